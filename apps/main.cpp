@@ -1,0 +1,50 @@
+// vpm: volume-preserving mapping and registration of 3-D shapes. See README.md.
+#include <exception>
+#include <iostream>
+#include <new>
+
+#include "cli.hpp"
+#include "vpm/config.hpp"
+#include "vpm/error.hpp"
+
+namespace {
+void usage(std::ostream& out) {
+  out << "vpm " VPM_VERSION ": volume-preserving mapping and registration of 3-D shapes\n"
+         "usage:\n";
+  for (const auto& c : vpm::cli::commands()) out << "  " << c.synopsis << '\n';
+  out << "environment: VPM_DEVICE=host|cpu|gpu|P:D|name-substring selects the compute device\n";
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::string> args(argv + 1, argv + argc);
+  if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
+    usage(args.empty() ? std::cerr : std::cout);
+    return args.empty() ? vpm::kExitInput : vpm::kExitOk;
+  }
+  if (args[0] == "--version") {
+    std::cout << "vpm " VPM_VERSION "\n";
+    return 0;
+  }
+  for (const auto& c : vpm::cli::commands()) {
+    if (c.name != args[0]) continue;
+    try {
+      return c.run(std::vector<std::string>(args.begin() + 1, args.end()));
+    } catch (const vpm::InputError& e) {
+      std::cerr << "vpm " << c.name << ": error: " << e.what() << '\n';
+      return vpm::kExitInput;
+    } catch (const vpm::NumericalError& e) {
+      std::cerr << "vpm " << c.name << ": numerical failure: " << e.what() << '\n';
+      return vpm::kExitNumerical;
+    } catch (const std::bad_alloc&) {
+      std::cerr << "vpm " << c.name << ": error: out of memory\n";
+      return vpm::kExitInternal;
+    } catch (const std::exception& e) {
+      std::cerr << "vpm " << c.name << ": internal error: " << e.what() << '\n';
+      return vpm::kExitInternal;
+    }
+  }
+  std::cerr << "vpm: unknown command '" << args[0] << "'\n";
+  usage(std::cerr);
+  return vpm::kExitInput;
+}

@@ -1,0 +1,224 @@
+#include "vpm/device.hpp"
+
+#include <CL/cl.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdlib>
+#include <mutex>
+#include <sstream>
+
+#include "vpm/error.hpp"
+
+namespace vpm {
+namespace detail {
+const std::map<std::string, std::string>& embedded_kernel_sources();
+}
+
+namespace bc = boost::compute;
+
+std::string DeviceDescription::label() const {
+  return std::to_string(platform_index) + ":" + std::to_string(device_index) + " " + platform +
+         ": " + name;
+}
+
+namespace {
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+std::string trim(std::string s) {
+  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.pop_back();
+  size_t i = 0;
+  while (i < s.size() && std::isspace(static_cast<unsigned char>(s[i]))) ++i;
+  return s.substr(i);
+}
+
+std::string info_string(cl_device_id d, cl_device_info what) {
+  size_t n = 0;
+  if (clGetDeviceInfo(d, what, 0, nullptr, &n) != CL_SUCCESS) return {};
+  std::string s(n, '\0');
+  clGetDeviceInfo(d, what, n, s.data(), nullptr);
+  while (!s.empty() && s.back() == '\0') s.pop_back();
+  return trim(s);
+}
+
+struct RawDevice {
+  DeviceDescription desc;
+  cl_device_id id;
+};
+
+std::vector<RawDevice> enumerate(std::string* error) {
+  std::vector<RawDevice> out;
+  cl_uint np = 0;
+  cl_int err = clGetPlatformIDs(0, nullptr, &np);
+  if (err != CL_SUCCESS || np == 0) {
+    if (error) *error = "no OpenCL platform (ICD) found (clGetPlatformIDs returned " +
+                        std::to_string(err) + "); install pocl-opencl-icd or a GPU driver";
+    return out;
+  }
+  std::vector<cl_platform_id> platforms(np);
+  clGetPlatformIDs(np, platforms.data(), nullptr);
+  for (cl_uint p = 0; p < np; ++p) {
+    size_t n = 0;
+    clGetPlatformInfo(platforms[p], CL_PLATFORM_NAME, 0, nullptr, &n);
+    std::string pname(n, '\0');
+    clGetPlatformInfo(platforms[p], CL_PLATFORM_NAME, n, pname.data(), nullptr);
+    while (!pname.empty() && pname.back() == '\0') pname.pop_back();
+    cl_uint nd = 0;
+    if (clGetDeviceIDs(platforms[p], CL_DEVICE_TYPE_ALL, 0, nullptr, &nd) != CL_SUCCESS) continue;
+    std::vector<cl_device_id> ids(nd);
+    clGetDeviceIDs(platforms[p], CL_DEVICE_TYPE_ALL, nd, ids.data(), nullptr);
+    for (cl_uint d = 0; d < nd; ++d) {
+      RawDevice r;
+      r.id = ids[d];
+      r.desc.platform_index = static_cast<int>(p);
+      r.desc.device_index = static_cast<int>(d);
+      r.desc.platform = trim(pname);
+      r.desc.name = info_string(ids[d], CL_DEVICE_NAME);
+      cl_device_type t = 0;
+      clGetDeviceInfo(ids[d], CL_DEVICE_TYPE, sizeof t, &t, nullptr);
+      r.desc.type = (t & CL_DEVICE_TYPE_GPU)           ? "gpu"
+                    : (t & CL_DEVICE_TYPE_CPU)         ? "cpu"
+                    : (t & CL_DEVICE_TYPE_ACCELERATOR) ? "accelerator"
+                                                       : "other";
+      cl_device_fp_config fp = 0;
+      clGetDeviceInfo(ids[d], CL_DEVICE_DOUBLE_FP_CONFIG, sizeof fp, &fp, nullptr);
+      std::string ext = info_string(ids[d], CL_DEVICE_EXTENSIONS);
+      r.desc.fp64 = fp != 0 || ext.find("cl_khr_fp64") != std::string::npos;
+      cl_uint cu = 0;
+      clGetDeviceInfo(ids[d], CL_DEVICE_MAX_COMPUTE_UNITS, sizeof cu, &cu, nullptr);
+      r.desc.compute_units = cu;
+      cl_ulong mem = 0;
+      clGetDeviceInfo(ids[d], CL_DEVICE_GLOBAL_MEM_SIZE, sizeof mem, &mem, nullptr);
+      r.desc.global_memory_bytes = mem;
+      out.push_back(r);
+    }
+  }
+  if (out.empty() && error) *error = "OpenCL platforms exist but report no device";
+  return out;
+}
+
+std::string device_list_text(const std::vector<RawDevice>& devs, const std::string& why) {
+  std::string s = "available: host";
+  for (const auto& d : devs) s += "; " + d.desc.label() + " (" + d.desc.type + ")";
+  if (devs.empty() && !why.empty()) s += " (" + why + ")";
+  return s;
+}
+
+}  // namespace
+
+std::vector<DeviceDescription> list_opencl_devices(std::string* error) {
+  std::vector<DeviceDescription> out;
+  for (auto& r : enumerate(error)) out.push_back(r.desc);
+  return out;
+}
+
+std::shared_ptr<Device> Device::host() {
+  std::shared_ptr<Device> d(new Device());
+  d->host_ = true;
+  d->desc_.name = "host";
+  d->desc_.type = "host";
+  d->desc_.fp64 = true;
+  return d;
+}
+
+std::shared_ptr<Device> Device::select(const std::string& spec_in) {
+  const std::string spec = lower(trim(spec_in));
+  if (spec == "host") return host();
+  std::string why;
+  auto devs = enumerate(&why);
+  const RawDevice* chosen = nullptr;
+  if (spec.empty()) {
+    for (auto& d : devs)
+      if (d.desc.type == "gpu" && d.desc.fp64) { chosen = &d; break; }
+    if (!chosen)
+      for (auto& d : devs)
+        if (d.desc.type == "cpu" && d.desc.fp64) { chosen = &d; break; }
+    if (!chosen) return host();  // the documented default when no fp64 OpenCL device exists
+  } else if (spec == "cpu" || spec == "gpu") {
+    for (auto& d : devs)
+      if (d.desc.type == spec) { chosen = &d; break; }
+  } else if (spec.find(':') != std::string::npos &&
+             std::all_of(spec.begin(), spec.end(),
+                         [](char c) { return std::isdigit(static_cast<unsigned char>(c)) || c == ':'; })) {
+    int p = -1, q = -1;
+    char colon = 0;
+    std::istringstream in(spec);
+    in >> p >> colon >> q;
+    for (auto& d : devs)
+      if (d.desc.platform_index == p && d.desc.device_index == q) { chosen = &d; break; }
+  } else {
+    for (auto& d : devs)
+      if (lower(d.desc.platform + ": " + d.desc.name).find(spec) != std::string::npos) {
+        chosen = &d;
+        break;
+      }
+  }
+  if (!chosen)
+    throw InputError("VPM_DEVICE='" + spec_in + "' matches no device; " + device_list_text(devs, why));
+  if (!chosen->desc.fp64)
+    throw InputError("VPM_DEVICE='" + spec_in + "' selects " + chosen->desc.label() +
+                     ", which has no double precision (fp64); vpm computes in double");
+
+  std::shared_ptr<Device> d(new Device());
+  d->host_ = false;
+  d->desc_ = chosen->desc;
+  d->device_ = bc::device(chosen->id, true);
+  d->context_ = bc::context(d->device_);
+  d->queue_ = bc::command_queue(d->context_, d->device_);
+  d->local_size_ = d->desc_.type == "gpu" ? 128 : 64;
+  return d;
+}
+
+Device& Device::current() {
+  static std::mutex m;
+  static std::shared_ptr<Device> dev;
+  std::lock_guard<std::mutex> lock(m);
+  if (!dev) {
+    const char* env = std::getenv("VPM_DEVICE");
+    dev = select(env ? env : "");
+  }
+  return *dev;
+}
+
+std::string Device::name() const { return host_ ? std::string("host") : desc_.label(); }
+
+size_t Device::padded(size_t n) const {
+  size_t g = (n + local_size_ - 1) / local_size_ * local_size_;
+  return std::max(g, local_size_);
+}
+
+void Device::launch(bc::kernel& k, size_t n) {
+  size_t global = padded(n);
+  size_t local = local_size_;
+  queue_.enqueue_nd_range_kernel(k, 1, nullptr, &global, &local);
+}
+
+bc::kernel Device::kernel(const std::string& program, const std::string& kernel_name,
+                          const std::string& options) {
+  const std::string key = program + "|" + options;
+  auto it = programs_.find(key);
+  if (it == programs_.end()) {
+    const auto& sources = detail::embedded_kernel_sources();
+    auto s = sources.find(program);
+    if (s == sources.end()) throw std::runtime_error("no embedded kernel program '" + program + "'");
+    const std::string preamble =
+        "#pragma OPENCL EXTENSION cl_khr_fp64 : enable\n"
+        "typedef double real;\ntypedef double2 real2;\ntypedef double3 real3;\ntypedef double4 real4;\n"
+        "#line 1\n";
+    bc::program prog = bc::program::create_with_source(preamble + s->second, context_);
+    try {
+      prog.build("-cl-std=CL1.2 " + options);
+    } catch (const bc::opencl_error&) {
+      throw std::runtime_error("OpenCL build of kernels/" + program + ".cl failed on " + name() +
+                               ":\n" + prog.build_log());
+    }
+    it = programs_.emplace(key, prog).first;
+  }
+  return it->second.create_kernel(kernel_name);
+}
+
+}  // namespace vpm

@@ -1,0 +1,105 @@
+#include "vpm/geometry.hpp"
+
+#include <Eigen/Geometry>
+#include <boost/compute/container/vector.hpp>
+#include <cmath>
+
+#include "vpm/device.hpp"
+#include "vpm/topology.hpp"
+
+namespace vpm {
+
+namespace bc = boost::compute;
+
+Eigen::VectorXd tet_volumes(const Points& x, const Tets& t) {
+  Eigen::VectorXd vol(t.rows());
+  for (Eigen::Index i = 0; i < t.rows(); ++i) {
+    const Eigen::Vector3d a = x.row(t(i, 0));
+    const Eigen::Vector3d e1 = x.row(t(i, 1)).transpose() - a;
+    const Eigen::Vector3d e2 = x.row(t(i, 2)).transpose() - a;
+    const Eigen::Vector3d e3 = x.row(t(i, 3)).transpose() - a;
+    vol(i) = e1.dot(e2.cross(e3)) / 6.0;
+  }
+  return vol;
+}
+
+Eigen::VectorXd dual_volumes(const Points& x, const Tets& t) {
+  const Eigen::VectorXd vol = tet_volumes(x, t);
+  Eigen::VectorXd d = Eigen::VectorXd::Zero(x.rows());
+  for (Eigen::Index i = 0; i < t.rows(); ++i)
+    for (int c = 0; c < 4; ++c) d(t(i, c)) += 0.25 * vol(i);
+  return d;
+}
+
+namespace {
+// Uploads positions and tets, runs tet_volumes, leaves the result in `vol`.
+void device_tet_volumes(Device& dev, const Points& x, const Tets& t, bc::vector<double>& vol) {
+  auto& q = dev.queue();
+  bc::vector<double> dx(x.data(), x.data() + x.size(), q);
+  bc::vector<int> dt(t.data(), t.data() + t.size(), q);
+  vol.resize(static_cast<size_t>(t.rows()), q);
+  auto k = dev.kernel("geometry", "tet_volumes");
+  k.set_arg(0, static_cast<int>(t.rows()));
+  k.set_arg(1, dx);
+  k.set_arg(2, dt);
+  k.set_arg(3, vol);
+  dev.launch(k, static_cast<size_t>(t.rows()));
+}
+}  // namespace
+
+Eigen::VectorXd tet_volumes(Device& dev, const Points& x, const Tets& t) {
+  if (dev.is_host() || t.rows() == 0) return tet_volumes(x, t);
+  bc::vector<double> vol(dev.context());
+  device_tet_volumes(dev, x, t, vol);
+  Eigen::VectorXd out(t.rows());
+  bc::copy(vol.begin(), vol.end(), out.data(), dev.queue());
+  return out;
+}
+
+Eigen::VectorXd dual_volumes(Device& dev, const Points& x, const Tets& t) {
+  if (dev.is_host() || t.rows() == 0) return dual_volumes(x, t);
+  auto& q = dev.queue();
+  bc::vector<double> vol(dev.context());
+  device_tet_volumes(dev, x, t, vol);
+  const Incidence inc = vertex_tet_incidence(static_cast<int>(x.rows()), t);
+  bc::vector<int> off(inc.offset.begin(), inc.offset.end(), q);
+  bc::vector<int> tof(inc.tet_of.begin(), inc.tet_of.end(), q);
+  bc::vector<double> dual(static_cast<size_t>(x.rows()), dev.context());
+  auto k = dev.kernel("geometry", "dual_volumes");
+  k.set_arg(0, static_cast<int>(x.rows()));
+  k.set_arg(1, off);
+  k.set_arg(2, tof);
+  k.set_arg(3, vol);
+  k.set_arg(4, dual);
+  dev.launch(k, static_cast<size_t>(x.rows()));
+  Eigen::VectorXd out(x.rows());
+  bc::copy(dual.begin(), dual.end(), out.data(), q);
+  return out;
+}
+
+Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> dihedral_angles_deg(const Points& x,
+                                                                             const Tets& t) {
+  static constexpr int kEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+  Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> out(t.rows(), 6);
+  for (Eigen::Index i = 0; i < t.rows(); ++i) {
+    Eigen::Vector3d p[4];
+    for (int c = 0; c < 4; ++c) p[c] = x.row(t(i, c)).transpose();
+    for (int e = 0; e < 6; ++e) {
+      const int a = kEdge[e][0], b = kEdge[e][1];
+      int o[2], k = 0;
+      for (int c = 0; c < 4; ++c)
+        if (c != a && c != b) o[k++] = c;
+      const Eigen::Vector3d axis = (p[b] - p[a]).normalized();
+      Eigen::Vector3d u = p[o[0]] - p[a], w = p[o[1]] - p[a];
+      u -= u.dot(axis) * axis;
+      w -= w.dot(axis) * axis;
+      const double nu = u.norm(), nw = w.norm();
+      double ang = 0;
+      if (nu > 0 && nw > 0) ang = std::acos(std::clamp(u.dot(w) / (nu * nw), -1.0, 1.0));
+      out(i, e) = ang * 180.0 / M_PI;
+    }
+  }
+  return out;
+}
+
+}  // namespace vpm

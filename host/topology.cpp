@@ -1,0 +1,205 @@
+#include "vpm/topology.hpp"
+
+#include <algorithm>
+#include <array>
+#include <numeric>
+#include <unordered_map>
+
+namespace vpm {
+
+namespace {
+// Faces of tet (a,b,c,d) with outward orientation for a positive tet.
+constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+
+struct FaceKey {
+  std::array<int, 3> v;
+  bool operator<(const FaceKey& o) const { return v < o.v; }
+  bool operator==(const FaceKey& o) const { return v == o.v; }
+};
+
+struct FaceRec {
+  std::array<int, 3> sorted;
+  int tet;
+  int local;
+};
+
+std::vector<FaceRec> sorted_faces(const Tets& tets) {
+  std::vector<FaceRec> f;
+  f.reserve(static_cast<size_t>(tets.rows()) * 4);
+  for (int t = 0; t < tets.rows(); ++t)
+    for (int k = 0; k < 4; ++k) {
+      std::array<int, 3> s = {tets(t, kFace[k][0]), tets(t, kFace[k][1]), tets(t, kFace[k][2])};
+      std::sort(s.begin(), s.end());
+      f.push_back({s, t, k});
+    }
+  std::sort(f.begin(), f.end(), [](const FaceRec& a, const FaceRec& b) { return a.sorted < b.sorted; });
+  return f;
+}
+
+int find_root(std::vector<int>& p, int x) {
+  while (p[x] != x) {
+    p[x] = p[p[x]];
+    x = p[x];
+  }
+  return x;
+}
+}  // namespace
+
+Triangles boundary_faces(const Tets& tets, std::vector<int>* face_tet) {
+  auto f = sorted_faces(tets);
+  std::vector<std::array<int, 3>> out;
+  std::vector<int> owner;
+  for (size_t i = 0; i < f.size();) {
+    size_t j = i;
+    while (j < f.size() && f[j].sorted == f[i].sorted) ++j;
+    if (j - i == 1) {
+      const int t = f[i].tet, k = f[i].local;
+      out.push_back({tets(t, kFace[k][0]), tets(t, kFace[k][1]), tets(t, kFace[k][2])});
+      owner.push_back(t);
+    }
+    i = j;
+  }
+  Triangles tri(static_cast<Eigen::Index>(out.size()), 3);
+  for (size_t i = 0; i < out.size(); ++i)
+    for (int c = 0; c < 3; ++c) tri(static_cast<Eigen::Index>(i), c) = out[i][c];
+  if (face_tet) *face_tet = std::move(owner);
+  return tri;
+}
+
+int nonmanifold_faces(const Tets& tets) {
+  auto f = sorted_faces(tets);
+  int bad = 0;
+  for (size_t i = 0; i < f.size();) {
+    size_t j = i;
+    while (j < f.size() && f[j].sorted == f[i].sorted) ++j;
+    if (j - i > 2) ++bad;
+    i = j;
+  }
+  return bad;
+}
+
+std::vector<char> boundary_vertex_mask(int num_vertices, const Triangles& faces) {
+  std::vector<char> m(static_cast<size_t>(num_vertices), 0);
+  for (int i = 0; i < faces.rows(); ++i)
+    for (int c = 0; c < 3; ++c) m[static_cast<size_t>(faces(i, c))] = 1;
+  return m;
+}
+
+Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> unique_edges(const Tets& tets) {
+  std::vector<std::pair<int, int>> e;
+  e.reserve(static_cast<size_t>(tets.rows()) * 6);
+  for (int t = 0; t < tets.rows(); ++t)
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b) {
+        int i = tets(t, a), j = tets(t, b);
+        e.emplace_back(std::min(i, j), std::max(i, j));
+      }
+  std::sort(e.begin(), e.end());
+  e.erase(std::unique(e.begin(), e.end()), e.end());
+  Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> out(static_cast<Eigen::Index>(e.size()), 2);
+  for (size_t i = 0; i < e.size(); ++i) {
+    out(static_cast<Eigen::Index>(i), 0) = e[i].first;
+    out(static_cast<Eigen::Index>(i), 1) = e[i].second;
+  }
+  return out;
+}
+
+Incidence vertex_tet_incidence(int num_vertices, const Tets& tets) {
+  Incidence inc;
+  inc.offset.assign(static_cast<size_t>(num_vertices) + 1, 0);
+  for (int t = 0; t < tets.rows(); ++t)
+    for (int c = 0; c < 4; ++c) ++inc.offset[static_cast<size_t>(tets(t, c)) + 1];
+  std::partial_sum(inc.offset.begin(), inc.offset.end(), inc.offset.begin());
+  inc.tet_of.resize(static_cast<size_t>(inc.offset.back()));
+  std::vector<int> fill(inc.offset.begin(), inc.offset.end() - 1);
+  for (int t = 0; t < tets.rows(); ++t)
+    for (int c = 0; c < 4; ++c) inc.tet_of[static_cast<size_t>(fill[static_cast<size_t>(tets(t, c))]++)] = t;
+  return inc;
+}
+
+std::vector<int> vertex_components(int num_vertices, const Tets& tets, int* count) {
+  std::vector<int> p(static_cast<size_t>(num_vertices));
+  std::iota(p.begin(), p.end(), 0);
+  for (int t = 0; t < tets.rows(); ++t)
+    for (int c = 1; c < 4; ++c) {
+      int a = find_root(p, tets(t, 0)), b = find_root(p, tets(t, c));
+      if (a != b) p[static_cast<size_t>(a)] = b;
+    }
+  std::vector<int> id(static_cast<size_t>(num_vertices), -1), comp(static_cast<size_t>(num_vertices));
+  int n = 0;
+  for (int v = 0; v < num_vertices; ++v) {
+    int r = find_root(p, v);
+    if (id[static_cast<size_t>(r)] < 0) id[static_cast<size_t>(r)] = n++;
+    comp[static_cast<size_t>(v)] = id[static_cast<size_t>(r)];
+  }
+  if (count) *count = n;
+  return comp;
+}
+
+SurfaceTopology surface_topology(int num_vertices, const Triangles& faces) {
+  SurfaceTopology s;
+  s.faces = static_cast<int>(faces.rows());
+  // edges with their incident face count
+  std::vector<std::array<int, 3>> e;  // (min, max, face)
+  e.reserve(static_cast<size_t>(faces.rows()) * 3);
+  for (int f = 0; f < faces.rows(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      int i = faces(f, c), j = faces(f, (c + 1) % 3);
+      e.push_back({std::min(i, j), std::max(i, j), f});
+    }
+  std::sort(e.begin(), e.end());
+  std::vector<int> parent(static_cast<size_t>(faces.rows()));
+  std::iota(parent.begin(), parent.end(), 0);
+  for (size_t i = 0; i < e.size();) {
+    size_t j = i;
+    while (j < e.size() && e[j][0] == e[i][0] && e[j][1] == e[i][1]) ++j;
+    ++s.edges;
+    const size_t k = j - i;
+    if (k == 1 || k > 2) {
+      if (k == 1) ++s.open_edges; else ++s.nonmanifold_edges;
+      if (s.first_bad_edge[0] < 0) { s.first_bad_edge[0] = e[i][0]; s.first_bad_edge[1] = e[i][1]; }
+    }
+    for (size_t q = i + 1; q < j; ++q) {
+      int a = find_root(parent, e[i][2]), b = find_root(parent, e[q][2]);
+      if (a != b) parent[static_cast<size_t>(a)] = b;
+    }
+    i = j;
+  }
+  for (int f = 0; f < faces.rows(); ++f)
+    if (find_root(parent, f) == f) ++s.components;
+  // vertex manifoldness: the faces around each vertex, joined through shared edges at that
+  // vertex, must form one fan.
+  std::vector<std::vector<int>> vf(static_cast<size_t>(num_vertices));
+  for (int f = 0; f < faces.rows(); ++f)
+    for (int c = 0; c < 3; ++c) vf[static_cast<size_t>(faces(f, c))].push_back(f);
+  for (int v = 0; v < num_vertices; ++v) {
+    const auto& fs = vf[static_cast<size_t>(v)];
+    if (fs.empty()) continue;
+    ++s.vertices;
+    // union faces sharing an edge (v, w)
+    std::unordered_map<int, int> first_face_of_w;
+    std::vector<int> par(fs.size());
+    std::iota(par.begin(), par.end(), 0);
+    for (size_t a = 0; a < fs.size(); ++a)
+      for (int c = 0; c < 3; ++c) {
+        int w = faces(fs[a], c);
+        if (w == v) continue;
+        auto [it, inserted] = first_face_of_w.emplace(w, static_cast<int>(a));
+        if (!inserted) {
+          int x = find_root(par, it->second), y = find_root(par, static_cast<int>(a));
+          if (x != y) par[static_cast<size_t>(x)] = y;
+        }
+      }
+    int roots = 0;
+    for (size_t a = 0; a < fs.size(); ++a)
+      if (find_root(par, static_cast<int>(a)) == static_cast<int>(a)) ++roots;
+    if (roots != 1) {
+      ++s.nonmanifold_vertices;
+      if (s.first_bad_vertex < 0) s.first_bad_vertex = v;
+    }
+  }
+  s.euler = s.vertices - s.edges + s.faces;
+  return s;
+}
+
+}  // namespace vpm

@@ -1,0 +1,118 @@
+#include "vpm/validate.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <sstream>
+
+#include "vpm/error.hpp"
+#include "vpm/geometry.hpp"
+#include "vpm/topology.hpp"
+
+namespace vpm {
+
+namespace {
+[[noreturn]] void fail(const std::string& source, const std::string& where, const std::string& what) {
+  throw InputError(source + ": " + where + ": " + what);
+}
+std::string tet_text(const Tets& t, int i) {
+  std::ostringstream s;
+  s << "tet " << i << " (" << t(i, 0) << " " << t(i, 1) << " " << t(i, 2) << " " << t(i, 3) << ")";
+  return s.str();
+}
+}  // namespace
+
+ValidationReport validate_mesh(TetMesh& mesh, const std::string& source, const ValidateOptions& opt) {
+  ValidationReport rep;
+  const int n = mesh.num_vertices(), m = mesh.num_tets();
+  if (n == 0) fail(source, "mesh", "has no vertices");
+  if (m == 0) fail(source, "mesh", "has no tets");
+  for (int v = 0; v < n; ++v)
+    for (int c = 0; c < 3; ++c)
+      if (!std::isfinite(mesh.vertices(v, c)))
+        fail(source, "vertex " + std::to_string(v), "coordinate " + std::to_string(c) + " is not finite");
+  std::vector<char> used(static_cast<size_t>(n), 0);
+  for (int t = 0; t < m; ++t) {
+    for (int c = 0; c < 4; ++c) {
+      const int v = mesh.tets(t, c);
+      if (v < 0 || v >= n)
+        fail(source, "tet " + std::to_string(t),
+             "vertex index " + std::to_string(v) + " out of range [0, " + std::to_string(n) + ")");
+      used[static_cast<size_t>(v)] = 1;
+    }
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b)
+        if (mesh.tets(t, a) == mesh.tets(t, b))
+          fail(source, tet_text(mesh.tets, t), "degenerate: vertex repeated");
+  }
+  for (int v = 0; v < n; ++v)
+    if (!used[static_cast<size_t>(v)]) fail(source, "vertex " + std::to_string(v), "isolated (in no tet)");
+
+  // duplicates
+  {
+    std::vector<std::pair<std::array<int, 4>, int>> keys(static_cast<size_t>(m));
+    for (int t = 0; t < m; ++t) {
+      std::array<int, 4> k = {mesh.tets(t, 0), mesh.tets(t, 1), mesh.tets(t, 2), mesh.tets(t, 3)};
+      std::sort(k.begin(), k.end());
+      keys[static_cast<size_t>(t)] = {k, t};
+    }
+    std::sort(keys.begin(), keys.end());
+    for (size_t i = 1; i < keys.size(); ++i)
+      if (keys[i].first == keys[i - 1].first)
+        fail(source, tet_text(mesh.tets, keys[i].second),
+             "duplicate of tet " + std::to_string(keys[i - 1].second));
+  }
+
+  // volumes: degenerate and orientation
+  Eigen::VectorXd vol = tet_volumes(mesh.vertices, mesh.tets);
+  const double mean_abs = vol.cwiseAbs().mean();
+  for (int t = 0; t < m; ++t)
+    if (std::fabs(vol(t)) <= opt.degenerate_relative_volume * mean_abs)
+      fail(source, tet_text(mesh.tets, t), "degenerate: zero volume (flat or collinear vertices)");
+  for (int t = 0; t < m; ++t)
+    if (vol(t) < 0) {
+      std::swap(mesh.tets(t, 2), mesh.tets(t, 3));
+      ++rep.reoriented_tets;
+    }
+  if (rep.reoriented_tets)
+    rep.notes.push_back("reoriented " + std::to_string(rep.reoriented_tets) +
+                        " negatively oriented tets (swapped their last two vertices)");
+
+  // manifold tet complex
+  if (int bad = nonmanifold_faces(mesh.tets))
+    fail(source, "mesh", std::to_string(bad) + " triangles are shared by more than two tets (non-manifold)");
+
+  int comps = 0;
+  vertex_components(n, mesh.tets, &comps);
+  if (comps != 1) fail(source, "mesh", "has " + std::to_string(comps) + " connected components, expected 1");
+
+  const Triangles bf = boundary_faces(mesh.tets);
+  const SurfaceTopology st = surface_topology(n, bf);
+  rep.boundary_faces = st.faces;
+  rep.boundary_vertices = st.vertices;
+  rep.boundary_euler = st.euler;
+  if (st.nonmanifold_edges || st.open_edges)
+    fail(source, "boundary edge (" + std::to_string(st.first_bad_edge[0]) + ", " +
+                     std::to_string(st.first_bad_edge[1]) + ")",
+         "non-manifold boundary (" + std::to_string(st.nonmanifold_edges + st.open_edges) + " such edges)");
+  if (st.nonmanifold_vertices)
+    fail(source, "boundary vertex " + std::to_string(st.first_bad_vertex),
+         "non-manifold boundary: the surface pinches there (" + std::to_string(st.nonmanifold_vertices) +
+             " such vertices)");
+  if (opt.require_ball_topology) {
+    if (st.components != 1)
+      fail(source, "boundary", "has " + std::to_string(st.components) +
+                                   " closed surfaces (a cavity?); the ball map needs exactly one");
+    if (st.euler != 2)
+      fail(source, "boundary", "Euler characteristic " + std::to_string(st.euler) + " (genus " +
+                                   std::to_string(st.genus()) + "); the ball map needs a genus-0 surface (2)");
+  }
+
+  const auto dih = dihedral_angles_deg(mesh.vertices, mesh.tets);
+  Eigen::Index r = 0, c = 0;
+  rep.min_dihedral_deg = dih.minCoeff(&r, &c);
+  rep.min_dihedral_tet = static_cast<int>(r);
+  return rep;
+}
+
+}  // namespace vpm

@@ -1,0 +1,89 @@
+#pragma once
+// Compute devices: the host (Eigen reference) or an OpenCL device, chosen by VPM_DEVICE.
+//
+//   VPM_DEVICE=host     no OpenCL; every stage runs its Eigen reference
+//   VPM_DEVICE=cpu|gpu  the first OpenCL device of that type
+//   VPM_DEVICE=P:D      platform index P, device index D (as `vpm devices` numbers them)
+//   VPM_DEVICE=text     first device whose "platform: device" name contains text (any case)
+//   unset               the first GPU if there is one, else the first CPU device, else host
+//
+// No match is an InputError listing the devices; there is never a silent fallback.
+// OpenCL devices must support double precision.
+#include <boost/compute/command_queue.hpp>
+#include <boost/compute/context.hpp>
+#include <boost/compute/kernel.hpp>
+#include <boost/compute/program.hpp>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace vpm {
+
+/// One OpenCL device as the ICD loader reports it.
+struct DeviceDescription {
+  int platform_index = -1;
+  int device_index = -1;
+  std::string platform;   ///< platform name, e.g. "Portable Computing Language"
+  std::string name;       ///< device name
+  std::string type;       ///< "gpu", "cpu", "accelerator" or "other"
+  bool fp64 = false;      ///< cl_khr_fp64 or CL_DEVICE_DOUBLE_FP_CONFIG non-zero
+  unsigned compute_units = 0;
+  unsigned long long global_memory_bytes = 0;
+  std::string label() const;  ///< "P:D platform: name"
+};
+
+/// All OpenCL devices visible now; empty (never an exception) when no platform is installed.
+/// `error`, if given, receives why the list is empty (e.g. "no OpenCL platform (ICD) found").
+std::vector<DeviceDescription> list_opencl_devices(std::string* error = nullptr);
+
+/// A selected compute device. Non-copyable; obtain with Device::current() or Device::select().
+class Device {
+ public:
+  /// The device VPM_DEVICE selects, created on first use and shared by the whole process.
+  /// Throws InputError when the value matches nothing or the device lacks fp64.
+  static Device& current();
+  /// Selects by the VPM_DEVICE grammar above ("" = the default rule).
+  static std::shared_ptr<Device> select(const std::string& spec);
+  /// The host device (always available).
+  static std::shared_ptr<Device> host();
+
+  Device(const Device&) = delete;
+  Device& operator=(const Device&) = delete;
+
+  bool is_host() const { return host_; }
+  /// "host" or "P:D platform: device".
+  std::string name() const;
+  const DeviceDescription& description() const { return desc_; }
+
+  /// OpenCL objects (precondition: !is_host()).
+  boost::compute::context& context() { return context_; }
+  boost::compute::command_queue& queue() { return queue_; }
+  boost::compute::device& cl_device() { return device_; }
+
+  /// Kernel `kernel_name` of kernels/<program>.cl. Programs are built once per
+  /// (program, options) and cached for the life of the device. The build prepends the fp64
+  /// pragma and `#define real double`; `options` adds -D definitions. A build failure throws
+  /// std::runtime_error with the build log.
+  boost::compute::kernel kernel(const std::string& program, const std::string& kernel_name,
+                                const std::string& options = "");
+
+  /// Work-group size used for every 1-D launch (fixed so PoCL compiles each kernel once).
+  size_t local_size() const { return local_size_; }
+  /// `n` rounded up to a multiple of local_size() (at least one group).
+  size_t padded(size_t n) const;
+  /// Enqueues `k` over `n` work items (global size padded; kernels must guard `i < n`).
+  void launch(boost::compute::kernel& k, size_t n);
+
+ private:
+  Device() = default;
+  bool host_ = true;
+  DeviceDescription desc_;
+  boost::compute::device device_;
+  boost::compute::context context_;
+  boost::compute::command_queue queue_;
+  size_t local_size_ = 64;
+  std::map<std::string, boost::compute::program> programs_;
+};
+
+}  // namespace vpm

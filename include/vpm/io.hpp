@@ -1,0 +1,37 @@
+#pragma once
+// Mesh and surface file formats, chosen by file extension.
+//
+// Tet meshes: TetGen .node/.ele (either name gives the pair; .face ignored on read, written
+// with the boundary), Medit .mesh, VTK .vtu (XML, ASCII; fields as point and cell data),
+// Gmsh .msh 4.1 ASCII. Surfaces: .off, .obj, .stl (ASCII or binary).
+//
+// Readers throw InputError("FILE:LINE: problem") on malformed input (truncated, wrong counts,
+// text in numbers, 1-based/0-based confusion, counts larger than the file could hold) and
+// never allocate more than the file size justifies. Writers write to a temporary name in the
+// same folder and rename, so a failed write leaves no partial file.
+#include <string>
+
+#include "vpm/mesh.hpp"
+
+namespace vpm {
+
+/// Reads a tet mesh (fields too, where the format carries them). Does not validate topology:
+/// call validate_mesh() for that.
+TetMesh read_mesh(const std::string& path);
+
+/// Writes a tet mesh; .vtu writes all fields, other formats write geometry (and a `label`
+/// cell field as the element reference/region tag where the format has one).
+void write_mesh(const std::string& path, const TetMesh& mesh);
+
+/// Reads a triangle surface.
+TriSurface read_surface(const std::string& path);
+
+/// Writes a triangle surface (.off, .obj, .stl).
+void write_surface(const std::string& path, const TriSurface& surface);
+
+/// True if `path` has an extension read_mesh() understands.
+bool is_mesh_path(const std::string& path);
+/// True if `path` has an extension read_surface() understands.
+bool is_surface_path(const std::string& path);
+
+}  // namespace vpm

@@ -1,0 +1,54 @@
+#pragma once
+// Combinatorial queries on tet meshes: boundary faces, boundary vertices, edges, incidence,
+// connected components, Euler characteristic. Host only: the host owns topology.
+#include <vector>
+
+#include "vpm/mesh.hpp"
+
+namespace vpm {
+
+/// Boundary triangles of a tet mesh: faces that belong to exactly one tet, oriented so that
+/// their normal points out of that tet (outward for positively oriented tets).
+/// `face_tet`, if given, receives for each face the index of the tet it belongs to.
+/// Faces shared by three or more tets are not returned; count them with nonmanifold_faces().
+Triangles boundary_faces(const Tets& tets, std::vector<int>* face_tet = nullptr);
+
+/// Number of triangles shared by more than two tets (0 for a manifold tet mesh).
+int nonmanifold_faces(const Tets& tets);
+
+/// For each of the `num_vertices` vertices, 1 if it lies on a triangle of `faces`.
+std::vector<char> boundary_vertex_mask(int num_vertices, const Triangles& faces);
+
+/// Unique undirected edges (i < j) of a tet mesh, sorted lexicographically. k x 2.
+Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> unique_edges(const Tets& tets);
+
+/// Compressed vertex -> tet incidence: tets touching vertex v are
+/// `tet_of[offset[v] .. offset[v+1])`, in increasing order; `offset` has n+1 entries.
+struct Incidence {
+  std::vector<int> offset;
+  std::vector<int> tet_of;
+};
+Incidence vertex_tet_incidence(int num_vertices, const Tets& tets);
+
+/// Connected components of the vertices that tets join (isolated vertices are their own
+/// component). Returns the component id of each vertex; `count` receives the number.
+std::vector<int> vertex_components(int num_vertices, const Tets& tets, int* count);
+
+/// Topological summary of a closed triangle surface.
+struct SurfaceTopology {
+  int vertices = 0;          ///< vertices used by at least one triangle
+  int edges = 0;
+  int faces = 0;
+  int euler = 0;             ///< V - E + F (2 for one sphere)
+  int components = 0;        ///< edge-connected components
+  int open_edges = 0;        ///< edges with one incident triangle (0 when closed)
+  int nonmanifold_edges = 0; ///< edges with three or more incident triangles
+  int nonmanifold_vertices = 0;  ///< vertices whose triangle fan is not one disk
+  int first_bad_vertex = -1; ///< index of a non-manifold vertex, or -1
+  int first_bad_edge[2] = {-1, -1};  ///< an open or non-manifold edge, or -1
+  /// Genus of a closed connected surface: (2 - euler) / 2.
+  int genus() const { return (2 - euler) / 2; }
+};
+SurfaceTopology surface_topology(int num_vertices, const Triangles& faces);
+
+}  // namespace vpm

@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# Installs every Debian 12 package vpm needs. Idempotent, non-interactive.
+set -euo pipefail
+PKGS=(
+  cmake g++ make pkg-config git
+  pocl-opencl-icd ocl-icd-opencl-dev opencl-headers opencl-clhpp-headers clinfo
+  libeigen3-dev libboost-dev catch2
+  libtet1.5-dev tetgen libnifti2-dev zlib1g-dev mricron-data
+  libcgal-dev libgmp-dev libmpfr-dev
+  libviennacl-dev python3-vtk9 python3-numpy
+)
+missing=()
+for p in "${PKGS[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  SUDO=""; [[ $(id -u) -ne 0 ]] && SUDO="sudo"
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+echo "setup: all ${#PKGS[@]} packages present"

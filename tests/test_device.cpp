@@ -1,0 +1,49 @@
+#include <catch2/catch.hpp>
+
+#include "support/devices.hpp"
+#include "vpm/device.hpp"
+#include "vpm/error.hpp"
+
+using namespace vpm;
+
+TEST_CASE("host device is always available") {
+  auto h = Device::select("host");
+  CHECK(h->is_host());
+  CHECK(h->name() == "host");
+  CHECK(Device::select("HOST")->is_host());
+}
+
+TEST_CASE("an unknown device spec is an InputError that lists the devices") {
+  try {
+    Device::select("no-such-device-xyz");
+    FAIL("expected InputError");
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    CHECK(msg.find("no-such-device-xyz") != std::string::npos);
+    CHECK(msg.find("available: host") != std::string::npos);
+  }
+  CHECK_THROWS_AS(Device::select("9:9"), InputError);
+}
+
+TEST_CASE("OpenCL device selection by type, index and name") {
+  auto dev = test::opencl_device();
+  if (!dev) {
+    WARN("no OpenCL device; skipped");
+    return;
+  }
+  const auto& d = dev->description();
+  CHECK(d.fp64);
+  auto by_index = Device::select(std::to_string(d.platform_index) + ":" + std::to_string(d.device_index));
+  CHECK(by_index->name() == dev->name());
+  auto by_name = Device::select(d.name.substr(0, 6));
+  CHECK_FALSE(by_name->is_host());
+  auto by_type = Device::select(d.type);
+  CHECK(by_type->description().type == d.type);
+  CHECK(dev->padded(1) == dev->local_size());
+  CHECK(dev->padded(dev->local_size() + 1) == 2 * dev->local_size());
+  // kernels are built once and cached: a second request reuses the program
+  auto k1 = dev->kernel("geometry", "tet_volumes");
+  auto k2 = dev->kernel("geometry", "tet_volumes");
+  CHECK(k1.get_program() == k2.get_program());
+  CHECK_THROWS(dev->kernel("no_such_program", "x"));
+}

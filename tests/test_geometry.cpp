@@ -1,0 +1,78 @@
+#include <catch2/catch.hpp>
+
+#include "support/devices.hpp"
+#include "support/fixtures.hpp"
+#include "vpm/device.hpp"
+#include "vpm/geometry.hpp"
+#include "vpm/metrics.hpp"
+
+using namespace vpm;
+
+TEST_CASE("tet volumes sum to the cube volume on every device") {
+  const TetMesh m = test::cube_mesh(5);
+  for (auto& dev : test::devices()) {
+    INFO("device " << dev->name());
+    const Eigen::VectorXd v = tet_volumes(*dev, m.vertices, m.tets);
+    REQUIRE(v.size() == m.num_tets());
+    CHECK(v.sum() == Approx(1.0).epsilon(1e-12));
+    CHECK(v.minCoeff() > 0);
+    CHECK(v.minCoeff() == Approx(1.0 / (6 * 125)).epsilon(1e-12));
+  }
+}
+
+TEST_CASE("dual volumes sum to the total and host and device agree") {
+  TetMesh m = test::ball_mesh(6);
+  // perturb interior points so volumes differ
+  for (int i = 0; i < m.num_vertices(); ++i) m.vertices.row(i) *= 1.0 + 0.01 * std::sin(7.0 * i);
+  const Eigen::VectorXd host = dual_volumes(m.vertices, m.tets);
+  const Eigen::VectorXd tv = tet_volumes(m.vertices, m.tets);
+  CHECK(host.sum() == Approx(tv.sum()).epsilon(1e-12));
+  for (auto& dev : test::devices()) {
+    INFO("device " << dev->name());
+    const Eigen::VectorXd d = dual_volumes(*dev, m.vertices, m.tets);
+    CHECK((d - host).cwiseAbs().maxCoeff() <= 1e-15 * host.cwiseAbs().maxCoeff() * 10);
+  }
+}
+
+TEST_CASE("a mirrored tet has negative volume") {
+  TetMesh m = test::single_tet();
+  CHECK(tet_volumes(m.vertices, m.tets)(0) == Approx(1.0 / 6));
+  std::swap(m.tets(0, 0), m.tets(0, 1));
+  CHECK(tet_volumes(m.vertices, m.tets)(0) == Approx(-1.0 / 6));
+}
+
+TEST_CASE("dihedral angles of the regular-corner tet") {
+  const TetMesh m = test::single_tet();
+  const auto a = dihedral_angles_deg(m.vertices, m.tets);
+  // edges at the right-angle corner have 90 degree dihedral angles
+  CHECK(a(0, 0) == Approx(90));
+  CHECK(a(0, 1) == Approx(90));
+  CHECK(a(0, 2) == Approx(90));
+  // opposite edges: acos(1/sqrt(3)) = 54.7356
+  CHECK(a(0, 3) == Approx(54.7356103).epsilon(1e-6));
+}
+
+TEST_CASE("metrics of the identity map and of a scaled map are zero distortion") {
+  const TetMesh m = test::ball_mesh(4);
+  for (auto& dev : test::devices()) {
+    const Points scaled = 2.5 * m.vertices;
+    const MapMetrics mm = map_metrics(*dev, m.vertices, scaled, m.tets);
+    CHECK(mm.inverted_tets == 0);
+    CHECK(mm.tet_volume_ratio.mean_abs_dev < 1e-12);
+    CHECK(mm.vertex_volume_ratio.max_abs_log < 1e-12);
+    CHECK(mm.boundary_max_radius_error == Approx(1.5).epsilon(1e-9));
+  }
+}
+
+TEST_CASE("metrics count inverted tets and measure distortion") {
+  const TetMesh m = test::cube_mesh(3);
+  Points moved = m.vertices;
+  // move an interior vertex far through its neighbours: some tets invert
+  int interior = 1 + 4 * (1 + 4 * 1);
+  moved.row(interior) << 2.0, 2.0, 2.0;
+  auto host = Device::host();
+  const MapMetrics mm = map_metrics(*host, m.vertices, moved, m.tets);
+  CHECK(mm.inverted_tets > 0);
+  CHECK(mm.tet_volume_ratio.mean_abs_dev > 0.01);
+  CHECK(mm.tet_volume_ratio.max_abs_log > 100);  // inverted ratios enter as 1e-300
+}

@@ -1,0 +1,74 @@
+#include <catch2/catch.hpp>
+
+#include <Eigen/Geometry>
+
+#include "support/fixtures.hpp"
+#include "vpm/geometry.hpp"
+#include "vpm/topology.hpp"
+
+using namespace vpm;
+
+TEST_CASE("boundary of a cube mesh is a closed sphere with outward normals") {
+  const TetMesh m = test::cube_mesh(3);
+  const Triangles bf = boundary_faces(m.tets);
+  CHECK(bf.rows() == 6 * 9 * 2);
+  const SurfaceTopology st = surface_topology(m.num_vertices(), bf);
+  CHECK(st.euler == 2);
+  CHECK(st.components == 1);
+  CHECK(st.open_edges == 0);
+  CHECK(st.nonmanifold_vertices == 0);
+  // outward: normal . (centroid - cube centre) > 0 for every face
+  for (int f = 0; f < bf.rows(); ++f) {
+    const Eigen::Vector3d a = m.vertices.row(bf(f, 0)), b = m.vertices.row(bf(f, 1)),
+                          c = m.vertices.row(bf(f, 2));
+    const Eigen::Vector3d n = (b - a).cross(c - a);
+    CHECK(n.dot((a + b + c) / 3 - Eigen::Vector3d(0.5, 0.5, 0.5)) > 0);
+  }
+  // enclosed volume by the divergence theorem equals the tet volume sum
+  double vol = 0;
+  for (int f = 0; f < bf.rows(); ++f) {
+    const Eigen::Vector3d a = m.vertices.row(bf(f, 0)), b = m.vertices.row(bf(f, 1)),
+                          c = m.vertices.row(bf(f, 2));
+    vol += a.dot(b.cross(c)) / 6;
+  }
+  CHECK(vol == Approx(1.0));
+}
+
+TEST_CASE("edges, incidence and components") {
+  const TetMesh m = test::cube_mesh(2);
+  const auto e = unique_edges(m.tets);
+  const Triangles bf = boundary_faces(m.tets);
+  // Euler for a ball: V - E + F - T = 1, with F all triangles
+  const int V = m.num_vertices(), E = static_cast<int>(e.rows()), T = m.num_tets();
+  const int F = (4 * T + static_cast<int>(bf.rows())) / 2;
+  CHECK(V - E + F - T == 1);
+  const Incidence inc = vertex_tet_incidence(V, m.tets);
+  CHECK(inc.offset.back() == 4 * T);
+  int count = 0;
+  vertex_components(V, m.tets, &count);
+  CHECK(count == 1);
+  // two disjoint tets
+  TetMesh two = test::single_tet();
+  two.vertices.conservativeResize(8, 3);
+  two.vertices.bottomRows(4) = two.vertices.topRows(4).array() + 5.0;
+  two.tets.conservativeResize(2, 4);
+  two.tets.row(1) << 4, 5, 6, 7;
+  vertex_components(8, two.tets, &count);
+  CHECK(count == 2);
+}
+
+TEST_CASE("surface topology detects genus and pinched vertices") {
+  // torus-like: a cube with a tunnel built from cube_mesh(3) minus the centre column
+  TetMesh m = test::cube_mesh(3);
+  std::vector<int> keep;
+  for (int t = 0; t < m.num_tets(); ++t) {
+    Eigen::RowVector3d c = Eigen::RowVector3d::Zero();
+    for (int k = 0; k < 4; ++k) c += m.vertices.row(m.tets(t, k)) / 4;
+    if (!(c(0) > 1.0 / 3 && c(0) < 2.0 / 3 && c(1) > 1.0 / 3 && c(1) < 2.0 / 3)) keep.push_back(t);
+  }
+  Tets t2(static_cast<Eigen::Index>(keep.size()), 4);
+  for (size_t i = 0; i < keep.size(); ++i) t2.row(static_cast<Eigen::Index>(i)) = m.tets.row(keep[i]);
+  const SurfaceTopology st = surface_topology(m.num_vertices(), boundary_faces(t2));
+  CHECK(st.euler == 0);
+  CHECK(st.genus() == 1);
+}
