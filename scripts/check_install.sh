@@ -1,0 +1,12 @@
+#!/usr/bin/env bash
+# Installs the built vpm into a temporary prefix and builds + runs a consumer project that
+# uses find_package(vpm). Usage: scripts/check_install.sh BUILD_DIR
+set -euo pipefail
+src="$(cd "$(dirname "$0")/.." && pwd)"
+build="$(cd "$1" && pwd)"
+work="$build/install-check"
+rm -rf "$work"
+cmake --install "$build" --prefix "$work/prefix" >/dev/null
+cmake -S "$src/tests/install_consumer" -B "$work/build" -DCMAKE_PREFIX_PATH="$work/prefix" >/dev/null
+cmake --build "$work/build" >/dev/null
+LD_LIBRARY_PATH="$work/prefix/lib:${LD_LIBRARY_PATH:-}" "$work/build/consumer"
