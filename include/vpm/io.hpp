@@ -26,8 +26,12 @@ void write_mesh(const std::string& path, const TetMesh& mesh);
 /// Reads a triangle surface.
 TriSurface read_surface(const std::string& path);
 
-/// Writes a triangle surface (.off, .obj, .stl).
+/// Writes a triangle surface (.off, .obj, .stl). STL is written as ASCII with exact decimal
+/// coordinates; use write_surface_stl_binary() for the compact (float) form.
 void write_surface(const std::string& path, const TriSurface& surface);
+
+/// Writes binary STL (coordinates rounded to float, normals from the triangles).
+void write_surface_stl_binary(const std::string& path, const TriSurface& surface);
 
 /// True if `path` has an extension read_mesh() understands.
 bool is_mesh_path(const std::string& path);

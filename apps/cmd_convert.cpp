@@ -1,0 +1,36 @@
+// vpm convert IN OUT: reads any mesh (or surface) format and writes any other, by extension.
+#include <iostream>
+
+#include "cli.hpp"
+#include "vpm/error.hpp"
+#include "vpm/io.hpp"
+
+namespace {
+int run(const std::vector<std::string>& argv) {
+  vpm::cli::Args args(argv, {}, {});
+  args.expect_positional(2, "vpm convert IN OUT");
+  const std::string& in = args.positional()[0];
+  const std::string& out = args.positional()[1];
+  if (vpm::is_surface_path(in) && vpm::is_surface_path(out)) {
+    const vpm::TriSurface s = vpm::read_surface(in);
+    vpm::write_surface(out, s);
+    vpm::cli::info("wrote " + out + ": " + std::to_string(s.vertices.rows()) + " vertices, " +
+                   std::to_string(s.triangles.rows()) + " triangles");
+    return 0;
+  }
+  if (!vpm::is_mesh_path(in))
+    throw vpm::InputError(in + ": unknown file extension (meshes: .node .ele .mesh .vtu .msh; "
+                          "surfaces: .off .obj .stl)");
+  if (!vpm::is_mesh_path(out))
+    throw vpm::InputError(out + ": unknown file extension for a tet mesh (expected .node .ele "
+                          ".mesh .vtu .msh)");
+  const vpm::TetMesh m = vpm::read_mesh(in);
+  vpm::write_mesh(out, m);
+  vpm::cli::info("wrote " + out + ": " + std::to_string(m.num_vertices()) + " vertices, " +
+                 std::to_string(m.num_tets()) + " tets");
+  return 0;
+}
+vpm::cli::Registrar reg({"convert",
+                         "vpm convert IN OUT               convert between mesh (or surface) formats",
+                         run});
+}  // namespace

@@ -1,0 +1,28 @@
+#pragma once
+// Private: one reader/writer pair per file format (host/io_<format>.cpp); io.cpp dispatches.
+#include <string>
+
+#include "vpm/mesh.hpp"
+
+namespace vpm::detail {
+
+TetMesh read_tetgen(const std::string& path);   // .node or .ele: reads the pair
+void write_tetgen(const std::string& path, const TetMesh& mesh);  // .node + .ele + .face
+TetMesh read_medit(const std::string& path);
+void write_medit(const std::string& path, const TetMesh& mesh);
+TetMesh read_vtu(const std::string& path);
+void write_vtu(const std::string& path, const TetMesh& mesh);
+TetMesh read_gmsh(const std::string& path);
+void write_gmsh(const std::string& path, const TetMesh& mesh);
+
+TriSurface read_off(const std::string& path);
+void write_off(const std::string& path, const TriSurface& surface);
+TriSurface read_obj(const std::string& path);
+void write_obj(const std::string& path, const TriSurface& surface);
+TriSurface read_stl(const std::string& path);
+void write_stl(const std::string& path, const TriSurface& surface, bool binary);
+
+/// Checks that the mesh's fields have the right number of rows (InputError naming `path`).
+void check_fields(const std::string& path, const TetMesh& mesh);
+
+}  // namespace vpm::detail
