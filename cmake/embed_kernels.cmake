@@ -1,5 +1,6 @@
 # Turns kernels/*.cl into one C++ source: vpm::detail::embedded_kernel_sources().
-# Usage: cmake -DOUT=file.cpp -DSOURCES="a.cl;b.cl" -P embed_kernels.cmake
+# Usage: cmake -DOUT=file.cpp -DSOURCES="a.cl|b.cl" -P embed_kernels.cmake
+string(REPLACE "|" ";" SOURCES "${SOURCES}")
 set(body "")
 foreach(src IN LISTS SOURCES)
   get_filename_component(name ${src} NAME_WE)

@@ -1,0 +1,239 @@
+#include "vpm/laplacian.hpp"
+
+#include <Eigen/Geometry>
+#include <Eigen/SparseCore>
+#include <algorithm>
+#include <string>
+
+#include "vpm/device.hpp"
+#include "vpm/error.hpp"
+#include "vpm/topology.hpp"
+
+namespace vpm {
+
+namespace bc = boost::compute;
+
+namespace {
+
+constexpr int kEdge[4][4] = {{-1, 0, 1, 2}, {0, -1, 3, 4}, {1, 3, -1, 5}, {2, 4, 5, -1}};
+constexpr int kEdgeEnds[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+
+// The six off-diagonal entries K_ab of tet t (same formula as kernels/laplacian.cl) and its
+// signed volume.
+inline double tet_weights(const Points& x, const Tets& tets, Eigen::Index t, double w[6]) {
+  const Eigen::Vector3d p0 = x.row(tets(t, 0)).transpose();
+  const Eigen::Vector3d e1 = x.row(tets(t, 1)).transpose() - p0;
+  const Eigen::Vector3d e2 = x.row(tets(t, 2)).transpose() - p0;
+  const Eigen::Vector3d e3 = x.row(tets(t, 3)).transpose() - p0;
+  Eigen::Vector3d c[4];
+  c[1] = e2.cross(e3);
+  c[2] = e3.cross(e1);
+  c[3] = e1.cross(e2);
+  c[0] = -(c[1] + c[2] + c[3]);
+  const double det = e1.dot(c[1]);
+  const double s = -1.0 / (6.0 * det);
+  for (int e = 0; e < 6; ++e) w[e] = s * c[kEdgeEnds[e][0]].dot(c[kEdgeEnds[e][1]]);
+  return det / 6.0;
+}
+
+void check_tets(int n, const Tets& tets, const char* where) {
+  for (Eigen::Index t = 0; t < tets.rows(); ++t)
+    for (int c = 0; c < 4; ++c)
+      if (tets(t, c) < 0 || tets(t, c) >= n)
+        throw InputError(std::string(where) + ": tet " + std::to_string(t) + " has vertex index " +
+                         std::to_string(tets(t, c)) + " outside [0, " + std::to_string(n) + ")");
+}
+
+}  // namespace
+
+CsrMatrix cotan_laplacian(const Points& x, const Tets& tets) {
+  const int n = static_cast<int>(x.rows());
+  check_tets(n, tets, "cotan_laplacian");
+  std::vector<Eigen::Triplet<double>> trip;
+  trip.reserve(static_cast<size_t>(tets.rows()) * 12 + n);
+  for (int i = 0; i < n; ++i) trip.emplace_back(i, i, 0.0);
+  for (Eigen::Index t = 0; t < tets.rows(); ++t) {
+    double w[6];
+    tet_weights(x, tets, t, w);
+    for (int e = 0; e < 6; ++e) {
+      const int i = tets(t, kEdgeEnds[e][0]), j = tets(t, kEdgeEnds[e][1]);
+      trip.emplace_back(i, j, w[e]);
+      trip.emplace_back(j, i, w[e]);
+      trip.emplace_back(i, i, -w[e]);
+      trip.emplace_back(j, j, -w[e]);
+    }
+  }
+  CsrMatrix::EigenType k(n, n);
+  k.setFromTriplets(trip.begin(), trip.end());
+  return CsrMatrix::from_eigen(k);
+}
+
+struct CotanLaplacian::DeviceState {
+  explicit DeviceState(Device& d)
+      : tets(d.context()), row_ptr(d.context()), col(d.context()), inc_offset(d.context()),
+        inc_tet(d.context()), slot(d.context()), diag(d.context()), x(d.context()),
+        w(d.context()), vol(d.context()), val(d.context()), mass(d.context()) {}
+  Device* device = nullptr;
+  bc::vector<int> tets, row_ptr, col, inc_offset, inc_tet, slot, diag;
+  bc::vector<double> x, w, vol, val, mass;
+  bc::kernel k_weights, k_rows;
+  Incidence inc;  // kept on the host for the host assembly
+};
+
+CotanLaplacian::CotanLaplacian(int n, const Tets& tets) : tets_(tets) {
+  if (n < 0) throw InputError("CotanLaplacian: negative vertex count");
+  check_tets(n, tets, "CotanLaplacian");
+  const Incidence inc = vertex_tet_incidence(n, tets);
+  // Pattern: each row holds itself and every vertex sharing a tet with it, sorted.
+  pattern_.rows = pattern_.cols = n;
+  pattern_.row_ptr.assign(n + 1, 0);
+  std::vector<int> nb;
+  pattern_.col.reserve(static_cast<size_t>(n) * 16);
+  for (int i = 0; i < n; ++i) {
+    nb.clear();
+    nb.push_back(i);
+    for (int k = inc.offset[i]; k < inc.offset[i + 1]; ++k)
+      for (int c = 0; c < 4; ++c) nb.push_back(tets(inc.tet_of[k], c));
+    std::sort(nb.begin(), nb.end());
+    nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
+    pattern_.col.insert(pattern_.col.end(), nb.begin(), nb.end());
+    pattern_.row_ptr[i + 1] = static_cast<int>(pattern_.col.size());
+  }
+  pattern_.val.assign(pattern_.col.size(), 0.0);
+  mass_ = Eigen::VectorXd::Zero(n);
+  diag_.resize(n);
+  for (int i = 0; i < n; ++i) diag_[i] = pattern_.find(i, i);
+  slot_.resize(static_cast<size_t>(tets.rows()) * 12);
+  for (Eigen::Index t = 0; t < tets.rows(); ++t)
+    for (int a = 0; a < 4; ++a)
+      for (int q = 0; q < 3; ++q) {
+        const int b = q < a ? q : q + 1;
+        slot_[12 * t + 3 * a + q] = pattern_.find(tets(t, a), tets(t, b));
+      }
+}
+
+void CotanLaplacian::assemble(Device& device, const Points& x) {
+  const int n = num_vertices();
+  if (x.rows() != n)
+    throw InputError("CotanLaplacian::assemble: " + std::to_string(x.rows()) +
+                     " positions for " + std::to_string(n) + " vertices");
+  const Eigen::Index m = tets_.rows();
+  if (device.is_host() || n == 0) {
+    // Same gather as the kernel (row by row over incident tets in increasing order).
+    std::vector<double> w(static_cast<size_t>(m) * 6), vol(m);
+    for (Eigen::Index t = 0; t < m; ++t) vol[t] = tet_weights(x, tets_, t, &w[6 * t]);
+    const Incidence inc = vertex_tet_incidence(n, tets_);
+    auto& val = pattern_.val;
+    for (int i = 0; i < n; ++i) {
+      for (int k = pattern_.row_ptr[i]; k < pattern_.row_ptr[i + 1]; ++k) val[k] = 0;
+      double d = 0, vs = 0;
+      for (int k = inc.offset[i]; k < inc.offset[i + 1]; ++k) {
+        const int t = inc.tet_of[k];
+        int a = 0;
+        for (int c = 1; c < 4; ++c)
+          if (tets_(t, c) == i) a = c;
+        for (int q = 0; q < 3; ++q) {
+          const int b = q < a ? q : q + 1;
+          const double ww = w[6 * t + kEdge[a][b]];
+          val[slot_[12 * t + 3 * a + q]] += ww;
+          d -= ww;
+        }
+        vs += vol[t];
+      }
+      val[diag_[i]] = d;
+      mass_[i] = 0.25 * vs;
+    }
+    host_stale_ = false;
+    device_ = &device;
+    return;
+  }
+  auto& q = device.queue();
+  if (!dev_ || dev_->device != &device) {
+    dev_ = std::make_shared<DeviceState>(device);
+    auto& s = *dev_;
+    s.device = &device;
+    const Incidence inc = vertex_tet_incidence(n, tets_);
+    s.tets = bc::vector<int>(tets_.data(), tets_.data() + tets_.size(), q);
+    s.row_ptr = bc::vector<int>(pattern_.row_ptr.begin(), pattern_.row_ptr.end(), q);
+    s.col = bc::vector<int>(pattern_.col.begin(), pattern_.col.end(), q);
+    s.inc_offset = bc::vector<int>(inc.offset.begin(), inc.offset.end(), q);
+    s.inc_tet = bc::vector<int>(std::max<size_t>(inc.tet_of.size(), 1), device.context());
+    if (!inc.tet_of.empty()) bc::copy(inc.tet_of.begin(), inc.tet_of.end(), s.inc_tet.begin(), q);
+    s.slot = bc::vector<int>(std::max<size_t>(slot_.size(), 1), device.context());
+    if (!slot_.empty()) bc::copy(slot_.begin(), slot_.end(), s.slot.begin(), q);
+    s.diag = bc::vector<int>(diag_.begin(), diag_.end(), q);
+    s.x = bc::vector<double>(static_cast<size_t>(n) * 3, device.context());
+    s.w = bc::vector<double>(std::max<size_t>(static_cast<size_t>(m) * 6, 1), device.context());
+    s.vol = bc::vector<double>(std::max<size_t>(static_cast<size_t>(m), 1), device.context());
+    s.val = bc::vector<double>(std::max<size_t>(pattern_.col.size(), 1), device.context());
+    s.mass = bc::vector<double>(static_cast<size_t>(n), device.context());
+    s.k_weights = device.kernel("laplacian", "tet_weights");
+    s.k_rows = device.kernel("laplacian", "assemble_rows");
+    s.k_weights.set_arg(0, static_cast<int>(m));
+    s.k_weights.set_arg(1, s.x);
+    s.k_weights.set_arg(2, s.tets);
+    s.k_weights.set_arg(3, s.w);
+    s.k_weights.set_arg(4, s.vol);
+    s.k_rows.set_arg(0, n);
+    s.k_rows.set_arg(1, s.row_ptr);
+    s.k_rows.set_arg(2, s.inc_offset);
+    s.k_rows.set_arg(3, s.inc_tet);
+    s.k_rows.set_arg(4, s.tets);
+    s.k_rows.set_arg(5, s.slot);
+    s.k_rows.set_arg(6, s.diag);
+    s.k_rows.set_arg(7, s.w);
+    s.k_rows.set_arg(8, s.vol);
+    s.k_rows.set_arg(9, s.val);
+    s.k_rows.set_arg(10, s.mass);
+  }
+  auto& s = *dev_;
+  bc::copy(x.data(), x.data() + x.size(), s.x.begin(), q);
+  if (m > 0) device.launch(s.k_weights, static_cast<size_t>(m));
+  device.launch(s.k_rows, static_cast<size_t>(n));
+  device_ = &device;
+  host_stale_ = true;
+}
+
+void CotanLaplacian::download() const {
+  if (!host_stale_) return;
+  auto& q = dev_->device->queue();
+  if (!pattern_.val.empty())
+    bc::copy(dev_->val.begin(), dev_->val.begin() + pattern_.val.size(), pattern_.val.begin(), q);
+  if (mass_.size() > 0) bc::copy(dev_->mass.begin(), dev_->mass.end(), mass_.data(), q);
+  host_stale_ = false;
+}
+
+const CsrMatrix& CotanLaplacian::matrix() const {
+  download();
+  return pattern_;
+}
+
+const Eigen::VectorXd& CotanLaplacian::mass() const {
+  download();
+  return mass_;
+}
+
+namespace {
+[[noreturn]] void no_device_values() {
+  throw std::logic_error("CotanLaplacian: device buffers requested but no OpenCL assemble ran");
+}
+}  // namespace
+
+bc::vector<int>& CotanLaplacian::device_row_ptr() {
+  if (!dev_) no_device_values();
+  return dev_->row_ptr;
+}
+bc::vector<int>& CotanLaplacian::device_col() {
+  if (!dev_) no_device_values();
+  return dev_->col;
+}
+bc::vector<double>& CotanLaplacian::device_values() {
+  if (!dev_) no_device_values();
+  return dev_->val;
+}
+bc::vector<double>& CotanLaplacian::device_mass() {
+  if (!dev_) no_device_values();
+  return dev_->mass;
+}
+
+}  // namespace vpm
