@@ -1,0 +1,136 @@
+#pragma once
+// The initial (fold-free) map of a tet mesh to the closed unit ball (paper 4.1; DESIGN.md 4.1
+// steps 1-4):
+//
+//  1. split: every interior edge whose two ends are boundary vertices is split at its midpoint
+//     (all tets around it are halved), repeated up to `max_split_rounds` times; a tet whose
+//     four vertices are on the boundary with all six edges on the boundary surface (no
+//     interior edge left to split) is split 1 -> 4 at its centroid. Afterwards no tet has four
+//     boundary vertices. Inserted vertices come after the input ones (input order kept).
+//  2. boundary -> sphere: spherical conformal map with linear solves only (Choi, Lam & Lui
+//     2015): planar harmonic map of the surface minus its most regular triangle onto that
+//     triangle, inverse stereographic projection (rescaled so the north and south triangles
+//     have comparable size), south-pole correction (quasi-conformal composition through the
+//     linear Beltrami solver, the 10% of vertices nearest the south pole fixed), orientation
+//     check (mirrored if reversed), Moebius balancing (hyperbolic translations of the ball that
+//     move the input-area-weighted centroid of the sphere points to the origin), optionally an
+//     area-equalising flow on the sphere. Steps that would flip a boundary triangle are
+//     undone and reported.
+//  3. interior: harmonic map (P1 cotangent stiffness of the refined input mesh, Dirichlet on
+//     the boundary), solved on the host (Eigen) or by the shared solver on the device.
+//  4. untangle: vpm::untangle (Garanzha et al. 2021) with the boundary fixed; the reference
+//     shape of each tet is the refined input tet scaled to the ball mesh's volume.
+//
+// A map that is still folded after step 4 is never returned: NumericalError (exit 3) with the
+// number of folded tets, where they are, and the smallest dihedral angle of the input (meshes
+// with slivers of 0.01-0.05 degrees are known to defeat this pipeline, DESIGN.md 4.2).
+#include <array>
+#include <string>
+#include <vector>
+
+#include "vpm/json.hpp"
+#include "vpm/mesh.hpp"
+#include "vpm/untangle.hpp"
+
+namespace vpm {
+
+class Device;
+
+struct InitialMapOptions {
+  // ---- step 1: edge split
+  bool split_edges = true;        ///< false: keep the input connectivity (tets with four
+                                  ///< boundary vertices then usually flatten on the sphere)
+  int max_split_rounds = 4;
+  // ---- step 2: boundary -> sphere
+  bool south_pole_correction = true;
+  bool moebius_balance = true;
+  int moebius_max_iterations = 200;
+  double moebius_tolerance = 1e-9;   ///< stop when |area-weighted centroid| is below this
+  /// Area-equalising flow on the sphere after balancing (for users who freeze the boundary
+  /// during the Moser rounds; the sliding boundary does not need it). Off by default.
+  bool area_correction = false;
+  int area_correction_steps = 30;
+  // ---- step 3: harmonic interior
+  double solver_tolerance = 1e-10;   ///< relative residual when an iterative solver is used
+  // ---- step 4: untangling
+  enum class Untangle { Never, IfFolded, Always };
+  /// IfFolded: only when the harmonic map folded a tet. Always: also improve a fold-free map
+  /// (lower distortion, DESIGN.md 4.1 table: 0.363 -> 0.318 on Colin27).
+  Untangle untangle = Untangle::IfFolded;
+  UntangleOptions untangle_options{};   ///< theta = 1/128 by default
+  /// Throw NumericalError when folds remain (the default and the contract of `vpm map`).
+  /// false: return the folded map and let the caller read report["folds_after_untangle"].
+  bool throw_on_folds = true;
+  /// Number of worst tets (smallest dihedral angle) listed in report["input_quality"].
+  int report_worst_tets = 5;
+};
+
+struct InitialMapResult {
+  /// The refined mesh in input coordinates: input vertices first (input order), then the
+  /// inserted ones; tets refined; input point fields carried (inserted vertices: mean of the
+  /// edge ends, integer fields from the first end), input cell fields carried to the child
+  /// tets, and point field `original_position` (n x 3) = position in the input mesh.
+  TetMesh mesh;
+  /// Same rows as mesh.vertices: positions in the closed unit ball, boundary vertices on the
+  /// sphere (| |x| - 1 | <= 1e-12), every tet positively oriented (fold-free).
+  Points ball;
+  /// Boundary vertex mask of `mesh` (1 = on the sphere), n entries.
+  std::vector<char> boundary;
+  /// Report: {"device", "input": {"vertices","tets"}, "refined": {"vertices","tets"},
+  ///   "split": {"rounds","inserted_vertices","four_boundary_tets_before","four_boundary_tets_after",
+  ///             "centroid_splits"},
+  ///   "input_quality": {"min_dihedral_deg","min_dihedral_tet","tets_below_1deg",
+  ///                     "tets_below_5deg","worst": [{"tet","min_dihedral_deg","centroid"}]},
+  ///   "boundary": {"vertices","faces","flipped_triangles","area_distortion_conformal",
+  ///                "area_distortion_balanced","area_distortion_final","moebius_iterations",...},
+  ///   "harmonic": {"inverted_tets"}, "untangle": UntangleResult::to_json() (when run),
+  ///   "folds_before_untangle", "folds_after_untangle", "metrics": to_json(map_metrics),
+  ///   "timings_s": {"split","boundary","harmonic","untangle","total"}}
+  /// area_distortion_* = mean over boundary triangles of |area ratio - 1| (areas normalised).
+  Json report;
+};
+
+/// Maps `input` (validated tet mesh: positively oriented tets, boundary one closed genus-0
+/// surface) to the unit ball; see above. Numerical work runs on `device` where a device
+/// path exists (the harmonic solve); the result does not depend on the device beyond
+/// round-off. Throws InputError for an input that is not a ball topologically, NumericalError
+/// when the map cannot be made fold-free (unless options.throw_on_folds is false).
+InitialMapResult initial_map(Device& device, const TetMesh& input, const InitialMapOptions& options = {});
+
+// ---- the steps, exposed for tests, benchmarks and other stages --------------------------
+
+/// Result of step 1.
+struct SplitResult {
+  TetMesh mesh;                 ///< refined mesh (input vertices first), fields carried
+  std::vector<int> parent_tet;  ///< for each refined tet, the input tet it lies in
+  /// For each refined vertex: the two input-or-earlier vertices whose midpoint it is
+  /// ({v, v} for input vertices; {a, b} with a, b < v, or {-1, -1} for a centroid).
+  std::vector<std::array<int, 2>> parents;
+  int rounds = 0;
+  int inserted_vertices = 0;
+  int four_boundary_tets_before = 0;
+  int four_boundary_tets_after = 0;
+  int centroid_splits = 0;
+};
+/// Step 1 on `input` (positively oriented tets).
+SplitResult split_boundary_edges(const TetMesh& input, int max_rounds = 4);
+
+/// Number of tets whose four vertices are all boundary vertices.
+int count_four_boundary_tets(const Tets& tets, const std::vector<char>& boundary);
+
+/// Result of step 2.
+struct SphereMapResult {
+  Points sphere;       ///< k x 3 unit vectors, one per surface vertex (rows of `vertices`)
+  int flipped_triangles = 0;
+  Json report;         ///< the "boundary" object described above
+};
+/// Step 2 for a closed genus-0 triangle surface with outward orientation (vertices unused by
+/// a triangle are mapped to (0,0,1) and ignored). Throws InputError if not genus 0.
+SphereMapResult sphere_map(const TriSurface& surface, const InitialMapOptions& options = {});
+
+/// Mean over `triangles` of |a_sphere/A_sphere / (a_in/A_in) - 1|.
+double area_distortion(const Points& input, const Points& sphere, const Triangles& triangles);
+/// Number of triangles with det(a, b, c) <= 0 (inward-facing on the sphere).
+int flipped_sphere_triangles(const Points& sphere, const Triangles& triangles);
+
+}  // namespace vpm

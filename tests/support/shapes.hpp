@@ -1,0 +1,23 @@
+#pragma once
+// Synthetic solids for the initial-map and untangling tests, built by mapping structured
+// box meshes (Kuhn subdivision, positively oriented, boundary a topological sphere).
+#include "vpm/mesh.hpp"
+
+namespace vpm::test {
+
+/// The box [0,nx/n]x[0,ny/n]x[0,nz/n] (unit spacing 1/n... see below) as nx*ny*nz cells of 6
+/// tets each: vertex (i,j,k) at (i/nx, j/ny, k/nz) of the unit cube. (nx+1)(ny+1)(nz+1) vertices.
+TetMesh box_mesh(int nx, int ny, int nz);
+
+/// Convex: ball_mesh(n) scaled to the ellipsoid with semi-axes 1.8 : 1 : 0.6.
+TetMesh ellipsoid_mesh(int n);
+
+/// Non-convex: a slab 3n x n x n cells bent into a C (270 degrees of arc, inner radius 1,
+/// cross-section 0.6 x 0.6).
+TetMesh bent_mesh(int n);
+
+/// Non-convex: a rod 3n x n x n cells of length 3 with a round cross-section whose radius
+/// goes 0.6 -> 0.25 (neck in the middle) -> 0.6.
+TetMesh dumbbell_mesh(int n);
+
+}  // namespace vpm::test

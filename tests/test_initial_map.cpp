@@ -1,0 +1,108 @@
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <iostream>
+
+#include "support/devices.hpp"
+#include "support/fixtures.hpp"
+#include "support/shapes.hpp"
+#include "vpm/device.hpp"
+#include "vpm/error.hpp"
+#include "vpm/geometry.hpp"
+#include "vpm/initial_map.hpp"
+#include "vpm/topology.hpp"
+
+using namespace vpm;
+
+namespace {
+void check_map(const InitialMapResult& r, const TetMesh& input) {
+  const TetMesh& m = r.mesh;
+  REQUIRE(r.ball.rows() == m.num_vertices());
+  // input vertices first, unchanged
+  CHECK((m.vertices.topRows(input.num_vertices()) - input.vertices).norm() == 0.0);
+  const Field* op = m.find_point_field("original_position");
+  REQUIRE(op != nullptr);
+  CHECK((op->values - FieldValues(m.vertices)).norm() == 0.0);
+  // fold-free, boundary on the sphere, interior inside
+  CHECK(inverted_tets(r.ball, m.tets).empty());
+  const Triangles bf = boundary_faces(m.tets);
+  CHECK(flipped_sphere_triangles(r.ball, bf) == 0);
+  const auto b = boundary_vertex_mask(m.num_vertices(), bf);
+  double err = 0, rmax = 0;
+  for (int i = 0; i < m.num_vertices(); ++i) {
+    if (b[i]) err = std::max(err, std::abs(r.ball.row(i).norm() - 1));
+    else rmax = std::max(rmax, r.ball.row(i).norm());
+  }
+  CHECK(err < 1e-12);
+  CHECK(rmax < 1.0);
+  CHECK(count_four_boundary_tets(m.tets, b) == 0);
+  CHECK(r.report.find("folds_after_untangle")->number() == 0);
+}
+}  // namespace
+
+TEST_CASE("edge split leaves no four-boundary-vertex tet and keeps the volume") {
+  for (const TetMesh& in : {test::cube_mesh(3), test::ball_mesh(4), test::bent_mesh(2)}) {
+    const SplitResult s = split_boundary_edges(in);
+    const auto b = boundary_vertex_mask(s.mesh.num_vertices(), boundary_faces(s.mesh.tets));
+    CHECK(s.four_boundary_tets_before > 0);
+    CHECK(s.four_boundary_tets_after == 0);
+    CHECK(count_four_boundary_tets(s.mesh.tets, b) == 0);
+    const Eigen::VectorXd v = tet_volumes(s.mesh.vertices, s.mesh.tets);
+    CHECK(v.minCoeff() > 0);
+    CHECK(v.sum() == Approx(tet_volumes(in.vertices, in.tets).sum()).epsilon(1e-13));
+    CHECK(s.mesh.num_vertices() == in.num_vertices() + s.inserted_vertices);
+    // the boundary surface is unchanged: same faces on the input vertices
+    CHECK(boundary_faces(s.mesh.tets).rows() == boundary_faces(in.tets).rows());
+    // inserted vertices are midpoints of their parents
+    for (int i = in.num_vertices(); i < s.mesh.num_vertices(); ++i) {
+      const auto p = s.parents[i];
+      if (p[0] < 0) continue;
+      CHECK(p[0] < i);
+      CHECK(p[1] < i);
+      CHECK((s.mesh.vertices.row(i) - 0.5 * (s.mesh.vertices.row(p[0]) + s.mesh.vertices.row(p[1]))).norm() < 1e-15);
+    }
+  }
+}
+
+TEST_CASE("edge split carries cell and point fields") {
+  TetMesh in = test::cube_mesh(2);
+  FieldValues lab(in.num_tets(), 1);
+  for (int i = 0; i < in.num_tets(); ++i) lab(i, 0) = i % 5;
+  in.set_cell_field("label", lab, true);
+  FieldValues px(in.num_vertices(), 1);
+  px.col(0) = in.vertices.col(0);
+  in.set_point_field("xcoord", px);
+  const SplitResult s = split_boundary_edges(in);
+  const Field* l = s.mesh.find_cell_field("label");
+  REQUIRE(l);
+  for (int i = 0; i < s.mesh.num_tets(); ++i) CHECK(l->values(i, 0) == lab(s.parent_tet[i], 0));
+  const Field* x = s.mesh.find_point_field("xcoord");
+  REQUIRE(x);
+  CHECK((x->values.col(0) - s.mesh.vertices.col(0)).cwiseAbs().maxCoeff() < 1e-15);
+}
+
+TEST_CASE("sphere map of a closed surface: no flipped triangles, balanced") {
+  const TetMesh m = test::ellipsoid_mesh(8);
+  TriSurface s{m.vertices, boundary_faces(m.tets)};
+  const SphereMapResult r = sphere_map(s);
+  CHECK(r.flipped_triangles == 0);
+  const auto b = boundary_vertex_mask(m.num_vertices(), s.triangles);
+  for (int i = 0; i < m.num_vertices(); ++i)
+    if (b[i]) CHECK(std::abs(r.sphere.row(i).norm() - 1) < 1e-14);
+  CHECK(r.report.find("area_distortion_balanced")->number() < r.report.find("area_distortion_conformal")->number() + 1e-12);
+  std::cout << "ellipsoid sphere map: " << r.report.dump(-1) << "\n";
+}
+
+TEST_CASE("initial map of convex and non-convex shapes is fold-free") {
+  auto& dev = *Device::host();
+  const std::pair<const char*, TetMesh> shapes[] = {
+      {"cube", test::cube_mesh(6)},        {"ball", test::ball_mesh(8)},
+      {"ellipsoid", test::ellipsoid_mesh(8)}, {"bent", test::bent_mesh(4)},
+      {"dumbbell", test::dumbbell_mesh(4)}};
+  for (const auto& [name, in] : shapes) {
+    INFO(name);
+    const InitialMapResult r = initial_map(dev, in);
+    check_map(r, in);
+    std::cout << name << ": " << r.report.dump(-1) << "\n";
+  }
+}

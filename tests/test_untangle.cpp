@@ -1,0 +1,107 @@
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "support/fixtures.hpp"
+#include "support/shapes.hpp"
+#include "vpm/geometry.hpp"
+#include "vpm/topology.hpp"
+#include "vpm/untangle.hpp"
+
+using namespace vpm;
+
+namespace {
+std::vector<char> boundary_of(const TetMesh& m) {
+  return boundary_vertex_mask(m.num_vertices(), boundary_faces(m.tets));
+}
+// Pushes interior vertex `v` far through its neighbours so several tets fold.
+Points fold_vertex(const TetMesh& m, int v, const Eigen::RowVector3d& shift) {
+  Points x = m.vertices;
+  x.row(v) += shift;
+  return x;
+}
+int interior_vertex_near(const TetMesh& m, const Eigen::RowVector3d& p) {
+  const auto b = boundary_of(m);
+  int best = -1;
+  double d = 1e300;
+  for (int i = 0; i < m.num_vertices(); ++i)
+    if (!b[i] && (m.vertices.row(i) - p).norm() < d) {
+      d = (m.vertices.row(i) - p).norm();
+      best = i;
+    }
+  return best;
+}
+}  // namespace
+
+TEST_CASE("untangle clears folds made by dragging interior vertices, boundary untouched") {
+  const TetMesh m = test::ball_mesh(6);
+  const auto fixed = boundary_of(m);
+  const int v1 = interior_vertex_near(m, {0, 0, 0});
+  const int v2 = interior_vertex_near(m, {0.5, 0.3, -0.2});
+  Points x = fold_vertex(m, v1, {0.45, 0.1, 0});
+  x.row(v2) += Eigen::RowVector3d(-0.4, 0.2, 0.3);
+  const int before = static_cast<int>(inverted_tets(x, m.tets).size());
+  REQUIRE(before > 0);
+  const Points x0 = x;
+  const UntangleResult r = untangle(m.vertices, m.tets, x, fixed);
+  CHECK(r.inverted_before == before);
+  CHECK(r.inverted_after == 0);
+  CHECK(inverted_tets(x, m.tets).empty());
+  CHECK(r.min_det_after > 0);
+  CHECK(r.min_det_before <= 0);
+  for (int i = 0; i < m.num_vertices(); ++i)
+    if (fixed[i]) CHECK((x.row(i) - x0.row(i)).norm() == 0.0);
+  // total volume is fixed by the boundary
+  CHECK(tet_volumes(x, m.tets).sum() == Approx(tet_volumes(m.vertices, m.tets).sum()).epsilon(1e-12));
+}
+
+TEST_CASE("untangle of a fold-free map keeps it fold-free and lowers the energy") {
+  const TetMesh m = test::ellipsoid_mesh(5);
+  const auto fixed = boundary_of(m);
+  Points x = m.vertices;
+  for (int i = 0; i < x.rows(); ++i)  // a smooth non-affine interior warp
+    if (!fixed[i]) x(i, 0) += 0.05 * std::sin(3 * x(i, 1));
+  REQUIRE(inverted_tets(x, m.tets).empty());
+  const UntangleResult r = untangle(m.vertices, m.tets, x, fixed);
+  CHECK(r.inverted_after == 0);
+  CHECK(r.energy_after <= r.energy_before);
+}
+
+TEST_CASE("local untangle frees only the neighbourhood of the folded tets") {
+  const TetMesh m = test::ball_mesh(8);
+  const auto fixed = boundary_of(m);
+  const int v = interior_vertex_near(m, {0.2, -0.1, 0.1});
+  Points x = fold_vertex(m, v, {0.3, 0.05, 0.02});
+  const std::vector<int> folded = inverted_tets(x, m.tets);
+  REQUIRE(!folded.empty());
+  const Points x0 = x;
+  const UntangleResult r = untangle_local(m.vertices, m.tets, x, fixed, folded);
+  CHECK(r.inverted_after == 0);
+  CHECK(r.free_vertices > 0);
+  CHECK(r.free_vertices < m.num_vertices() / 4);
+  int moved = 0;
+  for (int i = 0; i < m.num_vertices(); ++i) moved += (x.row(i) - x0.row(i)).norm() > 0;
+  CHECK(moved <= r.free_vertices);
+  // a vertex far away did not move
+  const int far = interior_vertex_near(m, {-0.6, 0.0, 0.0});
+  CHECK((x.row(far) - x0.row(far)).norm() == 0.0);
+}
+
+TEST_CASE("untangle reports folds it cannot clear") {
+  // every vertex fixed: a mirrored tet stays mirrored and is reported
+  TetMesh m = test::single_tet();
+  Points x = m.vertices;
+  x.row(3) << 0, 0, -1;
+  const std::vector<char> fixed(4, 1);
+  const UntangleResult r = untangle(m.vertices, m.tets, x, fixed);
+  CHECK(r.inverted_before == 1);
+  CHECK(r.inverted_after == 1);
+  REQUIRE(r.inverted_tets.size() == 1);
+  CHECK(r.inverted_tets[0] == 0);
+}
+
+TEST_CASE("untangle refuses inconsistent sizes") {
+  const TetMesh m = test::single_tet();
+  Points x = m.vertices;
+  CHECK_THROWS_AS(untangle(m.vertices, m.tets, x, std::vector<char>(3, 0)), InputError);
+}
