@@ -33,9 +33,9 @@ SolverMethod parse_solver_method(const std::string& name);
 const char* to_string(SolverMethod m);
 
 struct SolverOptions {
-  /// Stop when ||b - A x||_2 <= relative_tolerance * ||b||_2 (b: the right side after Dirichlet
-  /// elimination; for `paper` the residual of the original system A x = b is what is reported
-  /// and tested).
+  /// Stop when the true residual ||b - A x||_2 <= relative_tolerance * ||b||_2 (b: the right
+  /// side after Dirichlet elimination). For `paper` the test is on the normal equations,
+  /// ||A^T (b - A x)|| <= tol ||A^T b||, and SolverStats reports the original system's residual.
   double relative_tolerance = 1e-8;
   /// Iteration cap per right-hand side; reaching it throws NumericalError.
   int max_iterations = 20000;

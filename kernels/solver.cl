@@ -1,0 +1,233 @@
+// Sparse solver primitives (vpm/solver.hpp): CSR spmv one row per work item, fused CG and
+// BiCGSTAB vector updates, and two-stage dot products. Scalars (alpha, beta, ...) stay on the
+// device in a small array S; the host reads one residual per iteration.
+//
+// Reductions run on a fixed number G of work items (global size G, a multiple of the local
+// size): each writes one partial sum, a single work item then combines them ("finalize").
+// With -DCHUNKED (CPU devices) each work item sums a contiguous chunk, else a grid stride
+// (coalesced on GPUs).
+
+// Scalar slots (keep in sync with host/solver_backend.hpp)
+#define S_RZ 0
+#define S_RR 1
+#define S_ALPHA 2
+#define S_BETA 3
+#define S_RHO 4
+#define S_OMEGA 5
+
+#ifdef CHUNKED
+#define RANGE_BEGIN(n)                                                   \
+  const int g_ = get_global_id(0), G_ = get_global_size(0);              \
+  const int chunk_ = (((n) + G_ - 1) / G_ + 7) & ~7;                     \
+  const int b_ = min((n), g_ * chunk_), e_ = min((n), b_ + chunk_);      \
+  for (int i = b_; i < e_; ++i)
+#else
+#define RANGE_BEGIN(n) \
+  for (int i = get_global_id(0); i < (n); i += get_global_size(0))
+#endif
+
+// y = A x on rows that are not masked; masked rows give 0.
+__kernel void spmv(const int n, __global const int* row_ptr, __global const int* col,
+                   __global const real* val, __global const char* mask,
+                   __global const real* x, __global real* y) {
+  const int i = get_global_id(0);
+  if (i >= n) return;
+  real s = 0.0;
+  if (!mask[i]) {
+    const int e = row_ptr[i + 1];
+    for (int k = row_ptr[i]; k < e; ++k) s += val[k] * x[col[k]];
+  }
+  y[i] = s;
+}
+
+// y = A diag(d) x (right Jacobi preconditioning fused into the product).
+__kernel void spmv_scaled(const int n, __global const int* row_ptr, __global const int* col,
+                          __global const real* val, __global const char* mask,
+                          __global const real* d, __global const real* x, __global real* y) {
+  const int i = get_global_id(0);
+  if (i >= n) return;
+  real s = 0.0;
+  if (!mask[i]) {
+    const int e = row_ptr[i + 1];
+    for (int k = row_ptr[i]; k < e; ++k) {
+      const int j = col[k];
+      s += val[k] * d[j] * x[j];
+    }
+  }
+  y[i] = s;
+}
+
+// r = b - A x on unmasked rows, 0 on masked rows.
+__kernel void residual(const int n, __global const int* row_ptr, __global const int* col,
+                       __global const real* val, __global const char* mask,
+                       __global const real* b, __global const real* x, __global real* r) {
+  const int i = get_global_id(0);
+  if (i >= n) return;
+  real s = 0.0;
+  if (!mask[i]) {
+    s = b[i];
+    const int e = row_ptr[i + 1];
+    for (int k = row_ptr[i]; k < e; ++k) s -= val[k] * x[col[k]];
+  }
+  r[i] = s;
+}
+
+// Jacobi: d_i = 1 / A_ii (0 on masked rows, 1 where the diagonal is 0).
+__kernel void inv_diagonal(const int n, __global const int* row_ptr, __global const int* col,
+                           __global const real* val, __global const char* mask,
+                           __global real* d) {
+  const int i = get_global_id(0);
+  if (i >= n) return;
+  real a = 0.0;
+  for (int k = row_ptr[i]; k < row_ptr[i + 1]; ++k)
+    if (col[k] == i) a = val[k];
+  d[i] = mask[i] ? 0.0 : (a != 0.0 ? 1.0 / a : 1.0);
+}
+
+// Jacobi for the normal equations: d_i = 1 / sum_{j unmasked} B_ij^2 where B is the transpose
+// of the system matrix (so this is the column norm of A), 0 on masked rows.
+__kernel void inv_row_squares(const int n, __global const int* row_ptr, __global const int* col,
+                              __global const real* val, __global const char* mask,
+                              __global real* d) {
+  const int i = get_global_id(0);
+  if (i >= n) return;
+  real a = 0.0;
+  for (int k = row_ptr[i]; k < row_ptr[i + 1]; ++k)
+    if (!mask[col[k]]) a += val[k] * val[k];
+  d[i] = mask[i] ? 0.0 : (a != 0.0 ? 1.0 / a : 1.0);
+}
+
+// partial[g] = a . b over this work item's range
+__kernel void dot_partial(const int n, __global const real* a, __global const real* b,
+                          __global real* partial) {
+  real s = 0.0;
+  RANGE_BEGIN(n) s += a[i] * b[i];
+  partial[get_global_id(0)] = s;
+}
+
+// partial[g] = a . b, partial[G + g] = c . e
+__kernel void dot2_partial(const int n, __global const real* a, __global const real* b,
+                           __global const real* c, __global const real* e,
+                           __global real* partial) {
+  real s = 0.0, t = 0.0;
+  RANGE_BEGIN(n) {
+    s += a[i] * b[i];
+    t += c[i] * e[i];
+  }
+  partial[get_global_id(0)] = s;
+  partial[get_global_size(0) + get_global_id(0)] = t;
+}
+
+// One work item combines the partial sums and updates the scalars.
+#define OP_CG_INIT 0   // S[RZ] = p0, S[RR] = p1
+#define OP_CG_ALPHA 1  // S[ALPHA] = S[RZ] / p0
+#define OP_CG_BETA 2   // S[BETA] = p0 / S[RZ], S[RZ] = p0, S[RR] = p1
+#define OP_BI_INIT 3   // S[RHO] = p0, S[RR] = p1
+#define OP_BI_ALPHA 4  // S[ALPHA] = S[RHO] / p0
+#define OP_BI_OMEGA 5  // S[OMEGA] = p0 / p1
+#define OP_BI_BETA 6   // S[BETA] = (p0 / S[RHO]) (S[ALPHA] / S[OMEGA]), S[RHO] = p0, S[RR] = p1
+#define OP_NORM 7      // S[RR] = p0
+__kernel void finalize(const int G, const int op, __global const real* partial,
+                       __global real* S) {
+  if (get_global_id(0) != 0) return;
+  real p0 = 0.0, p1 = 0.0;
+  for (int g = 0; g < G; ++g) p0 += partial[g];
+  if (op == OP_CG_INIT || op == OP_CG_BETA || op == OP_BI_INIT || op == OP_BI_OMEGA ||
+      op == OP_BI_BETA)
+    for (int g = 0; g < G; ++g) p1 += partial[G + g];
+  switch (op) {
+    case OP_CG_INIT: S[S_RZ] = p0; S[S_RR] = p1; break;
+    case OP_CG_ALPHA: S[S_ALPHA] = S[S_RZ] / p0; break;
+    case OP_CG_BETA: S[S_BETA] = p0 / S[S_RZ]; S[S_RZ] = p0; S[S_RR] = p1; break;
+    case OP_BI_INIT: S[S_RHO] = p0; S[S_RR] = p1; break;
+    case OP_BI_ALPHA: S[S_ALPHA] = S[S_RHO] / p0; break;
+    case OP_BI_OMEGA: S[S_OMEGA] = p0 / p1; break;
+    case OP_BI_BETA:
+      S[S_BETA] = (p0 / S[S_RHO]) * (S[S_ALPHA] / S[S_OMEGA]);
+      S[S_RHO] = p0;
+      S[S_RR] = p1;
+      break;
+    case OP_NORM: S[S_RR] = p0; break;
+  }
+}
+
+// CG start: p = d r; partials r . p and r . r
+__kernel void cg_init(const int n, __global const real* r, __global const real* d,
+                      __global real* p, __global real* partial) {
+  real s = 0.0, t = 0.0;
+  RANGE_BEGIN(n) {
+    const real ri = r[i], pi = d[i] * ri;
+    p[i] = pi;
+    s += ri * pi;
+    t += ri * ri;
+  }
+  partial[get_global_id(0)] = s;
+  partial[get_global_size(0) + get_global_id(0)] = t;
+}
+
+// CG: x += alpha p; r -= alpha q; partials r . d r and r . r
+__kernel void cg_update_xr(const int n, __global const real* S, __global real* x,
+                           __global real* r, __global const real* p, __global const real* q,
+                           __global const real* d, __global real* partial) {
+  const real alpha = S[S_ALPHA];
+  real s = 0.0, t = 0.0;
+  RANGE_BEGIN(n) {
+    x[i] += alpha * p[i];
+    const real ri = r[i] - alpha * q[i];
+    r[i] = ri;
+    s += ri * d[i] * ri;
+    t += ri * ri;
+  }
+  partial[get_global_id(0)] = s;
+  partial[get_global_size(0) + get_global_id(0)] = t;
+}
+
+// CG: p = d r + beta p
+__kernel void cg_update_p(const int n, __global const real* S, __global const real* r,
+                          __global const real* d, __global real* p) {
+  const int i = get_global_id(0);
+  if (i >= n) return;
+  p[i] = d[i] * r[i] + S[S_BETA] * p[i];
+}
+
+// BiCGSTAB: s = r - alpha v
+__kernel void bicg_s(const int n, __global const real* S, __global const real* r,
+                     __global const real* v, __global real* s) {
+  const int i = get_global_id(0);
+  if (i >= n) return;
+  s[i] = r[i] - S[S_ALPHA] * v[i];
+}
+
+// BiCGSTAB: x += d (alpha p + omega s); r = s - omega t; partials r0 . r and r . r
+__kernel void bicg_update(const int n, __global const real* S, __global real* x,
+                          __global real* r, __global const real* s, __global const real* t,
+                          __global const real* p, __global const real* d,
+                          __global const real* r0, __global real* partial) {
+  const real alpha = S[S_ALPHA], omega = S[S_OMEGA];
+  real a = 0.0, b = 0.0;
+  RANGE_BEGIN(n) {
+    x[i] += d[i] * (alpha * p[i] + omega * s[i]);
+    const real ri = s[i] - omega * t[i];
+    r[i] = ri;
+    a += r0[i] * ri;
+    b += ri * ri;
+  }
+  partial[get_global_id(0)] = a;
+  partial[get_global_size(0) + get_global_id(0)] = b;
+}
+
+// BiCGSTAB: p = r + beta (p - omega v)
+__kernel void bicg_p(const int n, __global const real* S, __global const real* r,
+                     __global const real* v, __global real* p) {
+  const int i = get_global_id(0);
+  if (i >= n) return;
+  p[i] = r[i] + S[S_BETA] * (p[i] - S[S_OMEGA] * v[i]);
+}
+
+// triad (bandwidth reference for benchmarks): a = b + s c
+__kernel void triad(const int n, const real s, __global real* a, __global const real* b,
+                    __global const real* c) {
+  const int i = get_global_id(0);
+  if (i >= n) return;
+  a[i] = b[i] + s * c[i];
+}
