@@ -1,0 +1,63 @@
+// Isotropic surface remeshing with CGAL Polygon_mesh_processing (GPL-3+ parts of CGAL).
+// The only translation unit that includes CGAL (it compiles slowly).
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/angle_and_area_smoothing.h>
+#include <CGAL/Polygon_mesh_processing/remesh.h>
+#include <CGAL/Surface_mesh.h>
+
+#include <string>
+#include <vector>
+
+#include "vpm/error.hpp"
+#include "vpm/mesh_image.hpp"
+
+namespace vpm {
+
+namespace {
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Mesh = CGAL::Surface_mesh<K::Point_3>;
+namespace PMP = CGAL::Polygon_mesh_processing;
+}  // namespace
+
+TriSurface remesh_surface(const TriSurface& surface, double edge_length, int iterations) {
+  Mesh mesh;
+  std::vector<Mesh::Vertex_index> vid(surface.vertices.rows());
+  for (int i = 0; i < surface.vertices.rows(); ++i)
+    vid[i] = mesh.add_vertex(K::Point_3(surface.vertices(i, 0), surface.vertices(i, 1), surface.vertices(i, 2)));
+  for (int f = 0; f < surface.triangles.rows(); ++f) {
+    const auto fi = mesh.add_face(vid[surface.triangles(f, 0)], vid[surface.triangles(f, 1)],
+                                  vid[surface.triangles(f, 2)]);
+    if (fi == Mesh::null_face())
+      throw InputError("remesh: triangle " + std::to_string(f) +
+                       " cannot be added (non-manifold or inconsistently oriented surface)");
+  }
+  if (!CGAL::is_closed(mesh)) throw InputError("remesh: the surface is not closed");
+
+  PMP::isotropic_remeshing(faces(mesh), edge_length, mesh,
+                           PMP::parameters::number_of_iterations(iterations)
+                               .number_of_relaxation_steps(3)
+                               .protect_constraints(false));
+  // Angle smoothing with Delaunay flips lifts the few remaining small angles.
+  PMP::angle_and_area_smoothing(mesh, PMP::parameters::number_of_iterations(3)
+                                          .use_area_smoothing(false)
+                                          .use_Delaunay_flips(true)
+                                          .use_safety_constraints(true));
+  mesh.collect_garbage();
+
+  TriSurface out;
+  out.vertices.resize(mesh.number_of_vertices(), 3);
+  for (auto v : mesh.vertices()) {
+    const auto& p = mesh.point(v);
+    out.vertices.row(v.idx()) << p.x(), p.y(), p.z();
+  }
+  out.triangles.resize(mesh.number_of_faces(), 3);
+  int f = 0;
+  for (auto fi : mesh.faces()) {
+    int c = 0;
+    for (auto v : CGAL::vertices_around_face(mesh.halfedge(fi), mesh)) out.triangles(f, c++) = v.idx();
+    ++f;
+  }
+  return out;
+}
+
+}  // namespace vpm

@@ -1,0 +1,173 @@
+// NIfTI-1/2 reading and writing with nifti_clib (Debian libnifti2-dev).
+#include <nifti2_io.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <unistd.h>
+#include <string>
+
+#include "vpm/error.hpp"
+#include "vpm/image.hpp"
+
+namespace vpm {
+
+namespace {
+
+struct NimDeleter {
+  void operator()(nifti_image* n) const { nifti_image_free(n); }
+};
+using NimPtr = std::unique_ptr<nifti_image, NimDeleter>;
+
+Eigen::Matrix4d to_eigen(const nifti_dmat44& m) {
+  Eigen::Matrix4d a;
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) a(r, c) = m.m[r][c];
+  return a;
+}
+
+template <class T>
+void convert(const void* src, size_t n, std::vector<float>& out) {
+  const T* p = static_cast<const T*>(src);
+  for (size_t i = 0; i < n; ++i) out[i] = static_cast<float>(p[i]);
+}
+
+bool gzip_magic(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char b[2] = {0, 0};
+  in.read(reinterpret_cast<char*>(b), 2);
+  return in && b[0] == 0x1f && b[1] == 0x8b;
+}
+
+}  // namespace
+
+Image read_nifti(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(path + ": no such file");
+  if (fs::is_directory(path, ec)) throw InputError(path + ": is a directory, not a NIfTI file");
+  nifti_set_debug_level(0);
+  const int kind = is_nifti_file(path.c_str());
+  if (kind <= 0)  // -1: error reading, 0: ANALYZE (no magic) or garbage
+    throw InputError(path + ": header: not a NIfTI-1/2 file (no 'n+1'/'ni1'/'n+2' magic" +
+                     std::string(gzip_magic(path) ? " in the decompressed stream" : "") +
+                     "; file too short or not an image)");
+  NimPtr nim(nifti_image_read(path.c_str(), 0));
+  if (!nim) throw InputError(path + ": header: nifti_clib cannot read the NIfTI header");
+  if (nim->ndim < 1 || nim->ndim > 7 || nim->nx < 1)
+    throw InputError(path + ": header: invalid dimensions (dim[0] = " + std::to_string(nim->ndim) + ")");
+  for (int d = 4; d <= nim->ndim; ++d)
+    if (nim->dim[d] > 1)
+      throw InputError(path + ": header: a " + std::to_string(nim->ndim) + "-D image (dim[" +
+                       std::to_string(d) + "] = " + std::to_string(nim->dim[d]) +
+                       "); mesh-image needs one 3-D volume: extract it first");
+  switch (nim->datatype) {
+    case DT_UINT8: case DT_INT8: case DT_INT16: case DT_UINT16: case DT_INT32: case DT_UINT32:
+    case DT_INT64: case DT_UINT64: case DT_FLOAT32: case DT_FLOAT64: break;
+    default:
+      throw InputError(path + ": header: unsupported data type " + std::to_string(nim->datatype) +
+                       " (" + nifti_datatype_string(nim->datatype) + "); need a real scalar type");
+  }
+  const int64_t nx = nim->nx, ny = nim->ndim >= 2 ? nim->ny : 1, nz = nim->ndim >= 3 ? nim->nz : 1;
+  if (nx > 100000 || ny > 100000 || nz > 100000 || nx * ny * nz > (int64_t(1) << 31))
+    throw InputError(path + ": header: image too large (" + std::to_string(nx) + "x" +
+                     std::to_string(ny) + "x" + std::to_string(nz) + ")");
+  // Compare the declared data size with the file before reading (uncompressed files).
+  if (!gzip_magic(path) && nim->nifti_type != NIFTI_FTYPE_NIFTI1_2 && nim->nifti_type != NIFTI_FTYPE_NIFTI2_2) {
+    const auto size = fs::file_size(path, ec);
+    const int64_t need = int64_t(nim->iname_offset) + int64_t(nim->nvox) * nim->nbyper;
+    if (!ec && int64_t(size) < need)
+      throw InputError(path + ": data: truncated: the header declares " + std::to_string(need) +
+                       " bytes, the file has " + std::to_string(size));
+  }
+  if (nifti_image_load(nim.get()) < 0 || !nim->data)
+    throw InputError(path + ": data: cannot read " + std::to_string(int64_t(nim->nvox) * nim->nbyper) +
+                     " bytes of voxel data (truncated file or broken gzip stream)");
+
+  Image img;
+  img.path = path;
+  img.dims = {int(nx), int(ny), int(nz)};
+  const size_t n = size_t(nx * ny * nz);
+  img.data.resize(n);
+  switch (nim->datatype) {
+    case DT_UINT8: convert<uint8_t>(nim->data, n, img.data); break;
+    case DT_INT8: convert<int8_t>(nim->data, n, img.data); break;
+    case DT_INT16: convert<int16_t>(nim->data, n, img.data); break;
+    case DT_UINT16: convert<uint16_t>(nim->data, n, img.data); break;
+    case DT_INT32: convert<int32_t>(nim->data, n, img.data); break;
+    case DT_UINT32: convert<uint32_t>(nim->data, n, img.data); break;
+    case DT_INT64: convert<int64_t>(nim->data, n, img.data); break;
+    case DT_UINT64: convert<uint64_t>(nim->data, n, img.data); break;
+    case DT_FLOAT32: convert<float>(nim->data, n, img.data); break;
+    case DT_FLOAT64: convert<double>(nim->data, n, img.data); break;
+  }
+  const double slope = nim->scl_slope, inter = nim->scl_inter;
+  if (std::isfinite(slope) && slope != 0 && !(slope == 1 && inter == 0))
+    for (auto& v : img.data) v = float(slope * v + inter);
+
+  if (nim->sform_code > 0) {
+    img.affine = to_eigen(nim->sto_xyz);
+    img.affine_source = "sform";
+  } else if (nim->qform_code > 0) {
+    img.affine = to_eigen(nim->qto_xyz);
+    img.affine_source = "qform";
+  } else {
+    img.affine = Eigen::Matrix4d::Identity();
+    for (int d = 0; d < 3; ++d) img.affine(d, d) = nim->pixdim[d + 1] > 0 ? nim->pixdim[d + 1] : 1.0;
+    img.affine_source = "pixdim";
+  }
+  img.affine.row(3) << 0, 0, 0, 1;
+  for (int d = 0; d < 3; ++d) {
+    img.spacing[d] = img.affine.col(d).head<3>().norm();
+    if (!(img.spacing[d] > 0) || !std::isfinite(img.spacing[d]))
+      throw InputError(path + ": header: degenerate " + img.affine_source + " (axis " +
+                       std::to_string(d) + " has zero length)");
+  }
+  if (std::abs(img.affine.topLeftCorner<3, 3>().determinant()) < 1e-12)
+    throw InputError(path + ": header: singular " + img.affine_source + " matrix");
+  return img;
+}
+
+void write_nifti(const std::string& path, const Image& image) {
+  const int64_t dims[8] = {3, image.dims[0], image.dims[1], image.dims[2], 1, 1, 1, 1};
+  NimPtr nim(nifti_make_new_nim(dims, DT_FLOAT32, 0));
+  if (!nim) throw InputError(path + ": cannot create a NIfTI image");
+  std::memcpy(nim->data, image.data.data(), image.data.size() * sizeof(float));
+  nifti_dmat44 m;
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) m.m[r][c] = image.affine(r, c);
+  nim->sform_code = NIFTI_XFORM_SCANNER_ANAT;
+  nim->sto_xyz = m;
+  nim->qform_code = NIFTI_XFORM_SCANNER_ANAT;
+  double dx, dy, dz, qfac;
+  nifti_dmat44_to_quatern(m, &nim->quatern_b, &nim->quatern_c, &nim->quatern_d, &nim->qoffset_x,
+                          &nim->qoffset_y, &nim->qoffset_z, &dx, &dy, &dz, &qfac);
+  nim->qfac = qfac;
+  nim->dx = nim->pixdim[1] = dx;
+  nim->dy = nim->pixdim[2] = dy;
+  nim->dz = nim->pixdim[3] = dz;
+  nim->qto_xyz = m;
+  // Write under a temporary name in the same folder, then rename (no partial outputs).
+  std::string ext = ".nii";
+  if (path.size() > 7 && path.substr(path.size() - 7) == ".nii.gz") ext = ".nii.gz";
+  else if (path.size() < 4 || path.substr(path.size() - 4) != ".nii")
+    throw InputError(path + ": write_nifti needs a .nii or .nii.gz name");
+  const std::string stem = path.substr(0, path.size() - ext.size());
+  const std::string tmp = stem + ".tmp" + std::to_string(::getpid()) + ext;
+  if (nifti_set_filenames(nim.get(), tmp.c_str(), 0, 1) != 0)
+    throw InputError(path + ": cannot set NIfTI file names");
+  nim->nifti_type = NIFTI_FTYPE_NIFTI1_1;
+  nifti_image_write(nim.get());
+  std::error_code ec;
+  if (!std::filesystem::exists(tmp, ec)) throw InputError(path + ": cannot write the NIfTI file");
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw InputError(path + ": cannot rename the written NIfTI file into place");
+  }
+}
+
+}  // namespace vpm

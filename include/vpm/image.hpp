@@ -1,0 +1,50 @@
+#pragma once
+// 3-D images (NIfTI-1/2 volumes): grid, voxel -> world affine, intensities as float.
+#include <Eigen/Dense>
+#include <array>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace vpm {
+
+/// A scalar 3-D image on a regular voxel grid.
+struct Image {
+  std::array<int, 3> dims{0, 0, 0};        ///< voxels along i, j, k
+  std::array<double, 3> spacing{1, 1, 1};  ///< voxel size along i, j, k in mm (column norms of the affine)
+  /// Voxel index (i, j, k, 1) -> world millimetres (x, y, z, 1). Voxel centres sit at integer
+  /// indices.
+  Eigen::Matrix4d affine = Eigen::Matrix4d::Identity();
+  /// Where the affine came from: "sform", "qform" or "pixdim" (neither code set: scaling only).
+  std::string affine_source = "pixdim";
+  /// dims[0]*dims[1]*dims[2] values, i fastest: value(i,j,k) = data[i + dims[0]*(j + dims[1]*k)].
+  /// Scaled by scl_slope/scl_inter when the file sets them.
+  std::vector<float> data;
+  std::string path;  ///< the file it was read from (for messages), may be empty
+
+  size_t size() const { return size_t(dims[0]) * dims[1] * dims[2]; }
+  size_t index(int i, int j, int k) const { return size_t(i) + size_t(dims[0]) * (size_t(j) + size_t(dims[1]) * k); }
+  float at(int i, int j, int k) const { return data[index(i, j, k)]; }
+  /// World position (mm) of a (possibly fractional) voxel index.
+  Eigen::Vector3d to_world(const Eigen::Vector3d& ijk) const {
+    return affine.topLeftCorner<3, 3>() * ijk + affine.topRightCorner<3, 1>();
+  }
+  /// Voxel index (fractional) of a world position.
+  Eigen::Vector3d to_voxel(const Eigen::Vector3d& xyz) const {
+    return affine.topLeftCorner<3, 3>().inverse() * (xyz - affine.topRightCorner<3, 1>());
+  }
+};
+
+/// Reads a NIfTI-1 or NIfTI-2 image (.nii, .nii.gz, or a .hdr/.img pair) with nifti_clib.
+/// A 4-D file with one volume (dim[4] == 1) is accepted as 3-D. The affine is the sform when
+/// sform_code > 0, else the qform when qform_code > 0, else the pixdim scaling.
+/// Throws InputError("PATH: what") when the file is missing or unreadable, is not NIfTI, is
+/// truncated (e.g. a cut gzip stream), has more than one volume (4-D), has a complex/RGB data
+/// type, or when vpm was built without nifti_clib.
+Image read_nifti(const std::string& path);
+
+/// Writes `image` as NIfTI-1 (float32, sform and qform set from `image.affine`; `.nii.gz`
+/// compresses). Used for tests and fixtures. Throws InputError when it cannot write.
+void write_nifti(const std::string& path, const Image& image);
+
+}  // namespace vpm

@@ -1,0 +1,116 @@
+#pragma once
+// Image mask (or closed surface) -> quality tetrahedral mesh, the `vpm mesh-image` pipeline:
+//
+//   mask (value > threshold, largest component, cavities filled)
+//   -> Gaussian smoothing (sigma = `smooth` mm) and resampling on a grid of about half the
+//      target edge length
+//   -> topology check (Euler characteristic of the mask surface); handles removed by
+//      morphological closing at growing radii, or refused (InputError) when that fails
+//   -> marching tetrahedra (Freudenthal cube split: always a closed 2-manifold)
+//   -> isotropic remeshing to the target edge length + angle smoothing (CGAL PMP, GPL)
+//   -> TetGen (AGPL) with radius-edge / dihedral bounds and a max volume; tets whose four
+//      vertices are all on the boundary are removed by inserting interior points
+//   -> optional atlas labels: per tet the atlas label at the centroid, per vertex the
+//      majority label of its tets (fields "label", integer).
+//
+// Coordinates are world millimetres (NIfTI sform/qform). Report keys are listed at
+// mesh_image().
+#include <functional>
+#include <string>
+
+#include "vpm/image.hpp"
+#include "vpm/json.hpp"
+#include "vpm/mesh.hpp"
+
+namespace vpm {
+
+struct MeshImageOptions {
+  /// Mask = voxels with value > threshold.
+  double threshold = 0.0;
+  /// Target number of mesh vertices (the paper's brain has about 5,200). Ignored when
+  /// max_volume > 0.
+  int target_vertices = 5200;
+  /// Largest tet volume in mm^3 (TetGen -a). When > 0 it sets the resolution instead of
+  /// target_vertices.
+  double max_volume = 0.0;
+  /// Gaussian smoothing of the mask before surface extraction, sigma in mm; < 0 chooses
+  /// 0.5 x the target edge length (at least 1 voxel), 0 disables smoothing.
+  double smooth = -1.0;
+  /// TetGen quality bounds: radius-edge ratio and smallest dihedral angle (degrees), as in -q1.5/12.
+  double radius_edge = 1.5;
+  double min_dihedral_deg = 12.0;
+  /// Largest closing radius (in extraction-grid cells) tried to remove handles of the mask.
+  int max_closing_radius = 6;
+  /// Isotropic remeshing iterations.
+  int remesh_iterations = 5;
+  /// Progress messages (stage names); may be empty.
+  std::function<void(const std::string&)> progress;
+};
+
+/// Meshes the mask of `image` (voxels > options.threshold). When `atlas` is given, it must be
+/// on the same grid (dims and affine within 1e-3 mm; else InputError) and labels are attached:
+/// cell field "label" = atlas label at each tet's centroid (nearest voxel, through the atlas's
+/// own affine; 0 outside), point field "label" = majority label of the vertex's tets.
+///
+/// `report` (if given) receives: "input" {path, dims, spacing_mm, affine_source, threshold,
+/// mask_voxels, mask_volume_mm3}, "parameters" {target_edge_mm, grid_mm, smooth_sigma_mm,
+/// max_volume_mm3, tetgen_switches}, "topology" {euler_before, genus_before, closing_radius,
+/// repairs: [...], euler}, "surface" {vertices, triangles, min_angle_deg, max_angle_deg,
+/// euler}, "mesh" {vertices, tets, boundary_vertices, boundary_faces, min_dihedral_deg,
+/// max_dihedral_deg, four_boundary_vertex_tets, volume_mm3, interior_points_added},
+/// "labels" {label: {tets, volume_mm3, voxels, voxel_volume_mm3}} (with an atlas),
+/// "timings_s" {read, mask, grid, topology, extract, remesh, tetgen, labels, total}.
+///
+/// Throws InputError for an empty mask, a mask touching the image border, an atlas on another
+/// grid, or a mask whose handles cannot be closed (genus > 0 after the largest closing radius);
+/// NumericalError when TetGen fails on the remeshed surface.
+TetMesh mesh_image(const Image& image, const MeshImageOptions& options, Json* report = nullptr,
+                   const Image* atlas = nullptr);
+
+/// Reads `image_path` (NIfTI) or a closed surface (.off/.obj/.stl) and meshes it; with
+/// `labels_path` non-empty reads that atlas and labels the mesh. Same report as above.
+TetMesh mesh_image_file(const std::string& image_path, const MeshImageOptions& options,
+                        Json* report = nullptr, const std::string& labels_path = "");
+
+/// Meshes the solid bounded by a closed, oriented, genus-0 triangle surface (world mm):
+/// isotropic remeshing, then TetGen, as above. InputError if the surface is open,
+/// non-manifold, disconnected or of higher genus.
+TetMesh mesh_surface(const TriSurface& surface, const MeshImageOptions& options,
+                     Json* report = nullptr, const std::string& source = "surface");
+
+// ---- building blocks (exposed for tests and benchmarks) --------------------------------
+
+/// Attaches "label" cell and point fields from `atlas` (see mesh_image). Returns, per label,
+/// {tets, volume_mm3} (labels are the JSON keys as decimal strings).
+Json label_mesh(TetMesh& mesh, const Image& atlas);
+
+/// Isotropic remeshing of a closed manifold surface to `edge_length` (CGAL
+/// Polygon_mesh_processing::isotropic_remeshing, then angle-and-area smoothing), keeping its
+/// topology. Throws InputError when vpm was built without CGAL.
+TriSurface remesh_surface(const TriSurface& surface, double edge_length, int iterations);
+
+/// Smallest and largest triangle angles of a surface, degrees.
+std::pair<double, double> triangle_angle_range_deg(const TriSurface& surface);
+
+/// TetGen options for tetrahedralize_surface().
+struct TetgenOptions {
+  double radius_edge = 1.5;
+  double min_dihedral_deg = 12.0;
+  double max_volume = 0.0;      ///< mm^3; 0 = no bound
+  bool preserve_surface = true; ///< -Y: no Steiner points on the boundary
+  int fix_rounds = 0;           ///< rounds of interior point insertion against four-boundary-vertex tets
+};
+
+/// Tetrahedralises the solid bounded by a closed surface with TetGen (linked as a library);
+/// then, for up to `fix_rounds`, inserts the centroids of tets whose four vertices all lie on
+/// the boundary and re-meshes, then splits the longest interior edge of any such tet left
+/// (midpoint). `info` (if given) receives {switches, fix_rounds, edge_splits,
+/// interior_points_added, four_boundary_vertex_tets}. Throws NumericalError if TetGen fails
+/// (e.g. a self-intersecting surface) and InputError when vpm was built without TetGen.
+TetMesh tetrahedralize_surface(const TriSurface& surface, const TetgenOptions& options,
+                               Json* info = nullptr);
+
+/// Number of tets whose four vertices are all boundary vertices.
+int count_four_boundary_vertex_tets(const TetMesh& mesh);
+
+}  // namespace vpm
