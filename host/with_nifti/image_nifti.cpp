@@ -133,8 +133,8 @@ Image read_nifti(const std::string& path) {
 
 void write_nifti(const std::string& path, const Image& image) {
   const int64_t dims[8] = {3, image.dims[0], image.dims[1], image.dims[2], 1, 1, 1, 1};
-  NimPtr nim(nifti_make_new_nim(dims, DT_FLOAT32, 0));
-  if (!nim) throw InputError(path + ": cannot create a NIfTI image");
+  NimPtr nim(nifti_make_new_nim(dims, DT_FLOAT32, 1));
+  if (!nim || !nim->data) throw InputError(path + ": cannot create a NIfTI image");
   std::memcpy(nim->data, image.data.data(), image.data.size() * sizeof(float));
   nifti_dmat44 m;
   for (int r = 0; r < 4; ++r)
