@@ -1,0 +1,140 @@
+#pragma once
+// The volume-preserving map inside the unit ball (paper sections 3, 4.2, 4.3; DESIGN.md 4.1
+// steps 5-6 and 4.2): starting from a fold-free map of a tet mesh to the ball, move the
+// vertices until every vertex's dual volume is its input dual volume (both normalised to the
+// total volume).
+//
+// Methods:
+//  * moser (default): Moser rounds on a fixed field. Per round, on the current ball mesh
+//    ("background"): dual volumes V_i, targets m_i = input dual volumes rescaled to the current
+//    total volume, rho0 = m / V; one Neumann solve  -K psi = V - m  (K: the cotangent stiffness
+//    of vpm/laplacian.hpp, negative semi-definite, so this is  K psi = m - V); per-tet gradients
+//    of psi (paper eq. 12), volume-weighted vertex averages (eq. 13), normal component removed
+//    at boundary vertices. The field v(y, t) = grad psi(y) / ((1 - t) rho0(y) + t) (grad psi and
+//    rho0 interpolated barycentrically at y in the background mesh) carries density rho0 to the
+//    uniform one (continuity equation d rho/dt + div(rho v) = 0). Every vertex follows its
+//    pathline from t = 0 to 1 with RK4; boundary vertices slide on the sphere (their velocity's
+//    normal part is removed and they are renormalised to radius 1 after each stage) or stay
+//    fixed. Point location + interpolation run as OpenCL kernels (kernels/moser.cl: walk through
+//    tet faces from the previous containing tet, uniform-grid fallback, clamping to the nearest
+//    boundary tet for points just outside the inscribed polyhedron) or as the same code on the
+//    host.
+//  * paper: the paper's discrete loop (4.3): at each of `paper_steps` steps recompute
+//    rho = m / V from the current geometry, re-solve, step x += dt grad psi / rho (dt = 1/K).
+//    A step that folds is retried with dt halved. Kept for comparison (it stalls, DESIGN.md 4.2).
+//  * vsem: each tet's stiffness (on the input geometry) multiplied by its accumulated volume
+//    ratio, boundary frozen, harmonic (Dirichlet) re-solve per iteration (Yueh et al. 2019 style
+//    fixed point). For comparison.
+//
+// Fold safety (every method): after each round the tets with signed volume <= 0 are counted;
+// if any, they are untangled locally (vpm::untangle_local, theta = 0.5, two rings, boundary
+// fixed); if that fails the round is redone on a shorter time interval (t_end halved, up to
+// `max_step_halvings` times); if it still folds the round is discarded, the previous fold-free
+// map kept and the iteration stops (reported). An input map that is folded and cannot be
+// untangled is NumericalError. The returned map is always fold-free.
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "vpm/json.hpp"
+#include "vpm/mesh.hpp"
+
+namespace vpm {
+
+class Device;
+
+enum class VolumeMapMethod { moser, paper, vsem };
+/// "moser", "paper", "vsem" (InputError otherwise).
+VolumeMapMethod parse_volume_map_method(const std::string& name);
+const char* to_string(VolumeMapMethod m);
+
+enum class BoundaryMode {
+  automatic,  ///< slide for moser, fixed for paper and vsem (their published behaviour)
+  slide,      ///< boundary vertices move tangentially on the unit sphere
+  fixed,      ///< boundary vertices do not move
+};
+/// "auto", "slide", "fixed" (InputError otherwise).
+BoundaryMode parse_boundary_mode(const std::string& name);
+const char* to_string(BoundaryMode m);
+
+struct VolumeMapOptions {
+  VolumeMapMethod method = VolumeMapMethod::moser;
+  /// Rounds to run (Moser rounds; paper: explicit steps; vsem: fixed-point iterations).
+  /// -1: until the vertex mean |r - 1| <= tolerance or max_rounds is reached.
+  int rounds = -1;
+  /// Cap used when rounds == -1: 8 for moser; paper_steps for paper; 15 for vsem when <= 0.
+  int max_rounds = 0;
+  /// Stop when the vertex mean |r - 1| (normalised dual volumes) is at or below this.
+  double tolerance = 0.01;
+  /// RK4 steps per Moser round (t from 0 to 1).
+  int rk_steps = 40;
+  /// Explicit steps K of the paper's loop (dt = 1/K).
+  int paper_steps = 50;
+  BoundaryMode boundary = BoundaryMode::automatic;
+  /// Linear solver: "cg" (Jacobi CG) or "paper" (BiCGSTAB on the normal equations).
+  std::string solver = "cg";
+  /// Relative residual of each linear solve.
+  double solver_tolerance = 1e-8;
+  /// Local untangling (theta 0.5, two rings, boundary fixed) of rounds that fold.
+  bool local_untangle = true;
+  /// Times a folding round is redone with t_end halved before it is discarded.
+  int max_step_halvings = 3;
+  /// Run point location / RK stages on the host even when the device is OpenCL (tests).
+  bool force_host_advection = false;
+  /// Called with one line per round (progress display); may be empty.
+  std::function<void(const std::string&)> progress;
+};
+
+/// One round (Moser round, paper step or vsem iteration).
+struct VolumeMapRound {
+  int round = 0;                  ///< 1-based
+  double vertex_mean_abs_dev = 0; ///< after the round (normalised dual volume ratios vs input)
+  double tet_mean_abs_dev = 0;    ///< after the round (normalised tet volume ratios vs input)
+  int folds_before_untangle = 0;  ///< tets with signed volume <= 0 right after advection
+  int folds = 0;                  ///< after local untangling (0 unless the round was discarded)
+  bool untangled = false;         ///< local untangling ran
+  bool discarded = false;         ///< the round could not be made fold-free and was undone
+  double t_end = 1;               ///< integration interval used (halved on retries), or dt (paper)
+  int solver_iterations = 0;
+  double solver_residual = 0;
+  // Point location statistics (moser): walk steps per location, grid fallbacks, clamped points.
+  double walk_steps_per_location = 0;
+  long long grid_fallbacks = 0;
+  long long clamped = 0;
+  // Seconds.
+  double time_solve = 0, time_field = 0, time_advect = 0, time_untangle = 0, time_total = 0;
+  Json to_json() const;
+};
+
+struct VolumeMapResult {
+  std::vector<VolumeMapRound> rounds;
+  double initial_vertex_mean_abs_dev = 0, initial_tet_mean_abs_dev = 0;
+  double final_vertex_mean_abs_dev = 0, final_tet_mean_abs_dev = 0;
+  int final_folds = 0;     ///< always 0 on return
+  std::string stop_reason; ///< "tolerance", "rounds", "stalled", "fold"
+  /// {"method", "boundary", "solver", "rk_steps", "rounds": [VolumeMapRound::to_json...],
+  ///  "initial": {"vertex_mean_abs_dev","tet_mean_abs_dev"}, "final": {...}, "stop_reason",
+  ///  "timings_s": {"solve","field","advect","untangle","total"}}
+  Json report;
+};
+
+/// Maps `ball` (n x 3; in: a fold-free map of the mesh to the closed unit ball with boundary
+/// vertices on the sphere; out: the volume-preserving map) of the mesh (`reference` n x 3, the
+/// input coordinates, any unit; `tets` m x 4, positively oriented on `reference`). Boundary
+/// vertices are those of the mesh's boundary faces. Runs on `device` (OpenCL kernels for point
+/// location and RK stages, solver on the device; host: the Eigen/C++ reference).
+/// Throws InputError on inconsistent sizes, NumericalError when the input map is folded and
+/// cannot be untangled or a linear solve fails (the message says what was reached); on
+/// NumericalError `ball` holds the last fold-free map (or the input if none).
+VolumeMapResult volume_preserving_map(Device& device, const Points& reference, const Tets& tets,
+                                      Points& ball, const VolumeMapOptions& options = {});
+
+/// Normalised volume ratios of a map (DESIGN.md 5): mean |r - 1| of vertex dual volumes and of
+/// tet volumes of `mapped` against `reference` (both n x 3, same `tets`), host computation.
+struct DistortionPair {
+  double vertex = 0, tet = 0;
+  int folds = 0;
+};
+DistortionPair volume_distortion(const Points& reference, const Points& mapped, const Tets& tets);
+
+}  // namespace vpm

@@ -1,0 +1,159 @@
+// Moser rounds: point location in the round's background mesh, interpolation of the fixed
+// field v(y, t) = grad psi(y) / ((1 - t) rho0(y) + t), and the RK4 stages.
+// Must match host/moser_field.cpp (the host reference) line for line.
+//
+// Background data (uploaded once per round):
+//   inv   m x 12: corner a (3), then the rows of [b-a, c-a, d-a]^-1 (9): lambda_{1..3} = Minv (p - a)
+//   tets  m x 4, nbr m x 4 (tet across the face opposite corner k, -1 on the boundary)
+//   grad  n x 3 vertex gradients of psi, rho0 n
+//   grid: lo (3), inv_h, dims (3); cell_start (cells + 1), cell_tets
+// Per point: x n x 3, hint n (containing tet of the last location), stats n x 3
+// (walk steps, grid fallbacks, clamped-outside count).
+
+#ifndef MAX_WALK
+#define MAX_WALK 64
+#endif
+#define INSIDE_EPS (-1e-12)
+
+inline real3 ld3(__global const real* x, int i) {
+  return (real3)(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
+}
+
+inline void bary(__global const real* inv, int t, real3 p, real* l) {
+  __global const real* q = inv + 12 * t;
+  const real3 d = p - (real3)(q[0], q[1], q[2]);
+  l[1] = q[3] * d.x + q[4] * d.y + q[5] * d.z;
+  l[2] = q[6] * d.x + q[7] * d.y + q[8] * d.z;
+  l[3] = q[9] * d.x + q[10] * d.y + q[11] * d.z;
+  l[0] = 1.0 - l[1] - l[2] - l[3];
+}
+
+inline real min4(const real* l) { return fmin(fmin(l[0], l[1]), fmin(l[2], l[3])); }
+
+inline void clamp_bary(real* l) {
+  real s = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    l[k] = fmax(l[k], 0.0);
+    s += l[k];
+  }
+  if (s <= 0.0) {
+    for (int k = 0; k < 4; ++k) l[k] = 0.25;
+  } else {
+    for (int k = 0; k < 4; ++k) l[k] /= s;
+  }
+}
+
+// Locates p starting from tet `t`; returns the tet and its (clamped if outside) barycentric
+// coordinates in l. st[0..2] count walk steps, grid fallbacks, clamps.
+inline int locate(real3 p, int t, __global const real* inv, __global const int* nbr,
+                  const real lox, const real loy, const real loz, const real inv_h,
+                  const int gx, const int gy, const int gz, __global const int* cell_start,
+                  __global const int* cell_tets, real* l, int* st) {
+  for (int s = 0; s < MAX_WALK; ++s) {
+    bary(inv, t, p, l);
+    int k = 0;
+    for (int c = 1; c < 4; ++c)
+      if (l[c] < l[k]) k = c;
+    if (l[k] >= INSIDE_EPS) return t;
+    const int nb = nbr[4 * t + k];
+    if (nb < 0) {  // leaving the mesh through a boundary face: outside, clamp here
+      clamp_bary(l);
+      st[2] += 1;
+      return t;
+    }
+    t = nb;
+    st[0] += 1;
+  }
+  // Walk failed (cycle or long way): search the uniform grid cell of p.
+  st[1] += 1;
+  int ix = (int)floor((p.x - lox) * inv_h);
+  int iy = (int)floor((p.y - loy) * inv_h);
+  int iz = (int)floor((p.z - loz) * inv_h);
+  ix = clamp(ix, 0, gx - 1);
+  iy = clamp(iy, 0, gy - 1);
+  iz = clamp(iz, 0, gz - 1);
+  const int cell = ix + gx * (iy + gy * iz);
+  int best = -1;
+  real best_score = -1e300;
+  real lb[4];
+  for (int j = cell_start[cell]; j < cell_start[cell + 1]; ++j) {
+    const int c = cell_tets[j];
+    bary(inv, c, p, lb);
+    const real sc = min4(lb);
+    if (sc > best_score) {
+      best_score = sc;
+      best = c;
+    }
+  }
+  if (best < 0) best = t;
+  bary(inv, best, p, l);
+  if (min4(l) < INSIDE_EPS) {
+    clamp_bary(l);
+    st[2] += 1;
+  }
+  return best;
+}
+
+// vel[i] = v(p, t) at p = x[i] + c * kprev[i] (boundary points renormalised to radius 1 when
+// sliding; zero velocity when the boundary is fixed).
+__kernel void moser_velocity(const int n, __global const real* x, __global const real* kprev,
+                             const real c, const real t, const int slide,
+                             __global const char* boundary, __global int* hint,
+                             __global const real* inv, __global const int* tets,
+                             __global const int* nbr, __global const real* grad,
+                             __global const real* rho0, const real lox, const real loy,
+                             const real loz, const real inv_h, const int gx, const int gy,
+                             const int gz, __global const int* cell_start,
+                             __global const int* cell_tets, __global real* vel,
+                             __global int* stats) {
+  const int i = get_global_id(0);
+  if (i >= n) return;
+  const int on_b = boundary[i];
+  if (on_b && !slide) {
+    vel[3 * i] = 0.0;
+    vel[3 * i + 1] = 0.0;
+    vel[3 * i + 2] = 0.0;
+    return;
+  }
+  real3 p = ld3(x, i) + c * ld3(kprev, i);
+  if (on_b) p = p / length(p);
+  real l[4];
+  int st[3] = {0, 0, 0};
+  const int tet = locate(p, hint[i], inv, nbr, lox, loy, loz, inv_h, gx, gy, gz, cell_start,
+                         cell_tets, l, st);
+  hint[i] = tet;
+  real3 g = (real3)(0.0, 0.0, 0.0);
+  real r = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    const int v = tets[4 * tet + k];
+    g += l[k] * ld3(grad, v);
+    r += l[k] * rho0[v];
+  }
+  real3 u = g / ((1.0 - t) * r + t);
+  if (on_b) {
+    const real3 nrm = p;  // unit
+    u -= dot(u, nrm) * nrm;
+  }
+  vel[3 * i] = u.x;
+  vel[3 * i + 1] = u.y;
+  vel[3 * i + 2] = u.z;
+  stats[3 * i] += st[0];
+  stats[3 * i + 1] += st[1];
+  stats[3 * i + 2] += st[2];
+}
+
+// x += dt/6 (k1 + 2 k2 + 2 k3 + k4); boundary points renormalised to radius 1 when sliding.
+__kernel void moser_rk_update(const int n, __global real* x, __global const real* k1,
+                              __global const real* k2, __global const real* k3,
+                              __global const real* k4, const real dt, const int slide,
+                              __global const char* boundary) {
+  const int i = get_global_id(0);
+  if (i >= n) return;
+  const int on_b = boundary[i];
+  if (on_b && !slide) return;
+  real3 p = ld3(x, i) + (dt / 6.0) * (ld3(k1, i) + 2.0 * ld3(k2, i) + 2.0 * ld3(k3, i) + ld3(k4, i));
+  if (on_b) p = p / length(p);
+  x[3 * i] = p.x;
+  x[3 * i + 1] = p.y;
+  x[3 * i + 2] = p.z;
+}
