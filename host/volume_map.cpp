@@ -243,11 +243,6 @@ void paper_step(Ctx& c, Points& x, double dt, VolumeMapRound& r) {
   solve_round(c, x, V, target, r);
   const auto t1 = Clock::now();
   detail::MoserField f;
-  f.n = c.n;
-  f.m = c.m;
-  f.tets = &c.tets;
-  f.inv.resize(12 * static_cast<size_t>(c.m));
-  // Per-tet gradients need only the inverse edge matrices.
   detail::build_background(f, x, c.tets, c.nbr);
   const auto G = detail::tet_gradients(f, c.psi);
   const Eigen::VectorXd vol = tet_volumes(x, c.tets);
@@ -368,15 +363,8 @@ VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, cons
       }
       folds = count_folds(c, ball);
       r.folds_before_untangle = folds;
-      if (folds > 0 && std::getenv("VPM_DEBUG_FOLDS")) {
-        for (int t : folded_list(ball, tets)) {
-          int nb = 0;
-          for (int q = 0; q < 4; ++q) nb += c.boundary[tets(t, q)];
-          std::fprintf(stderr, "fold tet %d: %d boundary vertices, t_end %g\n", t, nb, t_end);
-        }
-      }
       if (folds > 0) {
-        r.untangled = true;
+        r.untangled = VPM_VOLUME_MAP_HAVE_UNTANGLE && opt.local_untangle;
         folds = untangle_folds(c, ball, &r.time_untangle);
       }
       r.t_end = t_end;

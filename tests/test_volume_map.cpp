@@ -1,29 +1,36 @@
+#include <sys/wait.h>
+
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 
 #include "support/devices.hpp"
 #include "support/fixtures.hpp"
+#include "support/shapes.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/geometry.hpp"
+#include "vpm/initial_map.hpp"
+#include "vpm/io.hpp"
+#include "vpm/json.hpp"
 #include "vpm/topology.hpp"
 #include "vpm/volume_map.hpp"
 
 using namespace vpm;
+namespace fs = std::filesystem;
 
 namespace {
-// A smooth fold-free warp of the ball that keeps the sphere in place: radial power law plus
-// a bump that shifts the centre along x (det J >= 0.7 for the bump).
-Points warp(const Points& x, double power = 1.6, double shift = 0.15) {
-  Points y = x;
-  for (Eigen::Index i = 0; i < x.rows(); ++i) {
-    Eigen::Vector3d p = x.row(i).transpose();
-    const double r = p.norm();
-    if (r > 0) p *= std::pow(r, power - 1.0);
-    p.x() += shift * (1.0 - p.squaredNorm());
-    y.row(i) = p.transpose();
-  }
-  return y;
+
+// Initial map of a small ellipsoid (1.8 : 1 : 0.6): ~50 % volume distortion, fold-free.
+const InitialMapResult& ellipsoid_start() {
+  static const InitialMapResult r = [] {
+    auto host = Device::host();
+    return initial_map(*host, test::ellipsoid_mesh(6));
+  }();
+  return r;
 }
 
 double max_boundary_radius_error(const Points& x, const Tets& t) {
@@ -33,28 +40,159 @@ double max_boundary_radius_error(const Points& x, const Tets& t) {
     if (mask[i]) e = std::max(e, std::fabs(x.row(i).norm() - 1.0));
   return e;
 }
+
+int run_status(const std::string& cmd) {
+  const int st = std::system(cmd.c_str());
+  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+std::string tmp(const std::string& name) { return std::string(VPM_TEST_TMP) + "/vm_" + name; }
+
 }  // namespace
 
-TEST_CASE("a Moser round lowers the distortion, keeps the boundary on the sphere, folds nothing") {
-  const TetMesh m = test::ball_mesh(6);
-  const Points start = warp(m.vertices);
-  const DistortionPair d0 = volume_distortion(m.vertices, start, m.tets);
+TEST_CASE("volume map: a Moser round lowers the distortion, boundary slides on the sphere, host == device") {
+  const InitialMapResult& im = ellipsoid_start();
+  const DistortionPair d0 = volume_distortion(im.mesh.vertices, im.ball, im.mesh.tets);
   REQUIRE(d0.folds == 0);
   REQUIRE(d0.vertex > 0.2);
+  Points host_result;
   for (auto& dev : test::devices()) {
     INFO("device " << dev->name());
-    Points ball = start;
+    Points ball = im.ball;
     VolumeMapOptions o;
     o.rounds = 1;
-    const VolumeMapResult r = volume_preserving_map(*dev, m.vertices, m.tets, ball, o);
+    const VolumeMapResult r = volume_preserving_map(*dev, im.mesh.vertices, im.mesh.tets, ball, o);
     REQUIRE(r.rounds.size() == 1);
-    const DistortionPair d1 = volume_distortion(m.vertices, ball, m.tets);
+    const DistortionPair d1 = volume_distortion(im.mesh.vertices, ball, im.mesh.tets);
     CHECK(d1.folds == 0);
-    CHECK(d1.vertex < 0.5 * d0.vertex);
+    CHECK(r.final_folds == 0);
+    CHECK(d1.vertex < 0.5 * d0.vertex);  // sign conventions: the round moves toward the targets
     CHECK(d1.tet < d0.tet);
     CHECK(r.final_vertex_mean_abs_dev == Approx(d1.vertex));
-    CHECK(max_boundary_radius_error(ball, m.tets) < 1e-12);
-    // boundary vertices moved (slide), i.e. the boundary is not frozen
-    CHECK((ball - start).rowwise().norm().maxCoeff() > 1e-3);
+    CHECK(max_boundary_radius_error(ball, im.mesh.tets) < 1e-12);
+    // the boundary slides: boundary vertices moved along the sphere
+    const auto mask = boundary_vertex_mask(static_cast<int>(ball.rows()), boundary_faces(im.mesh.tets));
+    double bmove = 0;
+    for (Eigen::Index i = 0; i < ball.rows(); ++i)
+      if (mask[i]) bmove = std::max(bmove, (ball.row(i) - im.ball.row(i)).norm());
+    CHECK(bmove > 1e-3);
+    CHECK(r.report.find("rounds")->size() == 1);
+    if (dev->is_host()) {
+      host_result = ball;
+      // the host-side advection of an OpenCL run is the same code as this one
+    } else {
+      CHECK(r.report.find("advection")->string() == "device");
+      CHECK((ball - host_result).cwiseAbs().maxCoeff() < 1e-8);
+    }
   }
+}
+
+TEST_CASE("volume map: rounds until the tolerance, every method fold-free") {
+  const InitialMapResult& im = ellipsoid_start();
+  auto host = Device::host();
+  const DistortionPair d0 = volume_distortion(im.mesh.vertices, im.ball, im.mesh.tets);
+  for (auto method : {VolumeMapMethod::moser, VolumeMapMethod::paper, VolumeMapMethod::vsem}) {
+    INFO("method " << to_string(method));
+    Points ball = im.ball;
+    VolumeMapOptions o;
+    o.method = method;
+    o.max_rounds = method == VolumeMapMethod::moser ? 4 : 6;
+    const VolumeMapResult r = volume_preserving_map(*host, im.mesh.vertices, im.mesh.tets, ball, o);
+    const DistortionPair d1 = volume_distortion(im.mesh.vertices, ball, im.mesh.tets);
+    CHECK(d1.folds == 0);
+    CHECK(d1.vertex < d0.vertex);
+    CHECK(!r.rounds.empty());
+    CHECK(r.rounds.size() <= 6);
+    for (const auto& rd : r.rounds) CHECK(rd.folds == 0);
+    if (method == VolumeMapMethod::moser) CHECK(d1.vertex < 0.4 * d0.vertex);
+    if (method == VolumeMapMethod::vsem) {
+      // boundary frozen
+      const auto mask = boundary_vertex_mask(static_cast<int>(ball.rows()), boundary_faces(im.mesh.tets));
+      for (Eigen::Index i = 0; i < ball.rows(); ++i)
+        if (mask[i]) REQUIRE((ball.row(i) - im.ball.row(i)).norm() == 0.0);
+    }
+  }
+}
+
+TEST_CASE("volume map: --boundary fixed keeps the boundary vertices in place") {
+  const InitialMapResult& im = ellipsoid_start();
+  for (auto& dev : test::devices()) {
+    Points ball = im.ball;
+    VolumeMapOptions o;
+    o.rounds = 1;
+    o.boundary = BoundaryMode::fixed;
+    volume_preserving_map(*dev, im.mesh.vertices, im.mesh.tets, ball, o);
+    const auto mask = boundary_vertex_mask(static_cast<int>(ball.rows()), boundary_faces(im.mesh.tets));
+    for (Eigen::Index i = 0; i < ball.rows(); ++i)
+      if (mask[i]) REQUIRE((ball.row(i) - im.ball.row(i)).norm() == 0.0);
+    CHECK(volume_distortion(im.mesh.vertices, ball, im.mesh.tets).folds == 0);
+  }
+}
+
+TEST_CASE("volume map: a folded start that cannot be untangled is refused with NumericalError") {
+  // ball_mesh(2) keeps tets with four boundary vertices; with the boundary fixed no interior
+  // vertex can repair them once two boundary vertices are swapped.
+  const TetMesh m = test::ball_mesh(2);
+  Points ball = m.vertices;
+  const auto mask = boundary_vertex_mask(m.num_vertices(), boundary_faces(m.tets));
+  int a = -1, b = -1;
+  for (int t = 0; t < m.num_tets() && a < 0; ++t) {
+    int nb = 0;
+    for (int k = 0; k < 4; ++k) nb += mask[m.tets(t, k)];
+    if (nb == 4) {
+      a = m.tets(t, 0);
+      b = m.tets(t, 1);
+    }
+  }
+  REQUIRE(a >= 0);
+  ball.row(a).swap(ball.row(b));
+  REQUIRE(volume_distortion(m.vertices, ball, m.tets).folds > 0);
+  auto host = Device::host();
+  VolumeMapOptions o;
+  o.rounds = 1;
+  CHECK_THROWS_AS(volume_preserving_map(*host, m.vertices, m.tets, ball, o), NumericalError);
+  CHECK_THROWS_WITH(volume_preserving_map(*host, m.vertices, m.tets, ball, o),
+                    Catch::Contains("inverted tets"));
+  // bad sizes are input errors
+  Points wrong = ball.topRows(5);
+  CHECK_THROWS_AS(volume_preserving_map(*host, m.vertices, m.tets, wrong, o), InputError);
+  CHECK_THROWS_AS(parse_volume_map_method("fast"), InputError);
+  CHECK_THROWS_AS(parse_boundary_mode("free"), InputError);
+}
+
+TEST_CASE("vpm map: writes the ball mesh with fields and the report; refuses bad options") {
+  const std::string vpm = VPM_BINARY;
+  const TetMesh m = test::ellipsoid_mesh(4);
+  write_mesh(tmp("in.vtu"), m);
+  fs::remove(tmp("out.vtu"));
+  fs::remove(tmp("report.json"));
+  REQUIRE(run_status(vpm + " map " + tmp("in.vtu") + " -o " + tmp("out.vtu") + " --report " +
+                     tmp("report.json") + " --quiet") == 0);
+  const TetMesh out = read_mesh(tmp("out.vtu"));
+  REQUIRE(out.num_vertices() >= m.num_vertices());
+  const Field* op = out.find_point_field("original_position");
+  REQUIRE(op != nullptr);
+  // input vertices first, in input order
+  CHECK((op->values.topRows(m.num_vertices()) - FieldValues(m.vertices)).cwiseAbs().maxCoeff() < 1e-12);
+  CHECK(out.find_point_field("vertex_volume_ratio") != nullptr);
+  CHECK(out.find_cell_field("tet_volume_ratio") != nullptr);
+  CHECK(inverted_tets(out.vertices, out.tets).empty());
+  std::ifstream in(tmp("report.json"));
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const Json j = Json::parse(ss.str());
+  for (const char* k : {"device", "input", "initial", "final", "rounds", "timings_s"}) CHECK(j.find(k) != nullptr);
+  CHECK(j.find("final")->find("inverted_tets")->number() == 0);
+  CHECK(j.find("final")->find("vertex_volume_ratio")->find("mean_abs_dev")->number() <
+        j.find("initial")->find("vertex_volume_ratio")->find("mean_abs_dev")->number());
+  CHECK(j.find("timings_s")->find("total") != nullptr);
+
+  // --rounds 0 stops after the initial map
+  REQUIRE(run_status(vpm + " map " + tmp("in.vtu") + " -o " + tmp("out0.vtu") + " --rounds 0 --quiet") == 0);
+  // usage errors: exit 2, nothing written
+  fs::remove(tmp("bad.vtu"));
+  CHECK(run_status(vpm + " map " + tmp("in.vtu") + " -o " + tmp("bad.vtu") + " --method fast 2>/dev/null") == 2);
+  CHECK(run_status(vpm + " map " + tmp("in.vtu") + " -o " + tmp("bad.vtu") + " --rounds x 2>/dev/null") == 2);
+  CHECK(run_status(vpm + " map " + tmp("missing.vtu") + " -o " + tmp("bad.vtu") + " 2>/dev/null") == 2);
+  CHECK(!fs::exists(tmp("bad.vtu")));
 }
