@@ -18,6 +18,8 @@ int run(const std::vector<std::string>& argv) {
                    std::to_string(s.triangles.rows()) + " triangles");
     return 0;
   }
+  if (vpm::is_surface_path(in))
+    throw vpm::InputError(out + ": a surface (" + in + ") converts only to .off .obj .stl");
   if (!vpm::is_mesh_path(in))
     throw vpm::InputError(in + ": unknown file extension (meshes: .node .ele .mesh .vtu .msh; "
                           "surfaces: .off .obj .stl)");

@@ -45,11 +45,11 @@ TetMesh read_tetgen(const std::string& path) {
     if (dim != 3) s.fail("dimension is " + std::to_string(dim) + ", only 3 is supported");
     if (nmark > 1) s.fail("number of boundary markers must be 0 or 1, found " + std::to_string(nmark));
     if (nattr > 1000) s.fail("number of attributes " + std::to_string(nattr) + " is implausible");
-    s.check_fits(n, 8, "points");
+    s.check_fits(n, 4, "points");
     const size_t need = 4 + static_cast<size_t>(nattr) + static_cast<size_t>(nmark);
     mesh.vertices.resize(n, 3);
     for (int i = 0; i < n; ++i) {
-      s.need_line(t, "point " + std::to_string(i + 1) + " of " + n_of(n, "declared"));
+      s.need_line_lazy(t, [&] { return "point " + std::to_string(i + 1) + " of " + n_of(n, "declared"); });
       if (t.size() < need)
         s.fail("point line has " + std::to_string(t.size()) + " values, expected " +
                std::to_string(need) + " (number, x, y, z, " + n_of(nattr, "attributes") + ", " +
@@ -80,14 +80,14 @@ TetMesh read_tetgen(const std::string& path) {
     if (npt != 4 && npt != 10)
       s.fail("nodes per tetrahedron must be 4 or 10, found " + std::to_string(npt));
     if (nreg > 1) s.fail("number of region attributes must be 0 or 1, found " + std::to_string(nreg));
-    s.check_fits(m, 10, "tetrahedra");
+    s.check_fits(m, 5, "tetrahedra");
     const size_t need = 1 + static_cast<size_t>(npt) + static_cast<size_t>(nreg);
     const long long n = mesh.vertices.rows();
     mesh.tets.resize(m, 4);
     FieldValues region(nreg ? m : 0, 1);
     bool integral = true;
     for (int i = 0; i < m; ++i) {
-      s.need_line(t, "tetrahedron " + std::to_string(i + 1) + " of " + n_of(m, "declared"));
+      s.need_line_lazy(t, [&] { return "tetrahedron " + std::to_string(i + 1) + " of " + n_of(m, "declared"); });
       if (t.size() < need)
         s.fail("tetrahedron line has " + std::to_string(t.size()) + " values, expected " +
                std::to_string(need) + " (number, " + std::to_string(npt) + " nodes, " +

@@ -82,12 +82,19 @@ void Scanner::skip_space() {
   }
 }
 
+size_t Scanner::eof_line() const {
+  // The last line that has characters (a final '\n' does not start a new line).
+  if (!data_.empty() && data_.back() == '\n' && line_ > 1) return line_ - 1;
+  return line_;
+}
+
 bool Scanner::at_end() {
   skip_space();
   if (pos_ >= data_.size()) {
-    tok_line_ = line_;
+    tok_line_ = eof_line();
     return true;
   }
+  tok_line_ = line_;  // the line of the data that follows
   return false;
 }
 
@@ -95,7 +102,7 @@ bool Scanner::next(std::string_view& tok) {
   skip_space();
   const size_t n = data_.size();
   if (pos_ >= n) {
-    tok_line_ = line_;
+    tok_line_ = eof_line();
     return false;
   }
   const size_t start = pos_;
@@ -144,7 +151,7 @@ bool Scanner::next_line(std::vector<std::string_view>& toks) {
       return true;
     }
   }
-  tok_line_ = line_;
+  tok_line_ = eof_line();
   return false;
 }
 

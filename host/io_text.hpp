@@ -36,11 +36,24 @@ class Scanner {
   /// A count: an integer in [0, INT_MAX]. Negative -> "negative count".
   int need_count(const std::string& what);
 
+  /// need() building the message only on failure.
+  template <class F>
+  std::string_view need_lazy(F&& what) {
+    std::string_view tok;
+    if (!next(tok)) fail("unexpected end of file (truncated?): expected " + what());
+    return tok;
+  }
+
   // ---- line mode ----
   /// Tokens of the rest of the current line, skipping lines with no tokens. False at the end.
   bool next_line(std::vector<std::string_view>& toks);
   /// Like next_line(), InputError "unexpected end of file: expected WHAT" at the end.
   void need_line(std::vector<std::string_view>& toks, const std::string& what);
+  /// Same, building the message only on failure (for hot loops): `what()` returns a string.
+  template <class F>
+  void need_line_lazy(std::vector<std::string_view>& toks, F&& what) {
+    if (!next_line(toks)) fail("unexpected end of file (truncated?): expected " + what());
+  }
 
   // ---- conversions (errors reported at line()) ----
   long long to_int(std::string_view tok, const std::string& what) const;
@@ -56,6 +69,9 @@ class Scanner {
   /// True if only whitespace and comments remain.
   bool at_end();
   /// InputError unless `count` items of at least `min_bytes` each fit in the bytes left.
+  /// Callers pass the number of tokens an item has at least (a token and its separator take
+  /// two bytes, so this is a 2x safety margin: it rejects absurd counts before allocating and
+  /// leaves small shortfalls to the precise "end of file" messages).
   void check_fits(long long count, long long min_bytes, const std::string& what) const;
 
   const std::string& path() const { return path_; }
@@ -64,6 +80,7 @@ class Scanner {
 
  private:
   void skip_space();
+  size_t eof_line() const;
   std::string path_;
   std::string_view data_;
   char comment_;

@@ -175,43 +175,45 @@ long long attr_count(const XmlWalker& w, const Tag& tag, const std::string& key,
 }
 
 // Reads a DataArray's ASCII content: exactly `rows` tuples of its components.
-Array read_array(const std::string& path, XmlWalker& w, const Tag& tag, long long rows) {
+Array read_array(const std::string& path, XmlWalker& w, const Tag& tag, long long rows,
+                 const char* unnamed = "(unnamed)") {
   Array a;
   a.line = tag.line;
   a.name = tag.attrs.count("Name") ? tag.attrs.at("Name") : "";
+  const std::string shown = a.name.empty() ? std::string(unnamed) : a.name;
   a.type = tag.attrs.count("type") ? tag.attrs.at("type") : "";
   if (a.type.empty()) w.fail(tag.line, "<DataArray Name=\"" + a.name + "\"> has no type attribute");
   a.comps = static_cast<int>(attr_count(w, tag, "NumberOfComponents", false, 1));
   if (a.comps < 1 || a.comps > 1000)
-    w.fail(tag.line, "DataArray '" + a.name + "': NumberOfComponents=" + std::to_string(a.comps) +
+    w.fail(tag.line, "DataArray '" + shown + "': NumberOfComponents=" + std::to_string(a.comps) +
                          " is out of range");
   const std::string fmt = tag.attrs.count("format") ? tag.attrs.at("format") : "ascii";
   if (fmt != "ascii")
-    w.fail(tag.line, "DataArray '" + a.name + "' has format=\"" + fmt +
+    w.fail(tag.line, "DataArray '" + shown + "' has format=\"" + fmt +
                          "\": only ASCII .vtu is supported (save as ASCII in ParaView)");
   if (tag.self_closing) {
-    if (rows != 0) w.fail(tag.line, "DataArray '" + a.name + "' is empty, expected " + std::to_string(rows) + " tuples");
+    if (rows != 0) w.fail(tag.line, "DataArray '" + shown + "' is empty, expected " + std::to_string(rows) + " tuples");
     return a;
   }
   const std::string_view d = w.data();
   const size_t close = d.find("</DataArray", tag.end);
   if (close == std::string_view::npos)
-    w.fail(tag.line, "DataArray '" + a.name + "' is not closed (truncated file?)");
+    w.fail(tag.line, "DataArray '" + shown + "' is not closed (truncated file?)");
   Scanner s(path, d.substr(tag.end, close - tag.end), '\0', w.line_at(tag.end));
   const long long count = rows * a.comps;
-  s.check_fits(count, 2, "values in DataArray '" + a.name + "'");
+  s.check_fits(count, 1, "values in DataArray '" + shown + "'");
   a.values.resize(static_cast<size_t>(count));
   const bool integer = is_integer_type(a.type);
   std::string_view tok;
+  const std::string what = "DataArray '" + shown + "'";
   for (long long i = 0; i < count; ++i) {
     if (!s.next(tok))
-      s.fail("DataArray '" + a.name + "' has " + std::to_string(i) + " values, expected " +
+      s.fail("DataArray '" + shown + "' has " + std::to_string(i) + " values, expected " +
              std::to_string(count) + " (wrong count or truncated)");
-    a.values[static_cast<size_t>(i)] = integer ? static_cast<double>(s.to_int(tok, "DataArray '" + a.name + "'"))
-                                               : s.to_real(tok, "DataArray '" + a.name + "'");
+    a.values[static_cast<size_t>(i)] = integer ? static_cast<double>(s.to_int(tok, what)) : s.to_real(tok, what);
   }
   if (s.next(tok))
-    s.fail("DataArray '" + a.name + "' has more than the " + std::to_string(count) +
+    s.fail("DataArray '" + shown + "' has more than the " + std::to_string(count) +
            " values expected (wrong count)");
   w.set_pos(close);
   return a;
@@ -254,8 +256,8 @@ TetMesh read_vtu(const std::string& path) {
       piece_line = tag.line;
       n = attr_count(w, tag, "NumberOfPoints", true, 0);
       m = attr_count(w, tag, "NumberOfCells", true, 0);
-      // Every point needs >= 3 values of >= 2 bytes, every cell >= 3 values.
-      if (n * 6 + m * 6 > static_cast<long long>(data.size()))
+      // A point takes >= 3 values of >= 2 bytes, a cell >= 3 values (offset, type, index): 2x margin.
+      if (n * 3 + m * 3 > static_cast<long long>(data.size()))
         w.fail(tag.line, "declares " + std::to_string(n) + " points and " + std::to_string(m) +
                              " cells, more than the file's " + std::to_string(data.size()) +
                              " bytes could hold (truncated or wrong count)");
@@ -274,7 +276,7 @@ TetMesh read_vtu(const std::string& path) {
       }
       const std::string name = tag.attrs.count("Name") ? tag.attrs.at("Name") : "";
       if (section == "Points") {
-        points = read_array(path, w, tag, n);
+        points = read_array(path, w, tag, n, "Points");
         if (points.comps != 3) w.fail(tag.line, "Points must have 3 components, found " + std::to_string(points.comps));
         have_points = true;
       } else if (section == "PointData") {

@@ -1,0 +1,80 @@
+// vpm_bench_io [N] [DIR]: writes and reads a cube mesh of 6 N^3 tets (N = 55: ~1M tets) in
+// every mesh format, prints the times and file sizes, writes DIR/bench_io.json.
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include "vpm/io.hpp"
+#include "vpm/json.hpp"
+
+namespace {
+vpm::TetMesh cube(int n) {
+  vpm::TetMesh m;
+  const int s = n + 1;
+  m.vertices.resize(s * s * s, 3);
+  auto id = [s](int i, int j, int k) { return i + s * (j + s * k); };
+  for (int k = 0; k < s; ++k)
+    for (int j = 0; j < s; ++j)
+      for (int i = 0; i < s; ++i)
+        m.vertices.row(id(i, j, k)) << double(i) / n, double(j) / n, double(k) / n;
+  static constexpr int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  m.tets.resize(6 * n * n * n, 4);
+  int t = 0;
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i)
+        for (const auto& p : perms) {
+          int c[3] = {i, j, k};
+          m.tets(t, 0) = id(c[0], c[1], c[2]);
+          for (int q = 0; q < 3; ++q) {
+            ++c[p[q]];
+            m.tets(t, q + 1) = id(c[0], c[1], c[2]);
+          }
+          ++t;
+        }
+  vpm::FieldValues label(m.num_tets(), 1), ratio(m.num_vertices(), 1);
+  for (int i = 0; i < m.num_tets(); ++i) label(i, 0) = 1 + i % 3;
+  for (int i = 0; i < m.num_vertices(); ++i) ratio(i, 0) = 1.0 + 1.0 / (7.0 + i);
+  m.set_cell_field("label", label, true);
+  m.set_point_field("vertex_volume_ratio", ratio);
+  return m;
+}
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int n = argc > 1 ? std::atoi(argv[1]) : 55;
+  const std::string dir = argc > 2 ? argv[2] : std::filesystem::temp_directory_path().string();
+  const vpm::TetMesh m = cube(n);
+  std::printf("cube mesh: %d vertices, %d tets\n%-6s %10s %10s %10s\n", m.num_vertices(),
+              m.num_tets(), "format", "write_s", "read_s", "MB");
+  vpm::Json j = vpm::Json::object();
+  j["vertices"] = m.num_vertices();
+  j["tets"] = m.num_tets();
+  for (const char* ext : {".node", ".mesh", ".vtu", ".msh"}) {
+    const std::string path = dir + "/bench_io" + ext;
+    auto t0 = std::chrono::steady_clock::now();
+    vpm::write_mesh(path, m);
+    const double w = seconds_since(t0);
+    t0 = std::chrono::steady_clock::now();
+    const vpm::TetMesh r = vpm::read_mesh(path);
+    const double rd = seconds_since(t0);
+    double mb = std::filesystem::file_size(path) / 1e6;
+    if (std::string(ext) == ".node") mb += std::filesystem::file_size(dir + "/bench_io.ele") / 1e6;
+    const bool same = r.vertices == m.vertices && r.tets == m.tets;
+    std::printf("%-6s %10.3f %10.3f %10.1f %s\n", ext, w, rd, mb, same ? "" : "MISMATCH");
+    vpm::Json& e = j["formats"][ext + 1];
+    e["write_s"] = w;
+    e["read_s"] = rd;
+    e["megabytes"] = mb;
+    e["exact"] = same;
+    std::filesystem::remove(path);
+  }
+  for (const char* extra : {"/bench_io.ele", "/bench_io.face"}) std::filesystem::remove(dir + extra);
+  vpm::write_json_file(dir + "/bench_io.json", j);
+  return 0;
+}
