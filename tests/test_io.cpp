@@ -391,10 +391,12 @@ TEST_CASE("io: every broken file in tests/data/bad is an InputError naming file,
     CHECK_THAT(msg, Catch::Contains(c.keyword));
     CHECK(msg.find('\n') == std::string::npos);
   }
-  // every file of the corpus is in the table
+  // every mesh/surface file of the corpus is in the table
   size_t listed = 0;
   for (const auto& e : fs::directory_iterator(std::string(VPM_TEST_DATA) + "/bad")) {
     const std::string name = e.path().filename().string();
+    if (!is_mesh_path(name) && !is_surface_path(name) && name != "unknown_extension.xyz")
+      continue;  // other modules' broken files (images, landmarks) share the folder
     bool found = false;
     for (const BadCase& c : kBad) found = found || name == c.file || name == c.named ||
                                           fs::path(name).stem() == fs::path(c.file).stem();
