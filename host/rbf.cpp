@@ -1,0 +1,271 @@
+#include "vpm/rbf.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <boost/compute/container/vector.hpp>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "vpm/device.hpp"
+#include "vpm/error.hpp"
+
+namespace vpm {
+
+namespace bc = boost::compute;
+
+Eigen::Matrix3d divfree_kernel(const Eigen::Vector3d& r, double lambda) {
+  const double r2 = r.squaredNorm();
+  const double psi = std::exp(-lambda * r2);
+  Eigen::Matrix3d k = (4 * lambda * lambda * psi) * (r * r.transpose());
+  k.diagonal().array() += (4 * lambda - 4 * lambda * lambda * r2) * psi;
+  return k;
+}
+
+Eigen::Matrix3d tangent_kernel(const Eigen::Vector3d& x, const Eigen::Vector3d& y, double lambda) {
+  const Eigen::Vector3d r = x - y;
+  const double psi = std::exp(-lambda * r.squaredNorm());
+  const double px = 1 - x.squaredNorm(), py = 1 - y.squaredNorm();
+  // H_nk = d/dx_n d/dy_k [phi(x) phi(y) psi(x - y)] / psi
+  Eigen::Matrix3d h = 4 * x * y.transpose() - 4 * lambda * py * x * r.transpose() +
+                      4 * lambda * px * r * y.transpose() -
+                      px * py * 4 * lambda * lambda * r * r.transpose();
+  h.diagonal().array() += px * py * 2 * lambda;
+  Eigen::Matrix3d k = -h.transpose();
+  k.diagonal().array() += h.trace();
+  return psi * k;
+}
+
+namespace {
+
+// K(x, y) c without forming the matrix (the same formulas the OpenCL kernel uses).
+inline Eigen::Vector3d apply_free(const Eigen::Vector3d& r, const Eigen::Vector3d& c,
+                                  double lambda) {
+  const double r2 = r.squaredNorm();
+  const double psi = std::exp(-lambda * r2);
+  return psi * ((4 * lambda - 4 * lambda * lambda * r2) * c + (4 * lambda * lambda * r.dot(c)) * r);
+}
+
+inline Eigen::Vector3d apply_tangent(const Eigen::Vector3d& x, const Eigen::Vector3d& y,
+                                     const Eigen::Vector3d& c, double lambda) {
+  const Eigen::Vector3d r = x - y;
+  const double r2 = r.squaredNorm();
+  const double psi = std::exp(-lambda * r2);
+  const double px = 1 - x.squaredNorm(), py = 1 - y.squaredNorm();
+  const double xc = x.dot(c), rc = r.dot(c);
+  const double tr = 4 * x.dot(y) - 4 * lambda * py * x.dot(r) + 4 * lambda * px * r.dot(y) -
+                    px * py * (4 * lambda * lambda * r2 - 6 * lambda);
+  const Eigen::Vector3d htc = 4 * xc * y - 4 * lambda * py * xc * r + 4 * lambda * px * rc * y -
+                              px * py * (4 * lambda * lambda * rc * r - 2 * lambda * c);
+  return psi * (tr * c - htc);
+}
+
+Eigen::Matrix3d kernel_block(RbfKernel kind, const Eigen::Vector3d& x, const Eigen::Vector3d& y,
+                             double lambda) {
+  return kind == RbfKernel::Free ? divfree_kernel(x - y, lambda) : tangent_kernel(x, y, lambda);
+}
+
+// Gram matrix of point samples only (3N x 3N).
+Eigen::MatrixXd gram(const Points& p, RbfKernel kind, double lambda) {
+  const Eigen::Index n = p.rows();
+  Eigen::MatrixXd a(3 * n, 3 * n);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index j = 0; j <= i; ++j) {
+      const Eigen::Matrix3d k = kernel_block(kind, p.row(i).transpose(), p.row(j).transpose(), lambda);
+      a.block<3, 3>(3 * i, 3 * j) = k;
+      a.block<3, 3>(3 * j, 3 * i) = k.transpose();
+    }
+  return a;
+}
+
+}  // namespace
+
+Eigen::Vector3d DivFreeField::operator()(const Eigen::Vector3d& x) const {
+  Eigen::Vector3d u = Eigen::Vector3d::Zero();
+  for (Eigen::Index j = 0; j < centres.rows(); ++j) {
+    const Eigen::Vector3d c = centres.row(j).transpose(), a = coefficients.row(j).transpose();
+    u += kernel == RbfKernel::Free ? apply_free(x - c, a, lambda) : apply_tangent(x, c, a, lambda);
+  }
+  return u;
+}
+
+Points evaluate(const DivFreeField& field, const Points& points) {
+  Points out(points.rows(), 3);
+  for (Eigen::Index i = 0; i < points.rows(); ++i)
+    out.row(i) = field(points.row(i).transpose()).transpose();
+  return out;
+}
+
+Points evaluate(Device& dev, const DivFreeField& field, const Points& points) {
+  if (dev.is_host() || points.rows() == 0) return evaluate(field, points);
+  auto& q = dev.queue();
+  const Eigen::Index nc = field.centres.rows();
+  // Empty buffers are not allowed: pad with one zero centre.
+  Points c = nc ? field.centres : Points::Zero(1, 3);
+  Points a = nc ? field.coefficients : Points::Zero(1, 3);
+  bc::vector<double> dx(points.data(), points.data() + points.size(), q);
+  bc::vector<double> dc(c.data(), c.data() + c.size(), q);
+  bc::vector<double> da(a.data(), a.data() + a.size(), q);
+  bc::vector<double> du(static_cast<size_t>(points.size()), dev.context());
+  auto k = dev.kernel("register", "eval_field");
+  k.set_arg(0, static_cast<int>(points.rows()));
+  k.set_arg(1, dx);
+  k.set_arg(2, static_cast<int>(nc));
+  k.set_arg(3, dc);
+  k.set_arg(4, da);
+  k.set_arg(5, field.lambda);
+  k.set_arg(6, field.kernel == RbfKernel::Tangent ? 1 : 0);
+  k.set_arg(7, du);
+  dev.launch(k, static_cast<size_t>(points.rows()));
+  Points out(points.rows(), 3);
+  bc::copy(du.begin(), du.end(), out.data(), q);
+  return out;
+}
+
+DivFreeField fit_divfree(const Points& points_in, const Points& velocities_in,
+                         const RbfFitOptions& opt, RbfFitInfo* info) {
+  if (points_in.rows() != velocities_in.rows())
+    throw InputError("fit_divfree: " + std::to_string(points_in.rows()) + " points but " +
+                     std::to_string(velocities_in.rows()) + " velocities");
+  if (!(opt.lambda > 0)) throw InputError("fit_divfree: lambda must be positive");
+  // Merge near-duplicate samples (greedy clusters around the first unassigned sample).
+  const Eigen::Index n0 = points_in.rows();
+  std::vector<int> cluster(static_cast<size_t>(n0), -1);
+  std::vector<int> count;
+  Points p(n0, 3), v(n0, 3);
+  int nc = 0;
+  for (Eigen::Index i = 0; i < n0; ++i) {
+    if (cluster[static_cast<size_t>(i)] >= 0) continue;
+    p.row(nc).setZero();
+    v.row(nc).setZero();
+    int members = 0;
+    for (Eigen::Index j = i; j < n0; ++j) {
+      if (cluster[static_cast<size_t>(j)] >= 0) continue;
+      if (j != i && (points_in.row(j) - points_in.row(i)).norm() > opt.merge_distance) continue;
+      cluster[static_cast<size_t>(j)] = nc;
+      p.row(nc) += points_in.row(j);
+      v.row(nc) += velocities_in.row(j);
+      ++members;
+    }
+    p.row(nc) /= members;
+    v.row(nc) /= members;
+    ++nc;
+  }
+  p.conservativeResize(nc, 3);
+  v.conservativeResize(nc, 3);
+
+  const bool with_boundary = opt.kernel == RbfKernel::Free && opt.boundary_samples.rows() > 0;
+  const Eigen::Index nb = with_boundary ? opt.boundary_samples.rows() : 0;
+  const Eigen::Index dim = 3 * nc + nb;
+  Eigen::MatrixXd a(dim, dim);
+  a.topLeftCorner(3 * nc, 3 * nc) = gram(p, opt.kernel, opt.lambda);
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(dim);
+  for (int i = 0; i < nc; ++i) rhs.segment<3>(3 * i) = v.row(i).transpose();
+  const Points& s = opt.boundary_samples;
+  for (Eigen::Index j = 0; j < nb; ++j) {
+    const Eigen::Vector3d sj = s.row(j).transpose(), nj = sj.normalized();
+    for (int i = 0; i < nc; ++i) {
+      const Eigen::Vector3d col = divfree_kernel(p.row(i).transpose() - sj, opt.lambda) * nj;
+      a.block<3, 1>(3 * i, 3 * nc + j) = col;
+      a.block<1, 3>(3 * nc + j, 3 * i) = col.transpose();
+    }
+    for (Eigen::Index k = 0; k <= j; ++k) {
+      const Eigen::Vector3d sk = s.row(k).transpose(), nk = sk.normalized();
+      const double e = nj.dot(divfree_kernel(sj - sk, opt.lambda) * nk);
+      a(3 * nc + j, 3 * nc + k) = e;
+      a(3 * nc + k, 3 * nc + j) = e;
+    }
+  }
+  RbfFitInfo local;
+  local.samples = nc;
+  local.merged = static_cast<int>(n0 - nc);
+  local.boundary_constraints = static_cast<int>(nb);
+  if (opt.estimate_condition && dim > 0) {
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(a, Eigen::EigenvaluesOnly);
+    const double lo = es.eigenvalues().minCoeff(), hi = es.eigenvalues().maxCoeff();
+    local.condition = lo > 0 ? hi / lo : std::numeric_limits<double>::infinity();
+  }
+  Eigen::VectorXd sol;
+  if (dim > 0) {
+    Eigen::LLT<Eigen::MatrixXd> llt(a);
+    if (llt.info() != Eigen::Success) {
+      const double ridge = 1e-12 * a.diagonal().mean();
+      a.diagonal().array() += ridge;
+      llt.compute(a);
+      local.regularised = true;
+      if (llt.info() != Eigen::Success) {
+        std::ostringstream msg;
+        msg << "divergence-free interpolation: the " << dim << " x " << dim
+            << " Gram matrix is not positive definite even with a ridge (lambda " << opt.lambda
+            << ", " << nc << " samples): samples too close for this width";
+        throw NumericalError(msg.str());
+      }
+    }
+    sol = llt.solve(rhs);
+  }
+  DivFreeField f;
+  f.kernel = opt.kernel;
+  f.lambda = opt.lambda;
+  f.centres.resize(nc + nb, 3);
+  f.coefficients.resize(nc + nb, 3);
+  for (int i = 0; i < nc; ++i) {
+    f.centres.row(i) = p.row(i);
+    f.coefficients.row(i) = sol.segment<3>(3 * i).transpose();
+  }
+  for (Eigen::Index j = 0; j < nb; ++j) {
+    f.centres.row(nc + j) = s.row(j);
+    f.coefficients.row(nc + j) = sol(3 * nc + j) * s.row(j).normalized();
+  }
+  for (int i = 0; i < nc; ++i)
+    local.max_residual = std::max(
+        local.max_residual, (f(p.row(i).transpose()) - v.row(i).transpose()).norm());
+  if (info) *info = local;
+  return f;
+}
+
+Eigen::VectorXd loo_errors(const Points& p, const Points& v, RbfKernel kind, double lambda) {
+  const Eigen::Index n = p.rows();
+  Eigen::VectorXd err = Eigen::VectorXd::Zero(n);
+  if (n < 2) return err;
+  const Eigen::MatrixXd a = gram(p, kind, lambda);
+  Eigen::LLT<Eigen::MatrixXd> llt(a);
+  if (llt.info() != Eigen::Success) {
+    err.setConstant(std::numeric_limits<double>::infinity());
+    return err;
+  }
+  const Eigen::MatrixXd inv = llt.solve(Eigen::MatrixXd::Identity(3 * n, 3 * n));
+  Eigen::VectorXd rhs(3 * n);
+  for (Eigen::Index i = 0; i < n; ++i) rhs.segment<3>(3 * i) = v.row(i).transpose();
+  const Eigen::VectorXd c = inv * rhs;
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const Eigen::Matrix3d b = inv.block<3, 3>(3 * j, 3 * j);
+    err(j) = b.ldlt().solve(c.segment<3>(3 * j)).norm();
+  }
+  return err;
+}
+
+double mean_nearest_spacing(const Points& p) {
+  const Eigen::Index n = p.rows();
+  if (n < 2) return 0;
+  double sum = 0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    double best = std::numeric_limits<double>::infinity();
+    for (Eigen::Index j = 0; j < n; ++j)
+      if (j != i) best = std::min(best, (p.row(i) - p.row(j)).norm());
+    sum += best;
+  }
+  return sum / static_cast<double>(n);
+}
+
+Points fibonacci_sphere(int n) {
+  Points s(std::max(n, 0), 3);
+  const double golden = M_PI * (3 - std::sqrt(5.0));
+  for (int i = 0; i < n; ++i) {
+    const double z = 1 - (2 * i + 1.0) / n;
+    const double rho = std::sqrt(std::max(0.0, 1 - z * z));
+    s.row(i) << rho * std::cos(golden * i), rho * std::sin(golden * i), z;
+  }
+  return s;
+}
+
+}  // namespace vpm

@@ -1,0 +1,106 @@
+#pragma once
+// Volume-preserving landmark registration inside the unit ball (Hu, Zou & Hua 2014, section 5).
+//
+// 1. Rigid step (5.1): the rotation about the ball centre that best maps the landmarks onto
+//    the targets (Kabsch: SVD of sum p_i q_i^T, reflections refused), applied to every vertex.
+// 2. Pathlines (5.2, eq. 20-21): each landmark p travels to its target q along
+//      x(t) = (1 - w) [(1 - t) p + t q] + w [((1 - t)|p| + t|q|) slerp(p/|p|, q/|q|, t)],
+//    w = (|p| + |q|) / 2, t in [0, 1]: straight lines near the centre, arcs near the sphere.
+//    The path stays inside the ball; its velocity x'(t) is analytic.
+// 3. Divergence-free field (5.3, 5.4): at each RK4 stage time t the velocity field is the
+//    divergence-free RBF interpolant (vpm/rbf.hpp) of the samples (x_i(t), x_i'(t)), one per
+//    landmark, so every landmark path is an exact trajectory of the flow (landmark error is
+//    the RK4 truncation error only). FieldMode::Steady instead fits one time-independent
+//    field to all pathline samples of all K steps (the paper's construction).
+//    Boundary: BoundaryMode::Tangent (default) uses the exactly tangent kernel, so the sphere
+//    is invariant; BoundaryMode::Samples adds the paper's normal-cancelling constraints at
+//    points on the sphere (tangent there only); BoundaryMode::None has no boundary condition.
+// 4. Advection: every vertex is moved through the field with K RK4 steps (device kernel
+//    register.rk4_advect, host reference otherwise); boundary vertices are put back on the
+//    sphere (radial projection of the O(dt^4) drift); inverted tets are counted and a folded
+//    result is refused with NumericalError.
+#include <Eigen/Core>
+#include <string>
+
+#include "vpm/json.hpp"
+#include "vpm/mesh.hpp"
+#include "vpm/rbf.hpp"
+
+namespace vpm {
+
+class Device;
+
+enum class BoundaryMode { Tangent, Samples, None };
+enum class FieldMode { PerStep, Steady };
+
+/// "tangent" | "samples" | "none" (InputError otherwise), and back.
+BoundaryMode parse_boundary_mode(const std::string& text);
+std::string to_string(BoundaryMode mode);
+/// "per-step" | "steady", and back.
+FieldMode parse_field_mode(const std::string& text);
+std::string to_string(FieldMode mode);
+
+struct RegistrationOptions {
+  int steps = 50;                 ///< K: pathline samples / RK4 steps over t in [0, 1]
+  /// Gaussian parameter lambda = 1 / width^2; 0 = automatic: width = width_factor x the mean
+  /// nearest-neighbour spacing of the landmarks (the smaller of start and target sets).
+  double lambda = 0;
+  double width_factor = 1.0;
+  /// Automatic width by leave-one-out instead: the factor in {0.5, 0.75, 1, 1.5, 2, 3} whose
+  /// interpolant of the initial landmark velocities has the smallest RMS LOO error.
+  bool width_loo = false;
+  BoundaryMode boundary = BoundaryMode::Tangent;
+  FieldMode field = FieldMode::PerStep;
+  int boundary_samples = 200;     ///< sphere points for BoundaryMode::Samples
+  int normal_check_samples = 4000;  ///< sphere points where max |u . n| is measured
+  bool rigid = true;              ///< do the rotation step first
+  bool project_boundary = true;   ///< put boundary vertices back on the sphere afterwards
+  /// Steady mode: pathline samples closer than this fraction of the width are merged.
+  double steady_merge_fraction = 0.25;
+};
+
+struct RegistrationResult {
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  ///< rigid step (x -> R x)
+  double lambda = 0;              ///< Gaussian parameter used
+  Points landmarks_final;         ///< where the flow took the landmarks (N x 3)
+  double landmark_rms_error = 0;  ///< RMS |landmark_final - target| (ball units)
+  double landmark_max_error = 0;
+  double max_normal_velocity = 0; ///< max |u . n| over the sphere check points and field times
+  double boundary_drift = 0;      ///< max | |x| - 1 | of boundary vertices before projection
+  int inverted_tets = 0;
+  /// {"device", "landmarks", "steps", "lambda", "width", "boundary", "field", "rotation_deg",
+  ///  "landmark_rms_error", "landmark_max_error", "max_normal_velocity", "boundary_drift",
+  ///  "inverted_tets", "fit": {...}, "timings_s": {"rigid", "fit", "advect", "check", "total"}}
+  Json report;
+};
+
+/// Rotation R (det +1) minimising sum |R p_i - q_i|^2 over rotations about the origin.
+/// `from`, `to`: N x 3. Fewer than two non-collinear landmarks give a valid but not unique R.
+Eigen::Matrix3d kabsch_rotation(const Points& from, const Points& to);
+
+/// Pathline point x(t) from p to q (eq. 20-21 blend) and, if `velocity`, x'(t).
+Eigen::Vector3d pathline(const Eigen::Vector3d& p, const Eigen::Vector3d& q, double t,
+                         Eigen::Vector3d* velocity = nullptr);
+
+/// The fields at the 2K + 1 RK4 stage times s * dt / 2 (per-step mode), or one steady field
+/// repeated. Exposed for tests and benchmarks; `landmarks` already rotated.
+std::vector<DivFreeField> registration_fields(const Points& landmarks, const Points& targets,
+                                              double lambda, const RegistrationOptions& options,
+                                              Json* fit_report = nullptr);
+
+/// Moves `points` (n x 3, in/out) with K RK4 steps through `fields` (2K + 1 of them, as
+/// registration_fields returns) on `device` (host: the reference loop).
+void advect(Device& device, Points& points, const std::vector<DivFreeField>& fields, int steps);
+
+/// Registers the mapped mesh: moves `ball` (n x 3 vertices of a mesh mapped to the unit ball,
+/// in/out) so that `landmarks` (N x 3, ball coordinates) go to `targets` (N x 3) by a rotation
+/// and a divergence-free flow tangent to the sphere. `tets` (m x 4) is used for the fold check.
+/// Throws InputError for mismatched counts, landmarks or targets outside the ball, duplicate
+/// landmarks with different targets, a boundary landmark with an interior target, or a mesh
+/// whose boundary is not on the unit sphere (within 1e-6); NumericalError when the result has
+/// inverted tets (then `ball` is left unchanged).
+RegistrationResult register_landmarks(Device& device, Points& ball, const Tets& tets,
+                                      const Points& landmarks, const Points& targets,
+                                      const RegistrationOptions& options = {});
+
+}  // namespace vpm

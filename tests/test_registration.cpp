@@ -1,0 +1,249 @@
+#include <catch2/catch.hpp>
+#include <Eigen/Geometry>
+#include <random>
+
+#include "support/devices.hpp"
+#include "support/fixtures.hpp"
+#include "vpm/device.hpp"
+#include "vpm/error.hpp"
+#include "vpm/geometry.hpp"
+#include "vpm/metrics.hpp"
+#include "vpm/registration.hpp"
+
+using namespace vpm;
+
+namespace {
+
+// n landmarks at random in the ball of radius 0.75 and targets moved by up to `shift` (fixed
+// seed), targets kept inside radius 0.85.
+void random_landmarks(int n, double shift, unsigned seed, Points& p, Points& q) {
+  std::mt19937 gen(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  p.resize(n, 3);
+  q.resize(n, 3);
+  for (int i = 0; i < n; ++i) {
+    Eigen::Vector3d a, d;
+    do a << u(gen), u(gen), u(gen);
+    while (a.norm() > 1);
+    a *= 0.75;
+    do d << u(gen), u(gen), u(gen);
+    while (d.norm() > 1 || (a + shift * d).norm() > 0.85);
+    p.row(i) = a.transpose();
+    q.row(i) = (a + shift * d).transpose();
+  }
+}
+
+// A smoother ball mesh than test::ball_mesh (whose shell-by-shell projection flattens tets at
+// every shell's corners): cube_mesh(n) on [-1,1]^3 through the elliptical cube-to-ball map
+// x' = x sqrt(1 - y^2/2 - z^2/2 + y^2 z^2/3) (and cyclic), smooth inside, sphere on the boundary.
+TetMesh smooth_ball(int n) {
+  TetMesh m = test::cube_mesh(n);
+  for (int i = 0; i < m.vertices.rows(); ++i) {
+    const double x = 2 * m.vertices(i, 0) - 1, y = 2 * m.vertices(i, 1) - 1, z = 2 * m.vertices(i, 2) - 1;
+    m.vertices.row(i) << x * std::sqrt(std::max(0.0, 1 - y * y / 2 - z * z / 2 + y * y * z * z / 3)),
+        y * std::sqrt(std::max(0.0, 1 - z * z / 2 - x * x / 2 + z * z * x * x / 3)),
+        z * std::sqrt(std::max(0.0, 1 - x * x / 2 - y * y / 2 + x * x * y * y / 3));
+  }
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("Kabsch recovers a rotation and never returns a reflection") {
+  Points p, q;
+  random_landmarks(8, 0.0, 1, p, q);
+  const Eigen::Matrix3d r0 = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
+  const Points rotated = p * r0.transpose();
+  CHECK((kabsch_rotation(p, rotated) - r0).norm() < 1e-12);
+  // mirrored targets: the best proper rotation, det +1
+  Points mirrored = p;
+  mirrored.col(0) *= -1;
+  const Eigen::Matrix3d r = kabsch_rotation(p, mirrored);
+  CHECK(r.determinant() == Approx(1.0).epsilon(1e-12));
+  CHECK((r * r.transpose() - Eigen::Matrix3d::Identity()).norm() < 1e-12);
+}
+
+TEST_CASE("pathlines: endpoints, analytic velocity, inside the ball, arcs on the sphere") {
+  const Eigen::Vector3d p(0.5, 0.2, -0.1), q(-0.2, 0.6, 0.3);
+  CHECK((pathline(p, q, 0) - p).norm() < 1e-15);
+  CHECK((pathline(p, q, 1) - q).norm() < 1e-14);
+  for (double t : {0.1, 0.37, 0.8}) {
+    Eigen::Vector3d v;
+    pathline(p, q, t, &v);
+    const double h = 1e-6;
+    const Eigen::Vector3d fd = (pathline(p, q, t + h) - pathline(p, q, t - h)) / (2 * h);
+    CHECK((v - fd).norm() < 1e-8);
+  }
+  const Eigen::Vector3d a = Eigen::Vector3d(1, 1, 0).normalized(), b = Eigen::Vector3d(0, -1, 1).normalized();
+  for (double t = 0; t <= 1; t += 0.125) {
+    CHECK(pathline(a, b, t).norm() == Approx(1.0).epsilon(1e-13));  // w = 1: great circle
+    CHECK(pathline(0.9 * a, 0.95 * b, t).norm() <= 0.95 + 1e-12);
+  }
+}
+
+TEST_CASE("registration moves landmarks to targets, preserves volumes, keeps the sphere") {
+  const TetMesh m = smooth_ball(8);
+  Points p, q;
+  random_landmarks(6, 0.1, 2, p, q);
+  std::vector<Points> results;
+  for (auto& dev : test::devices()) {
+    INFO("device " << dev->name());
+    Points x = m.vertices;
+    const RegistrationResult r = register_landmarks(*dev, x, m.tets, p, q);
+    INFO(r.report.dump());
+    CHECK(r.landmark_rms_error < 1e-5);
+    CHECK(r.landmark_max_error < 1e-4);
+    CHECK(r.max_normal_velocity < 1e-12);
+    CHECK(r.boundary_drift < 1e-6);
+    CHECK(r.inverted_tets == 0);
+    const MapMetrics mm = map_metrics(*dev, m.vertices, x, m.tets);
+    CHECK(mm.boundary_max_radius_error < 1e-12);
+    // divergence-free flow: what remains is the discretisation error of the coarse tets
+    // (measured 3.0 % per tet, 0.67 % per vertex at h ~ 0.25)
+    CHECK(mm.tet_volume_ratio.mean_abs_dev < 0.04);
+    CHECK(mm.vertex_volume_ratio.mean_abs_dev < 0.01);
+    // the vertices did move (by more than the rotation alone would explain for the landmarks)
+    CHECK((x - m.vertices).rowwise().norm().maxCoeff() > 0.05);
+    results.push_back(x);
+  }
+  if (results.size() == 2) CHECK((results[0] - results[1]).cwiseAbs().maxCoeff() < 1e-10);
+}
+
+TEST_CASE("volume distortion is discretisation error: it shrinks as the mesh is refined") {
+  Points p, q;
+  random_landmarks(6, 0.1, 2, p, q);
+  auto host = Device::host();
+  double mad[2];
+  for (int k = 0; k < 2; ++k) {
+    const TetMesh m = smooth_ball(k == 0 ? 6 : 12);
+    Points x = m.vertices;
+    register_landmarks(*host, x, m.tets, p, q);
+    mad[k] = map_metrics(*host, m.vertices, x, m.tets).tet_volume_ratio.mean_abs_dev;
+  }
+  INFO("tet mean |r-1|: h " << mad[0] << ", h/2 " << mad[1]);
+  CHECK(mad[1] < 0.7 * mad[0]);
+}
+
+TEST_CASE("a pure rotation of the landmarks is recovered by the rigid step alone") {
+  const TetMesh m = test::ball_mesh(4);
+  Points p, q;
+  random_landmarks(5, 0.0, 3, p, q);
+  const Eigen::Matrix3d r0 = Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  q = p * r0.transpose();
+  auto host = Device::host();
+  Points x = m.vertices;
+  const RegistrationResult r = register_landmarks(*host, x, m.tets, p, q);
+  CHECK((r.rotation - r0).norm() < 1e-12);
+  CHECK(r.landmark_max_error < 1e-12);
+  CHECK((x - m.vertices * r0.transpose()).cwiseAbs().maxCoeff() < 1e-12);
+}
+
+TEST_CASE("boundary modes: samples and none agree with the host reference on the device") {
+  const TetMesh m = test::ball_mesh(5);
+  Points p, q;
+  random_landmarks(5, 0.12, 4, p, q);
+  for (BoundaryMode mode : {BoundaryMode::Samples, BoundaryMode::None}) {
+    INFO("boundary " << to_string(mode));
+    RegistrationOptions opt;
+    opt.boundary = mode;
+    opt.steps = 10;
+    opt.boundary_samples = 100;
+    opt.normal_check_samples = 500;
+    std::vector<RegistrationResult> res;
+    std::vector<Points> xs;
+    for (auto& dev : test::devices()) {
+      Points x = m.vertices;
+      res.push_back(register_landmarks(*dev, x, m.tets, p, q, opt));
+      xs.push_back(x);
+    }
+    CHECK(res[0].landmark_rms_error < 1e-3);
+    CHECK(res[0].max_normal_velocity > 1e-6);  // not exactly tangent
+    if (mode == BoundaryMode::None) CHECK(res[0].boundary_drift > 1e-4);
+    if (xs.size() == 2) {
+      CHECK((xs[0] - xs[1]).cwiseAbs().maxCoeff() < 1e-10);
+      CHECK(res[1].max_normal_velocity == Approx(res[0].max_normal_velocity).epsilon(1e-8));
+    }
+  }
+}
+
+TEST_CASE("steady field (paper construction) and leave-one-out width") {
+  const TetMesh m = test::ball_mesh(5);
+  Points p, q;
+  random_landmarks(5, 0.1, 5, p, q);
+  RegistrationOptions opt;
+  opt.steps = 20;
+  opt.field = FieldMode::Steady;
+  opt.width_loo = true;
+  auto host = Device::host();
+  Points x = m.vertices;
+  const RegistrationResult r = register_landmarks(*host, x, m.tets, p, q, opt);
+  INFO(r.report.dump());
+  REQUIRE(r.report.find("width_loo") != nullptr);
+  CHECK(r.report.find("width_loo")->size() == 6);
+  CHECK(r.landmark_rms_error < 0.02);
+  CHECK(r.inverted_tets == 0);
+  CHECK(r.max_normal_velocity < 1e-12);
+}
+
+TEST_CASE("host and device advection agree") {
+  Points p, q;
+  random_landmarks(8, 0.2, 6, p, q);
+  RegistrationOptions opt;
+  opt.steps = 12;
+  const std::vector<DivFreeField> fields = registration_fields(p, q, 9.0, opt);
+  REQUIRE(fields.size() == 25);
+  Points x0(300, 3);
+  std::mt19937 gen(7);
+  std::uniform_real_distribution<double> u(-0.57, 0.57);
+  for (int i = 0; i < 300; ++i) x0.row(i) << u(gen), u(gen), u(gen);
+  Points host = x0;
+  advect(*Device::host(), host, fields, opt.steps);
+  // the landmark paths are trajectories of the flow
+  Points lm = p;
+  advect(*Device::host(), lm, fields, opt.steps);
+  CHECK((lm - q).rowwise().norm().maxCoeff() < 1e-4);
+  for (auto& dev : test::devices()) {
+    Points d = x0;
+    advect(*dev, d, fields, opt.steps);
+    CHECK((d - host).cwiseAbs().maxCoeff() < 1e-12);
+  }
+}
+
+TEST_CASE("bad input is refused with InputError") {
+  const TetMesh m = test::ball_mesh(3);
+  auto host = Device::host();
+  Points p(2, 3), q(2, 3);
+  p << 0.1, 0.2, 0.3, -0.3, 0.1, 0.0;
+  q << 0.2, 0.2, 0.3, -0.3, 0.2, 0.0;
+  Points x = m.vertices;
+  CHECK_THROWS_AS(register_landmarks(*host, x, m.tets, p, q.topRows(1)), InputError);
+  Points out = p;
+  out(1, 0) = 1.5;
+  CHECK_THROWS_WITH(register_landmarks(*host, x, m.tets, out, q), Catch::Contains("outside the unit ball"));
+  Points qout = q;
+  qout(0, 2) = 1.2;
+  CHECK_THROWS_WITH(register_landmarks(*host, x, m.tets, p, qout), Catch::Contains("outside the unit ball"));
+  Points dup(3, 3), dq(3, 3);
+  dup << p, p.row(0);
+  dq << q, q.row(1);
+  CHECK_THROWS_WITH(register_landmarks(*host, x, m.tets, dup, dq), Catch::Contains("different target"));
+  dq.row(2) = q.row(0);  // same landmark, same target: accepted
+  CHECK_NOTHROW(register_landmarks(*host, x, m.tets, dup, dq));
+  Points unmapped = 1.1 * m.vertices;
+  CHECK_THROWS_WITH(register_landmarks(*host, unmapped, m.tets, p, q), Catch::Contains("not mapped"));
+  Points onsphere = p;
+  onsphere.row(0) = p.row(0).normalized();
+  CHECK_THROWS_WITH(register_landmarks(*host, x, m.tets, onsphere, q), Catch::Contains("boundary sphere"));
+}
+
+TEST_CASE("a folding registration is refused with NumericalError and leaves the mesh unchanged") {
+  // test::ball_mesh flattens tets at the corners of every interior shell: the same landmark
+  // moves that fold nothing on smooth_ball(8) invert some of them.
+  const TetMesh m = test::ball_mesh(8);
+  Points p, q;
+  random_landmarks(6, 0.15, 2, p, q);
+  auto host = Device::host();
+  Points x = m.vertices;
+  CHECK_THROWS_WITH(register_landmarks(*host, x, m.tets, p, q), Catch::Contains("folded"));
+  CHECK(x == m.vertices);
+}
