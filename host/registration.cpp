@@ -200,23 +200,39 @@ void advect(Device& dev, Points& x, const std::vector<DivFreeField>& f, int step
     centres.assign(3, 0.0);
     coefs.assign(3, 0.0);
   }
+  // Structure-of-arrays positions, padded to a multiple of the SIMD width (8 lanes of double
+  // on CPU devices, 1 elsewhere); padding points sit at the origin and are discarded.
+  const int lanes = dev.description().type == "cpu" ? 8 : 1;
+  const size_t n = static_cast<size_t>(x.rows());
+  const size_t nv = (n + lanes - 1) / lanes, np = nv * lanes;
+  std::vector<double> soa(3 * np, 0.0);
+  for (size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) soa[c * np + i] = x(static_cast<Eigen::Index>(i), c);
   auto& q = dev.queue();
-  bc::vector<double> dx(x.data(), x.data() + x.size(), q);
+  bc::vector<double> dxs(soa.begin(), soa.begin() + np, q);
+  bc::vector<double> dys(soa.begin() + np, soa.begin() + 2 * np, q);
+  bc::vector<double> dzs(soa.begin() + 2 * np, soa.end(), q);
   bc::vector<int> dslot(slot.begin(), slot.end(), q);
   bc::vector<double> dc(centres.begin(), centres.end(), q);
   bc::vector<double> da(coefs.begin(), coefs.end(), q);
-  auto k = dev.kernel("register", "rk4_advect");
-  k.set_arg(0, static_cast<int>(x.rows()));
-  k.set_arg(1, dx);
-  k.set_arg(2, steps);
-  k.set_arg(3, 1.0 / steps);
-  k.set_arg(4, dslot);
-  k.set_arg(5, dc);
-  k.set_arg(6, da);
-  k.set_arg(7, f[0].lambda);
-  k.set_arg(8, f[0].kernel == RbfKernel::Tangent ? 1 : 0);
-  dev.launch(k, static_cast<size_t>(x.rows()));
-  bc::copy(dx.begin(), dx.end(), x.data(), q);
+  auto k = dev.kernel("register", "rk4_advect_soa", "-DLANES=" + std::to_string(lanes));
+  k.set_arg(0, static_cast<int>(nv));
+  k.set_arg(1, dxs);
+  k.set_arg(2, dys);
+  k.set_arg(3, dzs);
+  k.set_arg(4, steps);
+  k.set_arg(5, 1.0 / steps);
+  k.set_arg(6, dslot);
+  k.set_arg(7, dc);
+  k.set_arg(8, da);
+  k.set_arg(9, f[0].lambda);
+  k.set_arg(10, f[0].kernel == RbfKernel::Tangent ? 1 : 0);
+  dev.launch(k, nv);
+  bc::copy(dxs.begin(), dxs.end(), soa.begin(), q);
+  bc::copy(dys.begin(), dys.end(), soa.begin() + np, q);
+  bc::copy(dzs.begin(), dzs.end(), soa.begin() + 2 * np, q);
+  for (size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) x(static_cast<Eigen::Index>(i), c) = soa[c * np + i];
 }
 
 RegistrationResult register_landmarks(Device& dev, Points& ball, const Tets& tets,
@@ -386,7 +402,8 @@ RegistrationResult register_landmarks(Device& dev, Points& ball, const Tets& tet
   r["inverted_tets"] = res.inverted_tets;
   r["fit"] = fit;
   r["timings_s"] = timings;
-  if (newly_inverted > 0) {
+  r["newly_inverted_tets"] = newly_inverted;
+  if (newly_inverted > 0 && opt.refuse_folds) {
     std::ostringstream s;
     s << "registration folded the mesh: " << newly_inverted << " of " << tets.rows()
       << " tets inverted (landmark rms error " << res.landmark_rms_error << ", width "

@@ -55,6 +55,9 @@ struct RegistrationOptions {
   int normal_check_samples = 4000;  ///< sphere points where max |u . n| is measured
   bool rigid = true;              ///< do the rotation step first
   bool project_boundary = true;   ///< put boundary vertices back on the sphere afterwards
+  /// Throw NumericalError when tets invert (false: return the folded result and count them;
+  /// for benchmarks and diagnosis only).
+  bool refuse_folds = true;
   /// Steady mode: pathline samples closer than this fraction of the width are merged.
   double steady_merge_fraction = 0.25;
 };
@@ -102,5 +105,19 @@ void advect(Device& device, Points& points, const std::vector<DivFreeField>& fie
 RegistrationResult register_landmarks(Device& device, Points& ball, const Tets& tets,
                                       const Points& landmarks, const Points& targets,
                                       const RegistrationOptions& options = {});
+
+/// Landmarks read from a CSV file.
+struct LandmarkFile {
+  Points points;           ///< N x 3 ball coordinates
+  std::vector<int> lines;  ///< 1-based line of each landmark in the file
+};
+
+/// Reads a landmark CSV: one landmark a line, either `x,y,z` (ball coordinates) or a single
+/// `vertex_id` (0-based row of `vertices`, n x 3, whose position is used). Blank lines and
+/// lines starting with '#' are skipped; a first line that is not numeric is a header.
+/// Separators: commas (spaces and tabs around values are ignored; CRLF accepted).
+/// Throws InputError("FILE:LINE: what") on malformed lines, ids out of range, an empty file,
+/// and ("FILE:LINE: ... outside the unit ball") for points with |p| > 1 + 1e-9.
+LandmarkFile read_landmarks_csv(const std::string& path, const Points& vertices);
 
 }  // namespace vpm

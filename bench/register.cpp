@@ -1,0 +1,235 @@
+// Registration benchmark: 20 random landmarks moved by up to 0.2 ball radii on smooth ball
+// meshes of about the paper's size (26k tets) and ~1M tets. Prints a table and writes JSON.
+//
+//   vpm_bench_register [--quick] [--runs R] [--large N] [--out FILE]
+//
+// The device is VPM_DEVICE's (PoCL CPU here). Times are medians of R runs.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <random>
+#include <string>
+
+#include "vpm/device.hpp"
+#include "vpm/error.hpp"
+#include "vpm/geometry.hpp"
+#include "vpm/json.hpp"
+#include "vpm/metrics.hpp"
+#include "vpm/registration.hpp"
+
+using namespace vpm;
+
+namespace {
+
+// Unit cube split into n^3 cells of 6 Kuhn tets, [-1,1]^3 mapped to the ball by the elliptical
+// cube-to-ball map x' = x sqrt(1 - y^2/2 - z^2/2 + y^2 z^2/3) (and cyclic). (n+1)^3 vertices.
+TetMesh smooth_ball(int n) {
+  TetMesh m;
+  const int s = n + 1;
+  m.vertices.resize(s * s * s, 3);
+  auto id = [s](int i, int j, int k) { return i + s * (j + s * k); };
+  for (int k = 0; k < s; ++k)
+    for (int j = 0; j < s; ++j)
+      for (int i = 0; i < s; ++i) {
+        const double x = 2.0 * i / n - 1, y = 2.0 * j / n - 1, z = 2.0 * k / n - 1;
+        m.vertices.row(id(i, j, k)) << x * std::sqrt(std::max(0.0, 1 - y * y / 2 - z * z / 2 + y * y * z * z / 3)),
+            y * std::sqrt(std::max(0.0, 1 - z * z / 2 - x * x / 2 + z * z * x * x / 3)),
+            z * std::sqrt(std::max(0.0, 1 - x * x / 2 - y * y / 2 + x * x * y * y / 3));
+      }
+  static constexpr int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  m.tets.resize(6 * n * n * n, 4);
+  int t = 0;
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i)
+        for (const auto& p : perms) {
+          int c[3] = {i, j, k}, v[4];
+          v[0] = id(c[0], c[1], c[2]);
+          for (int q = 0; q < 3; ++q) {
+            ++c[p[q]];
+            v[q + 1] = id(c[0], c[1], c[2]);
+          }
+          m.tets.row(t++) << v[0], v[1], v[2], v[3];
+        }
+  const Eigen::VectorXd vol = tet_volumes(m.vertices, m.tets);
+  for (int i = 0; i < m.tets.rows(); ++i)
+    if (vol(i) < 0) std::swap(m.tets(i, 2), m.tets(i, 3));
+  return m;
+}
+
+// 20 landmarks in the ball of radius 0.8, each moved by a random vector of length <= 0.2,
+// targets inside radius 0.9 (fixed seed).
+void landmarks(int n, unsigned seed, double move, Points& p, Points& q) {
+  std::mt19937 gen(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  p.resize(n, 3);
+  q.resize(n, 3);
+  for (int i = 0; i < n; ++i) {
+    Eigen::Vector3d a, d;
+    do a << u(gen), u(gen), u(gen);
+    while (a.norm() > 1);
+    a *= 0.8;
+    do d << u(gen), u(gen), u(gen);
+    while (d.norm() > 1 || (a + 0.2 * d).norm() > 0.9);
+    p.row(i) = a.transpose();
+    q.row(i) = (a + move * d).transpose();
+  }
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n == 0 ? 0 : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+struct Case {
+  std::string name;
+  int n;          // smooth_ball(n)
+  int runs;
+  RegistrationOptions opt;
+  bool host = false;
+  double move = 0.2;  // largest landmark displacement
+};
+
+Json run_case(const Case& c, const TetMesh& m) {
+  Points p, q;
+  landmarks(20, 2014, c.move, p, q);
+  auto dev = c.host ? Device::host() : std::shared_ptr<Device>(&Device::current(), [](Device*) {});
+  Json j = Json::object();
+  j["case"] = c.name;
+  j["device"] = dev->name();
+  j["vertices"] = m.num_vertices();
+  j["tets"] = m.num_tets();
+  j["landmarks"] = static_cast<long>(p.rows());
+  j["steps"] = c.opt.steps;
+  j["boundary"] = to_string(c.opt.boundary);
+  j["field"] = to_string(c.opt.field);
+  j["width_factor"] = c.opt.width_factor;
+  j["max_landmark_move"] = c.move;
+  std::vector<double> total, advect, fit;
+  RegistrationResult res;
+  Points x;
+  for (int r = 0; r < c.runs; ++r) {
+    x = m.vertices;
+    try {
+      res = register_landmarks(*dev, x, m.tets, p, q, c.opt);
+    } catch (const NumericalError& e) {
+      j["error"] = e.what();
+      std::printf("%-22s %8d  FAILED: %s\n", c.name.c_str(), m.num_tets(), e.what());
+      return j;
+    }
+    const Json& tm = *res.report.find("timings_s");
+    total.push_back(tm.find("total")->number());
+    advect.push_back(tm.find("advect")->number());
+    fit.push_back(tm.find("fit")->number());
+  }
+  const MapMetrics mm = map_metrics(*dev, m.vertices, x, m.tets);
+  const double centres = static_cast<double>(res.report.find("fit")->find("samples_per_field")->number() +
+                                             res.report.find("fit")->find("boundary_constraints")->number());
+  const double evals = static_cast<double>(x.rows() + p.rows()) * centres * 4.0 * c.opt.steps;
+  j["runs"] = c.runs;
+  j["time_s_median"] = median(total);
+  j["advect_s_median"] = median(advect);
+  j["fit_s_median"] = median(fit);
+  Json all = Json::array();
+  for (double t : total) all.push_back(t);
+  j["time_s_all"] = all;
+  j["kernel_evaluations"] = evals;
+  j["kernel_evaluations_per_s"] = evals / median(advect);
+  j["landmark_rms_error"] = res.landmark_rms_error;
+  j["landmark_max_error"] = res.landmark_max_error;
+  j["max_normal_velocity"] = res.max_normal_velocity;
+  j["width"] = res.report.find("width")->number();
+  j["inverted_tets"] = mm.inverted_tets;
+  j["vertex_volume_ratio"] = to_json(mm.vertex_volume_ratio);
+  j["tet_volume_ratio"] = to_json(mm.tet_volume_ratio);
+  j["boundary_max_radius_error"] = mm.boundary_max_radius_error;
+  j["report"] = res.report;
+  std::printf("%-22s %8d %9.2e %9.2e %8.3f%% %8.3f%% %4d %9.1e %8.3f %8.3f %9.2e\n", c.name.c_str(),
+              m.num_tets(), res.landmark_rms_error, res.landmark_max_error,
+              100 * mm.vertex_volume_ratio.mean_abs_dev, 100 * mm.tet_volume_ratio.mean_abs_dev,
+              mm.inverted_tets, res.max_normal_velocity, median(total), median(advect),
+              evals / median(advect));
+  std::fflush(stdout);
+  return j;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  bool quick = false;
+  int runs = 3, large = 55;
+  std::string out = "bench/results/register.json";
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--quick") quick = true;
+    else if (a == "--runs" && i + 1 < argc) runs = std::atoi(argv[++i]);
+    else if (a == "--large" && i + 1 < argc) large = std::atoi(argv[++i]);
+    else if (a == "--out" && i + 1 < argc) out = argv[++i];
+    else {
+      std::cerr << "usage: vpm_bench_register [--quick] [--runs R] [--large N] [--out FILE]\n";
+      return 2;
+    }
+  }
+  try {
+    std::vector<Case> cases;
+    RegistrationOptions def;
+    def.refuse_folds = false;  // measure folds instead of stopping
+    cases.push_back({"paper-size", 16, runs, def});
+    if (!quick) {
+      Case h{"paper-size host", 16, 1, def, true};
+      cases.push_back(h);
+      for (double mv : {0.05, 0.1}) {
+        Case c{"move<=" + std::to_string(mv).substr(0, 4), 16, 1, def};
+        c.move = mv;
+        cases.push_back(c);
+      }
+      for (double f : {0.5, 2.0}) {
+        RegistrationOptions o = def;
+        o.width_factor = f;
+        cases.push_back({"width x" + std::to_string(f).substr(0, 3), 16, 1, o});
+      }
+      RegistrationOptions loo = def;
+      loo.width_loo = true;
+      cases.push_back({"width loo", 16, 1, loo});
+      RegistrationOptions samples = def;
+      samples.boundary = BoundaryMode::Samples;
+      cases.push_back({"boundary samples", 16, 1, samples});
+      RegistrationOptions none = def;
+      none.boundary = BoundaryMode::None;
+      cases.push_back({"boundary none", 16, 1, none});
+      RegistrationOptions steady = def;
+      steady.field = FieldMode::Steady;
+      cases.push_back({"steady field (paper)", 16, 1, steady});
+      cases.push_back({"50k tets", 20, 1, def});
+      cases.push_back({"200k tets", 32, 1, def});
+      cases.push_back({"~1M tets", large, std::max(1, runs / 2), def});
+    }
+    std::printf("%-22s %8s %9s %9s %9s %9s %4s %9s %8s %8s %9s\n", "case", "tets", "lm_rms", "lm_max",
+                "vert|r-1|", "tet|r-1|", "inv", "max|u.n|", "total_s", "advect_s", "evals/s");
+    Json results = Json::array();
+    std::map<int, TetMesh> meshes;
+    for (const auto& c : cases) {
+      if (!meshes.count(c.n)) meshes[c.n] = smooth_ball(c.n);
+      results.push_back(run_case(c, meshes[c.n]));
+    }
+    Json doc = Json::object();
+    doc["benchmark"] = "register";
+    doc["device"] = Device::current().name();
+    doc["landmarks"] = "20 random in radius 0.8, each moved by a random vector of length <= max_landmark_move (same seed 2014 and directions for every scale)";
+    doc["mesh"] = "Kuhn-subdivided cube through the elliptical cube-to-ball map";
+    doc["results"] = results;
+    std::filesystem::create_directories(std::filesystem::path(out).parent_path());
+    write_json_file(out, doc);
+    std::cout << "wrote " << out << '\n';
+  } catch (const std::exception& e) {
+    std::cerr << "vpm_bench_register: " << e.what() << '\n';
+    return 1;
+  }
+  return 0;
+}
