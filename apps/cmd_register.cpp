@@ -57,8 +57,8 @@ int run(const std::vector<std::string>& argv) {
   opt.width_factor = args.get_double("--width-factor", opt.width_factor);
   if (!(opt.width_factor > 0)) throw InputError("--width-factor: must be positive");
   opt.width_loo = args.has("--width-loo");
-  opt.boundary = parse_boundary_mode(args.get("--boundary", "tangent"));
-  opt.field = parse_field_mode(args.get("--field", "per-step"));
+  opt.boundary = parse_registration_boundary(args.get("--boundary", "tangent"));
+  opt.field = parse_registration_field(args.get("--field", "per-step"));
   opt.boundary_samples = args.get_int("--boundary-samples", opt.boundary_samples);
   if (opt.boundary_samples < 1) throw InputError("--boundary-samples: must be positive");
   opt.rigid = !args.has("--no-rigid");

@@ -198,13 +198,13 @@ int main(int argc, char** argv) {
       loo.width_loo = true;
       cases.push_back({"width loo", 16, 1, loo});
       RegistrationOptions samples = def;
-      samples.boundary = BoundaryMode::Samples;
+      samples.boundary = RegistrationBoundary::Samples;
       cases.push_back({"boundary samples", 16, 1, samples});
       RegistrationOptions none = def;
-      none.boundary = BoundaryMode::None;
+      none.boundary = RegistrationBoundary::None;
       cases.push_back({"boundary none", 16, 1, none});
       RegistrationOptions steady = def;
-      steady.field = FieldMode::Steady;
+      steady.field = RegistrationField::Steady;
       cases.push_back({"steady field (paper)", 16, 1, steady});
       cases.push_back({"50k tets", 20, 1, def});
       cases.push_back({"200k tets", 32, 1, def});

@@ -36,21 +36,21 @@ constexpr double kDuplicateDistance = 1e-9;
 
 }  // namespace
 
-BoundaryMode parse_boundary_mode(const std::string& t) {
-  if (t == "tangent") return BoundaryMode::Tangent;
-  if (t == "samples") return BoundaryMode::Samples;
-  if (t == "none") return BoundaryMode::None;
+RegistrationBoundary parse_registration_boundary(const std::string& t) {
+  if (t == "tangent") return RegistrationBoundary::Tangent;
+  if (t == "samples") return RegistrationBoundary::Samples;
+  if (t == "none") return RegistrationBoundary::None;
   throw InputError("--boundary: expected tangent, samples or none, got '" + t + "'");
 }
-std::string to_string(BoundaryMode m) {
-  return m == BoundaryMode::Tangent ? "tangent" : m == BoundaryMode::Samples ? "samples" : "none";
+std::string to_string(RegistrationBoundary m) {
+  return m == RegistrationBoundary::Tangent ? "tangent" : m == RegistrationBoundary::Samples ? "samples" : "none";
 }
-FieldMode parse_field_mode(const std::string& t) {
-  if (t == "per-step") return FieldMode::PerStep;
-  if (t == "steady") return FieldMode::Steady;
+RegistrationField parse_registration_field(const std::string& t) {
+  if (t == "per-step") return RegistrationField::PerStep;
+  if (t == "steady") return RegistrationField::Steady;
   throw InputError("--field: expected per-step or steady, got '" + t + "'");
 }
-std::string to_string(FieldMode m) { return m == FieldMode::PerStep ? "per-step" : "steady"; }
+std::string to_string(RegistrationField m) { return m == RegistrationField::PerStep ? "per-step" : "steady"; }
 
 Eigen::Matrix3d kabsch_rotation(const Points& from, const Points& to) {
   const Eigen::Matrix3d h = from.transpose() * to;  // sum p_i q_i^T
@@ -93,9 +93,9 @@ std::vector<DivFreeField> registration_fields(const Points& landmarks, const Poi
   const int k = opt.steps;
   const Eigen::Index n = landmarks.rows();
   RbfFitOptions fo;
-  fo.kernel = opt.boundary == BoundaryMode::Tangent ? RbfKernel::Tangent : RbfKernel::Free;
+  fo.kernel = opt.boundary == RegistrationBoundary::Tangent ? RbfKernel::Tangent : RbfKernel::Free;
   fo.lambda = lambda;
-  if (opt.boundary == BoundaryMode::Samples) fo.boundary_samples = fibonacci_sphere(opt.boundary_samples);
+  if (opt.boundary == RegistrationBoundary::Samples) fo.boundary_samples = fibonacci_sphere(opt.boundary_samples);
   auto samples_at = [&](double t, Points& x, Points& v) {
     for (Eigen::Index i = 0; i < n; ++i) {
       Eigen::Vector3d vel;
@@ -106,7 +106,7 @@ std::vector<DivFreeField> registration_fields(const Points& landmarks, const Poi
   std::vector<DivFreeField> fields;
   double max_residual = 0, max_condition = 0;
   int regularised = 0, merged = 0, samples = 0;
-  if (opt.field == FieldMode::PerStep) {
+  if (opt.field == RegistrationField::PerStep) {
     fo.merge_distance = 1e-6;
     for (int s = 0; s <= 2 * k; ++s) {
       Points x(n, 3), v(n, 3);
@@ -318,7 +318,7 @@ RegistrationResult register_landmarks(Device& dev, Points& ball, const Tets& tet
         v0.row(i) = vel.transpose();
       }
       const RbfKernel kind =
-          opt.boundary == BoundaryMode::Tangent ? RbfKernel::Tangent : RbfKernel::Free;
+          opt.boundary == RegistrationBoundary::Tangent ? RbfKernel::Tangent : RbfKernel::Free;
       double best = std::numeric_limits<double>::infinity();
       for (double f : {0.5, 0.75, 1.0, 1.5, 2.0, 3.0}) {
         const double w = f * spacing;

@@ -142,7 +142,7 @@ TEST_CASE("boundary modes: samples and none agree with the host reference on the
   const TetMesh m = test::ball_mesh(5);
   Points p, q;
   random_landmarks(5, 0.12, 4, p, q);
-  for (BoundaryMode mode : {BoundaryMode::Samples, BoundaryMode::None}) {
+  for (RegistrationBoundary mode : {RegistrationBoundary::Samples, RegistrationBoundary::None}) {
     INFO("boundary " << to_string(mode));
     RegistrationOptions opt;
     opt.boundary = mode;
@@ -158,7 +158,7 @@ TEST_CASE("boundary modes: samples and none agree with the host reference on the
     }
     CHECK(res[0].landmark_rms_error < 1e-3);
     CHECK(res[0].max_normal_velocity > 1e-6);  // not exactly tangent
-    if (mode == BoundaryMode::None) CHECK(res[0].boundary_drift > 1e-4);
+    if (mode == RegistrationBoundary::None) CHECK(res[0].boundary_drift > 1e-4);
     if (xs.size() == 2) {
       CHECK((xs[0] - xs[1]).cwiseAbs().maxCoeff() < 1e-10);
       CHECK(res[1].max_normal_velocity == Approx(res[0].max_normal_velocity).epsilon(1e-8));
@@ -172,7 +172,7 @@ TEST_CASE("steady field (paper construction) and leave-one-out width") {
   random_landmarks(5, 0.1, 5, p, q);
   RegistrationOptions opt;
   opt.steps = 20;
-  opt.field = FieldMode::Steady;
+  opt.field = RegistrationField::Steady;
   opt.width_loo = true;
   auto host = Device::host();
   Points x = m.vertices;

@@ -10,11 +10,11 @@
 // 3. Divergence-free field (5.3, 5.4): at each RK4 stage time t the velocity field is the
 //    divergence-free RBF interpolant (vpm/rbf.hpp) of the samples (x_i(t), x_i'(t)), one per
 //    landmark, so every landmark path is an exact trajectory of the flow (landmark error is
-//    the RK4 truncation error only). FieldMode::Steady instead fits one time-independent
+//    the RK4 truncation error only). RegistrationField::Steady instead fits one time-independent
 //    field to all pathline samples of all K steps (the paper's construction).
-//    Boundary: BoundaryMode::Tangent (default) uses the exactly tangent kernel, so the sphere
-//    is invariant; BoundaryMode::Samples adds the paper's normal-cancelling constraints at
-//    points on the sphere (tangent there only); BoundaryMode::None has no boundary condition.
+//    Boundary: RegistrationBoundary::Tangent (default) uses the exactly tangent kernel, so the sphere
+//    is invariant; RegistrationBoundary::Samples adds the paper's normal-cancelling constraints at
+//    points on the sphere (tangent there only); RegistrationBoundary::None has no boundary condition.
 // 4. Advection: every vertex is moved through the field with K RK4 steps (device kernel
 //    register.rk4_advect, host reference otherwise); boundary vertices are put back on the
 //    sphere (radial projection of the O(dt^4) drift); inverted tets are counted and a folded
@@ -30,15 +30,15 @@ namespace vpm {
 
 class Device;
 
-enum class BoundaryMode { Tangent, Samples, None };
-enum class FieldMode { PerStep, Steady };
+enum class RegistrationBoundary { Tangent, Samples, None };
+enum class RegistrationField { PerStep, Steady };
 
 /// "tangent" | "samples" | "none" (InputError otherwise), and back.
-BoundaryMode parse_boundary_mode(const std::string& text);
-std::string to_string(BoundaryMode mode);
+RegistrationBoundary parse_registration_boundary(const std::string& text);
+std::string to_string(RegistrationBoundary mode);
 /// "per-step" | "steady", and back.
-FieldMode parse_field_mode(const std::string& text);
-std::string to_string(FieldMode mode);
+RegistrationField parse_registration_field(const std::string& text);
+std::string to_string(RegistrationField mode);
 
 struct RegistrationOptions {
   int steps = 50;                 ///< K: pathline samples / RK4 steps over t in [0, 1]
@@ -49,9 +49,9 @@ struct RegistrationOptions {
   /// Automatic width by leave-one-out instead: the factor in {0.5, 0.75, 1, 1.5, 2, 3} whose
   /// interpolant of the initial landmark velocities has the smallest RMS LOO error.
   bool width_loo = false;
-  BoundaryMode boundary = BoundaryMode::Tangent;
-  FieldMode field = FieldMode::PerStep;
-  int boundary_samples = 200;     ///< sphere points for BoundaryMode::Samples
+  RegistrationBoundary boundary = RegistrationBoundary::Tangent;
+  RegistrationField field = RegistrationField::PerStep;
+  int boundary_samples = 200;     ///< sphere points for RegistrationBoundary::Samples
   int normal_check_samples = 4000;  ///< sphere points where max |u . n| is measured
   bool rigid = true;              ///< do the rotation step first
   bool project_boundary = true;   ///< put boundary vertices back on the sphere afterwards
