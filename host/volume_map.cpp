@@ -1,5 +1,6 @@
 #include "vpm/volume_map.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -56,6 +57,7 @@ const char* to_string(BoundaryMode m) {
 Json VolumeMapRound::to_json() const {
   Json j = Json::object();
   j["round"] = round;
+  j["kind"] = kind;
   j["vertex_mean_abs_dev"] = vertex_mean_abs_dev;
   j["tet_mean_abs_dev"] = tet_mean_abs_dev;
   j["folds_before_untangle"] = folds_before_untangle;
@@ -259,6 +261,82 @@ void paper_step(Ctx& c, Points& x, double dt, VolumeMapRound& r) {
   r.time_advect += since(t2);
 }
 
+// Polish: Gauss-Newton on relative tet volumes. Residual b_t = 1 - V_t / m_t; Jacobian
+// A_t,(v,:) = vol_t grad phi_v / m_t restricted to the moving directions (interior: all,
+// boundary: tangential when sliding, none when fixed). CGLS from 0: minimum-norm, early-stopped.
+void polish_step(Ctx& c, Points& x, VolumeMapRound& r, Points& dx_out) {
+  const auto t0 = Clock::now();
+  const Eigen::VectorXd vol = tet_volumes(x, c.tets);
+  const Eigen::VectorXd target = c.ref_tet * vol.sum();
+  // per-tet scaled gradients s_{t,k} = vol_t grad phi_k / m_t
+  std::vector<Eigen::Vector3d> sg(4 * static_cast<size_t>(c.m));
+  Eigen::VectorXd b(c.m);
+  for (int t = 0; t < c.m; ++t) {
+    const Eigen::Vector3d a = x.row(c.tets(t, 0)).transpose();
+    Eigen::Matrix3d M;
+    for (int q = 0; q < 3; ++q) M.col(q) = x.row(c.tets(t, q + 1)).transpose() - a;
+    const Eigen::Matrix3d Mi = M.inverse();
+    const double s = vol(t) / target(t);
+    Eigen::Vector3d g0 = Eigen::Vector3d::Zero();
+    for (int q = 0; q < 3; ++q) {
+      sg[4 * t + q + 1] = s * Mi.row(q).transpose();
+      g0 -= sg[4 * t + q + 1];
+    }
+    sg[4 * t] = g0;
+    b(t) = 1.0 - vol(t) / target(t);
+  }
+  std::vector<Eigen::Vector3d> nrm(static_cast<size_t>(c.n), Eigen::Vector3d::Zero());
+  for (int v = 0; v < c.n; ++v)
+    if (c.boundary[v]) nrm[v] = x.row(v).transpose().normalized();
+  auto project = [&](Points& d) {
+    for (int v = 0; v < c.n; ++v)
+      if (c.boundary[v]) {
+        if (!c.slide) {
+          d.row(v).setZero();
+        } else {
+          const Eigen::Vector3d u = d.row(v).transpose();
+          d.row(v) = (u - u.dot(nrm[v]) * nrm[v]).transpose();
+        }
+      }
+  };
+  auto apply = [&](const Points& d, Eigen::VectorXd& out) {  // out = A d (d already projected)
+    for (int t = 0; t < c.m; ++t) {
+      double s = 0;
+      for (int k = 0; k < 4; ++k) s += sg[4 * t + k].dot(d.row(c.tets(t, k)).transpose());
+      out(t) = s;
+    }
+  };
+  auto apply_t = [&](const Eigen::VectorXd& y, Points& out) {  // out = A^T y
+    out.setZero(c.n, 3);
+    for (int t = 0; t < c.m; ++t)
+      for (int k = 0; k < 4; ++k) out.row(c.tets(t, k)) += y(t) * sg[4 * t + k].transpose();
+    project(out);
+  };
+  // CGLS
+  Points dx = Points::Zero(c.n, 3), s(c.n, 3), p(c.n, 3);
+  Eigen::VectorXd rr = b, q(c.m);
+  apply_t(rr, s);
+  p = s;
+  double gamma = s.squaredNorm();
+  int it = 0;
+  for (; it < c.opt.polish_iterations && gamma > 0; ++it) {
+    apply(p, q);
+    const double qq = q.squaredNorm();
+    if (qq <= 0) break;
+    const double alpha = gamma / qq;
+    dx += alpha * p;
+    rr -= alpha * q;
+    apply_t(rr, s);
+    const double g2 = s.squaredNorm();
+    p = s + (g2 / gamma) * p;
+    gamma = g2;
+  }
+  r.solver_iterations += it;
+  r.solver_residual = b.norm() > 0 ? rr.norm() / b.norm() : 0;
+  r.time_solve += since(t0);
+  dx_out = dx;
+}
+
 }  // namespace
 
 VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, const Tets& tets,
@@ -325,6 +403,7 @@ VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, cons
   res.stop_reason = "rounds";
   double paper_dt = 1.0 / std::max(1, opt.paper_steps);
   Eigen::VectorXd vsem_w = Eigen::VectorXd::Ones(c.m);
+  double prev_vertex = d.vertex;
 
   for (int k = 1; k <= max_rounds; ++k) {
     if (opt.rounds < 0 && d.vertex <= opt.tolerance) {
@@ -334,6 +413,7 @@ VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, cons
     const auto t_round = Clock::now();
     VolumeMapRound r;
     r.round = k;
+    r.kind = to_string(opt.method);
     const Points saved = ball;
     double t_end = opt.method == VolumeMapMethod::paper ? paper_dt : 1.0;
     int folds = 0;
@@ -400,8 +480,63 @@ VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, cons
       res.stop_reason = "fold";
       break;
     }
+    // Automatic stop: a round that gains less than 30 % hands over to the polish rounds.
+    if (opt.rounds < 0 && opt.method == VolumeMapMethod::moser && opt.polish_rounds > 0 &&
+        d.vertex > opt.tolerance && d.vertex > 0.7 * prev_vertex) {
+      res.stop_reason = "stalled";
+      break;
+    }
+    prev_vertex = d.vertex;
   }
   if (res.stop_reason == "rounds" && opt.rounds < 0 && d.vertex <= opt.tolerance) res.stop_reason = "tolerance";
+
+  // Polish rounds (moser): tet-level Gauss-Newton steps, fold-checked like the rounds.
+  const int n_polish = opt.method == VolumeMapMethod::moser && opt.rounds != 0 ? opt.polish_rounds : 0;
+  for (int k = 1; k <= n_polish; ++k) {
+    const auto t_round = Clock::now();
+    VolumeMapRound r;
+    r.round = static_cast<int>(res.rounds.size()) + 1;
+    r.kind = "polish";
+    const Points saved = ball;
+    Points dx;
+    polish_step(c, ball, r, dx);
+    const auto t2 = Clock::now();
+    double step = 1.0;
+    int folds = 0;
+    for (int attempt = 0; attempt <= opt.max_step_halvings + 2; ++attempt) {
+      ball = saved + step * dx;
+      if (c.slide)
+        for (int i = 0; i < c.n; ++i)
+          if (c.boundary[i]) ball.row(i).normalize();
+      folds = count_folds(c, ball);
+      if (attempt == 0) r.folds_before_untangle = folds;
+      r.t_end = step;
+      if (folds == 0) break;
+      step *= 0.5;
+    }
+    r.time_advect += since(t2);
+    const DistortionPair dp = volume_distortion(reference, ball, tets);
+    const bool stalled = dp.tet > 0.99 * d.tet;
+    if (folds > 0 || dp.tet >= d.tet) {  // no progress or folded: undo and stop polishing
+      ball = saved;
+      r.discarded = true;
+    } else {
+      d = dp;
+    }
+    r.folds = 0;
+    r.vertex_mean_abs_dev = d.vertex;
+    r.tet_mean_abs_dev = d.tet;
+    r.time_total = since(t_round);
+    tt_solve += r.time_solve;
+    tt_adv += r.time_advect;
+    res.rounds.push_back(r);
+    rounds_json.push_back(r.to_json());
+    if (opt.progress)
+      opt.progress("polish " + std::to_string(k) + "/" + std::to_string(n_polish) +
+                   fmt(": vertex mean |r-1| %.4f, tet %.4f, %.2f s", d.vertex, d.tet, r.time_total) +
+                   (r.discarded ? " (discarded)" : ""));
+    if (r.discarded || stalled) break;
+  }
 
   res.final_vertex_mean_abs_dev = d.vertex;
   res.final_tet_mean_abs_dev = d.tet;

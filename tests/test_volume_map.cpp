@@ -61,8 +61,10 @@ TEST_CASE("volume map: a Moser round lowers the distortion, boundary slides on t
     Points ball = im.ball;
     VolumeMapOptions o;
     o.rounds = 1;
+    o.polish_rounds = 0;
     const VolumeMapResult r = volume_preserving_map(*dev, im.mesh.vertices, im.mesh.tets, ball, o);
     REQUIRE(r.rounds.size() == 1);
+    CHECK(r.rounds[0].kind == "moser");
     const DistortionPair d1 = volume_distortion(im.mesh.vertices, ball, im.mesh.tets);
     CHECK(d1.folds == 0);
     CHECK(r.final_folds == 0);
@@ -102,7 +104,7 @@ TEST_CASE("volume map: rounds until the tolerance, every method fold-free") {
     CHECK(d1.folds == 0);
     CHECK(d1.vertex < d0.vertex);
     CHECK(!r.rounds.empty());
-    CHECK(r.rounds.size() <= 6);
+    CHECK(r.rounds.size() <= (method == VolumeMapMethod::moser ? 4u + o.polish_rounds : 6u));
     for (const auto& rd : r.rounds) CHECK(rd.folds == 0);
     if (method == VolumeMapMethod::moser) CHECK(d1.vertex < 0.4 * d0.vertex);
     if (method == VolumeMapMethod::vsem) {
@@ -112,6 +114,25 @@ TEST_CASE("volume map: rounds until the tolerance, every method fold-free") {
         if (mask[i]) REQUIRE((ball.row(i) - im.ball.row(i)).norm() == 0.0);
     }
   }
+}
+
+TEST_CASE("volume map: polish rounds lower the per-tet distortion left by the Moser rounds") {
+  const InitialMapResult& im = ellipsoid_start();
+  auto host = Device::host();
+  Points a = im.ball, b = im.ball;
+  VolumeMapOptions o;
+  o.rounds = 2;
+  o.polish_rounds = 0;
+  volume_preserving_map(*host, im.mesh.vertices, im.mesh.tets, a, o);
+  o.polish_rounds = 3;
+  const VolumeMapResult r = volume_preserving_map(*host, im.mesh.vertices, im.mesh.tets, b, o);
+  const DistortionPair da = volume_distortion(im.mesh.vertices, a, im.mesh.tets);
+  const DistortionPair db = volume_distortion(im.mesh.vertices, b, im.mesh.tets);
+  REQUIRE(r.rounds.size() >= 3);
+  CHECK(r.rounds[2].kind == "polish");
+  CHECK(db.folds == 0);
+  CHECK(db.tet < 0.9 * da.tet);
+  CHECK(max_boundary_radius_error(b, im.mesh.tets) < 1e-12);
 }
 
 TEST_CASE("volume map: --boundary fixed keeps the boundary vertices in place") {

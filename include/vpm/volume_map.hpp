@@ -79,6 +79,16 @@ struct VolumeMapOptions {
   bool local_untangle = true;
   /// Times a folding round is redone with t_end halved before it is discarded.
   int max_step_halvings = 3;
+  /// Polish rounds after the Moser rounds (method moser only): Gauss-Newton steps on the
+  /// per-tet volumes, min over dx of sum_t (1 - V_t(x + dx) / m_t)^2 linearised, solved by
+  /// `polish_iterations` CGLS iterations from dx = 0 (minimum-norm, early-stopped), boundary
+  /// vertices moving tangentially (slide) or not at all (fixed); x += dx, halved while it folds.
+  /// They target the per-tet distortion that vertex-based Moser rounds cannot see.
+  /// At most this many (they stop when the tet mean |r-1| improves by less than 1 %). With
+  /// rounds == -1 the Moser rounds hand over to the polish as soon as a round gains less than
+  /// 30 % on the vertex mean |r-1|.
+  int polish_rounds = 4;
+  int polish_iterations = 60;
   /// Run point location / RK stages on the host even when the device is OpenCL (tests).
   bool force_host_advection = false;
   /// Called with one line per round (progress display); may be empty.
@@ -88,6 +98,7 @@ struct VolumeMapOptions {
 /// One round (Moser round, paper step or vsem iteration).
 struct VolumeMapRound {
   int round = 0;                  ///< 1-based
+  std::string kind = "moser";     ///< "moser", "paper", "vsem" or "polish"
   double vertex_mean_abs_dev = 0; ///< after the round (normalised dual volume ratios vs input)
   double tet_mean_abs_dev = 0;    ///< after the round (normalised tet volume ratios vs input)
   int folds_before_untangle = 0;  ///< tets with signed volume <= 0 right after advection
@@ -111,7 +122,7 @@ struct VolumeMapResult {
   double initial_vertex_mean_abs_dev = 0, initial_tet_mean_abs_dev = 0;
   double final_vertex_mean_abs_dev = 0, final_tet_mean_abs_dev = 0;
   int final_folds = 0;     ///< always 0 on return
-  std::string stop_reason; ///< "tolerance", "rounds", "stalled", "fold"
+  std::string stop_reason; ///< of the Moser rounds: "tolerance", "rounds", "stalled", "fold"
   /// {"method", "boundary", "solver", "rk_steps", "rounds": [VolumeMapRound::to_json...],
   ///  "initial": {"vertex_mean_abs_dev","tet_mean_abs_dev"}, "final": {...}, "stop_reason",
   ///  "timings_s": {"solve","field","advect","untangle","total"}}
