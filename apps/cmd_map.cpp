@@ -46,7 +46,7 @@ int run(const std::vector<std::string>& argv) {
   vo.tolerance = args.get_double("--tolerance", 0.01);
   if (!(vo.tolerance >= 0)) throw vpm::InputError("option --tolerance: must be >= 0");
   vo.method = vpm::parse_volume_map_method(args.get("--method", "moser"));
-  vo.boundary = vpm::parse_boundary_mode(args.get("--boundary", "auto"));
+  vo.boundary = vpm::parse_map_boundary(args.get("--boundary", "auto"));
   vo.solver = args.get("--solver", "cg");
   if (vo.solver != "cg" && vo.solver != "paper")
     throw vpm::InputError("option --solver: '" + vo.solver + "' is not one of cg, paper");

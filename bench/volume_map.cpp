@@ -91,7 +91,7 @@ std::vector<Variant> variants() {
   o.polish_rounds = 0;
   v.push_back({"moser-recipe", o});
   o = {};
-  o.boundary = vpm::BoundaryMode::fixed;
+  o.boundary = vpm::MapBoundary::fixed;
   o.polish_rounds = 0;
   v.push_back({"moser-fixed", o});
   o = {};

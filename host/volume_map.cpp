@@ -39,17 +39,17 @@ const char* to_string(VolumeMapMethod m) {
   }
   return "?";
 }
-BoundaryMode parse_boundary_mode(const std::string& s) {
-  if (s == "auto") return BoundaryMode::automatic;
-  if (s == "slide") return BoundaryMode::slide;
-  if (s == "fixed") return BoundaryMode::fixed;
+MapBoundary parse_map_boundary(const std::string& s) {
+  if (s == "auto") return MapBoundary::automatic;
+  if (s == "slide") return MapBoundary::slide;
+  if (s == "fixed") return MapBoundary::fixed;
   throw InputError("--boundary: '" + s + "' is not one of slide, fixed");
 }
-const char* to_string(BoundaryMode m) {
+const char* to_string(MapBoundary m) {
   switch (m) {
-    case BoundaryMode::automatic: return "auto";
-    case BoundaryMode::slide: return "slide";
-    case BoundaryMode::fixed: return "fixed";
+    case MapBoundary::automatic: return "auto";
+    case MapBoundary::slide: return "slide";
+    case MapBoundary::fixed: return "fixed";
   }
   return "?";
 }
@@ -353,10 +353,10 @@ VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, cons
   Ctx c(dev, reference, tets, opt);
   c.n = static_cast<int>(reference.rows());
   c.m = static_cast<int>(tets.rows());
-  const BoundaryMode bm = opt.boundary != BoundaryMode::automatic
+  const MapBoundary bm = opt.boundary != MapBoundary::automatic
                               ? opt.boundary
-                              : (opt.method == VolumeMapMethod::moser ? BoundaryMode::slide : BoundaryMode::fixed);
-  c.slide = bm == BoundaryMode::slide;
+                              : (opt.method == VolumeMapMethod::moser ? MapBoundary::slide : MapBoundary::fixed);
+  c.slide = bm == MapBoundary::slide;
   if (opt.method == VolumeMapMethod::vsem) c.slide = false;  // vsem: boundary frozen
   c.boundary = boundary_vertex_mask(c.n, boundary_faces(tets));
   c.nbr = detail::tet_neighbors(tets);

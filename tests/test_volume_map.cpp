@@ -141,7 +141,7 @@ TEST_CASE("volume map: --boundary fixed keeps the boundary vertices in place") {
     Points ball = im.ball;
     VolumeMapOptions o;
     o.rounds = 1;
-    o.boundary = BoundaryMode::fixed;
+    o.boundary = MapBoundary::fixed;
     volume_preserving_map(*dev, im.mesh.vertices, im.mesh.tets, ball, o);
     const auto mask = boundary_vertex_mask(static_cast<int>(ball.rows()), boundary_faces(im.mesh.tets));
     for (Eigen::Index i = 0; i < ball.rows(); ++i)
@@ -178,7 +178,7 @@ TEST_CASE("volume map: a folded start that cannot be untangled is refused with N
   Points wrong = ball.topRows(5);
   CHECK_THROWS_AS(volume_preserving_map(*host, m.vertices, m.tets, wrong, o), InputError);
   CHECK_THROWS_AS(parse_volume_map_method("fast"), InputError);
-  CHECK_THROWS_AS(parse_boundary_mode("free"), InputError);
+  CHECK_THROWS_AS(parse_map_boundary("free"), InputError);
 }
 
 TEST_CASE("vpm map: writes the ball mesh with fields and the report; refuses bad options") {

@@ -48,14 +48,14 @@ enum class VolumeMapMethod { moser, paper, vsem };
 VolumeMapMethod parse_volume_map_method(const std::string& name);
 const char* to_string(VolumeMapMethod m);
 
-enum class BoundaryMode {
+enum class MapBoundary {
   automatic,  ///< slide for moser, fixed for paper and vsem (their published behaviour)
   slide,      ///< boundary vertices move tangentially on the unit sphere
   fixed,      ///< boundary vertices do not move
 };
 /// "auto", "slide", "fixed" (InputError otherwise).
-BoundaryMode parse_boundary_mode(const std::string& name);
-const char* to_string(BoundaryMode m);
+MapBoundary parse_map_boundary(const std::string& name);
+const char* to_string(MapBoundary m);
 
 struct VolumeMapOptions {
   VolumeMapMethod method = VolumeMapMethod::moser;
@@ -70,7 +70,7 @@ struct VolumeMapOptions {
   int rk_steps = 40;
   /// Explicit steps K of the paper's loop (dt = 1/K).
   int paper_steps = 50;
-  BoundaryMode boundary = BoundaryMode::automatic;
+  MapBoundary boundary = MapBoundary::automatic;
   /// Linear solver: "cg" (Jacobi CG) or "paper" (BiCGSTAB on the normal equations).
   std::string solver = "cg";
   /// Relative residual of each linear solve.
