@@ -3,6 +3,7 @@
 
 #include <Eigen/Dense>
 #include <Eigen/Sparse>
+#include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <chrono>
@@ -249,9 +250,12 @@ SpMat cot_laplacian(const Points& p, const Triangles& f, double clamp) {
   return L;
 }
 
-// Solves A_FF u_F = -A_FB u_B for the columns of u (k x c), rows with fixed[i] given.
-// Returns false if the factorisation failed or the result is not finite.
-bool dirichlet_solve(const SpMat& A, const std::vector<char>& fixed, Eigen::MatrixXd& u) {
+// Solves A_FF u_F = -A_FB u_B for the columns of u (k x c), rows with fixed[i] given, by a
+// sparse Cholesky factorisation (iterative = false) or Jacobi-preconditioned CG to relative
+// residual `tol` (iterative = true; warm start from the free rows of u).
+// Returns false if the solve failed or the result is not finite.
+bool dirichlet_solve(const SpMat& A, const std::vector<char>& fixed, Eigen::MatrixXd& u,
+                     bool iterative = false, double tol = 1e-10, int* iterations = nullptr) {
   const int k = static_cast<int>(A.rows());
   std::vector<int> idx(k, -1);
   int nf = 0;
@@ -269,6 +273,24 @@ bool dirichlet_solve(const SpMat& A, const std::vector<char>& fixed, Eigen::Matr
     }
   SpMat Aff(nf, nf);
   Aff.setFromTriplets(tf.begin(), tf.end());
+  if (iterative) {
+    Eigen::ConjugateGradient<SpMat, Eigen::Lower | Eigen::Upper> cg(Aff);
+    cg.setTolerance(tol);
+    cg.setMaxIterations(std::max(1000, 10 * nf));
+    int its = 0;
+    for (Eigen::Index c = 0; c < u.cols(); ++c) {
+      Eigen::VectorXd x0(nf);
+      for (int i = 0; i < k; ++i)
+        if (idx[i] >= 0) x0(idx[i]) = u(i, c);
+      const Eigen::VectorXd sol = cg.solveWithGuess(rhs.col(c), x0);
+      its += static_cast<int>(cg.iterations());
+      if (cg.info() != Eigen::Success || !sol.allFinite()) return false;
+      for (int i = 0; i < k; ++i)
+        if (idx[i] >= 0) u(i, c) = sol(idx[i]);
+    }
+    if (iterations) *iterations = its;
+    return true;
+  }
   Eigen::SimplicialLDLT<SpMat> ldlt(Aff);
   if (ldlt.info() != Eigen::Success) return false;
   const Eigen::MatrixXd sol = ldlt.solve(rhs);
@@ -440,7 +462,8 @@ int area_flow(const Points& in, const Triangles& f, Points& s, int steps) {
       const Eigen::Vector3d x = s.row(i);
       grad.row(i) -= grad.row(i).dot(x) * x.transpose();  // tangential
     }
-    // step so that no vertex moves more than ~a fifth of its local edge scale
+    // step so that no vertex moves more than a fifth of the mean edge length; halved until
+    // no triangle flips and the area distortion decreases
     double gmax = 0;
     for (int i = 0; i < k; ++i) gmax = std::max(gmax, grad.row(i).norm());
     if (!(gmax > 0)) break;
@@ -449,7 +472,7 @@ int area_flow(const Points& in, const Triangles& f, Points& s, int steps) {
     bool ok = false;
     const double before = area_distortion(in, s, f);
     for (int ls = 0; ls < 8; ++ls) {
-      Points q = s + dt * grad;  // move from high to low density: expand where rho is high
+      Points q = s - dt * grad;  // down the density gradient: expand where rho is high
       normalize_rows(q);
       if (flipped_sphere_triangles(q, f) == 0 && area_distortion(in, q, f) < before) {
         s = std::move(q);
@@ -625,13 +648,16 @@ SphereMapResult sphere_map(const TriSurface& surf, const InitialMapOptions& opt)
     const int fb = flipped_sphere_triangles(b, f);
     rep["moebius_iterations"] = its;
     rep["moebius_centroid_norm"] = cn;
-    if (fb <= flips) {
+    const double before = area_distortion(in, s, f), after = area_distortion(in, b, f);
+    rep["area_distortion_balanced"] = after;
+    // kept when it flips nothing new and does not raise the area distortion (elongated
+    // shapes can be better off unbalanced)
+    const bool keep = fb <= flips && after <= before;
+    rep["moebius_kept"] = keep;
+    if (keep) {
       s = b;
       flips = fb;
-    } else {
-      rep["moebius_rejected_flips"] = fb;
     }
-    rep["area_distortion_balanced"] = area_distortion(in, s, f);
   }
   // 5. optional area correction
   if (opt.area_correction) {
@@ -703,6 +729,7 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
   }
 
   // input quality
+  auto t0 = Clock::now();
   const auto dih = dihedral_angles_deg(input.vertices, input.tets);
   const Eigen::VectorXd tmin = dih.rowwise().minCoeff();
   Eigen::Index worst = 0;
@@ -736,8 +763,10 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
            fmt(c(0)) + ", " + fmt(c(1)) + ", " + fmt(c(2)) + ")";
   };
 
+  const double t_quality = since(t0);
+
   // 1. split
-  auto t0 = Clock::now();
+  t0 = Clock::now();
   SplitResult sp;
   if (opt.split_edges) {
     sp = split_boundary_edges(input, opt.max_split_rounds);
@@ -783,8 +812,19 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
   Eigen::MatrixXd u = Eigen::MatrixXd::Zero(n, 3);
   for (int i = 0; i < n; ++i)
     if (res.boundary[i]) u.row(i) = sm.sphere.row(i);
-  if (!dirichlet_solve(K, res.boundary, u))
-    throw NumericalError("initial_map: the harmonic solve failed (stiffness factorisation); " + quality_note());
+  // warm start: interior vertices at their input position mapped to the ball's scale
+  {
+    const Eigen::RowVector3d c = m.vertices.colwise().mean();
+    const double r = (m.vertices.rowwise() - c).rowwise().norm().maxCoeff();
+    for (int i = 0; i < n; ++i)
+      if (!res.boundary[i]) u.row(i) = (m.vertices.row(i) - c) / std::max(r, 1e-300);
+  }
+  int cg_its = 0;
+  if (!dirichlet_solve(K, res.boundary, u, true, opt.solver_tolerance, &cg_its))
+    throw NumericalError("initial_map: the harmonic solve (CG, tolerance " + fmt(opt.solver_tolerance) +
+                         ") did not converge; " + quality_note());
+  rep["harmonic"]["solver"] = "host CG (Jacobi)";
+  rep["harmonic"]["iterations"] = cg_its;
   res.ball = u;
   for (int i = 0; i < n; ++i)
     if (res.boundary[i]) res.ball.row(i) = sm.sphere.row(i);
@@ -798,9 +838,28 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
   int folds = folds_harmonic;
   if (opt.untangle == InitialMapOptions::Untangle::Always ||
       (opt.untangle == InitialMapOptions::Untangle::IfFolded && folds_harmonic > 0)) {
-    const UntangleResult ur = untangle(m.vertices, m.tets, res.ball, res.boundary, opt.untangle_options);
-    rep["untangle"] = ur.to_json();
-    folds = ur.inverted_after;
+    const bool local = opt.untangle == InitialMapOptions::Untangle::IfFolded && opt.local_untangle_rings > 0;
+    if (local) {
+      // Few folds: free only their neighbourhood (fast); fall back to the global untangle.
+      Points trial = res.ball;
+      const UntangleResult ul = untangle_local(m.vertices, m.tets, trial, res.boundary,
+                                               inverted_tets(res.ball, m.tets), opt.local_untangle_rings,
+                                               opt.untangle_options);
+      Json j = ul.to_json();
+      j["scope"] = "local";
+      j["rings"] = opt.local_untangle_rings;
+      rep["untangle"] = j;
+      folds = ul.inverted_after;
+      if (folds == 0) res.ball = std::move(trial);
+    }
+    if (!local || folds > 0) {
+      const UntangleResult ur = untangle(m.vertices, m.tets, res.ball, res.boundary, opt.untangle_options);
+      Json j = ur.to_json();
+      j["scope"] = "global";
+      if (local) rep["untangle_local_failed"] = rep["untangle"];
+      rep["untangle"] = j;
+      folds = ur.inverted_after;
+    }
   }
   rep["folds_after_untangle"] = folds;
   const double t_untangle = since(t0);
@@ -823,9 +882,12 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
                          " tets remain folded after untangling (harmonic map folded " +
                          std::to_string(folds_harmonic) + "): " + where + "; " + quality_note());
   }
+  t0 = Clock::now();
   const MapMetrics mm = map_metrics(device, m.vertices, res.ball, m.tets);
   rep["metrics"] = to_json(mm);
   Json& tm = rep["timings_s"];
+  tm["input_quality"] = t_quality;
+  tm["metrics"] = since(t0);
   tm["split"] = t_split;
   tm["boundary"] = t_boundary;
   tm["harmonic"] = t_harmonic;

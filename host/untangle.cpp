@@ -8,6 +8,7 @@
 #include <deque>
 #include <limits>
 #include <string>
+#include <thread>
 
 #include "vpm/error.hpp"
 #include "vpm/geometry.hpp"
@@ -41,14 +42,15 @@ struct Eval {
   int nonpositive = 0;
 };
 
-// Energy (and gradient if g != nullptr) at positions x (free rows of x already set from z).
-Eval evaluate(const Problem& p, const Points& x, double eps, Eigen::VectorXd* g) {
+// Energy (and gradient if g != nullptr, zeroed first) over active tets [begin, end).
+Eval evaluate_range(const Problem& p, const Points& x, double eps, Eigen::VectorXd* g, size_t begin,
+                    size_t end) {
   Eval out;
   out.min_det = std::numeric_limits<double>::infinity();
   if (g) g->setZero();
   const Tets& t = *p.tets;
   const double th = p.theta;
-  for (size_t a = 0; a < p.active.size(); ++a) {
+  for (size_t a = begin; a < end; ++a) {
     const int ti = p.active[a];
     const int v0 = t(ti, 0), v1 = t(ti, 1), v2 = t(ti, 2), v3 = t(ti, 3);
     Eigen::Matrix3d X;
@@ -75,8 +77,7 @@ Eval evaluate(const Problem& p, const Points& x, double eps, Eigen::VectorXd* g)
     // df/dJ = (1-th) [2 J / c^(2/3) - 2/3 tr c^(-5/3) chi' C] + th [2D/c - (D^2+1) chi'/c^2] C
     const double k1 = (1 - th) * 2.0 / c23;
     const double k2 = -(1 - th) * (2.0 / 3.0) * tr / (c23 * c) * dc + th * (2 * d / c - (d * d + 1) * dc / (c * c));
-    const Eigen::Matrix3d dJ = k1 * J + k2 * C;
-    const Eigen::Matrix3d G = w * dJ * p.rinv[a].transpose();  // dE/dX, column k: vertex k+1
+    const Eigen::Matrix3d G = (w * (k1 * J + k2 * C)) * p.rinv[a].transpose();  // dE/dX
     const int vs[4] = {v0, v1, v2, v3};
     const Eigen::Vector3d g0 = -(G.col(0) + G.col(1) + G.col(2));
     for (int k = 0; k < 4; ++k) {
@@ -87,6 +88,36 @@ Eval evaluate(const Problem& p, const Points& x, double eps, Eigen::VectorXd* g)
       (*g)(i + 1) += gk(1);
       (*g)(i + 2) += gk(2);
     }
+  }
+  return out;
+}
+
+// Threads for the energy evaluation: split the active tets in chunks for large problems.
+int num_threads(size_t active) {
+  if (active < 8000) return 1;
+  const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
+  return static_cast<int>(std::min<unsigned>(hw, 8));
+}
+
+Eval evaluate(const Problem& p, const Points& x, double eps, Eigen::VectorXd* g) {
+  const size_t m = p.active.size();
+  const int nt = num_threads(m);
+  if (nt == 1) return evaluate_range(p, x, eps, g, 0, m);
+  std::vector<Eval> part(nt);
+  std::vector<Eigen::VectorXd> gl(nt);
+  std::vector<std::thread> pool;
+  for (int k = 1; k < nt; ++k) {
+    if (g) gl[k].resize(g->size());
+    pool.emplace_back([&, k] { part[k] = evaluate_range(p, x, eps, g ? &gl[k] : nullptr, m * k / nt, m * (k + 1) / nt); });
+  }
+  part[0] = evaluate_range(p, x, eps, g, 0, m / nt);
+  for (auto& th : pool) th.join();
+  Eval out = part[0];
+  for (int k = 1; k < nt; ++k) {
+    out.energy += part[k].energy;
+    out.min_det = std::min(out.min_det, part[k].min_det);
+    out.nonpositive += part[k].nonpositive;
+    if (g) *g += gl[k];
   }
   return out;
 }

@@ -1,7 +1,6 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
-#include <iostream>
 
 #include "support/devices.hpp"
 #include "support/fixtures.hpp"
@@ -90,7 +89,6 @@ TEST_CASE("sphere map of a closed surface: no flipped triangles, balanced") {
   for (int i = 0; i < m.num_vertices(); ++i)
     if (b[i]) CHECK(std::abs(r.sphere.row(i).norm() - 1) < 1e-14);
   CHECK(r.report.find("area_distortion_balanced")->number() < r.report.find("area_distortion_conformal")->number() + 1e-12);
-  std::cout << "ellipsoid sphere map: " << r.report.dump(-1) << "\n";
 }
 
 TEST_CASE("initial map of convex and non-convex shapes is fold-free") {
@@ -103,6 +101,65 @@ TEST_CASE("initial map of convex and non-convex shapes is fold-free") {
     INFO(name);
     const InitialMapResult r = initial_map(dev, in);
     check_map(r, in);
-    std::cout << name << ": " << r.report.dump(-1) << "\n";
   }
+}
+
+TEST_CASE("harmonic folds are untangled; without untangling the map is refused") {
+  auto& dev = *Device::host();
+  const TetMesh in = test::ellipsoid_mesh(8);  // slivers near the rim: the harmonic map folds
+  InitialMapOptions opt;
+  const InitialMapResult r = initial_map(dev, in, opt);
+  CHECK(r.report.find("folds_before_untangle")->number() > 0);
+  check_map(r, in);
+
+  opt.untangle = InitialMapOptions::Untangle::Never;
+  try {
+    initial_map(dev, in, opt);
+    FAIL("a folded map was returned");
+  } catch (const NumericalError& e) {
+    const std::string what = e.what();
+    CHECK(what.find("folded") != std::string::npos);
+    CHECK(what.find("smallest dihedral angle") != std::string::npos);
+  }
+  opt.throw_on_folds = false;
+  const InitialMapResult folded = initial_map(dev, in, opt);
+  CHECK(folded.report.find("folds_after_untangle")->number() > 0);
+  CHECK(!inverted_tets(folded.ball, folded.mesh.tets).empty());
+}
+
+TEST_CASE("global untangling (Always) keeps the map fold-free") {
+  auto& dev = *Device::host();
+  const TetMesh in = test::ball_mesh(6);
+  InitialMapOptions opt;
+  opt.untangle = InitialMapOptions::Untangle::Always;
+  const InitialMapResult r = initial_map(dev, in, opt);
+  check_map(r, in);
+  REQUIRE(r.report.find("untangle") != nullptr);
+  CHECK(r.report.find("untangle")->find("scope")->string() == "global");
+}
+
+TEST_CASE("area correction on the sphere lowers the boundary area distortion") {
+  auto& dev = *Device::host();
+  const TetMesh in = test::dumbbell_mesh(3);
+  InitialMapOptions opt;
+  opt.area_correction = true;
+  const InitialMapResult r = initial_map(dev, in, opt);
+  check_map(r, in);
+  const Json& b = *r.report.find("boundary");
+  CHECK(b.find("area_correction_steps")->number() > 0);
+  CHECK(b.find("area_distortion_final")->number() < 0.5 * b.find("area_distortion_conformal")->number());
+}
+
+TEST_CASE("an input with an inverted tet or a non-ball boundary is refused") {
+  auto& dev = *Device::host();
+  TetMesh in = test::cube_mesh(2);
+  std::swap(in.tets(3, 0), in.tets(3, 1));
+  CHECK_THROWS_AS(initial_map(dev, in), InputError);
+  // two separate cubes: the boundary has two components
+  TetMesh a = test::cube_mesh(1), two;
+  two.vertices.resize(2 * a.num_vertices(), 3);
+  two.vertices << a.vertices, (a.vertices.array() + 3.0).matrix();
+  two.tets.resize(2 * a.num_tets(), 4);
+  two.tets << a.tets, (a.tets.array() + a.num_vertices()).matrix();
+  CHECK_THROWS_AS(initial_map(dev, two), InputError);
 }

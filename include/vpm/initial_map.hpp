@@ -13,7 +13,8 @@
 //     have comparable size), south-pole correction (quasi-conformal composition through the
 //     linear Beltrami solver, the 10% of vertices nearest the south pole fixed), orientation
 //     check (mirrored if reversed), Moebius balancing (hyperbolic translations of the ball that
-//     move the input-area-weighted centroid of the sphere points to the origin), optionally an
+//     move the input-area-weighted centroid of the sphere points to the origin; kept only if it
+//     does not raise the mean |area ratio - 1|), optionally an
 //     area-equalising flow on the sphere. Steps that would flip a boundary triangle are
 //     undone and reported.
 //  3. interior: harmonic map (P1 cotangent stiffness of the refined input mesh, Dirichlet on
@@ -58,6 +59,9 @@ struct InitialMapOptions {
   /// (lower distortion, DESIGN.md 4.1 table: 0.363 -> 0.318 on Colin27).
   Untangle untangle = Untangle::IfFolded;
   UntangleOptions untangle_options{};   ///< theta = 1/128 by default
+  /// IfFolded: first untangle locally (the folded tets and this many rings of neighbours free,
+  /// boundary fixed, same energy and theta), then globally if folds remain. 0: global only.
+  int local_untangle_rings = 3;
   /// Throw NumericalError when folds remain (the default and the contract of `vpm map`).
   /// false: return the folded map and let the caller read report["folds_after_untangle"].
   bool throw_on_folds = true;
@@ -85,7 +89,8 @@ struct InitialMapResult {
   ///                "area_distortion_balanced","area_distortion_final","moebius_iterations",...},
   ///   "harmonic": {"inverted_tets"}, "untangle": UntangleResult::to_json() (when run),
   ///   "folds_before_untangle", "folds_after_untangle", "metrics": to_json(map_metrics),
-  ///   "timings_s": {"split","boundary","harmonic","untangle","total"}}
+  ///   "timings_s": {"input_quality","split","boundary","harmonic","untangle",
+  ///   "metrics","total"}}
   /// area_distortion_* = mean over boundary triangles of |area ratio - 1| (areas normalised).
   Json report;
 };
