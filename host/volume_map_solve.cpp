@@ -7,6 +7,8 @@
 
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
+#include "vpm/solver.hpp"
+#include "vpm/sparse.hpp"
 
 namespace vpm::detail {
 
@@ -39,91 +41,38 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-// Jacobi PCG on A x = b with A = -K symmetric positive (semi-)definite.
-SolveStats pcg(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b, Eigen::VectorXd& x,
-               double tol, int max_it, bool project_mean) {
-  SolveStats st;
-  const Eigen::VectorXd dinv = A.diagonal().cwiseAbs().cwiseMax(1e-300).cwiseInverse();
-  const double bn = b.norm();
-  if (bn == 0) {
-    x.setZero();
-    return st;
-  }
-  Eigen::VectorXd r = b - A * x;
-  Eigen::VectorXd z = dinv.cwiseProduct(r);
-  Eigen::VectorXd p = z, Ap(b.size());
-  double rz = r.dot(z);
-  int it = 0;
-  double rn = r.norm();
-  while (rn > tol * bn && it < max_it) {
-    Ap.noalias() = A * p;
-    const double alpha = rz / p.dot(Ap);
-    x += alpha * p;
-    r -= alpha * Ap;
-    z = dinv.cwiseProduct(r);
-    const double rz2 = r.dot(z);
-    p = z + (rz2 / rz) * p;
-    rz = rz2;
-    rn = r.norm();
-    ++it;
-  }
-  if (project_mean) x.array() -= x.mean();
-  st.iterations = it;
-  st.residual = (b - A * x).norm() / bn;
-  if (!(st.residual <= std::max(10 * tol, 1e-6)))
-    throw NumericalError("volume map: CG did not converge: relative residual " +
-                         std::to_string(st.residual) + " after " + std::to_string(it) + " iterations");
-  return st;
-}
-
-SolveStats normal_equations(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b,
-                            Eigen::VectorXd& x, double tol, bool project_mean) {
-  SolveStats st;
-  const Eigen::SparseMatrix<double> AtA = (A.transpose() * A).pruned();
-  Eigen::BiCGSTAB<Eigen::SparseMatrix<double>, Eigen::DiagonalPreconditioner<double>> s;
-  s.setTolerance(tol * tol);
-  s.setMaxIterations(20000);
-  s.compute(AtA);
-  const Eigen::VectorXd Atb = A.transpose() * b;
-  x = s.solveWithGuess(Atb, x);
-  if (project_mean) x.array() -= x.mean();
-  st.iterations = static_cast<int>(s.iterations());
-  const double bn = b.norm();
-  st.residual = bn > 0 ? (b - A * x).norm() / bn : 0;
-  if (!(st.residual <= std::max(1e3 * tol, 1e-4)))
-    throw NumericalError("volume map: BiCGSTAB on the normal equations reached relative residual " +
-                         std::to_string(st.residual) + " after " + std::to_string(st.iterations) +
-                         " iterations");
-  return st;
-}
-
 }  // namespace
 
 struct MapSolver::Impl {
   Device& dev;
   int n;
   Tets tets;
-  std::string method;
-  double tol;
+  SolverOptions options;
+  std::unique_ptr<PoissonSolver> poisson;
 };
 
 MapSolver::MapSolver(Device& device, int n, const Tets& tets, const std::string& method, double tol)
-    : impl_(new Impl{device, n, tets, method, tol}) {
+    : impl_(new Impl{device, n, tets, SolverOptions{}, nullptr}) {
   if (method != "cg" && method != "paper")
     throw InputError("--solver: '" + method + "' is not one of cg, paper");
+  impl_->options.method = parse_solver_method(method);
+  impl_->options.relative_tolerance = tol;
+  impl_->options.neumann_tolerance = 1e-8;
 }
 MapSolver::~MapSolver() = default;
 
 SolveStats MapSolver::neumann(const Points& x, const Eigen::VectorXd& b_in, Eigen::VectorXd& psi) {
   const auto t0 = Clock::now();
-  const Eigen::SparseMatrix<double> A = -weighted_stiffness(x, impl_->tets);
+  if (!impl_->poisson)
+    impl_->poisson = std::make_unique<PoissonSolver>(impl_->dev, impl_->n, impl_->tets, impl_->options);
+  impl_->poisson->set_positions(x);
   Eigen::VectorXd b = b_in;
-  b.array() -= b.mean();
+  b.array() -= b.mean();  // exact compatibility (the targets are rescaled to the total volume)
   if (psi.size() != b.size()) psi = Eigen::VectorXd::Zero(b.size());
-  // A = -K, so A psi = -b solves K psi = b.
-  Eigen::VectorXd rhs = -b;
-  SolveStats st = impl_->method == "paper" ? normal_equations(A, rhs, psi, impl_->tol, true)
-                                           : pcg(A, rhs, psi, impl_->tol, 20000, true);
+  const SolverStats s = impl_->poisson->solve_neumann(b, psi);
+  SolveStats st;
+  st.iterations = s.iterations;
+  st.residual = s.relative_residual;
   st.seconds = since(t0);
   return st;
 }
@@ -136,11 +85,10 @@ SolveStats MapSolver::dirichlet(const Eigen::SparseMatrix<double>& K, const std:
   int nf = 0;
   for (int i = 0; i < n; ++i)
     if (!fixed[i]) idx[i] = nf++;
-  std::vector<Eigen::Triplet<double>> tri, trb;
-  Eigen::SparseMatrix<double> Kc = K;  // column-major
+  std::vector<Eigen::Triplet<double>> tri;
   Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(nf, 3);
   for (int j = 0; j < n; ++j)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(Kc, j); it; ++it) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(K, j); it; ++it) {
       const int i = static_cast<int>(it.row());
       if (idx[i] < 0) continue;
       if (idx[j] >= 0)
@@ -150,16 +98,16 @@ SolveStats MapSolver::dirichlet(const Eigen::SparseMatrix<double>& K, const std:
     }
   Eigen::SparseMatrix<double> A(nf, nf);
   A.setFromTriplets(tri.begin(), tri.end());
+  SparseSolver solver(impl_->dev, CsrMatrix::from_eigen(A), impl_->options);
   SolveStats st;
   for (int c = 0; c < 3; ++c) {
     Eigen::VectorXd xc(nf);
     for (int i = 0; i < n; ++i)
       if (idx[i] >= 0) xc(idx[i]) = X(i, c);
     const Eigen::VectorXd b = rhs.col(c);
-    SolveStats s = impl_->method == "paper" ? normal_equations(A, b, xc, impl_->tol, false)
-                                            : pcg(A, b, xc, impl_->tol, 20000, false);
+    const SolverStats s = solver.solve(b, xc);
     st.iterations += s.iterations;
-    st.residual = std::max(st.residual, s.residual);
+    st.residual = std::max(st.residual, s.relative_residual);
     for (int i = 0; i < n; ++i)
       if (idx[i] >= 0) X(i, c) = xc(idx[i]);
   }

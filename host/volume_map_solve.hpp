@@ -1,6 +1,8 @@
 #pragma once
-// Private: the linear solves of the volume-preserving map behind one small interface, so the
-// host reference (own Jacobi CG over Eigen) and the shared solver module can be swapped.
+// Private: the linear solves of the volume-preserving map behind one small interface, on the
+// shared solver module (vpm/solver.hpp: Jacobi CG or the paper's normal equations, host or
+// OpenCL): PoissonSolver for the Neumann problems, SparseSolver for the reweighted (vsem)
+// Dirichlet problems.
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <memory>
