@@ -20,6 +20,7 @@
 #include "vpm/error.hpp"
 #include "vpm/geometry.hpp"
 #include "vpm/metrics.hpp"
+#include "vpm/solver.hpp"
 #include "vpm/topology.hpp"
 #include "vpm/untangle.hpp"
 
@@ -415,8 +416,11 @@ int moebius_balance(const Eigen::VectorXd& w, Points& s, int max_it, double tol,
 
 // Area-equalising flow on the sphere (density-equalising: vertices move down the gradient
 // of the area density rho = (input area share) / (sphere area share), diffused implicitly).
-// A step that would flip a triangle is halved; returns steps taken.
-int area_flow(const Points& in, const Triangles& f, Points& s, int steps) {
+// A step is halved until it flips no new triangle and either unflips one or lowers the area
+// distortion (so it also repairs chord triangles flipped by extreme conformal scale factors).
+// Stops early once no flip is left and the distortion changes by less than 1e-4 (when
+// `until_unflipped`, as soon as no flip is left). Returns steps taken.
+int area_flow(const Points& in, const Triangles& f, Points& s, int steps, bool until_unflipped) {
   const int k = static_cast<int>(s.rows());
   Eigen::VectorXd ain(f.rows());
   for (Eigen::Index i = 0; i < f.rows(); ++i) {
@@ -471,10 +475,12 @@ int area_flow(const Points& in, const Triangles& f, Points& s, int steps) {
     double dt = 0.2 * h / gmax;
     bool ok = false;
     const double before = area_distortion(in, s, f);
+    const int flips_before = flipped_sphere_triangles(s, f);
     for (int ls = 0; ls < 8; ++ls) {
       Points q = s - dt * grad;  // down the density gradient: expand where rho is high
       normalize_rows(q);
-      if (flipped_sphere_triangles(q, f) == 0 && area_distortion(in, q, f) < before) {
+      const int fq = flipped_sphere_triangles(q, f);
+      if (fq < flips_before || (fq == flips_before && area_distortion(in, q, f) < before)) {
         s = std::move(q);
         ok = true;
         break;
@@ -483,6 +489,7 @@ int area_flow(const Points& in, const Triangles& f, Points& s, int steps) {
     }
     if (!ok) break;
     ++done;
+    if (until_unflipped && flipped_sphere_triangles(s, f) == 0) break;
   }
   return done;
 }
@@ -661,7 +668,13 @@ SphereMapResult sphere_map(const TriSurface& surf, const InitialMapOptions& opt)
   }
   // 5. optional area correction
   if (opt.area_correction) {
-    rep["area_correction_steps"] = area_flow(in, f, s, opt.area_correction_steps);
+    rep["area_correction_steps"] = area_flow(in, f, s, opt.area_correction_steps, false);
+  }
+  if (flipped_sphere_triangles(s, f) > 0) {
+    // Extreme conformal scale factors (protrusions, coarse elongated shapes) can make a chord
+    // triangle face inwards: spread the areas until none does.
+    rep["flipped_before_repair"] = flipped_sphere_triangles(s, f);
+    rep["repair_steps"] = area_flow(in, f, s, std::max(opt.area_correction_steps, 100), true);
   }
   normalize_rows(s);
   flips = flipped_sphere_triangles(s, f);
@@ -677,27 +690,6 @@ SphereMapResult sphere_map(const TriSurface& surf, const InitialMapOptions& opt)
 // ----------------------------------------------------------------------- initial map
 
 namespace {
-
-// P1 stiffness (cotangent) matrix of a tet mesh, n x n.
-SpMat tet_stiffness(const Points& x, const Tets& t) {
-  std::vector<Trip> tr;
-  tr.reserve(16 * t.rows());
-  for (Eigen::Index i = 0; i < t.rows(); ++i) {
-    Eigen::Matrix3d E;
-    for (int c = 0; c < 3; ++c) E.col(c) = (x.row(t(i, c + 1)) - x.row(t(i, 0))).transpose();
-    const double vol = std::abs(E.determinant()) / 6.0;
-    if (!(vol > 0)) continue;
-    const Eigen::Matrix3d Ei = E.inverse();  // rows: gradients of barycentric 1..3
-    Eigen::Vector3d g[4];
-    for (int c = 0; c < 3; ++c) g[c + 1] = Ei.row(c).transpose();
-    g[0] = -(g[1] + g[2] + g[3]);
-    for (int a = 0; a < 4; ++a)
-      for (int b = 0; b < 4; ++b) tr.emplace_back(t(i, a), t(i, b), vol * g[a].dot(g[b]));
-  }
-  SpMat K(x.rows(), x.rows());
-  K.setFromTriplets(tr.begin(), tr.end());
-  return K;
-}
 
 Eigen::Vector3d tet_centroid(const Points& x, const Tets& t, int i) {
   return 0.25 * (x.row(t(i, 0)) + x.row(t(i, 1)) + x.row(t(i, 2)) + x.row(t(i, 3))).transpose();
@@ -808,23 +800,32 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
 
   // 3. harmonic interior
   t0 = Clock::now();
-  const SpMat K = tet_stiffness(m.vertices, m.tets);
-  Eigen::MatrixXd u = Eigen::MatrixXd::Zero(n, 3);
-  for (int i = 0; i < n; ++i)
-    if (res.boundary[i]) u.row(i) = sm.sphere.row(i);
   // warm start: interior vertices at their input position mapped to the ball's scale
+  FieldValues u = FieldValues::Zero(n, 3);
   {
     const Eigen::RowVector3d c = m.vertices.colwise().mean();
     const double r = (m.vertices.rowwise() - c).rowwise().norm().maxCoeff();
     for (int i = 0; i < n; ++i)
-      if (!res.boundary[i]) u.row(i) = (m.vertices.row(i) - c) / std::max(r, 1e-300);
+      u.row(i) = res.boundary[i] ? Eigen::RowVector3d(sm.sphere.row(i))
+                                 : Eigen::RowVector3d((m.vertices.row(i) - c) / std::max(r, 1e-300));
   }
-  int cg_its = 0;
-  if (!dirichlet_solve(K, res.boundary, u, true, opt.solver_tolerance, &cg_its))
-    throw NumericalError("initial_map: the harmonic solve (CG, tolerance " + fmt(opt.solver_tolerance) +
-                         ") did not converge; " + quality_note());
-  rep["harmonic"]["solver"] = "host CG (Jacobi)";
-  rep["harmonic"]["iterations"] = cg_its;
+  // The shared Poisson solver (Jacobi CG on the host or the OpenCL device of `device`).
+  SolverOptions so;
+  so.relative_tolerance = opt.solver_tolerance;
+  SolverStats st;
+  try {
+    PoissonSolver ps(device, n, m.tets, so);
+    ps.set_positions(m.vertices);
+    const FieldValues values = u;
+    st = ps.solve_dirichlet(res.boundary, values, u);
+  } catch (const NumericalError& e) {
+    throw NumericalError(std::string("initial_map: the harmonic solve failed: ") + e.what() + "; " + quality_note());
+  }
+  if (!u.allFinite())
+    throw NumericalError("initial_map: the harmonic solve gave non-finite positions; " + quality_note());
+  rep["harmonic"]["solver"] = device.is_host() ? "PoissonSolver CG (host)" : "PoissonSolver CG (OpenCL)";
+  rep["harmonic"]["iterations"] = st.iterations;
+  rep["harmonic"]["relative_residual"] = st.relative_residual;
   res.ball = u;
   for (int i = 0; i < n; ++i)
     if (res.boundary[i]) res.ball.row(i) = sm.sphere.row(i);
