@@ -300,8 +300,10 @@ TetMesh read_vtu(const std::string& path) {
           while (c.next(tok)) ++k;
           conn = read_array(path, w, tag, k);
         } else {
-          const long long len = m > 0 ? static_cast<long long>(offsets.values.back()) : 0;
-          if (len < 0) w.fail(offsets.line, "negative offset in 'offsets'");
+          const double last = m > 0 ? offsets.values.back() : 0.0;
+          if (!(last >= 0 && last < 4.0e9))
+            w.fail(offsets.line, "last offset in 'offsets' is negative or too large");
+          const long long len = static_cast<long long>(last);
           conn = read_array(path, w, tag, len);
         }
         have_conn = true;
@@ -313,6 +315,9 @@ TetMesh read_vtu(const std::string& path) {
   if (!seen_piece) throw InputError(path + ":" + std::to_string(last) + ": no <Piece> element (truncated file?)");
   if (!closed) throw InputError(path + ":" + std::to_string(last) + ": no </VTKFile> (truncated file?)");
   if (!have_points) w.fail(piece_line, "Piece has no <Points> array");
+  for (const Array* a : {&conn, &offsets, &types})
+    if (!a->type.empty() && !is_integer_type(a->type))
+      w.fail(a->line, "Cells array '" + a->name + "' has type " + a->type + ", expected an integer type");
   if (m > 0 && (!have_conn || !have_offsets || !have_types))
     w.fail(piece_line, "Piece lacks a Cells array (connectivity, offsets, types)");
 
@@ -323,7 +328,7 @@ TetMesh read_vtu(const std::string& path) {
   long long prev = 0;
   for (long long c = 0; c < m; ++c) {
     const double off = offsets.values[static_cast<size_t>(c)];
-    if (off < prev || off > static_cast<double>(conn.values.size()))
+    if (!(off >= prev) || off > static_cast<double>(conn.values.size()))
       w.fail(offsets.line, "cell " + std::to_string(c) + ": offset " + std::to_string(static_cast<long long>(off)) +
                                " is decreasing or beyond the " + std::to_string(conn.values.size()) +
                                " connectivity entries (wrong count)");

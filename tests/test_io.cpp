@@ -144,6 +144,11 @@ TEST_CASE("io: unknown extensions and missing files are InputErrors naming the p
   CHECK_THROWS_AS(write_mesh(tmp("x.abc"), test::single_tet()), InputError);
   CHECK_THROWS_WITH(write_mesh(std::string(VPM_TEST_TMP) + "/no/such/dir/a.vtu", test::single_tet()),
                     Catch::Contains("does not exist"));
+  CHECK_THROWS_WITH(write_surface(tmp("s.ply"), TriSurface{}), Catch::Contains("unknown surface file extension"));
+  TetMesh bad_field = test::single_tet();
+  bad_field.point_data.push_back(Field{"short", FieldValues::Zero(2, 1), false});
+  CHECK_THROWS_WITH(write_mesh(tmp("bf.vtu"), bad_field), Catch::Contains("'short'") && Catch::Contains("2 rows for 4 vertices"));
+  CHECK(!fs::exists(tmp("bf.vtu")));
   CHECK(is_mesh_path("A.VTU"));
   CHECK(is_mesh_path("a.node"));
   CHECK(!is_mesh_path("a.off"));
