@@ -79,7 +79,15 @@ int run(const std::vector<std::string>& argv) {
   vpm::Json rounds = vpm::Json::array();
   if (vo.rounds != 0) {
     t0 = Clock::now();
-    vpm::VolumeMapResult vm = vpm::volume_preserving_map(dev, im.mesh.vertices, im.mesh.tets, ball, vo);
+    vpm::VolumeMapResult vm;
+    try {
+      vm = vpm::volume_preserving_map(dev, im.mesh.vertices, im.mesh.tets, ball, vo);
+    } catch (const vpm::NumericalError& e) {
+      char q[160];
+      std::snprintf(q, sizeof q, " (input quality: smallest dihedral angle %.3g deg at tet %d)",
+                    vr.min_dihedral_deg, vr.min_dihedral_tet);
+      throw vpm::NumericalError(in + ": " + e.what() + q + "; nothing written");
+    }
     timings["volume_map"] = since(t0);
     vm_report = vm.report;
     if (const vpm::Json* r = vm.report.find("rounds")) rounds = *r;

@@ -126,6 +126,7 @@ namespace {
 
 constexpr int kMaxWalk = 64;
 constexpr double kInsideEps = -1e-12;
+constexpr double kOutsideClamp = -0.05;
 
 inline void bary(const MoserField& f, int t, const Eigen::Vector3d& p, double* l) {
   const double* q = &f.inv[12 * static_cast<size_t>(t)];
@@ -157,9 +158,12 @@ int locate(const MoserField& f, const Eigen::Vector3d& p, int t, double* l, long
     if (l[k] >= kInsideEps) return t;
     const int nb = nbr[4 * static_cast<size_t>(t) + k];
     if (nb < 0) {
-      clamp_bary(l);
-      st[2] += 1;
-      return t;
+      if (l[k] > kOutsideClamp) {
+        clamp_bary(l);
+        st[2] += 1;
+        return t;
+      }
+      break;
     }
     t = nb;
     st[0] += 1;

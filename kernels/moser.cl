@@ -14,6 +14,7 @@
 #define MAX_WALK 64
 #endif
 #define INSIDE_EPS (-1e-12)
+#define OUTSIDE_CLAMP (-0.05)
 
 inline real3 ld3(__global const real* x, int i) {
   return (real3)(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
@@ -56,15 +57,21 @@ inline int locate(real3 p, int t, __global const real* inv, __global const int* 
       if (l[c] < l[k]) k = c;
     if (l[k] >= INSIDE_EPS) return t;
     const int nb = nbr[4 * t + k];
-    if (nb < 0) {  // leaving the mesh through a boundary face: outside, clamp here
-      clamp_bary(l);
-      st[2] += 1;
-      return t;
+    if (nb < 0) {
+      // Leaving the mesh through a boundary face. Just outside (round-off, or a point on the
+      // sphere beyond the inscribed polyhedron): clamp to this boundary tet. Far outside (a
+      // non-convex boundary): search the grid.
+      if (l[k] > OUTSIDE_CLAMP) {
+        clamp_bary(l);
+        st[2] += 1;
+        return t;
+      }
+      break;
     }
     t = nb;
     st[0] += 1;
   }
-  // Walk failed (cycle or long way): search the uniform grid cell of p.
+  // Walk failed (cycle, long way, or left the mesh far from it): search the grid cell of p.
   st[1] += 1;
   int ix = (int)floor((p.x - lox) * inv_h);
   int iy = (int)floor((p.y - loy) * inv_h);
