@@ -10,6 +10,7 @@
 #include "support/devices.hpp"
 #include "support/fixtures.hpp"
 #include "support/shapes.hpp"
+#include "moser_field.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/geometry.hpp"
@@ -216,4 +217,75 @@ TEST_CASE("vpm map: writes the ball mesh with fields and the report; refuses bad
   CHECK(run_status(vpm + " map " + tmp("in.vtu") + " -o " + tmp("bad.vtu") + " --rounds x 2>/dev/null") == 2);
   CHECK(run_status(vpm + " map " + tmp("missing.vtu") + " -o " + tmp("bad.vtu") + " 2>/dev/null") == 2);
   CHECK(!fs::exists(tmp("bad.vtu")));
+}
+
+TEST_CASE("point location: walk, grid fallback and clamping give exact P1 transport on host and device") {
+  // A constant field (grad = e, rho0 = 1) is interpolated exactly, so interior points translate
+  // by exactly e over t in [0, 1]. Every point starts its walk in tet 0 (a corner), so long
+  // walks end in the grid search.
+  const TetMesh m = test::ball_mesh(10);
+  const auto nbr = detail::tet_neighbors(m.tets);
+  detail::MoserField f;
+  detail::build_background(f, m.vertices, m.tets, nbr);
+  const Eigen::Vector3d e(0.05, -0.03, 0.02);
+  f.grad.assign(3 * static_cast<size_t>(m.num_vertices()), 0.0);
+  for (int i = 0; i < m.num_vertices(); ++i)
+    for (int c = 0; c < 3; ++c) f.grad[3 * i + c] = e(c);
+  f.rho0.assign(static_cast<size_t>(m.num_vertices()), 1.0);
+  const auto boundary = boundary_vertex_mask(m.num_vertices(), boundary_faces(m.tets));
+  detail::AdvectParams p;
+  p.steps = 8;
+  p.slide = true;
+  std::vector<Points> results;
+  for (auto& dev : test::devices()) {
+    INFO("device " << dev->name());
+    Points x = m.vertices;
+    std::vector<int> hint(static_cast<size_t>(m.num_vertices()), 0);
+    detail::AdvectStats st;
+    if (dev->is_host()) {
+      detail::advect_host(f, boundary, p, x, hint, &st);
+    } else {
+      detail::DeviceAdvector adv(*dev, m.tets, nbr, boundary);
+      adv.set_field(f);
+      adv.advect(p, x, hint, &st);
+    }
+    CHECK(st.grid_fallbacks > 0);
+    CHECK(st.clamped > 0);  // boundary points on the sphere lie outside the inscribed polyhedron
+    double err = 0;
+    int checked = 0;
+    for (int i = 0; i < m.num_vertices(); ++i) {
+      if (boundary[i]) {
+        CHECK(std::fabs(x.row(i).norm() - 1.0) < 1e-12);
+        continue;
+      }
+      if (m.vertices.row(i).norm() > 0.8) continue;  // may reach the boundary layer
+      err = std::max(err, (x.row(i).transpose() - m.vertices.row(i).transpose() - e).norm());
+      ++checked;
+    }
+    CHECK(checked > 100);
+    CHECK(err < 1e-12);
+    results.push_back(x);
+  }
+  if (results.size() == 2) CHECK((results[0] - results[1]).cwiseAbs().maxCoeff() < 1e-12);
+}
+
+TEST_CASE("vpm map: an input whose map cannot be made fold-free exits 3 and writes nothing") {
+  // bent_mesh(3): a 270-degree C whose conformal boundary map flips triangles (DESIGN.md 4.2:
+  // appendages defeat the conformal start). If a later version maps it, the output must be
+  // fold-free.
+  const std::string vpm = VPM_BINARY;
+  write_mesh(tmp("bent.vtu"), test::bent_mesh(3));
+  fs::remove(tmp("bent_out.vtu"));
+  const int rc = run_status(vpm + " map " + tmp("bent.vtu") + " -o " + tmp("bent_out.vtu") +
+                            " --quiet 2> " + tmp("bent.err"));
+  if (rc == 3) {
+    CHECK(!fs::exists(tmp("bent_out.vtu")));
+    std::ifstream in(tmp("bent.err"));
+    std::string msg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    CHECK(msg.find("numerical failure") != std::string::npos);
+  } else {
+    REQUIRE(rc == 0);
+    const TetMesh out = read_mesh(tmp("bent_out.vtu"));
+    CHECK(inverted_tets(out.vertices, out.tets).empty());
+  }
 }
