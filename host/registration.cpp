@@ -274,9 +274,8 @@ RegistrationResult register_landmarks(Device& dev, Points& ball, const Tets& tet
     }
     if (!duplicate) keep.push_back(i);
   }
+  const auto mask = boundary_vertex_mask(static_cast<int>(ball.rows()), boundary_faces(tets));
   {
-    const Triangles bf = boundary_faces(tets);
-    const auto mask = boundary_vertex_mask(static_cast<int>(ball.rows()), bf);
     for (Eigen::Index v = 0; v < ball.rows(); ++v)
       if (mask[static_cast<size_t>(v)] && std::fabs(ball.row(v).norm() - 1) > kSphereTolerance) {
         std::ostringstream s;
@@ -351,8 +350,6 @@ RegistrationResult register_landmarks(Device& dev, Points& ball, const Tets& tet
   const Eigen::VectorXd err = (res.landmarks_final - targets).rowwise().norm();
   res.landmark_rms_error = std::sqrt(err.squaredNorm() / static_cast<double>(err.size()));
   res.landmark_max_error = err.maxCoeff();
-  const Triangles bf = boundary_faces(tets);
-  const auto mask = boundary_vertex_mask(static_cast<int>(after.rows()), bf);
   for (Eigen::Index v = 0; v < after.rows(); ++v) {
     if (!mask[static_cast<size_t>(v)]) continue;
     const double r = after.row(v).norm();
