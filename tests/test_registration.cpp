@@ -1,12 +1,20 @@
 #include <catch2/catch.hpp>
 #include <Eigen/Geometry>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <random>
+#include <sstream>
 
 #include "support/devices.hpp"
 #include "support/fixtures.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/geometry.hpp"
+#include "vpm/io.hpp"
+#include "vpm/json.hpp"
 #include "vpm/metrics.hpp"
 #include "vpm/registration.hpp"
 
@@ -246,4 +254,110 @@ TEST_CASE("a folding registration is refused with NumericalError and leaves the 
   Points x = m.vertices;
   CHECK_THROWS_WITH(register_landmarks(*host, x, m.tets, p, q), Catch::Contains("folded"));
   CHECK(x == m.vertices);
+}
+
+namespace {
+
+std::string tmp(const std::string& name) { return std::string(VPM_TEST_TMP) + "/register_" + name; }
+
+void write_text(const std::string& path, const std::string& text) {
+  std::ofstream(path) << text;
+}
+
+// Runs `vpm register ...` (stderr to `err`), returns the exit status.
+int vpm_register(const std::string& args, const std::string& err) {
+  const std::string cmd = std::string(VPM_BINARY) + " register " + args + " 2>" + err;
+  const int st = std::system(cmd.c_str());
+  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+}  // namespace
+
+TEST_CASE("vpm register: registers a mapped mesh, writes fields and the report") {
+  TetMesh m = smooth_ball(6);
+  m.set_point_field("original_position", m.vertices);
+  const std::string mesh = tmp("ball.vtu"), out = tmp("out.vtu"), report = tmp("report.json");
+  write_mesh(mesh, m);
+  // landmarks: a header, a vertex id and two coordinate lines; targets as coordinates
+  const int interior = 3 + 7 * (3 + 7 * 3);  // the centre vertex of smooth_ball(6)
+  write_text(tmp("src.csv"), "x,y,z\n" + std::to_string(interior) + "\n0.3,0.2,0.1\n-0.4, 0.1, 0.2\r\n\n");
+  write_text(tmp("dst.csv"), "0.05,0.0,0.02\n0.35,0.25,0.1\n-0.42,0.05,0.25\n");
+  std::filesystem::remove(out);
+  const int rc = vpm_register(mesh + " -o " + out + " --landmarks " + tmp("src.csv") + " --targets " +
+                                  tmp("dst.csv") + " --steps 20 --report " + report + " --quiet",
+                              tmp("err.txt"));
+  INFO(slurp(tmp("err.txt")));
+  REQUIRE(rc == 0);
+  const TetMesh r = read_mesh(out);
+  REQUIRE(r.num_vertices() == m.num_vertices());
+  CHECK(r.find_point_field("original_position") != nullptr);
+  REQUIRE(r.find_point_field("vertex_volume_ratio") != nullptr);
+  REQUIRE(r.find_cell_field("tet_volume_ratio") != nullptr);
+  CHECK((r.vertices.row(interior) - Eigen::RowVector3d(0.05, 0.0, 0.02)).norm() < 1e-6);
+  const Json j = Json::parse(slurp(report));
+  for (const char* key : {"landmark_rms_error", "landmark_max_error", "max_normal_velocity",
+                          "vertex_volume_ratio", "tet_volume_ratio", "inverted_tets", "timings_s"})
+    CHECK(j.find(key) != nullptr);
+  CHECK(j.find("landmark_rms_error")->number() < 1e-6);
+  CHECK(j.find("inverted_tets")->number() == 0);
+}
+
+TEST_CASE("vpm register: bad input exits 2 naming the file and line") {
+  const TetMesh m = smooth_ball(4);
+  const std::string mesh = tmp("ball4.vtu"), out = tmp("bad_out.vtu"), err = tmp("bad_err.txt");
+  write_mesh(mesh, m);
+  TetMesh scaled = m;
+  scaled.vertices *= 1.2;
+  write_mesh(tmp("unmapped.vtu"), scaled);
+  write_text(tmp("ok.csv"), "0.1,0.2,0.3\n-0.2,0.1,0\n");
+  write_text(tmp("ok_dst.csv"), "0.15,0.2,0.3\n-0.2,0.15,0\n");
+  struct Case {
+    std::string mesh, src, src_text, expect;
+  };
+  const std::vector<Case> cases = {
+      {mesh, "short.csv", "0.1,0.2,0.3\n", "has 1 landmarks but"},
+      {mesh, "text.csv", "x,y,z\n0.1,abc,0.3\n-0.2,0.1,0\n", "text.csv:2: 'abc' is not a number"},
+      {mesh, "two.csv", "0.1,0.2\n-0.2,0.1,0\n", "two.csv:1: expected x,y,z or vertex_id, got 2"},
+      {mesh, "outside.csv", "0.1,0.2,0.3\n1.2,0.1,0\n", "outside.csv:2: landmark (1.2, 0.1, 0) is outside the unit ball"},
+      {mesh, "id.csv", "0.1,0.2,0.3\n100000\n", "id.csv:2: vertex id 100000 out of range"},
+      {mesh, "dup.csv", "0.1,0.2,0.3\n0.1,0.2,0.3\n", "with a different target"},
+      {mesh, "empty.csv", "x,y,z\n", "no landmarks"},
+      {tmp("unmapped.vtu"), "ok.csv", "0.1,0.2,0.3\n-0.2,0.1,0\n", "not mapped to the unit ball"},
+  };
+  for (const auto& c : cases) {
+    INFO(c.src);
+    write_text(tmp(c.src), c.src_text);
+    std::filesystem::remove(out);
+    const int rc = vpm_register(c.mesh + " -o " + out + " --landmarks " + tmp(c.src) + " --targets " +
+                                    tmp("ok_dst.csv"), err);
+    const std::string msg = slurp(err);
+    INFO(msg);
+    CHECK(rc == 2);
+    CHECK(msg.find(c.expect) != std::string::npos);
+    CHECK(!std::filesystem::exists(out));
+  }
+  // a folding registration: exit 3, no output
+  TetMesh sliver = test::ball_mesh(8);
+  write_mesh(tmp("sliver.vtu"), sliver);
+  Points p, q;
+  random_landmarks(6, 0.15, 2, p, q);
+  std::ostringstream src, dst;
+  for (int i = 0; i < 6; ++i) {
+    src.precision(17);
+    dst.precision(17);
+    src << p(i, 0) << "," << p(i, 1) << "," << p(i, 2) << "\n";
+    dst << q(i, 0) << "," << q(i, 1) << "," << q(i, 2) << "\n";
+  }
+  write_text(tmp("fold_src.csv"), src.str());
+  write_text(tmp("fold_dst.csv"), dst.str());
+  const int rc = vpm_register(tmp("sliver.vtu") + " -o " + out + " --landmarks " + tmp("fold_src.csv") +
+                                  " --targets " + tmp("fold_dst.csv"), err);
+  INFO(slurp(err));
+  CHECK(rc == 3);
+  CHECK(!std::filesystem::exists(out));
 }
