@@ -141,7 +141,8 @@ Eigen::VectorXd gather(const Problem& p, const Points& x) {
 }
 
 // L-BFGS with backtracking (Armijo) line search at fixed eps. Returns iterations run.
-int lbfgs(const Problem& p, Points& x, double eps, const UntangleOptions& o, int* evals) {
+int lbfgs(const Problem& p, Points& x, double eps, const UntangleOptions& o, int* evals,
+          std::chrono::steady_clock::time_point deadline) {
   const int nz = static_cast<int>(3 * p.free_vertices.size());
   if (nz == 0) return 0;
   Eigen::VectorXd z = gather(p, x), g(nz), gn(nz);
@@ -153,6 +154,7 @@ int lbfgs(const Problem& p, Points& x, double eps, const UntangleOptions& o, int
   int it = 0;
   for (; it < o.max_lbfgs_iterations; ++it) {
     if (g.lpNorm<Eigen::Infinity>() <= o.gradient_tolerance * (1 + g0)) break;
+    if (o.max_seconds > 0 && std::chrono::steady_clock::now() > deadline) break;
     // two-loop recursion
     Eigen::VectorXd q = -g;
     std::vector<double> alpha(S.size());
@@ -277,8 +279,14 @@ UntangleResult run(Problem& p, const Points& reference, const Tets& tets, Points
   double e_prev = evaluate(p, x, eps, nullptr).energy;
   r.energy_before = e_prev;
   int evals = 0;
+  const auto deadline = t0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                  std::chrono::duration<double>(std::max(o.max_seconds, 0.0)));
   for (int outer = 0; outer < o.max_outer_iterations; ++outer) {
-    r.lbfgs_iterations += lbfgs(p, x, eps, o, &evals);
+    if (o.max_seconds > 0 && std::chrono::steady_clock::now() > deadline) {
+      r.out_of_time = true;
+      break;
+    }
+    r.lbfgs_iterations += lbfgs(p, x, eps, o, &evals, deadline);
     ++r.iterations;
     ev = evaluate(p, x, eps, nullptr);
     const double e = ev.energy;
@@ -416,6 +424,7 @@ Json UntangleResult::to_json() const {
   j["energy_after"] = energy_after;
   j["final_eps"] = final_eps;
   j["seconds"] = seconds;
+  j["out_of_time"] = out_of_time;
   Json list = Json::array();
   for (size_t i = 0; i < inverted_tets.size() && i < 20; ++i) list.push_back(inverted_tets[i]);
   j["inverted_tets_first"] = list;

@@ -188,6 +188,6 @@ TEST_CASE("host and OpenCL device give the same initial map") {
       continue;
     }
     REQUIRE(r.ball.rows() == ref.rows());
-    CHECK((r.ball - ref).cwiseAbs().maxCoeff() < 1e-7);
+    CHECK((r.ball - ref).cwiseAbs().maxCoeff() < 1e-6);  // CG to 1e-10 relative residual on both
   }
 }

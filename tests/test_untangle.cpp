@@ -105,3 +105,17 @@ TEST_CASE("untangle refuses inconsistent sizes") {
   Points x = m.vertices;
   CHECK_THROWS_AS(untangle(m.vertices, m.tets, x, std::vector<char>(3, 0)), InputError);
 }
+
+TEST_CASE("untangle honours a time budget and still reports the folds") {
+  const TetMesh m = test::ball_mesh(6);
+  const auto fixed = boundary_of(m);
+  Points x = m.vertices;
+  const int v = interior_vertex_near(m, {0, 0, 0});
+  x.row(v) += Eigen::RowVector3d(0.45, 0.1, 0);
+  UntangleOptions o;
+  o.max_seconds = 1e-9;
+  const UntangleResult r = untangle(m.vertices, m.tets, x, fixed, o);
+  CHECK(r.out_of_time);
+  CHECK(r.inverted_after == static_cast<int>(inverted_tets(x, m.tets).size()));
+  CHECK(r.inverted_after > 0);
+}

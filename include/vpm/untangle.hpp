@@ -36,7 +36,7 @@ struct UntangleOptions {
   /// Outer iterations (eps updates). Each runs one L-BFGS minimisation.
   int max_outer_iterations = 50;
   /// L-BFGS iterations per outer iteration.
-  int max_lbfgs_iterations = 200;
+  int max_lbfgs_iterations = 100;
   /// L-BFGS memory (number of correction pairs).
   int lbfgs_memory = 8;
   /// L-BFGS stops when |grad|_inf <= gradient_tolerance * (1 + |grad_0|_inf)
@@ -49,6 +49,9 @@ struct UntangleOptions {
   /// Stop as soon as no tet is inverted (minimum quality work), instead of also converging the
   /// energy. Off by default: the further descent improves the map (DESIGN.md 4.1 table).
   bool stop_when_untangled = false;
+  /// Wall-clock budget in seconds (0: none). Checked between L-BFGS iterations; when it runs
+  /// out the current positions are returned (folds are still reported, never hidden).
+  double max_seconds = 0;
   /// Scale the reference so its total volume equals the total signed volume of x.
   bool rescale_reference = true;
 };
@@ -67,6 +70,7 @@ struct UntangleResult {
   double energy_after = 0;   ///< energy at the end (last eps)
   double final_eps = 0;
   double seconds = 0;
+  bool out_of_time = false;  ///< stopped by options.max_seconds
   std::vector<int> inverted_tets;  ///< indices (into `tets`) of all tets still inverted after
   Json to_json() const;            ///< the scalar fields above, plus the first inverted tets
 };
