@@ -92,7 +92,8 @@ TEST_CASE("sphere map of a closed surface: no flipped triangles, balanced") {
 }
 
 TEST_CASE("initial map of convex and non-convex shapes is fold-free") {
-  auto& dev = *Device::host();
+  const auto host = Device::host();
+  auto& dev = *host;
   const std::pair<const char*, TetMesh> shapes[] = {
       {"cube", test::cube_mesh(6)},        {"ball", test::ball_mesh(8)},
       {"ellipsoid", test::ellipsoid_mesh(8)}, {"bent", test::bent_mesh(4)},
@@ -105,7 +106,8 @@ TEST_CASE("initial map of convex and non-convex shapes is fold-free") {
 }
 
 TEST_CASE("harmonic folds are untangled; without untangling the map is refused") {
-  auto& dev = *Device::host();
+  const auto host = Device::host();
+  auto& dev = *host;
   const TetMesh in = test::ellipsoid_mesh(8);  // slivers near the rim: the harmonic map folds
   InitialMapOptions opt;
   const InitialMapResult r = initial_map(dev, in, opt);
@@ -128,7 +130,8 @@ TEST_CASE("harmonic folds are untangled; without untangling the map is refused")
 }
 
 TEST_CASE("global untangling (Always) keeps the map fold-free") {
-  auto& dev = *Device::host();
+  const auto host = Device::host();
+  auto& dev = *host;
   const TetMesh in = test::ball_mesh(6);
   InitialMapOptions opt;
   opt.untangle = InitialMapOptions::Untangle::Always;
@@ -139,7 +142,8 @@ TEST_CASE("global untangling (Always) keeps the map fold-free") {
 }
 
 TEST_CASE("area correction on the sphere lowers the boundary area distortion") {
-  auto& dev = *Device::host();
+  const auto host = Device::host();
+  auto& dev = *host;
   const TetMesh in = test::dumbbell_mesh(3);
   InitialMapOptions opt;
   opt.area_correction = true;
@@ -153,7 +157,8 @@ TEST_CASE("area correction on the sphere lowers the boundary area distortion") {
 TEST_CASE("a boundary map that cannot be made fold-free is refused with NumericalError") {
   // bent_mesh(3): 128 boundary vertices on a 270-degree C; the conformal scale factors reach
   // 1e-11 and a few chord triangles face inwards on the sphere (known limitation).
-  auto& dev = *Device::host();
+  const auto host = Device::host();
+  auto& dev = *host;
   try {
     const InitialMapResult r = initial_map(dev, test::bent_mesh(3));
     check_map(r, test::bent_mesh(3));  // if a later version maps it, it must be a valid map
@@ -163,7 +168,8 @@ TEST_CASE("a boundary map that cannot be made fold-free is refused with Numerica
 }
 
 TEST_CASE("an input with an inverted tet or a non-ball boundary is refused") {
-  auto& dev = *Device::host();
+  const auto host = Device::host();
+  auto& dev = *host;
   TetMesh in = test::cube_mesh(2);
   std::swap(in.tets(3, 0), in.tets(3, 1));
   CHECK_THROWS_AS(initial_map(dev, in), InputError);
