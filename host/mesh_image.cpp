@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <ctime>
 #include <fstream>
 #include <map>
 #include <numeric>
@@ -25,8 +26,17 @@ namespace vpm {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
+// Wall-clock and process CPU time of a stage.
+struct Stamp {
+  Clock::time_point wall;
+  std::clock_t cpu;
+};
+Stamp stamp() { return {Clock::now(), std::clock()}; }
+double seconds_since(const Stamp& t0) { return std::chrono::duration<double>(Clock::now() - t0.wall).count(); }
+// report.timings_s[key] = wall seconds, report.cpu_s[key] = process CPU seconds.
+void record(Json& report, const std::string& key, const Stamp& t0) {
+  report["timings_s"][key] = seconds_since(t0);
+  report["cpu_s"][key] = double(std::clock() - t0.cpu) / CLOCKS_PER_SEC;
 }
 
 std::string fmt(double x, int prec = 4) {
@@ -311,8 +321,8 @@ double enclosed_volume(const TriSurface& s) {
 // Constants relating the requested vertex count to the surface edge length and TetGen's
 // volume bound (calibrated on Colin27, see docs/mesh_image.md):
 //   edge = kEdge * (V / N)^(1/3),  max_volume = kVol * V / N.
-constexpr double kEdge = 1.0;
-constexpr double kVol = 0.5;
+constexpr double kEdge = 0.98;
+constexpr double kVol = 0.47;
 
 struct Resolution {
   double edge = 0, max_volume = 0;
@@ -360,14 +370,14 @@ void check_closed_genus0(const TriSurface& s, const std::string& source, const s
 TetMesh surface_to_tets(const TriSurface& raw, const Resolution& res, const MeshImageOptions& o,
                         Json& report, const std::string& source, bool already_checked) {
   if (!already_checked) check_closed_genus0(raw, source, "the input surface");
-  auto t0 = Clock::now();
+  auto t0 = stamp();
   if (o.progress) o.progress("remeshing the surface to edge " + fmt(res.edge, 3) + " mm");
   TriSurface s = remesh_surface(raw, res.edge, o.remesh_iterations);
-  report["timings_s"]["remesh"] = seconds_since(t0);
+  record(report, "remesh", t0);
   check_closed_genus0(s, source, "the remeshed surface");
   report["surface"] = surface_json(s);
 
-  t0 = Clock::now();
+  t0 = stamp();
   TetgenOptions to;
   to.radius_edge = o.radius_edge;
   to.min_dihedral_deg = o.min_dihedral_deg;
@@ -375,7 +385,7 @@ TetMesh surface_to_tets(const TriSurface& raw, const Resolution& res, const Mesh
   if (o.progress) o.progress("tetrahedralising (TetGen)");
   Json tinfo = Json::object();
   TetMesh mesh = tetrahedralize_surface(s, to, &tinfo);
-  report["timings_s"]["tetgen"] = seconds_since(t0);
+  record(report, "tetgen", t0);
   report["parameters"]["tetgen_switches"] = *tinfo.find("switches");
 
   const Triangles bf = boundary_faces(mesh.tets);
@@ -542,7 +552,7 @@ TetMesh tetrahedralize_surface(const TriSurface&, const TetgenOptions&, Json*) {
 // ---- the pipeline --------------------------------------------------------------------------
 
 TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out, const Image* atlas) {
-  const auto t_total = Clock::now();
+  const auto t_total = stamp();
   Json report = Json::object();
   const std::string src = img.path.empty() ? std::string("image") : img.path;
   report["input"]["path"] = src;
@@ -569,7 +579,7 @@ TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out
   }
 
   // ---- mask: threshold, largest 6-connected component, cavities filled -------------------
-  auto t0 = Clock::now();
+  auto t0 = stamp();
   if (o.progress) o.progress("mask (value > " + fmt(o.threshold) + ")");
   const Grid3 G{img.dims[0], img.dims[1], img.dims[2]};
   std::vector<uint8_t> mask(G.size());
@@ -605,14 +615,14 @@ TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out
   report["input"]["mask_volume_mm3"] = mask_volume;
   report["input"]["components_removed"] = removed;
   report["input"]["cavities_filled"] = filled;
-  report["timings_s"]["mask"] = seconds_since(t0);
+  record(report, "mask", t0);
 
   // ---- resolution, smoothing, resampling ----------------------------------------------------
-  t0 = Clock::now();
+  t0 = stamp();
   const Resolution res = resolution_for(mask_volume, o);
   const double min_sp = std::min({img.spacing[0], img.spacing[1], img.spacing[2]});
-  const double grid = std::max(0.5 * res.edge, min_sp);
-  const double sigma = o.smooth < 0 ? std::max(0.5 * res.edge, min_sp) : o.smooth;
+  const double grid = std::max(0.7 * res.edge, min_sp);
+  const double sigma = o.smooth < 0 ? std::max(0.5 * res.edge, 2 * min_sp) : o.smooth;
   report["parameters"]["target_edge_mm"] = res.edge;
   report["parameters"]["grid_mm"] = grid;
   report["parameters"]["smooth_sigma_mm"] = sigma;
@@ -657,10 +667,10 @@ TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out
     for (int y = 0; y < E.ny; ++y)
       for (int x = 0; x < E.nx; ++x) F[E.idx(x, y, z)] = sample(x * step[0], y * step[1], z * step[2]);
   std::vector<float>().swap(field);
-  report["timings_s"]["grid"] = seconds_since(t0);
+  record(report, "grid", t0);
 
   // ---- topology: one component, no cavities, genus 0 (closing at growing radii) ----------
-  t0 = Clock::now();
+  t0 = stamp();
   if (o.progress) o.progress("topology check");
   const float iso = 0.5f;
   std::vector<uint8_t> B0(E.size());
@@ -716,10 +726,10 @@ TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out
   }
   topo["closing_radius_cells"] = radius;
   topo["euler"] = st.euler;
-  report["timings_s"]["topology"] = seconds_since(t0);
+  record(report, "topology", t0);
 
   // ---- surface to world coordinates ---------------------------------------------------------
-  t0 = Clock::now();
+  t0 = stamp();
   for (int v = 0; v < surf.vertices.rows(); ++v) {
     Eigen::Vector3d ijk;
     for (int d = 0; d < 3; ++d) ijk[d] = c0[d] + surf.vertices(v, d) * step[d];
@@ -728,12 +738,12 @@ TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out
   if (img.affine.topLeftCorner<3, 3>().determinant() < 0) surf.triangles.col(1).swap(surf.triangles.col(2));
   report["extracted_surface"] = surface_json(surf);
   report["extracted_surface"]["volume_mm3"] = enclosed_volume(surf);
-  report["timings_s"]["extract"] = seconds_since(t0);
+  record(report, "extract", t0);
 
   TetMesh mesh = surface_to_tets(surf, res, o, report, src, true);
 
   if (atlas) {
-    t0 = Clock::now();
+    t0 = stamp();
     if (o.progress) o.progress("labels");
     Json labels = label_mesh(mesh, *atlas);
     // voxel counts per label inside the atlas, for comparison
@@ -751,15 +761,15 @@ TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out
       r["voxel_volume_mm3"] = n * avox;
     }
     report["labels"] = out;
-    report["timings_s"]["labels"] = seconds_since(t0);
+    record(report, "labels", t0);
   }
-  report["timings_s"]["total"] = seconds_since(t_total);
+  record(report, "total", t_total);
   if (report_out) *report_out = report;
   return mesh;
 }
 
 TetMesh mesh_surface(const TriSurface& surface, const MeshImageOptions& o, Json* report_out, const std::string& source) {
-  const auto t_total = Clock::now();
+  const auto t_total = stamp();
   Json report = Json::object();
   report["input"]["path"] = source;
   check_closed_genus0(surface, source, "the input surface");
@@ -774,7 +784,7 @@ TetMesh mesh_surface(const TriSurface& surface, const MeshImageOptions& o, Json*
   report["parameters"]["target_edge_mm"] = res.edge;
   report["parameters"]["max_volume_mm3"] = res.max_volume;
   TetMesh mesh = surface_to_tets(s, res, o, report, source, true);
-  report["timings_s"]["total"] = seconds_since(t_total);
+  record(report, "total", t_total);
   if (report_out) *report_out = report;
   return mesh;
 }
@@ -787,7 +797,7 @@ TetMesh mesh_image_file(const std::string& path, const MeshImageOptions& o, Json
   };
   if (ends_with(".off") || ends_with(".obj") || ends_with(".stl")) {
     if (!labels_path.empty()) throw InputError("--labels needs an image input, not a surface (" + path + ")");
-    const auto t0 = Clock::now();
+    const auto t0 = stamp();
     TriSurface s;
     try {
       s = read_surface(path);
@@ -796,18 +806,20 @@ TetMesh mesh_image_file(const std::string& path, const MeshImageOptions& o, Json
       if (!ends_with(".off") || std::string(e.what()).find("not implemented") == std::string::npos) throw;
       s = read_off_surface(path);
     }
-    const double tr = seconds_since(t0);
+    Json r;
+    record(r, "read", t0);
     TetMesh m = mesh_surface(s, o, report, path);
-    if (report) (*report)["timings_s"]["read"] = tr;
+    if (report) (*report)["timings_s"]["read"] = r["timings_s"]["read"], (*report)["cpu_s"]["read"] = r["cpu_s"]["read"];
     return m;
   }
-  const auto t0 = Clock::now();
+  const auto t0 = stamp();
   Image img = read_nifti(path);
   Image atlas;
   if (!labels_path.empty()) atlas = read_nifti(labels_path);
-  const double tr = seconds_since(t0);
+  Json r;
+  record(r, "read", t0);
   TetMesh m = mesh_image(img, o, report, labels_path.empty() ? nullptr : &atlas);
-  if (report) (*report)["timings_s"]["read"] = tr;
+  if (report) (*report)["timings_s"]["read"] = r["timings_s"]["read"], (*report)["cpu_s"]["read"] = r["cpu_s"]["read"];
   return m;
 }
 

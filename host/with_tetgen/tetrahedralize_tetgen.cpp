@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "vpm/error.hpp"
+#include "vpm/geometry.hpp"
 #include "vpm/mesh_image.hpp"
 #include "vpm/topology.hpp"
 
@@ -103,9 +104,65 @@ void drop_unused_vertices(TetMesh& m) {
     for (int c = 0; c < 4; ++c) m.tets(t, c) = map[m.tets(t, c)];
 }
 
+// Smallest dihedral angle (degrees) of tet (a, b, c, d); negative volume gives -1.
+double tet_min_dihedral(const Eigen::Vector3d* p) {
+  if ((p[1] - p[0]).dot((p[2] - p[0]).cross(p[3] - p[0])) <= 0) return -1;
+  const int e[6][4] = {{0, 1, 2, 3}, {0, 2, 1, 3}, {0, 3, 1, 2}, {1, 2, 0, 3}, {1, 3, 0, 2}, {2, 3, 0, 1}};
+  double lo = 180;
+  for (auto& q : e) {
+    const Eigen::Vector3d ax = (p[q[1]] - p[q[0]]).normalized();
+    Eigen::Vector3d u = p[q[2]] - p[q[0]], v = p[q[3]] - p[q[0]];
+    u -= ax * ax.dot(u);
+    v -= ax * ax.dot(v);
+    lo = std::min(lo, std::atan2(u.cross(v).norm(), u.dot(v)) * 180.0 / M_PI);
+  }
+  return lo;
+}
+
+// Moves each vertex >= first (interior vertices inserted by splits) to the position among
+// blends of its current place and the centroid of its neighbours that maximises the smallest
+// dihedral angle of its tets (all kept positive).
+void optimise_inserted_vertices(TetMesh& mesh, int first) {
+  const int n = mesh.num_vertices();
+  if (first >= n) return;
+  std::vector<std::vector<int>> tets_of(n - first);
+  for (int t = 0; t < mesh.num_tets(); ++t)
+    for (int c = 0; c < 4; ++c)
+      if (mesh.tets(t, c) >= first) tets_of[mesh.tets(t, c) - first].push_back(t);
+  auto worst = [&](int v) {
+    double lo = 180;
+    for (int t : tets_of[v - first]) {
+      Eigen::Vector3d p[4];
+      for (int c = 0; c < 4; ++c) p[c] = mesh.vertices.row(mesh.tets(t, c));
+      lo = std::min(lo, tet_min_dihedral(p));
+    }
+    return lo;
+  };
+  for (int pass = 0; pass < 4; ++pass)
+    for (int v = first; v < n; ++v) {
+      const auto& ts = tets_of[v - first];
+      if (ts.empty()) continue;
+      Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+      int k = 0;
+      for (int t : ts)
+        for (int c = 0; c < 4; ++c)
+          if (mesh.tets(t, c) != v) centre += mesh.vertices.row(mesh.tets(t, c)).transpose(), ++k;
+      centre /= k;
+      const Eigen::Vector3d start = mesh.vertices.row(v).transpose();
+      Eigen::Vector3d best = start;
+      double best_q = worst(v);
+      for (double w : {0.2, 0.4, 0.6, 0.8, 1.0}) {
+        mesh.vertices.row(v) = ((1 - w) * start + w * centre).transpose();
+        const double q = worst(v);
+        if (q > best_q) best_q = q, best = mesh.vertices.row(v).transpose();
+      }
+      mesh.vertices.row(v) = best.transpose();
+    }
+}
+
 // Splits, for every tet whose four vertices are on the boundary, its longest edge that is not
 // a boundary edge (both ends on the boundary, interior segment). Returns the number of splits.
-int split_four_boundary_vertex_tets(TetMesh& mesh) {
+int split_four_boundary_vertex_tets(TetMesh& mesh, int* centroid_splits) {
   const Triangles bf = boundary_faces(mesh.tets);
   const auto on_b = boundary_vertex_mask(mesh.num_vertices(), bf);
   std::set<std::pair<int, int>> bedges;
@@ -115,6 +172,7 @@ int split_four_boundary_vertex_tets(TetMesh& mesh) {
       bedges.insert({std::min(a, b), std::max(a, b)});
     }
   std::set<std::pair<int, int>> to_split;
+  std::vector<int> lone;
   const int pairs[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
   for (int t = 0; t < mesh.num_tets(); ++t) {
     if (!(on_b[mesh.tets(t, 0)] && on_b[mesh.tets(t, 1)] && on_b[mesh.tets(t, 2)] && on_b[mesh.tets(t, 3)])) continue;
@@ -127,7 +185,27 @@ int split_four_boundary_vertex_tets(TetMesh& mesh) {
       const double len = (mesh.vertices.row(a) - mesh.vertices.row(b)).norm();
       if (len > best) best = len, e = {a, b};
     }
-    if (e.first >= 0) to_split.insert(e);
+    if (e.first >= 0) {
+      to_split.insert(e);
+    } else {
+      lone.push_back(t);  // all six edges on the surface: split the tet at its centroid (1 -> 4)
+    }
+  }
+  for (int t : lone) {
+    const int m = mesh.num_vertices();
+    mesh.vertices.conservativeResize(m + 1, 3);
+    mesh.vertices.row(m).setZero();
+    for (int k = 0; k < 4; ++k) mesh.vertices.row(m) += 0.25 * mesh.vertices.row(mesh.tets(t, k));
+    const Eigen::RowVector4i v = mesh.tets.row(t);
+    const int old = mesh.num_tets();
+    mesh.tets.conservativeResize(old + 3, 4);
+    for (int k = 1; k < 4; ++k) {
+      Eigen::RowVector4i w = v;
+      w(k) = m;
+      mesh.tets.row(old + k - 1) = w;
+    }
+    mesh.tets(t, 0) = m;
+    if (centroid_splits) ++*centroid_splits;
   }
   int n = 0;
   for (const auto& [a, b] : to_split) {
@@ -154,7 +232,7 @@ int split_four_boundary_vertex_tets(TetMesh& mesh) {
     }
     ++n;
   }
-  return n;
+  return n + int(lone.size());
 }
 
 }  // namespace
@@ -195,10 +273,20 @@ TetMesh tetrahedralize_surface(const TriSurface& surface, const TetgenOptions& o
   drop_unused_vertices(mesh);
   // What point insertion left: split the longest interior edge of each remaining such tet
   // at its midpoint (DESIGN.md 4.1 step 1); the new vertex is interior.
-  int splits = 0;
+  if (std::getenv("VPM_DEBUG_TETGEN")) {
+    const auto dih = dihedral_angles_deg(mesh.vertices, mesh.tets);
+    std::fprintf(stderr, "tetgen: %d tets, min dihedral %.3f, %d four-boundary-vertex tets\n", mesh.num_tets(), dih.minCoeff(), bad);
+  }
+  int splits = 0, centroids = 0;
+  const int first_inserted = mesh.num_vertices();
   for (int guard = 0; bad > 0 && guard < 8; ++guard) {
-    splits += split_four_boundary_vertex_tets(mesh);
+    splits += split_four_boundary_vertex_tets(mesh, &centroids);
     bad = count_four_boundary_vertex_tets(mesh);
+  }
+  optimise_inserted_vertices(mesh, first_inserted);
+  if (std::getenv("VPM_DEBUG_TETGEN")) {
+    const auto dih = dihedral_angles_deg(mesh.vertices, mesh.tets);
+    std::fprintf(stderr, "after %d splits (%d centroid): min dihedral %.3f, %d left\n", splits, centroids, dih.minCoeff(), bad);
   }
   if (info) {
     (*info)["edge_splits"] = splits;

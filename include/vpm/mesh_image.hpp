@@ -2,7 +2,7 @@
 // Image mask (or closed surface) -> quality tetrahedral mesh, the `vpm mesh-image` pipeline:
 //
 //   mask (value > threshold, largest component, cavities filled)
-//   -> Gaussian smoothing (sigma = `smooth` mm) and resampling on a grid of about half the
+//   -> Gaussian smoothing (sigma = `smooth` mm) and resampling on a grid of 0.7 x the
 //      target edge length
 //   -> topology check (Euler characteristic of the mask surface); handles removed by
 //      morphological closing at growing radii, or refused (InputError) when that fails
@@ -34,7 +34,7 @@ struct MeshImageOptions {
   /// target_vertices.
   double max_volume = 0.0;
   /// Gaussian smoothing of the mask before surface extraction, sigma in mm; < 0 chooses
-  /// 0.5 x the target edge length (at least 1 voxel), 0 disables smoothing.
+  /// 0.5 x the target edge length (at least 2 voxels), 0 disables smoothing.
   double smooth = -1.0;
   /// TetGen quality bounds: radius-edge ratio and smallest dihedral angle (degrees), as in -q1.5/12.
   double radius_edge = 1.5;
