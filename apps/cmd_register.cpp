@@ -17,7 +17,8 @@ namespace {
 constexpr const char* kUsage =
     "vpm register MAPPED -o OUT --landmarks SRC.csv --targets DST.csv [--steps K] "
     "[--report R.json] [--width W | --lambda L | --width-factor F | --width-loo] "
-    "[--boundary tangent|samples|none] [--field per-step|steady] [--no-rigid] [--quiet]";
+    "[--boundary tangent|samples|none] [--field per-step|steady] [--no-rigid] [--no-untangle] "
+    "[--quiet]";
 
 double since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -29,7 +30,7 @@ int run(const std::vector<std::string>& argv) {
   cli::Args args(argv,
                  {"--landmarks", "--targets", "--steps", "--report", "--width", "--lambda",
                   "--width-factor", "--boundary", "--field", "--boundary-samples"},
-                 {"--width-loo", "--no-rigid"});
+                 {"--width-loo", "--no-rigid", "--no-untangle"});
   args.expect_positional(1, kUsage);
   const std::string in = args.positional()[0];
   const auto out = args.get("-o");
@@ -62,6 +63,7 @@ int run(const std::vector<std::string>& argv) {
   opt.boundary_samples = args.get_int("--boundary-samples", opt.boundary_samples);
   if (opt.boundary_samples < 1) throw InputError("--boundary-samples: must be positive");
   opt.rigid = !args.has("--no-rigid");
+  opt.untangle = !args.has("--no-untangle");
 
   auto t0 = std::chrono::steady_clock::now();
   TetMesh mesh = read_mesh(in);

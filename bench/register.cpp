@@ -167,16 +167,18 @@ Json run_case(const Case& c, const TetMesh& m) {
   j["landmark_max_error"] = res.landmark_max_error;
   j["max_normal_velocity"] = res.max_normal_velocity;
   j["width"] = res.report.find("width")->number();
+  j["folded_by_flow"] = res.report.find("folded_by_flow")->number();
+  if (const Json* u = res.report.find("untangle")) j["untangle"] = *u;
   j["inverted_tets"] = mm.inverted_tets;
   j["inverted_tets_all_vertices_on_sphere"] = inverted_flat;
   j["vertex_volume_ratio"] = to_json(mm.vertex_volume_ratio);
   j["tet_volume_ratio"] = to_json(mm.tet_volume_ratio);
   j["boundary_max_radius_error"] = mm.boundary_max_radius_error;
   j["report"] = res.report;
-  std::printf("%-22s %8d %9.2e %9.2e %8.3f%% %8.3f%% %4d/%-3d %9.1e %8.3f %8.3f %9.2e\n", c.name.c_str(),
+  std::printf("%-22s %8d %9.2e %9.2e %8.3f%% %8.3f%% %4d %4d/%-3d %9.1e %8.3f %8.3f %9.2e\n", c.name.c_str(),
               m.num_tets(), res.landmark_rms_error, res.landmark_max_error,
               100 * mm.vertex_volume_ratio.mean_abs_dev, 100 * mm.tet_volume_ratio.mean_abs_dev,
-              mm.inverted_tets, inverted_flat, res.max_normal_velocity, median(total), median(advect),
+              static_cast<int>(res.report.find("folded_by_flow")->number()), mm.inverted_tets, inverted_flat, res.max_normal_velocity, median(total), median(advect),
               evals / median(advect));
   std::fflush(stdout);
   return j;
@@ -233,8 +235,8 @@ int main(int argc, char** argv) {
       cases.push_back({"200k tets", 32, 1, def});
       cases.push_back({"~1M tets", large, std::max(1, runs / 2), def});
     }
-    std::printf("%-22s %8s %9s %9s %9s %9s %8s %9s %8s %8s %9s\n", "case", "tets", "lm_rms", "lm_max",
-                "vert|r-1|", "tet|r-1|", "inv/flat", "max|u.n|", "total_s", "advect_s", "evals/s");
+    std::printf("%-22s %8s %9s %9s %9s %9s %4s %8s %9s %8s %8s %9s\n", "case", "tets", "lm_rms", "lm_max",
+                "vert|r-1|", "tet|r-1|", "fold", "inv/flat", "max|u.n|", "total_s", "advect_s", "evals/s");
     Json results = Json::array();
     std::map<int, TetMesh> meshes;
     for (const auto& c : cases) {

@@ -11,6 +11,7 @@
 #include "vpm/error.hpp"
 #include "vpm/geometry.hpp"
 #include "vpm/topology.hpp"
+#include "vpm/untangle.hpp"
 
 namespace vpm {
 
@@ -368,7 +369,28 @@ RegistrationResult register_landmarks(Device& dev, Points& ball, const Tets& tet
         res.max_normal_velocity, (u.array() * sphere.array()).rowwise().sum().abs().maxCoeff());
   }
   const Eigen::VectorXd v0 = tet_volumes(dev, before, tets);
-  const Eigen::VectorXd v1 = tet_volumes(dev, after, tets);
+  Eigen::VectorXd v1 = tet_volumes(dev, after, tets);
+  Json untangle_report;
+  int folded_by_flow = 0;
+  if (opt.untangle) {
+    std::vector<int> folded;
+    for (Eigen::Index t = 0; t < v1.size(); ++t)
+      if (v1(t) <= 0 && v0(t) > 0) folded.push_back(static_cast<int>(t));
+    folded_by_flow = static_cast<int>(folded.size());
+    if (!folded.empty()) {
+      const auto t_untangle = Clock::now();
+      std::vector<char> fixed(mask.begin(), mask.end());
+      for (Eigen::Index v = 0; v < before.rows(); ++v)  // vertices used as landmarks stay put
+        for (Eigen::Index i = 0; i < landmarks_in.rows(); ++i)
+          if ((before.row(v) - landmarks_in.row(i)).squaredNorm() <= 1e-24) fixed[static_cast<size_t>(v)] = 1;
+      const UntangleResult ur =
+          untangle_local(before, tets, after, fixed, folded, opt.untangle_rings, untangle_local_options());
+      untangle_report = ur.to_json();
+      untangle_report["folded_by_flow"] = folded_by_flow;
+      untangle_report["seconds"] = seconds_since(t_untangle);
+      v1 = tet_volumes(dev, after, tets);
+    }
+  }
   int newly_inverted = 0;
   for (Eigen::Index t = 0; t < v1.size(); ++t) {
     if (v1(t) <= 0) ++res.inverted_tets;
@@ -397,14 +419,19 @@ RegistrationResult register_landmarks(Device& dev, Points& ball, const Tets& tet
   r["max_normal_velocity"] = res.max_normal_velocity;
   r["boundary_drift"] = res.boundary_drift;
   r["inverted_tets"] = res.inverted_tets;
+  r["folded_by_flow"] = folded_by_flow;
+  if (untangle_report.type() != Json::Type::Null) r["untangle"] = untangle_report;
   r["fit"] = fit;
   r["timings_s"] = timings;
   r["newly_inverted_tets"] = newly_inverted;
   if (newly_inverted > 0 && opt.refuse_folds) {
     std::ostringstream s;
     s << "registration folded the mesh: " << newly_inverted << " of " << tets.rows()
-      << " tets inverted (landmark rms error " << res.landmark_rms_error << ", width "
-      << 1 / std::sqrt(res.lambda) << "); try more --steps or a larger width";
+      << " tets inverted" << (opt.untangle ? " after local untangling" : "")
+      << " (landmark rms error " << res.landmark_rms_error << ", width "
+      << 1 / std::sqrt(res.lambda)
+      << "): the landmark moves shear the flow more than these tets can follow; use smaller "
+         "moves or a finer mesh";
     throw NumericalError(s.str());
   }
   ball = after;

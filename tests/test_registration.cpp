@@ -251,9 +251,18 @@ TEST_CASE("a folding registration is refused with NumericalError and leaves the 
   Points p, q;
   random_landmarks(6, 0.15, 2, p, q);
   auto host = Device::host();
+  RegistrationOptions opt;
+  opt.untangle = false;
   Points x = m.vertices;
-  CHECK_THROWS_WITH(register_landmarks(*host, x, m.tets, p, q), Catch::Contains("folded"));
+  CHECK_THROWS_WITH(register_landmarks(*host, x, m.tets, p, q, opt), Catch::Contains("folded"));
   CHECK(x == m.vertices);
+  // with the default local untangling the same folds are repaired, landmarks untouched
+  const RegistrationResult r = register_landmarks(*host, x, m.tets, p, q);
+  CHECK(r.inverted_tets == 0);
+  CHECK(r.report.find("folded_by_flow")->number() > 0);
+  REQUIRE(r.report.find("untangle") != nullptr);
+  CHECK(r.landmark_max_error < 1e-6);
+  CHECK(map_metrics(*host, m.vertices, x, m.tets).inverted_tets == 0);
 }
 
 namespace {
@@ -356,7 +365,7 @@ TEST_CASE("vpm register: bad input exits 2 naming the file and line") {
   write_text(tmp("fold_src.csv"), src.str());
   write_text(tmp("fold_dst.csv"), dst.str());
   const int rc = vpm_register(tmp("sliver.vtu") + " -o " + out + " --landmarks " + tmp("fold_src.csv") +
-                                  " --targets " + tmp("fold_dst.csv"), err);
+                                  " --targets " + tmp("fold_dst.csv") + " --no-untangle", err);
   INFO(slurp(err));
   CHECK(rc == 3);
   CHECK(!std::filesystem::exists(out));

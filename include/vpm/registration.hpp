@@ -17,8 +17,9 @@
 //    points on the sphere (tangent there only); RegistrationBoundary::None has no boundary condition.
 // 4. Advection: every vertex is moved through the field with K RK4 steps (device kernel
 //    register.rk4_advect, host reference otherwise); boundary vertices are put back on the
-//    sphere (radial projection of the O(dt^4) drift); inverted tets are counted and a folded
-//    result is refused with NumericalError.
+//    sphere (radial projection of the O(dt^4) drift); tets the flow inverted (discretisation
+//    error of strongly sheared tets) are repaired by local untangling (vpm/untangle.hpp) when
+//    possible; a result still folded is refused with NumericalError.
 #include <Eigen/Core>
 #include <string>
 
@@ -55,6 +56,11 @@ struct RegistrationOptions {
   int normal_check_samples = 4000;  ///< sphere points where max |u . n| is measured
   bool rigid = true;              ///< do the rotation step first
   bool project_boundary = true;   ///< put boundary vertices back on the sphere afterwards
+  /// Repair tets the flow inverted with the local untangler of vpm/untangle.hpp (the
+  /// pre-registration map as reference, theta 0.5, `untangle_rings` rings of neighbours free;
+  /// boundary vertices and vertices at landmark positions fixed) before the fold check.
+  bool untangle = true;
+  int untangle_rings = 2;
   /// Throw NumericalError when tets invert (false: return the folded result and count them;
   /// for benchmarks and diagnosis only).
   bool refuse_folds = true;
@@ -73,7 +79,7 @@ struct RegistrationResult {
   int inverted_tets = 0;
   /// {"device", "landmarks", "steps", "lambda", "width", "boundary", "field", "rotation_deg",
   ///  "landmark_rms_error", "landmark_max_error", "max_normal_velocity", "boundary_drift",
-  ///  "inverted_tets", "fit": {...}, "timings_s": {"rigid", "fit", "advect", "check", "total"}}
+  ///  "inverted_tets", "untangle": {...} (when run), "fit": {...}, "timings_s": {"rigid", "fit", "advect", "check", "total"}}
   Json report;
 };
 
