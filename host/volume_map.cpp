@@ -480,9 +480,9 @@ VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, cons
       res.stop_reason = "fold";
       break;
     }
-    // Automatic stop: a round that gains less than 30 % hands over to the polish rounds.
+    // Automatic stop: a round that gains less than half hands over to the polish rounds.
     if (opt.rounds < 0 && opt.method == VolumeMapMethod::moser && opt.polish_rounds > 0 &&
-        d.vertex > opt.tolerance && d.vertex > 0.7 * prev_vertex) {
+        d.vertex > opt.tolerance && d.vertex > 0.5 * prev_vertex) {
       res.stop_reason = "stalled";
       break;
     }
@@ -510,11 +510,16 @@ VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, cons
           if (c.boundary[i]) ball.row(i).normalize();
       folds = count_folds(c, ball);
       if (attempt == 0) r.folds_before_untangle = folds;
+      if (folds > 0) {
+        r.untangled = VPM_VOLUME_MAP_HAVE_UNTANGLE && opt.local_untangle;
+        folds = untangle_folds(c, ball, &r.time_untangle);
+      }
       r.t_end = step;
       if (folds == 0) break;
       step *= 0.5;
     }
-    r.time_advect += since(t2);
+    r.time_advect += since(t2) - r.time_untangle;
+    tt_unt += r.time_untangle;
     const DistortionPair dp = volume_distortion(reference, ball, tets);
     const bool stalled = dp.tet > 0.99 * d.tet;
     if (folds > 0 || dp.tet >= d.tet) {  // no progress or folded: undo and stop polishing

@@ -86,8 +86,9 @@ struct VolumeMapOptions {
   /// They target the per-tet distortion that vertex-based Moser rounds cannot see.
   /// At most this many (they stop when the tet mean |r-1| improves by less than 1 %). With
   /// rounds == -1 the Moser rounds hand over to the polish as soon as a round gains less than
-  /// 30 % on the vertex mean |r-1|.
-  int polish_rounds = 4;
+  /// half on the vertex mean |r-1|. A polish step that folds is untangled locally like a round,
+  /// then halved.
+  int polish_rounds = 8;
   int polish_iterations = 60;
   /// Run point location / RK stages on the host even when the device is OpenCL (tests).
   bool force_host_advection = false;
