@@ -18,7 +18,9 @@
 //    fixed. Point location + interpolation run as OpenCL kernels (kernels/moser.cl: walk through
 //    tet faces from the previous containing tet, uniform-grid fallback, clamping to the nearest
 //    boundary tet for points just outside the inscribed polyhedron) or as the same code on the
-//    host.
+//    host. Then polish rounds (VolumeMapOptions::polish_rounds): Gauss-Newton steps on the
+//    per-tet volumes (CGLS, minimum-norm), which remove the per-tet distortion that the
+//    vertex-based rounds leave (Colin27: tet mean |r-1| 5.3 % -> 2.75 %).
 //  * paper: the paper's discrete loop (4.3): at each of `paper_steps` steps recompute
 //    rho = m / V from the current geometry, re-solve, step x += dt grad psi / rho (dt = 1/K).
 //    A step that folds is retried with dt halved. Kept for comparison (it stalls, DESIGN.md 4.2).
