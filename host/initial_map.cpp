@@ -843,7 +843,7 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
     if (local) {
       // Few folds: free only their neighbourhood (fast); fall back to the global untangle.
       Points trial = res.ball;
-      const UntangleResult ul = untangle_local(m.vertices, m.tets, trial, res.boundary,
+      const UntangleResult ul = untangle_local(device, m.vertices, m.tets, trial, res.boundary,
                                                inverted_tets(res.ball, m.tets), opt.local_untangle_rings,
                                                opt.untangle_options);
       Json j = ul.to_json();
@@ -854,7 +854,7 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
       if (folds == 0) res.ball = std::move(trial);
     }
     if (!local || folds > 0) {
-      const UntangleResult ur = untangle(m.vertices, m.tets, res.ball, res.boundary, opt.untangle_options);
+      const UntangleResult ur = untangle(device, m.vertices, m.tets, res.ball, res.boundary, opt.untangle_options);
       Json j = ur.to_json();
       j["scope"] = "global";
       if (local) rep["untangle_local_failed"] = rep["untangle"];

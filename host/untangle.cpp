@@ -6,10 +6,14 @@
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <memory>
 #include <limits>
 #include <string>
 #include <thread>
 
+#include <boost/compute/container/vector.hpp>
+
+#include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/geometry.hpp"
 #include "vpm/topology.hpp"
@@ -34,6 +38,7 @@ struct Problem {
   std::vector<int> var;                  // per vertex: index of its first unknown, or -1
   std::vector<int> free_vertices;
   double theta = 1.0 / 128.0;
+  struct DeviceEval* device = nullptr;  // OpenCL evaluation when set
 };
 
 struct Eval {
@@ -99,7 +104,100 @@ int num_threads(size_t active) {
   return static_cast<int>(std::min<unsigned>(hw, 8));
 }
 
+namespace bc = boost::compute;
+
+// OpenCL evaluation: kernels/untangle.cl computes per-tet energies, determinants and corner
+// gradients, then gathers the gradient per free vertex; the host sums the energies (fixed
+// order) and reads everything back with one synchronisation per evaluation.
+struct DeviceEval {
+  Device& dev;
+  int n = 0, m = 0, nfree = 0;
+  bc::vector<int> tv, off, slot;
+  bc::vector<double> rinv, w, x, e, d, gt, g;
+  bc::kernel ktet, kgather;
+  std::vector<double> he, hd;
+
+  DeviceEval(Device& device, const Problem& p, int num_vertices)
+      : dev(device), n(num_vertices), m(static_cast<int>(p.active.size())),
+        nfree(static_cast<int>(p.free_vertices.size())), tv(device.context()), off(device.context()),
+        slot(device.context()), rinv(device.context()), w(device.context()), x(device.context()),
+        e(device.context()), d(device.context()), gt(device.context()), g(device.context()) {
+    auto& q = dev.queue();
+    const Tets& t = *p.tets;
+    std::vector<int> htv(4 * static_cast<size_t>(m));
+    std::vector<double> hr(9 * static_cast<size_t>(m));
+    std::vector<std::vector<int>> per(nfree);
+    for (int a = 0; a < m; ++a) {
+      for (int k = 0; k < 4; ++k) {
+        const int v = t(p.active[a], k);
+        htv[4 * a + k] = v;
+        if (p.var[v] >= 0) per[p.var[v] / 3].push_back(12 * a + 3 * k);
+      }
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) hr[9 * a + 3 * r + c] = p.rinv[a](r, c);
+    }
+    std::vector<int> hoff(nfree + 1, 0), hslot;
+    for (int f = 0; f < nfree; ++f) {
+      hoff[f + 1] = hoff[f] + static_cast<int>(per[f].size());
+      hslot.insert(hslot.end(), per[f].begin(), per[f].end());
+    }
+    if (hslot.empty()) hslot.push_back(0);
+    tv.assign(htv.begin(), htv.end(), q);
+    rinv.assign(hr.begin(), hr.end(), q);
+    w.assign(p.weight.begin(), p.weight.end(), q);
+    off.assign(hoff.begin(), hoff.end(), q);
+    slot.assign(hslot.begin(), hslot.end(), q);
+    x.resize(3 * static_cast<size_t>(n), q);
+    e.resize(m, q);
+    d.resize(m, q);
+    gt.resize(12 * static_cast<size_t>(m), q);
+    g.resize(std::max(3 * nfree, 1), q);
+    he.resize(m);
+    hd.resize(m);
+    ktet = dev.kernel("untangle", "untangle_tet");
+    kgather = dev.kernel("untangle", "untangle_gather");
+  }
+
+  Eval run(const Problem& p, const Points& xs, double eps, Eigen::VectorXd* grad) {
+    auto& q = dev.queue();
+    q.enqueue_write_buffer(x.get_buffer(), 0, sizeof(double) * 3 * n, xs.data());
+    ktet.set_arg(0, m);
+    ktet.set_arg(1, eps);
+    ktet.set_arg(2, p.theta);
+    ktet.set_arg(3, grad ? 1 : 0);
+    ktet.set_arg(4, tv);
+    ktet.set_arg(5, rinv);
+    ktet.set_arg(6, w);
+    ktet.set_arg(7, x);
+    ktet.set_arg(8, e);
+    ktet.set_arg(9, d);
+    ktet.set_arg(10, gt);
+    dev.launch(ktet, m);
+    if (grad && nfree > 0) {
+      kgather.set_arg(0, nfree);
+      kgather.set_arg(1, off);
+      kgather.set_arg(2, slot);
+      kgather.set_arg(3, gt);
+      kgather.set_arg(4, g);
+      dev.launch(kgather, nfree);
+      q.enqueue_read_buffer_async(g.get_buffer(), 0, sizeof(double) * 3 * nfree, grad->data());
+    }
+    q.enqueue_read_buffer_async(e.get_buffer(), 0, sizeof(double) * m, he.data());
+    q.enqueue_read_buffer_async(d.get_buffer(), 0, sizeof(double) * m, hd.data());
+    q.finish();
+    Eval out;
+    out.min_det = std::numeric_limits<double>::infinity();
+    for (int a = 0; a < m; ++a) {
+      out.energy += he[a];
+      out.min_det = std::min(out.min_det, hd[a]);
+      if (hd[a] <= 0) ++out.nonpositive;
+    }
+    return out;
+  }
+};
+
 Eval evaluate(const Problem& p, const Points& x, double eps, Eigen::VectorXd* g) {
+  if (p.device) return p.device->run(p, x, eps, g);
   const size_t m = p.active.size();
   const int nt = num_threads(m);
   if (nt == 1) return evaluate_range(p, x, eps, g, 0, m);
@@ -231,7 +329,7 @@ int lbfgs(const Problem& p, Points& x, double eps, const UntangleOptions& o, int
 }
 
 UntangleResult run(Problem& p, const Points& reference, const Tets& tets, Points& x,
-                   const UntangleOptions& o) {
+                   const UntangleOptions& o, Device* device) {
   const auto t0 = std::chrono::steady_clock::now();
   UntangleResult r;
   r.inverted_before = static_cast<int>(inverted_tets(x, tets).size());
@@ -273,6 +371,11 @@ UntangleResult run(Problem& p, const Points& reference, const Tets& tets, Points
     p.weight[a] = vol / vref;
   }
 
+  std::unique_ptr<DeviceEval> dev_eval;
+  if (device && !device->is_host()) {
+    dev_eval = std::make_unique<DeviceEval>(*device, p, static_cast<int>(x.rows()));
+    p.device = dev_eval.get();
+  }
   Eval ev = evaluate(p, x, 1.0, nullptr);
   r.min_det_before = ev.min_det;
   double eps = std::sqrt(1e-12 + 0.04 * std::pow(std::min(ev.min_det, 0.0), 2));
@@ -304,6 +407,7 @@ UntangleResult run(Problem& p, const Points& reference, const Tets& tets, Points
     e_prev = e;
   }
   r.min_det_after = evaluate(p, x, 1.0, nullptr).min_det;
+  p.device = nullptr;
   r.evaluations = evals;
   r.inverted_tets = inverted_tets(x, tets);
   r.inverted_after = static_cast<int>(r.inverted_tets.size());
@@ -343,6 +447,17 @@ UntangleOptions untangle_local_options() {
 
 UntangleResult untangle(const Points& reference, const Tets& tets, Points& x,
                         const std::vector<char>& fixed, const UntangleOptions& options) {
+  return untangle(*Device::host(), reference, tets, x, fixed, options);
+}
+
+UntangleResult untangle_local(const Points& reference, const Tets& tets, Points& x,
+                              const std::vector<char>& fixed, const std::vector<int>& folded,
+                              int rings, const UntangleOptions& options) {
+  return untangle_local(*Device::host(), reference, tets, x, fixed, folded, rings, options);
+}
+
+UntangleResult untangle(Device& device, const Points& reference, const Tets& tets, Points& x,
+                        const std::vector<char>& fixed, const UntangleOptions& options) {
   check_sizes(reference, tets, x, fixed);
   Problem p;
   const int n = static_cast<int>(x.rows());
@@ -361,10 +476,10 @@ UntangleResult untangle(const Points& reference, const Tets& tets, Points& x,
     for (int c = 0; c < 4; ++c) any = any || p.var[tets(i, c)] >= 0;
     if (any) p.active.push_back(static_cast<int>(i));
   }
-  return run(p, reference, tets, x, options);
+  return run(p, reference, tets, x, options, &device);
 }
 
-UntangleResult untangle_local(const Points& reference, const Tets& tets, Points& x,
+UntangleResult untangle_local(Device& device, const Points& reference, const Tets& tets, Points& x,
                               const std::vector<char>& fixed, const std::vector<int>& folded,
                               int rings, const UntangleOptions& options) {
   check_sizes(reference, tets, x, fixed);
@@ -406,7 +521,7 @@ UntangleResult untangle_local(const Points& reference, const Tets& tets, Points&
     for (int k = inc.offset[v]; k < inc.offset[v + 1]; ++k) act[inc.tet_of[k]] = 1;
   for (Eigen::Index i = 0; i < tets.rows(); ++i)
     if (act[i]) p.active.push_back(static_cast<int>(i));
-  return run(p, reference, tets, x, options);
+  return run(p, reference, tets, x, options, &device);
 }
 
 Json UntangleResult::to_json() const {

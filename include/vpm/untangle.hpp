@@ -19,7 +19,8 @@
 // sigma = max(1 - E/E_prev, 0.1) while Dmin < mu (else eps = 1e-10): eps shrinks as the
 // folds clear, so the barrier at D = 0 takes hold only when all D can be made positive.
 //
-// Host implementation (Eigen); the per-tet energy and gradient are independent per tet.
+// Host implementation (Eigen, 2+ threads for large problems); the per-tet energy and gradient
+// can also be evaluated on an OpenCL device (overloads taking a Device).
 #include <string>
 #include <vector>
 
@@ -28,6 +29,8 @@
 #include "vpm/mesh.hpp"
 
 namespace vpm {
+
+class Device;
 
 struct UntangleOptions {
   /// Weight of the volume term (theta): 1/128 for the global untangle after the harmonic map
@@ -92,6 +95,15 @@ UntangleOptions untangle_local_options();
 /// Use with options.theta = 0.5 (see untangle_local_options()). `folded` empty: nothing to do.
 /// The rescaled reference uses the volume of the active tets only.
 UntangleResult untangle_local(const Points& reference, const Tets& tets, Points& x,
+                              const std::vector<char>& fixed, const std::vector<int>& folded,
+                              int rings = 2, const UntangleOptions& options = untangle_local_options());
+
+/// Same, with the per-tet energy and gradient evaluated on `device` (kernels/untangle.cl) when
+/// it is an OpenCL device; the L-BFGS iterations stay on the host. Results agree with the host
+/// version to round-off (energies are summed in the same order on the host).
+UntangleResult untangle(Device& device, const Points& reference, const Tets& tets, Points& x,
+                        const std::vector<char>& fixed, const UntangleOptions& options = {});
+UntangleResult untangle_local(Device& device, const Points& reference, const Tets& tets, Points& x,
                               const std::vector<char>& fixed, const std::vector<int>& folded,
                               int rings = 2, const UntangleOptions& options = untangle_local_options());
 
