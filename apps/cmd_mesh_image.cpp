@@ -10,12 +10,12 @@
 namespace {
 const char* kUsage =
     "vpm mesh-image IMAGE.nii[.gz]|SURFACE.off -o OUT [--threshold T] [--labels ATLAS.nii[.gz]] "
-    "[--target-vertices N | --max-volume V] [--smooth S] [--report R.json]";
+    "[--target-vertices N | --max-volume V] [--smooth S] [--close-at-border] [--report R.json]";
 
 int run(const std::vector<std::string>& argv) {
   vpm::cli::Args args(argv, {"--threshold", "--labels", "--target-vertices", "--max-volume", "--smooth",
                              "--report", "--radius-edge", "--min-dihedral", "--max-closing-radius"},
-                      {});
+                      {"--close-at-border"});
   args.expect_positional(1, std::string("usage: ") + kUsage);
   const auto out = args.get("-o");
   if (!out) throw vpm::InputError(std::string("missing -o OUT; usage: ") + kUsage);
@@ -30,6 +30,7 @@ int run(const std::vector<std::string>& argv) {
   o.radius_edge = args.get_double("--radius-edge", o.radius_edge);
   o.min_dihedral_deg = args.get_double("--min-dihedral", o.min_dihedral_deg);
   o.max_closing_radius = args.get_int("--max-closing-radius", o.max_closing_radius);
+  o.close_at_border = args.has("--close-at-border");
   o.progress = [](const std::string& s) { vpm::cli::progress("mesh-image: " + s); };
   vpm::Json report;
   const vpm::TetMesh mesh = vpm::mesh_image_file(args.positional()[0], o, &report, args.get("--labels", ""));

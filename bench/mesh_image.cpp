@@ -89,7 +89,7 @@ int main(int argc, char** argv) {
   std::string image = std::string(kDir) + "ch2bet.nii.gz", labels = std::string(kDir) + "aal.nii.gz";
   std::string out_path = std::string(VPM_SOURCE_DIR) + "/bench/results/mesh_image.json";
   vpm::MeshImageOptions paper;
-  double large_volume = 0.9;  // mm^3: about 1M tets on Colin27
+  double large_volume = 3.4;  // mm^3: about 1.1M tets on Colin27
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto val = [&]() -> std::string {

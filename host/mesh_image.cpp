@@ -597,14 +597,19 @@ TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out
   const auto [removed, filled] = keep_largest_fill_cavities(G, mask, kN6);
   int bx[2] = {G.nx, -1}, by[2] = {G.ny, -1}, bz[2] = {G.nz, -1};
   count = 0;
+  size_t border_voxels = 0;
   for (int z = 0; z < G.nz; ++z)
     for (int y = 0; y < G.ny; ++y)
       for (int x = 0; x < G.nx; ++x) {
         if (!mask[G.idx(x, y, z)]) continue;
         ++count;
-        if (x == 0 || y == 0 || z == 0 || x == G.nx - 1 || y == G.ny - 1 || z == G.nz - 1)
-          throw InputError(src + ": mask touches the image border at " + world_str(img, x, y, z) +
-                           ": the surface would be cut open (pad the image or raise --threshold)");
+        if (x == 0 || y == 0 || z == 0 || x == G.nx - 1 || y == G.ny - 1 || z == G.nz - 1) {
+          if (!o.close_at_border)
+            throw InputError(src + ": mask touches the image border at " + world_str(img, x, y, z) +
+                             ": the surface would be cut open (pad the image, raise --threshold, or "
+                             "pass --close-at-border to close it with a flat cap there)");
+          ++border_voxels;
+        }
         bx[0] = std::min(bx[0], x), bx[1] = std::max(bx[1], x);
         by[0] = std::min(by[0], y), by[1] = std::max(by[1], y);
         bz[0] = std::min(bz[0], z), bz[1] = std::max(bz[1], z);
@@ -615,6 +620,7 @@ TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out
   report["input"]["mask_volume_mm3"] = mask_volume;
   report["input"]["components_removed"] = removed;
   report["input"]["cavities_filled"] = filled;
+  report["input"]["border_voxels"] = double(border_voxels);
   record(report, "mask", t0);
 
   // ---- resolution, smoothing, resampling ----------------------------------------------------

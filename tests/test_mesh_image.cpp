@@ -161,6 +161,14 @@ TEST_CASE("bad masks: empty, touching the border, atlas on another grid") {
   const std::string et = input_error_of([&] { mesh_image(touch, o); });
   CHECK(et.find("touches the image border") != std::string::npos);
   CHECK(et.find("voxel (0,") != std::string::npos);
+  {  // with close_at_border the cut is capped and the mesh is a genus-0 solid
+    MeshImageOptions oc = o;
+    oc.close_at_border = true;
+    Json rep;
+    const TetMesh m = mesh_image(touch, oc, &rep);
+    CHECK(rep["input"]["border_voxels"].number() > 0);
+    CHECK(euler_of_boundary(m) == 2);
+  }
   const Image other = ball_image(31, 9);
   CHECK(input_error_of([&] { mesh_image(ball, o, nullptr, &other); }).find("atlas grid") != std::string::npos);
   Image shifted = ball;

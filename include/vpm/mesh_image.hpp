@@ -43,6 +43,10 @@ struct MeshImageOptions {
   int max_closing_radius = 6;
   /// Isotropic remeshing iterations.
   int remesh_iterations = 5;
+  /// A mask touching the image border is refused (InputError) unless this is set; then the
+  /// surface is closed just outside the image (a flat cap), e.g. a brainstem cut by the field
+  /// of view.
+  bool close_at_border = false;
   /// Progress messages (stage names); may be empty.
   std::function<void(const std::string&)> progress;
 };
