@@ -214,7 +214,7 @@ int main(int argc, char** argv) {
         c.move = mv;
         cases.push_back(c);
       }
-      for (double f : {0.5, 2.0}) {
+      for (double f : {1.0, 2.0}) {
         RegistrationOptions o = def;
         o.width_factor = f;
         cases.push_back({"width x" + std::to_string(f).substr(0, 3), 16, 1, o});

@@ -46,7 +46,7 @@ struct RegistrationOptions {
   /// Gaussian parameter lambda = 1 / width^2; 0 = automatic: width = width_factor x the mean
   /// nearest-neighbour spacing of the landmarks (the smaller of start and target sets).
   double lambda = 0;
-  double width_factor = 1.0;
+  double width_factor = 0.5;
   /// Automatic width by leave-one-out instead: the factor in {0.5, 0.75, 1, 1.5, 2, 3} whose
   /// interpolant of the initial landmark velocities has the smallest RMS LOO error.
   bool width_loo = false;
