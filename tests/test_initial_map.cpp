@@ -105,7 +105,7 @@ TEST_CASE("initial map of convex and non-convex shapes is fold-free") {
   }
 }
 
-TEST_CASE("harmonic folds are untangled; without untangling the map is refused") {
+TEST_CASE("harmonic folds are untangled, without untangling the map is refused") {
   const auto host = Device::host();
   auto& dev = *host;
   const TetMesh in = test::ellipsoid_mesh(8);  // slivers near the rim: the harmonic map folds

@@ -272,7 +272,7 @@ TEST_CASE("io: surfaces .off .obj .stl round trip exactly") {
   require_same_surface(f, read_surface(tmp("b.stl")));
 }
 
-TEST_CASE("io: .obj polygons, slash forms, negative indices; .off polygons; STL merging") {
+TEST_CASE("io: .obj polygons, slash forms, negative indices, .off polygons, STL merging") {
   spit(tmp("p.obj"),
        "mtllib x.mtl\no quad\nv 0 0 0\nv 1 0 0\nv 1 1 0 1.0\nv 0 1 0\nvn 0 0 1\nvt 0 0\n"
        "usemtl m\ns off\nf 1/1/1 2/1/1 3//1 4/1\nf -4 -2 -1\n");

@@ -278,7 +278,7 @@ TEST_CASE("atlas labels: labelled volumes match the voxel counts") {
   CHECK(agree == inside);
 }
 
-TEST_CASE("a closed surface file is meshed; an open one is refused") {
+TEST_CASE("a closed surface file is meshed, an open one is refused") {
   if (!(VPM_HAVE_CGAL && VPM_HAVE_TETGEN)) { WARN("built without CGAL/TetGen: skipped"); return; }
   // octahedron subdivided 3 times, projected to a sphere of radius 10
   std::vector<Eigen::Vector3d> P = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};

@@ -101,7 +101,7 @@ TEST_CASE("fitted fields interpolate the samples and are divergence-free") {
   }
 }
 
-TEST_CASE("tangent kernel field has zero normal velocity on the sphere; boundary samples make it small") {
+TEST_CASE("tangent kernel field has zero normal velocity on the sphere, boundary samples make it small") {
   const Points p = random_ball(12, 0.8, 4);
   const Points v = random_vectors(12, 0.2, 5);
   const Points sphere = fibonacci_sphere(2000);
@@ -171,7 +171,7 @@ TEST_CASE("leave-one-out errors match refitting without the sample") {
   }
 }
 
-TEST_CASE("near-duplicate samples are merged; wider Gaussians are worse conditioned") {
+TEST_CASE("near-duplicate samples are merged, wider Gaussians are worse conditioned") {
   Points p = random_ball(5, 0.5, 11);
   Points v = random_vectors(5, 0.1, 12);
   Points p2(6, 3), v2(6, 3);

@@ -182,7 +182,7 @@ TEST_CASE("volume map: a folded start that cannot be untangled is refused with N
   CHECK_THROWS_AS(parse_map_boundary("free"), InputError);
 }
 
-TEST_CASE("vpm map: writes the ball mesh with fields and the report; refuses bad options") {
+TEST_CASE("vpm map: writes the ball mesh with fields and the report, refuses bad options") {
   const std::string vpm = VPM_BINARY;
   const TetMesh m = test::ellipsoid_mesh(4);
   write_mesh(tmp("in.vtu"), m);
