@@ -5,12 +5,10 @@
 #include "cli.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
-#include "vpm/initial_map.hpp"
+#include "vpm/ball_map.hpp"
 #include "vpm/io.hpp"
 #include "vpm/json.hpp"
-#include "vpm/metrics.hpp"
 #include "vpm/validate.hpp"
-#include "vpm/volume_map.hpp"
 
 namespace {
 
@@ -57,93 +55,31 @@ int run(const std::vector<std::string>& argv) {
 
   const auto t_start = Clock::now();
   vpm::Device& dev = vpm::Device::current();
-  vpm::Json timings = vpm::Json::object();
-
   auto t0 = Clock::now();
   vpm::TetMesh mesh = vpm::read_mesh(in);
   const vpm::ValidationReport vr = vpm::validate_mesh(mesh, in);
-  timings["read"] = since(t0);
+  const double t_read = since(t0);
   vpm::cli::progress("read " + in + ": " + std::to_string(mesh.num_vertices()) + " vertices, " +
                      std::to_string(mesh.num_tets()) + " tets");
 
-  t0 = Clock::now();
-  vpm::InitialMapResult im = vpm::initial_map(dev, mesh);
-  timings["initial_map"] = since(t0);
-  const vpm::MapMetrics m0 = vpm::map_metrics(dev, im.mesh.vertices, im.ball, im.mesh.tets);
-  vpm::cli::progress("initial map: vertex mean |r-1| " + pct(m0.vertex_volume_ratio.mean_abs_dev) +
-                     ", tet " + pct(m0.tet_volume_ratio.mean_abs_dev) + ", " +
-                     std::to_string(m0.inverted_tets) + " folds");
+  vpm::BallMapOptions bo;
+  bo.volume = vo;
+  vpm::BallMap bm = vpm::map_to_ball(dev, mesh, vr, in, bo);
 
-  vpm::Points ball = im.ball;
-  vpm::Json vm_report;
-  vpm::Json rounds = vpm::Json::array();
-  if (vo.rounds != 0) {
-    t0 = Clock::now();
-    vpm::VolumeMapResult vm;
-    try {
-      vm = vpm::volume_preserving_map(dev, im.mesh.vertices, im.mesh.tets, ball, vo);
-    } catch (const vpm::NumericalError& e) {
-      char q[160];
-      std::snprintf(q, sizeof q, " (input quality: smallest dihedral angle %.3g deg at tet %d)",
-                    vr.min_dihedral_deg, vr.min_dihedral_tet);
-      throw vpm::NumericalError(in + ": " + e.what() + q + "; nothing written");
-    }
-    timings["volume_map"] = since(t0);
-    vm_report = vm.report;
-    if (const vpm::Json* r = vm.report.find("rounds")) rounds = *r;
-    if (const vpm::Json* t = vm.report.find("timings_s")) {
-      for (const char* k : {"solve", "field", "advect", "untangle"})
-        if (const vpm::Json* v = t->find(k)) timings[std::string("volume_map_") + k] = *v;
-    }
-  }
-  const vpm::MapMetrics m1 = vpm::map_metrics(dev, im.mesh.vertices, ball, im.mesh.tets);
-  if (m1.inverted_tets > 0)  // never write a folded map
-    throw vpm::NumericalError(in + ": the map has " + std::to_string(m1.inverted_tets) +
-                              " inverted tets; nothing written (vertex mean |r-1| reached " +
-                              pct(m1.vertex_volume_ratio.mean_abs_dev) + ")");
-
-  // Output: ball positions, refined tets, input fields carried, ratios and original positions.
   t0 = Clock::now();
-  vpm::TetMesh outm;
-  outm.vertices = ball;
-  outm.tets = im.mesh.tets;
-  outm.point_data = im.mesh.point_data;
-  outm.cell_data = im.mesh.cell_data;
-  if (!outm.find_point_field("original_position")) outm.set_point_field("original_position", im.mesh.vertices);
-  outm.set_point_field("vertex_volume_ratio", m1.vertex_ratio);
-  outm.set_cell_field("tet_volume_ratio", m1.tet_ratio);
-  vpm::write_mesh(*out, outm);
+  vpm::write_mesh(*out, bm.mesh);
+  vpm::Json& timings = bm.report["timings_s"];
+  timings["read"] = t_read;
   timings["write"] = since(t0);
   timings["total"] = since(t_start);
 
-  vpm::cli::info("wrote " + *out + ": " + std::to_string(outm.num_vertices()) + " vertices, " +
-                 std::to_string(outm.num_tets()) + " tets; vertex mean |r-1| " +
-                 pct(m0.vertex_volume_ratio.mean_abs_dev) + " -> " +
-                 pct(m1.vertex_volume_ratio.mean_abs_dev) + ", tet " +
-                 pct(m0.tet_volume_ratio.mean_abs_dev) + " -> " + pct(m1.tet_volume_ratio.mean_abs_dev) +
-                 ", 0 folds");
-
-  if (report_path) {
-    vpm::Json j = vpm::Json::object();
-    j["device"] = dev.name();
-    vpm::Json jin = vpm::Json::object();
-    jin["vertices"] = mesh.num_vertices();
-    jin["tets"] = mesh.num_tets();
-    jin["min_dihedral_deg"] = vr.min_dihedral_deg;
-    jin["reoriented_tets"] = vr.reoriented_tets;
-    j["input"] = jin;
-    vpm::Json jref = vpm::Json::object();
-    jref["vertices"] = im.mesh.num_vertices();
-    jref["tets"] = im.mesh.num_tets();
-    j["refined"] = jref;
-    j["initial"] = vpm::to_json(m0);
-    j["final"] = vpm::to_json(m1);
-    j["rounds"] = rounds;
-    j["timings_s"] = timings;
-    j["initial_map"] = im.report;
-    if (vo.rounds != 0) j["volume_map"] = vm_report;
-    vpm::write_json_file(*report_path, j);
-  }
+  vpm::cli::info("wrote " + *out + ": " + std::to_string(bm.mesh.num_vertices()) + " vertices, " +
+                 std::to_string(bm.mesh.num_tets()) + " tets; vertex mean |r-1| " +
+                 pct(bm.initial.vertex_volume_ratio.mean_abs_dev) + " -> " +
+                 pct(bm.final.vertex_volume_ratio.mean_abs_dev) + ", tet " +
+                 pct(bm.initial.tet_volume_ratio.mean_abs_dev) + " -> " +
+                 pct(bm.final.tet_volume_ratio.mean_abs_dev) + ", 0 folds");
+  if (report_path) vpm::write_json_file(*report_path, bm.report);
   return 0;
 }
 

@@ -1,10 +1,12 @@
 // Landmark CSV reader (vpm/registration.hpp).
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
 
+#include "atomic_file.hpp"
 #include "vpm/error.hpp"
 #include "vpm/registration.hpp"
 
@@ -95,6 +97,18 @@ LandmarkFile read_landmarks_csv(const std::string& path, const Points& vertices)
   out.points.resize(static_cast<Eigen::Index>(pts.size()), 3);
   for (size_t i = 0; i < pts.size(); ++i) out.points.row(static_cast<Eigen::Index>(i)) = pts[i];
   return out;
+}
+
+void write_landmarks_csv(const std::string& path, const Points& points) {
+  detail::AtomicFile f(path);
+  f.stream() << "x,y,z\n";
+  char buf[32];
+  for (int i = 0; i < points.rows(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      const auto r = std::to_chars(buf, buf + sizeof buf, points(i, c));
+      f.stream().write(buf, r.ptr - buf) << (c < 2 ? ',' : '\n');
+    }
+  f.commit();
 }
 
 }  // namespace vpm

@@ -123,12 +123,12 @@ Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> tet_gradients(const Mo
 // ---- host reference (mirrors kernels/moser.cl) ---------------------------------------------
 
 namespace {
-
 constexpr int kMaxWalk = 64;
 constexpr double kInsideEps = -1e-12;
 constexpr double kOutsideClamp = -0.05;
+}  // namespace
 
-inline void bary(const MoserField& f, int t, const Eigen::Vector3d& p, double* l) {
+void bary(const MoserField& f, int t, const Eigen::Vector3d& p, double* l) {
   const double* q = &f.inv[12 * static_cast<size_t>(t)];
   const double dx = p.x() - q[0], dy = p.y() - q[1], dz = p.z() - q[2];
   l[1] = q[3] * dx + q[4] * dy + q[5] * dz;
@@ -137,6 +137,7 @@ inline void bary(const MoserField& f, int t, const Eigen::Vector3d& p, double* l
   l[0] = 1.0 - l[1] - l[2] - l[3];
 }
 
+namespace {
 inline double min4(const double* l) { return std::min(std::min(l[0], l[1]), std::min(l[2], l[3])); }
 
 inline void clamp_bary(double* l) {
@@ -147,6 +148,8 @@ inline void clamp_bary(double* l) {
   }
   for (int k = 0; k < 4; ++k) l[k] = s <= 0 ? 0.25 : l[k] / s;
 }
+
+}  // namespace
 
 int locate(const MoserField& f, const Eigen::Vector3d& p, int t, double* l, long long* st) {
   const std::vector<int>& nbr = *f.nbr;
@@ -192,6 +195,8 @@ int locate(const MoserField& f, const Eigen::Vector3d& p, int t, double* l, long
   }
   return best;
 }
+
+namespace {
 
 // Velocity of point i at position x_i + c k_i, time t (boundary: renormalised, tangential).
 Eigen::Vector3d velocity(const MoserField& f, bool on_b, bool slide, Eigen::Vector3d p, double t,

@@ -40,6 +40,15 @@ void build_background(MoserField& f, const Points& x, const Tets& tets, const st
 Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> tet_gradients(const MoserField& f,
                                                                        const Eigen::VectorXd& psi);
 
+/// Barycentric coordinates l[0..3] of `p` in tet `t` of the background `f`.
+void bary(const MoserField& f, int t, const Eigen::Vector3d& p, double* l);
+
+/// Point location: walks from tet `t` towards `p` through face neighbours (at most 64 steps),
+/// else searches the grid cell of `p`. Returns the tet containing `p` with its barycentric
+/// coordinates in `l`; a point outside the mesh gets the best tet found and coordinates clamped
+/// to it. `st` (3 counters: walk steps, grid fallbacks, clamped) is incremented.
+int locate(const MoserField& f, const Eigen::Vector3d& p, int t, double* l, long long* st);
+
 struct AdvectStats {
   long long locations = 0;
   long long walk_steps = 0;

@@ -2,6 +2,7 @@
 // 3-D images (NIfTI-1/2 volumes): grid, voxel -> world affine, intensities as float.
 #include <Eigen/Dense>
 #include <array>
+#include <functional>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -46,5 +47,15 @@ Image read_nifti(const std::string& path);
 /// Writes `image` as NIfTI-1 (float32, sform and qform set from `image.affine`; `.nii.gz`
 /// compresses). Used for tests and fixtures. Throws InputError when it cannot write.
 void write_nifti(const std::string& path, const Image& image);
+
+/// Interpolation for resample_image: nearest voxel (labels) or trilinear (intensities).
+enum class Interpolation { nearest, linear };
+
+/// An image on the grid of `image` (same dims and affine) whose value at each voxel centre x
+/// (world mm) is `image` read at pull(x): `pull` maps output world positions to input world
+/// positions, so resampling through the inverse of a deformation applies the deformation.
+/// Positions outside the input grid read 0. Runs on the host threads available.
+Image resample_image(const Image& image, const std::function<Eigen::Vector3d(const Eigen::Vector3d&)>& pull,
+                     Interpolation interpolation);
 
 }  // namespace vpm

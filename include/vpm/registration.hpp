@@ -126,4 +126,9 @@ struct LandmarkFile {
 /// and ("FILE:LINE: ... outside the unit ball") for points with |p| > 1 + 1e-9.
 LandmarkFile read_landmarks_csv(const std::string& path, const Points& vertices);
 
+/// Writes `points` (N x 3 ball coordinates) as a landmark CSV that read_landmarks_csv reads
+/// back exactly: header `x,y,z`, then one `x,y,z` line per point (shortest round-trip decimals).
+/// Written to a temporary name and renamed; InputError when it cannot write.
+void write_landmarks_csv(const std::string& path, const Points& points);
+
 }  // namespace vpm

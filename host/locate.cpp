@@ -1,0 +1,72 @@
+#include "vpm/locate.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <thread>
+
+#include "moser_field.hpp"
+
+namespace vpm {
+
+struct TetLocator::Impl {
+  Points x;
+  Tets tets;
+  std::vector<int> nbr;
+  detail::MoserField background;  // geometry and grid only (no field values)
+};
+
+TetLocator::TetLocator(const Points& vertices, const Tets& tets) : impl_(std::make_unique<Impl>()) {
+  impl_->x = vertices;
+  impl_->tets = tets;
+  impl_->nbr = detail::tet_neighbors(impl_->tets);
+  detail::build_background(impl_->background, impl_->x, impl_->tets, impl_->nbr);
+}
+TetLocator::~TetLocator() = default;
+TetLocator::TetLocator(TetLocator&&) noexcept = default;
+TetLocator& TetLocator::operator=(TetLocator&&) noexcept = default;
+
+Location TetLocator::locate(const Eigen::Vector3d& p, int hint) const {
+  Location out;
+  const detail::MoserField& f = impl_->background;
+  if (f.m == 0) return out;
+  if (hint < 0 || hint >= f.m) {  // start from a tet of p's grid cell when it has one
+    int idx[3];
+    for (int c = 0; c < 3; ++c)
+      idx[c] = std::clamp(static_cast<int>(std::floor((p(c) - f.lo[c]) * f.inv_h)), 0, f.dims[c] - 1);
+    const size_t cell = idx[0] + f.dims[0] * (idx[1] + static_cast<size_t>(f.dims[1]) * idx[2]);
+    hint = f.cell_start[cell] < f.cell_start[cell + 1] ? f.cell_tets[f.cell_start[cell]] : 0;
+  }
+  long long st[3] = {0, 0, 0};
+  out.tet = detail::locate(f, p, hint, out.bary, st);
+  double raw[4];
+  detail::bary(f, out.tet, p, raw);
+  out.min_bary = *std::min_element(raw, raw + 4);
+  return out;
+}
+
+std::vector<Location> TetLocator::locate(const Points& points) const {
+  const int k = static_cast<int>(points.rows());
+  std::vector<Location> out(k);
+  const int threads = std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, 16);
+  const int chunk = (k + threads - 1) / std::max(threads, 1);
+  auto work = [&](int begin, int end) {
+    int hint = -1;
+    for (int i = begin; i < end; ++i) {
+      out[i] = locate(points.row(i).transpose(), hint);
+      hint = out[i].tet;
+    }
+  };
+  if (threads == 1 || k < 4096) {
+    work(0, k);
+    return out;
+  }
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t) {
+    const int b = t * chunk, e = std::min(k, b + chunk);
+    if (b < e) pool.emplace_back(work, b, e);
+  }
+  for (auto& th : pool) th.join();
+  return out;
+}
+
+}  // namespace vpm

@@ -1,0 +1,45 @@
+#pragma once
+// Point location in a tet mesh: which tet holds a point, and where (barycentric coordinates).
+// The same walk-then-grid search the volume map uses on the device (kernels/moser.cl), here as
+// a host service for analysis (label sampling, transfer of fields between meshes).
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+#include "vpm/mesh.hpp"
+
+namespace vpm {
+
+/// Where a point lies in a mesh.
+struct Location {
+  int tet = -1;            ///< containing tet (or the nearest one found for outside points)
+  double bary[4] = {0, 0, 0, 0};  ///< barycentric coordinates in `tet`, clamped to [0, 1]
+  /// Smallest unclamped barycentric coordinate: >= -1e-12 inside the tet, negative outside
+  /// (about -distance / tet height).
+  double min_bary = 0;
+  bool inside() const { return min_bary >= -1e-9; }
+};
+
+/// Locates points in a fixed tet mesh. Built once (O(m): per-tet inverse edge matrices, face
+/// neighbours and a uniform grid of about one cell per tet), then each query walks through face
+/// neighbours from a hint tet and falls back to the grid cell of the point.
+class TetLocator {
+ public:
+  /// `vertices` n x 3, `tets` m x 4 (non-degenerate). Both are copied.
+  TetLocator(const Points& vertices, const Tets& tets);
+  ~TetLocator();
+  TetLocator(TetLocator&&) noexcept;
+  TetLocator& operator=(TetLocator&&) noexcept;
+
+  /// Location of `p`; `hint` is a tet near p (e.g. the previous query's), or -1.
+  Location locate(const Eigen::Vector3d& p, int hint = -1) const;
+  /// Locations of `points` (k x 3), each query starting from the previous result (so nearby
+  /// consecutive points are cheap). Runs on the host threads available.
+  std::vector<Location> locate(const Points& points) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace vpm
