@@ -61,7 +61,7 @@ std::vector<int> sample_labels(const Points& vertices, const Tets& tets, const s
     throw InputError("sample_labels: " + std::to_string(tet_labels.size()) + " labels for " +
                      std::to_string(tets.rows()) + " tets");
   const TetLocator locator(vertices, tets);
-  const std::vector<Location> loc = locator.locate(points);
+  const std::vector<Location> loc = locator.locate_all(points);
   std::vector<int> out(loc.size(), outside_label);
   for (size_t i = 0; i < loc.size(); ++i)
     if (loc[i].tet >= 0 && loc[i].min_bary >= -outside_tolerance) out[i] = tet_labels[loc[i].tet];

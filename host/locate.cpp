@@ -44,7 +44,7 @@ Location TetLocator::locate(const Eigen::Vector3d& p, int hint) const {
   return out;
 }
 
-std::vector<Location> TetLocator::locate(const Points& points) const {
+std::vector<Location> TetLocator::locate_all(const Points& points) const {
   const int k = static_cast<int>(points.rows());
   std::vector<Location> out(k);
   const int threads = std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, 16);

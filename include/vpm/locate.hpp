@@ -35,7 +35,7 @@ class TetLocator {
   Location locate(const Eigen::Vector3d& p, int hint = -1) const;
   /// Locations of `points` (k x 3), each query starting from the previous result (so nearby
   /// consecutive points are cheap). Runs on the host threads available.
-  std::vector<Location> locate(const Points& points) const;
+  std::vector<Location> locate_all(const Points& points) const;
 
  private:
   struct Impl;
