@@ -31,7 +31,7 @@ using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 const char* kUsage =
-    "vpm demo [--out DIR] [--data DIR] [--target-vertices N] [--grid N] [--quiet] [--verbose]";
+    "vpm demo [--out DIR] [--data DIR] [--target-vertices N] [--grid N] [--width-factor F] [--quiet] [--verbose]";
 
 // Regions whose overlap is measured; they are never used as landmarks (held out).
 const std::vector<int> kEvaluated = {71, 72, 77, 78};  // Caudate_L/R, Thalamus_L/R
@@ -117,12 +117,15 @@ vpm::BallMap mesh_and_map(vpm::Device& dev, const vpm::Image& image, const vpm::
 
 int run(const std::vector<std::string>& argv) {
   using namespace vpm;
-  cli::Args args(argv, {"--out", "--data", "--target-vertices", "--grid"}, {});
+  cli::Args args(argv, {"--out", "--data", "--target-vertices", "--grid", "--width-factor"}, {});
   args.expect_positional(0, std::string("usage: ") + kUsage);
   const fs::path out = args.get("--out", "out/demo");
   const fs::path data = args.get("--data", "/usr/share/mricron/templates");
   const int grid = args.get_int("--grid", 96);
   if (grid < 8 || grid > 512) throw InputError("--grid: expected 8 to 512 cells a side");
+  RegistrationOptions ro;
+  ro.width_factor = args.get_double("--width-factor", ro.width_factor);
+  if (!(ro.width_factor > 0)) throw InputError("--width-factor: must be positive");
   MeshImageOptions mo;
   mo.target_vertices = args.get_int("--target-vertices", mo.target_vertices);
   if (mo.target_vertices < 100) throw InputError("--target-vertices: expected at least 100");
@@ -169,7 +172,7 @@ int run(const std::vector<std::string>& argv) {
             " region centroids");
   t0 = Clock::now();
   Points registered = subj.mesh.vertices;
-  const RegistrationResult reg = register_landmarks(dev, registered, subj.mesh.tets, src, dst);
+  const RegistrationResult reg = register_landmarks(dev, registered, subj.mesh.tets, src, dst, ro);
   timings["register"] = since(t0);
   const MapMetrics rm = map_metrics(dev, subj.mesh.vertices, registered, subj.mesh.tets);
   TetMesh reg_mesh = subj.mesh;
