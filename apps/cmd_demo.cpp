@@ -206,14 +206,8 @@ int run(const std::vector<std::string>& argv) {
   report["device"] = dev.name();
   report["data"] = data.string();
   report["subjects"] = subjects;
-  Json jr = Json::object();
+  Json jr = registration_summary(reg, rm);
   jr["landmarks"] = static_cast<long>(landmark_labels.size());
-  jr["landmark_rms_error"] = reg.landmark_rms_error;
-  jr["landmark_max_error"] = reg.landmark_max_error;
-  jr["max_normal_velocity"] = reg.max_normal_velocity;
-  jr["inverted_tets"] = rm.inverted_tets;
-  jr["vertex_volume_ratio"] = to_json(rm.vertex_volume_ratio);
-  jr["tet_volume_ratio"] = to_json(rm.tet_volume_ratio);
   jr["rotation_deg"] = *reg.report.find("rotation_deg");
   report["registration"] = jr;
   Json jd = Json::array();

@@ -133,13 +133,10 @@ int run(const std::vector<std::string>& argv) {
     input["tets"] = mesh.num_tets();
     input["landmarks"] = static_cast<long>(lm.points.rows());
     r["input"] = input;
-    r["landmark_rms_error"] = res.landmark_rms_error;
-    r["landmark_max_error"] = res.landmark_max_error;
-    r["max_normal_velocity"] = res.max_normal_velocity;
-    r["inverted_tets"] = mm.inverted_tets;
-    r["vertex_volume_ratio"] = to_json(mm.vertex_volume_ratio);
-    r["tet_volume_ratio"] = to_json(mm.tet_volume_ratio);
-    r["boundary_max_radius_error"] = mm.boundary_max_radius_error;
+    const Json summary = registration_summary(res, mm);
+    for (const char* k : {"landmark_rms_error", "landmark_max_error", "max_normal_velocity", "inverted_tets",
+                          "vertex_volume_ratio", "tet_volume_ratio", "boundary_max_radius_error"})
+      r[k] = *summary.find(k);
     r["registration"] = res.report;
     Json timings = Json::object();
     timings["read"] = t_read;

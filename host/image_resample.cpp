@@ -1,8 +1,8 @@
 #include <algorithm>
 #include <cmath>
-#include <thread>
 #include <vector>
 
+#include "parallel.hpp"
 #include "vpm/image.hpp"
 
 namespace vpm {
@@ -42,14 +42,7 @@ Image resample_image(const Image& image, const std::function<Eigen::Vector3d(con
           out.data[image.index(i, j, k)] = sample(image, image.to_voxel(pull(x)), interpolation);
         }
   };
-  const int threads = std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, 16);
-  std::vector<std::thread> pool;
-  const int chunk = (nk + threads - 1) / threads;
-  for (int t = 0; t < threads; ++t) {
-    const int b = t * chunk, e = std::min(nk, b + chunk);
-    if (b < e) pool.emplace_back(work, b, e);
-  }
-  for (auto& th : pool) th.join();
+  detail::parallel_for(nk, 2, work);
   return out;
 }
 

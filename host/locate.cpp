@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <thread>
 
 #include "moser_field.hpp"
+#include "parallel.hpp"
 
 namespace vpm {
 
@@ -47,25 +47,13 @@ Location TetLocator::locate(const Eigen::Vector3d& p, int hint) const {
 std::vector<Location> TetLocator::locate_all(const Points& points) const {
   const int k = static_cast<int>(points.rows());
   std::vector<Location> out(k);
-  const int threads = std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, 16);
-  const int chunk = (k + threads - 1) / std::max(threads, 1);
-  auto work = [&](int begin, int end) {
+  detail::parallel_for(k, 4096, [&](int begin, int end) {
     int hint = -1;
     for (int i = begin; i < end; ++i) {
       out[i] = locate(points.row(i).transpose(), hint);
       hint = out[i].tet;
     }
-  };
-  if (threads == 1 || k < 4096) {
-    work(0, k);
-    return out;
-  }
-  std::vector<std::thread> pool;
-  for (int t = 0; t < threads; ++t) {
-    const int b = t * chunk, e = std::min(k, b + chunk);
-    if (b < e) pool.emplace_back(work, b, e);
-  }
-  for (auto& th : pool) th.join();
+  });
   return out;
 }
 

@@ -236,6 +236,18 @@ void advect(Device& dev, Points& x, const std::vector<DivFreeField>& f, int step
     for (int c = 0; c < 3; ++c) x(static_cast<Eigen::Index>(i), c) = soa[c * np + i];
 }
 
+Json registration_summary(const RegistrationResult& result, const MapMetrics& against_before) {
+  Json r = Json::object();
+  r["landmark_rms_error"] = result.landmark_rms_error;
+  r["landmark_max_error"] = result.landmark_max_error;
+  r["max_normal_velocity"] = result.max_normal_velocity;
+  r["inverted_tets"] = against_before.inverted_tets;
+  r["vertex_volume_ratio"] = to_json(against_before.vertex_volume_ratio);
+  r["tet_volume_ratio"] = to_json(against_before.tet_volume_ratio);
+  r["boundary_max_radius_error"] = against_before.boundary_max_radius_error;
+  return r;
+}
+
 RegistrationResult register_landmarks(Device& dev, Points& ball, const Tets& tets,
                                       const Points& landmarks_in, const Points& targets,
                                       const RegistrationOptions& opt) {

@@ -25,6 +25,7 @@
 
 #include "vpm/json.hpp"
 #include "vpm/mesh.hpp"
+#include "vpm/metrics.hpp"
 #include "vpm/rbf.hpp"
 
 namespace vpm {
@@ -111,6 +112,12 @@ void advect(Device& device, Points& points, const std::vector<DivFreeField>& fie
 RegistrationResult register_landmarks(Device& device, Points& ball, const Tets& tets,
                                       const Points& landmarks, const Points& targets,
                                       const RegistrationOptions& options = {});
+
+/// The registration metrics of DESIGN.md 5 as report members: {"landmark_rms_error",
+/// "landmark_max_error", "max_normal_velocity", "inverted_tets", "vertex_volume_ratio",
+/// "tet_volume_ratio", "boundary_max_radius_error"}; `against_before` = map_metrics of the
+/// registered mesh against the pre-registration map.
+Json registration_summary(const RegistrationResult& result, const MapMetrics& against_before);
 
 /// Landmarks read from a CSV file.
 struct LandmarkFile {
