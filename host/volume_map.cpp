@@ -130,6 +130,7 @@ struct Ctx {
   std::unique_ptr<detail::MapSolver> solver;
   std::unique_ptr<detail::DeviceAdvector> advector;
   Eigen::VectorXd psi;
+  Triangles bfaces;  // boundary faces (outward), built on first use
 
   Ctx(Device& d, const Points& r, const Tets& t, const VolumeMapOptions& o) : dev(d), ref(r), tets(t), opt(o) {}
 };
@@ -147,12 +148,19 @@ std::vector<int> folded_list(const Points& x, const Tets& tets) {
   return out;
 }
 
-// Local untangling of the folded tets of x (boundary fixed). Returns the folds left.
-int untangle_folds(Ctx& c, Points& x, double* seconds) {
+
+// Local untangling of the folded tets of x (boundary fixed; when sliding and `before` is given,
+// boundary triangles flipped on the sphere are unflipped first). Returns the folds left.
+int untangle_folds(Ctx& c, Points& x, double* seconds, const Points* before = nullptr) {
   const auto t0 = Clock::now();
   std::vector<int> folded = folded_list(x, c.tets);
   if (folded.empty()) return 0;
 #if VPM_VOLUME_MAP_HAVE_UNTANGLE
+  if (c.opt.local_untangle && c.slide && before) {
+    if (c.bfaces.rows() == 0) c.bfaces = boundary_faces(c.tets);
+    unflip_sphere_faces(*before, c.bfaces, x);
+    folded = folded_list(x, c.tets);
+  }
   if (c.opt.local_untangle) {
     for (int rings = 2; rings <= 4 && !folded.empty(); rings += 2) {
       untangle_local(c.ref, c.tets, x, c.boundary, folded, rings, untangle_local_options());
@@ -445,7 +453,7 @@ VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, cons
       r.folds_before_untangle = folds;
       if (folds > 0) {
         r.untangled = VPM_VOLUME_MAP_HAVE_UNTANGLE && opt.local_untangle;
-        folds = untangle_folds(c, ball, &r.time_untangle);
+        folds = untangle_folds(c, ball, &r.time_untangle, &saved);
       }
       r.t_end = t_end;
       if (folds == 0) break;
@@ -512,7 +520,7 @@ VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, cons
       if (attempt == 0) r.folds_before_untangle = folds;
       if (folds > 0) {
         r.untangled = VPM_VOLUME_MAP_HAVE_UNTANGLE && opt.local_untangle;
-        folds = untangle_folds(c, ball, &r.time_untangle);
+        folds = untangle_folds(c, ball, &r.time_untangle, &saved);
       }
       r.t_end = step;
       if (folds == 0) break;

@@ -150,3 +150,45 @@ TEST_CASE("host and OpenCL evaluation of the untangling energy agree") {
     CHECK((x - ref).cwiseAbs().maxCoeff() < 1e-5);
   }
 }
+
+TEST_CASE("triangles flipped on the sphere are repaired along the sphere, then the tets untangle") {
+  const TetMesh m = test::ball_mesh(6);
+  const Triangles faces = boundary_faces(m.tets);
+  const auto boundary = boundary_of(m);
+  REQUIRE(flipped_sphere_faces(faces, m.vertices).empty());
+  // Drag the boundary vertex nearest the north pole along the sphere past a neighbour.
+  int v = -1, u = -1;
+  for (int i = 0; i < m.num_vertices(); ++i)
+    if (boundary[i] && (v < 0 || m.vertices(i, 2) > m.vertices(v, 2))) v = i;
+  for (int f = 0; f < faces.rows() && u < 0; ++f)
+    for (int k = 0; k < 3; ++k)
+      if (faces(f, k) == v) u = faces(f, (k + 1) % 3);
+  REQUIRE(u >= 0);
+  Points x = m.vertices;
+  const Eigen::RowVector3d pu = m.vertices.row(u), pv = m.vertices.row(v);
+  x.row(v) = (pu + 0.6 * (pu - pv)).normalized();
+  const std::vector<int> flipped = flipped_sphere_faces(faces, x);
+  REQUIRE(!flipped.empty());
+  REQUIRE(!inverted_tets(x, m.tets).empty());
+
+  // With the boundary fixed, the tets on flipped faces cannot be repaired.
+  Points y = x;
+  untangle_local(m.vertices, m.tets, y, boundary, inverted_tets(y, m.tets), 4);
+  CHECK(!inverted_tets(y, m.tets).empty());
+
+  // Unflip along the sphere first: no flipped face, face vertices on the sphere, interior
+  // vertices untouched; then the boundary-fixed untangling clears the tets.
+  CHECK(unflip_sphere_faces(m.vertices, faces, x) == 0);
+  CHECK(flipped_sphere_faces(faces, x).empty());
+  for (int i = 0; i < m.num_vertices(); ++i) {
+    if (boundary[i]) CHECK(std::abs(x.row(i).norm() - 1) < 1e-12);
+    else CHECK(x.row(i) == m.vertices.row(i));
+  }
+  // only the neighbourhood moved
+  int moved = 0;
+  for (int i = 0; i < m.num_vertices(); ++i) moved += (x.row(i) - m.vertices.row(i)).norm() > 1e-9;
+  CHECK(moved < m.num_vertices() / 10);
+  const std::vector<int> folded = inverted_tets(x, m.tets);
+  if (!folded.empty()) untangle_local(m.vertices, m.tets, x, boundary, folded, 4);
+  CHECK(inverted_tets(x, m.tets).empty());
+}

@@ -98,6 +98,20 @@ UntangleResult untangle_local(const Points& reference, const Tets& tets, Points&
                               const std::vector<char>& fixed, const std::vector<int>& folded,
                               int rings = 2, const UntangleOptions& options = untangle_local_options());
 
+/// Boundary triangles flipped on the unit sphere: indices f of `faces` (k x 3, outward
+/// boundary triangles of a ball mesh) with det[x_a, x_b, x_c] <= 0.
+std::vector<int> flipped_sphere_faces(const Triangles& faces, const Points& x);
+
+/// Repairs boundary triangles flipped on the unit sphere by moving vertices along the sphere
+/// only. A tet standing on such a face cannot be untangled with the boundary fixed (its apex
+/// would have to leave the ball), so this runs first: the cones (O, a, b, c) over `faces`, with
+/// one fixed apex each at the centre, are untangled by untangle_local (the flipped cones'
+/// vertices and 2, then 4, rings free; only face vertices can move) against `reference`
+/// (n x 3, a fold-free configuration such as the positions before the step that flipped them);
+/// the face vertices are then put back on the sphere, which keeps the sign of det[a, b, c].
+/// `x` (n x 3, in/out): only vertices of `faces` change. Returns the flipped faces left.
+int unflip_sphere_faces(const Points& reference, const Triangles& faces, Points& x);
+
 /// Same, with the per-tet energy and gradient evaluated on `device` (kernels/untangle.cl) when
 /// it is an OpenCL device; the L-BFGS iterations stay on the host. Results agree with the host
 /// version to round-off (energies are summed in the same order on the host).
