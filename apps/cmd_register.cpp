@@ -18,7 +18,7 @@ constexpr const char* kUsage =
     "vpm register MAPPED -o OUT --landmarks SRC.csv --targets DST.csv [--steps K] "
     "[--report R.json] [--width W | --lambda L | --width-factor F | --width-loo] "
     "[--boundary tangent|samples|none] [--field per-step|steady] [--no-rigid] [--no-untangle] "
-    "[--quiet]";
+    "[--no-restore] [--quiet]";
 
 double since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -30,7 +30,7 @@ int run(const std::vector<std::string>& argv) {
   cli::Args args(argv,
                  {"--landmarks", "--targets", "--steps", "--report", "--width", "--lambda",
                   "--width-factor", "--boundary", "--field", "--boundary-samples"},
-                 {"--width-loo", "--no-rigid", "--no-untangle"});
+                 {"--width-loo", "--no-rigid", "--no-untangle", "--no-restore"});
   args.expect_positional(1, kUsage);
   const std::string in = args.positional()[0];
   const auto out = args.get("-o");
@@ -64,6 +64,7 @@ int run(const std::vector<std::string>& argv) {
   if (opt.boundary_samples < 1) throw InputError("--boundary-samples: must be positive");
   opt.rigid = !args.has("--no-rigid");
   opt.untangle = !args.has("--no-untangle");
+  opt.restore_volumes = !args.has("--no-restore");
 
   auto t0 = std::chrono::steady_clock::now();
   TetMesh mesh = read_mesh(in);

@@ -206,6 +206,9 @@ int main(int argc, char** argv) {
     RegistrationOptions def;
     def.refuse_folds = false;  // measure folds instead of stopping
     cases.push_back({"paper-size", 16, runs, def});
+    RegistrationOptions no_restore = def;
+    no_restore.restore_volumes = false;
+    cases.push_back({"no volume restore", 16, runs, no_restore});
     if (!quick) {
       Case h{"paper-size host", 16, 1, def, true};
       cases.push_back(h);

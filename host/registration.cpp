@@ -9,6 +9,8 @@
 
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
+#include "vpm/locate.hpp"
+#include "vpm/volume_map.hpp"
 #include "vpm/geometry.hpp"
 #include "vpm/topology.hpp"
 #include "vpm/untangle.hpp"
@@ -382,6 +384,11 @@ RegistrationResult register_landmarks(Device& dev, Points& ball, const Tets& tet
   }
   const Eigen::VectorXd v0 = tet_volumes(dev, before, tets);
   Eigen::VectorXd v1 = tet_volumes(dev, after, tets);
+  // Vertices used as landmarks: never moved by untangling or the volume restoration.
+  std::vector<char> landmark_vertex(static_cast<size_t>(before.rows()), 0);
+  for (Eigen::Index v = 0; v < before.rows(); ++v)
+    for (Eigen::Index i = 0; i < landmarks_in.rows(); ++i)
+      if ((before.row(v) - landmarks_in.row(i)).squaredNorm() <= 1e-24) landmark_vertex[static_cast<size_t>(v)] = 1;
   Json untangle_report;
   int folded_by_flow = 0;
   if (opt.untangle) {
@@ -392,9 +399,7 @@ RegistrationResult register_landmarks(Device& dev, Points& ball, const Tets& tet
     if (!folded.empty()) {
       const auto t_untangle = Clock::now();
       std::vector<char> fixed(mask.begin(), mask.end());
-      for (Eigen::Index v = 0; v < before.rows(); ++v)  // vertices used as landmarks stay put
-        for (Eigen::Index i = 0; i < landmarks_in.rows(); ++i)
-          if ((before.row(v) - landmarks_in.row(i)).squaredNorm() <= 1e-24) fixed[static_cast<size_t>(v)] = 1;
+      for (size_t v = 0; v < fixed.size(); ++v) fixed[v] = fixed[v] || landmark_vertex[v];
       const UntangleResult ur =
           untangle_local(before, tets, after, fixed, folded, opt.untangle_rings, untangle_local_options());
       untangle_report = ur.to_json();
@@ -409,6 +414,32 @@ RegistrationResult register_landmarks(Device& dev, Points& ball, const Tets& tet
     if (v1(t) <= 0 && v0(t) > 0) ++newly_inverted;
   }
   timings["check"] = seconds_since(t0);
+  // ---- volume restoration ------------------------------------------------------------------
+  Json restore_report;
+  if (opt.restore_volumes && res.inverted_tets == 0) {
+    t0 = Clock::now();
+    VolumeMapOptions vo;
+    vo.polish_only = true;
+    vo.boundary = MapBoundary::slide;
+    vo.pinned = landmark_vertex;
+    const TetLocator locator(after, tets);
+    for (Eigen::Index i = 0; i < res.landmarks_final.rows(); ++i) {
+      const Location l = locator.locate(res.landmarks_final.row(i).transpose());
+      if (l.tet >= 0 && l.min_bary >= -1e-9)
+        for (int k = 0; k < 4; ++k) vo.pinned[static_cast<size_t>(tets(l.tet, k))] = 1;
+    }
+    int pinned = 0;
+    for (char c : vo.pinned) pinned += c != 0;
+    const VolumeMapResult vm = volume_preserving_map(dev, before, tets, after, vo);
+    restore_report = Json::object();
+    restore_report["vertex_mean_abs_dev_before"] = vm.initial_vertex_mean_abs_dev;
+    restore_report["tet_mean_abs_dev_before"] = vm.initial_tet_mean_abs_dev;
+    restore_report["vertex_mean_abs_dev"] = vm.final_vertex_mean_abs_dev;
+    restore_report["tet_mean_abs_dev"] = vm.final_tet_mean_abs_dev;
+    restore_report["rounds"] = static_cast<long>(vm.rounds.size());
+    restore_report["pinned_vertices"] = pinned;
+    timings["restore"] = seconds_since(t0);
+  }
   timings["total"] = seconds_since(t_start);
 
   Json& r = res.report;
@@ -433,6 +464,7 @@ RegistrationResult register_landmarks(Device& dev, Points& ball, const Tets& tet
   r["inverted_tets"] = res.inverted_tets;
   r["folded_by_flow"] = folded_by_flow;
   if (untangle_report.type() != Json::Type::Null) r["untangle"] = untangle_report;
+  if (restore_report.type() != Json::Type::Null) r["restore"] = restore_report;
   r["fit"] = fit;
   r["timings_s"] = timings;
   r["newly_inverted_tets"] = newly_inverted;

@@ -15,7 +15,8 @@ std::vector<int> flipped_sphere_faces(const Triangles& faces, const Points& x) {
   return out;
 }
 
-int unflip_sphere_faces(const Points& reference, const Triangles& faces, Points& x) {
+int unflip_sphere_faces(const Points& reference, const Triangles& faces, Points& x,
+                        const std::vector<char>& pinned) {
   std::vector<int> flipped = flipped_sphere_faces(faces, x);
   if (flipped.empty()) return 0;
   const int n = static_cast<int>(x.rows()), nf = static_cast<int>(faces.rows());
@@ -29,8 +30,10 @@ int unflip_sphere_faces(const Points& reference, const Triangles& faces, Points&
     cone(f, 0) = n + f;
     for (int k = 0; k < 3; ++k) {
       cone(f, k + 1) = faces(f, k);
-      fixed[faces(f, k)] = 0;
-      on_face[faces(f, k)] = 1;
+      const int v = faces(f, k);
+      const bool pin = !pinned.empty() && pinned[static_cast<size_t>(v)];
+      fixed[v] = pin ? 1 : 0;
+      on_face[v] = pin ? 0 : 1;
     }
   }
   for (int rings = 2; rings <= 4 && !flipped.empty(); rings += 2) {

@@ -123,6 +123,7 @@ struct Ctx {
   int n = 0, m = 0;
   bool slide = true;
   std::vector<char> boundary;
+  std::vector<char> frozen;       // never moved by untangling: boundary or pinned
   std::vector<int> nbr;
   std::vector<int> vertex_tet;    // one tet incident to each vertex
   Eigen::VectorXd ref_dual;       // input dual volumes / input total volume
@@ -133,6 +134,7 @@ struct Ctx {
   Triangles bfaces;  // boundary faces (outward), built on first use
 
   Ctx(Device& d, const Points& r, const Tets& t, const VolumeMapOptions& o) : dev(d), ref(r), tets(t), opt(o) {}
+  bool pinned(int v) const { return !opt.pinned.empty() && opt.pinned[static_cast<size_t>(v)]; }
 };
 
 int count_folds(Ctx& c, const Points& x) {
@@ -158,12 +160,12 @@ int untangle_folds(Ctx& c, Points& x, double* seconds, const Points* before = nu
 #if VPM_VOLUME_MAP_HAVE_UNTANGLE
   if (c.opt.local_untangle && c.slide && before) {
     if (c.bfaces.rows() == 0) c.bfaces = boundary_faces(c.tets);
-    unflip_sphere_faces(*before, c.bfaces, x);
+    unflip_sphere_faces(*before, c.bfaces, x, c.opt.pinned);
     folded = folded_list(x, c.tets);
   }
   if (c.opt.local_untangle) {
     for (int rings = 2; rings <= 4 && !folded.empty(); rings += 2) {
-      untangle_local(c.ref, c.tets, x, c.boundary, folded, rings, untangle_local_options());
+      untangle_local(c.ref, c.tets, x, c.frozen, folded, rings, untangle_local_options());
       folded = folded_list(x, c.tets);
     }
   }
@@ -298,7 +300,9 @@ void polish_step(Ctx& c, Points& x, VolumeMapRound& r, Points& dx_out) {
     if (c.boundary[v]) nrm[v] = x.row(v).transpose().normalized();
   auto project = [&](Points& d) {
     for (int v = 0; v < c.n; ++v)
-      if (c.boundary[v]) {
+      if (c.pinned(v)) {
+        d.row(v).setZero();
+      } else if (c.boundary[v]) {
         if (!c.slide) {
           d.row(v).setZero();
         } else {
@@ -367,6 +371,16 @@ VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, cons
   c.slide = bm == MapBoundary::slide;
   if (opt.method == VolumeMapMethod::vsem) c.slide = false;  // vsem: boundary frozen
   c.boundary = boundary_vertex_mask(c.n, boundary_faces(tets));
+  if (!opt.pinned.empty() && static_cast<int>(opt.pinned.size()) != c.n)
+    throw InputError("volume map: pinned has " + std::to_string(opt.pinned.size()) + " entries for " +
+                     std::to_string(c.n) + " vertices");
+  if (!opt.pinned.empty() && !opt.polish_only)
+    throw InputError("volume map: pinned vertices need polish_only (Moser rounds move every vertex)");
+  if (opt.polish_only && opt.method != VolumeMapMethod::moser)
+    throw InputError("volume map: polish_only needs the moser method");
+  c.frozen = c.boundary;
+  for (size_t v = 0; v < opt.pinned.size(); ++v)
+    if (opt.pinned[v]) c.frozen[v] = 1;
   c.nbr = detail::tet_neighbors(tets);
   c.vertex_tet.assign(static_cast<size_t>(c.n), 0);
   for (int t = c.m - 1; t >= 0; --t)
@@ -397,18 +411,19 @@ VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, cons
   }
   if (c.slide)
     for (int i = 0; i < c.n; ++i)
-      if (c.boundary[i]) ball.row(i).normalize();
+      if (c.boundary[i] && !c.pinned(i)) ball.row(i).normalize();
 
   DistortionPair d = volume_distortion(reference, ball, tets);
   res.initial_vertex_mean_abs_dev = d.vertex;
   res.initial_tet_mean_abs_dev = d.tet;
 
-  int max_rounds = opt.rounds >= 0 ? opt.rounds
+  int max_rounds = opt.polish_only ? 0
+                   : opt.rounds >= 0 ? opt.rounds
                    : opt.max_rounds > 0 ? opt.max_rounds
                    : opt.method == VolumeMapMethod::moser ? 8
                    : opt.method == VolumeMapMethod::paper ? opt.paper_steps
                                                           : 15;
-  res.stop_reason = "rounds";
+  res.stop_reason = opt.polish_only ? "polish_only" : "rounds";
   double paper_dt = 1.0 / std::max(1, opt.paper_steps);
   Eigen::VectorXd vsem_w = Eigen::VectorXd::Ones(c.m);
   double prev_vertex = d.vertex;
@@ -515,7 +530,7 @@ VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, cons
       ball = saved + step * dx;
       if (c.slide)
         for (int i = 0; i < c.n; ++i)
-          if (c.boundary[i]) ball.row(i).normalize();
+          if (c.boundary[i] && !c.pinned(i)) ball.row(i).normalize();
       folds = count_folds(c, ball);
       if (attempt == 0) r.folds_before_untangle = folds;
       if (folds > 0) {

@@ -136,6 +136,41 @@ TEST_CASE("volume map: polish rounds lower the per-tet distortion left by the Mo
   CHECK(max_boundary_radius_error(b, im.mesh.tets) < 1e-12);
 }
 
+TEST_CASE("volume map: polish_only runs only polish rounds and never moves pinned vertices") {
+  const InitialMapResult& im = ellipsoid_start();
+  auto host = Device::host();
+  const int n = static_cast<int>(im.ball.rows());
+  Points x = im.ball;
+  VolumeMapOptions o;
+  o.polish_only = true;
+  o.pinned.assign(static_cast<size_t>(n), 0);
+  for (int v = 0; v < n; v += 7) o.pinned[static_cast<size_t>(v)] = 1;
+  const VolumeMapResult r = volume_preserving_map(*host, im.mesh.vertices, im.mesh.tets, x, o);
+  REQUIRE(!r.rounds.empty());
+  for (const auto& round : r.rounds) CHECK(round.kind == "polish");
+  CHECK(r.stop_reason == "polish_only");
+  CHECK(r.final_tet_mean_abs_dev < r.initial_tet_mean_abs_dev);
+  CHECK(volume_distortion(im.mesh.vertices, x, im.mesh.tets).folds == 0);
+  int moved = 0;
+  for (int v = 0; v < n; ++v) {
+    if (o.pinned[static_cast<size_t>(v)]) CHECK(x.row(v) == im.ball.row(v));
+    else moved += x.row(v) != im.ball.row(v);
+  }
+  CHECK(moved > n / 2);
+  CHECK(max_boundary_radius_error(x, im.mesh.tets) < 1e-12);
+  // pinned needs polish_only, the right length, and the moser method
+  Points y = im.ball;
+  VolumeMapOptions bad = o;
+  bad.polish_only = false;
+  CHECK_THROWS_AS(volume_preserving_map(*host, im.mesh.vertices, im.mesh.tets, y, bad), InputError);
+  bad = o;
+  bad.pinned.pop_back();
+  CHECK_THROWS_AS(volume_preserving_map(*host, im.mesh.vertices, im.mesh.tets, y, bad), InputError);
+  bad = o;
+  bad.method = VolumeMapMethod::vsem;
+  CHECK_THROWS_AS(volume_preserving_map(*host, im.mesh.vertices, im.mesh.tets, y, bad), InputError);
+}
+
 TEST_CASE("volume map: --boundary fixed keeps the boundary vertices in place") {
   const InitialMapResult& im = ellipsoid_start();
   for (auto& dev : test::devices()) {

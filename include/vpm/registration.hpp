@@ -62,6 +62,13 @@ struct RegistrationOptions {
   /// boundary vertices and vertices at landmark positions fixed) before the fold check.
   bool untangle = true;
   int untangle_rings = 2;
+  /// After the flow (and any untangling), give back the volume the linear tets lost under the
+  /// flow: polish rounds of the volume map (vpm/volume_map.hpp, polish_only) with the
+  /// pre-registration map as reference, the boundary sliding on the sphere, and pinned: vertices
+  /// used as landmarks and the four vertices of the tet holding each moved landmark, so the
+  /// landmarks stay where the flow put them. Each polish step is fold-checked and kept only if
+  /// it lowers the tet distortion.
+  bool restore_volumes = true;
   /// Throw NumericalError when tets invert (false: return the folded result and count them;
   /// for benchmarks and diagnosis only).
   bool refuse_folds = true;
@@ -80,7 +87,10 @@ struct RegistrationResult {
   int inverted_tets = 0;
   /// {"device", "landmarks", "steps", "lambda", "width", "boundary", "field", "rotation_deg",
   ///  "landmark_rms_error", "landmark_max_error", "max_normal_velocity", "boundary_drift",
-  ///  "inverted_tets", "untangle": {...} (when run), "fit": {...}, "timings_s": {"rigid", "fit", "advect", "check", "total"}}
+  ///  "inverted_tets", "untangle": {...} (when run), "restore": {"vertex_mean_abs_dev_before",
+  ///  "tet_mean_abs_dev_before", "vertex_mean_abs_dev", "tet_mean_abs_dev", "rounds",
+  ///  "pinned_vertices"} (when run), "fit": {...},
+  ///  "timings_s": {"rigid", "fit", "advect", "check", "restore", "total"}}
   Json report;
 };
 

@@ -109,8 +109,10 @@ std::vector<int> flipped_sphere_faces(const Triangles& faces, const Points& x);
 /// vertices and 2, then 4, rings free; only face vertices can move) against `reference`
 /// (n x 3, a fold-free configuration such as the positions before the step that flipped them);
 /// the face vertices are then put back on the sphere, which keeps the sign of det[a, b, c].
-/// `x` (n x 3, in/out): only vertices of `faces` change. Returns the flipped faces left.
-int unflip_sphere_faces(const Points& reference, const Triangles& faces, Points& x);
+/// `x` (n x 3, in/out): only vertices of `faces` change, and none with pinned[v] != 0 (`pinned`
+/// n entries or empty). Returns the flipped faces left.
+int unflip_sphere_faces(const Points& reference, const Triangles& faces, Points& x,
+                        const std::vector<char>& pinned = {});
 
 /// Same, with the per-tet energy and gradient evaluated on `device` (kernels/untangle.cl) when
 /// it is an OpenCL device; the L-BFGS iterations stay on the host. Results agree with the host

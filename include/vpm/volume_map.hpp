@@ -92,6 +92,14 @@ struct VolumeMapOptions {
   /// then halved.
   int polish_rounds = 8;
   int polish_iterations = 60;
+  /// Skip the Moser rounds: only the polish rounds run (method moser). Registration uses it to
+  /// give back, against the pre-registration map, the volume that linear tets lost under its
+  /// divergence-free flow.
+  bool polish_only = false;
+  /// Vertices that never move: n entries (1 = pinned) or empty. Honoured by the polish rounds
+  /// and the untangling; only with polish_only (InputError otherwise: Moser rounds move every
+  /// vertex along the flow).
+  std::vector<char> pinned;
   /// Run point location / RK stages on the host even when the device is OpenCL (tests).
   bool force_host_advection = false;
   /// Called with one line per round (progress display); may be empty.
