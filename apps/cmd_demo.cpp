@@ -269,6 +269,5 @@ int run(const std::vector<std::string>& argv) {
   return 0;
 }
 
-vpm::cli::Registrar reg({"demo", "vpm demo [--out DIR]   the whole pipeline on the Colin27 brain (Debian mricron-data)",
-                         run});
+vpm::cli::Registrar reg({"demo", kUsage, run});
 }  // namespace

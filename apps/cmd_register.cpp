@@ -151,8 +151,5 @@ int run(const std::vector<std::string>& argv) {
   return 0;
 }
 
-vpm::cli::Registrar reg({"register",
-                         "vpm register MAPPED -o OUT --landmarks SRC.csv --targets DST.csv "
-                         "[--steps K] [--report R.json]   volume-preserving landmark registration",
-                         run});
+vpm::cli::Registrar reg({"register", kUsage, run});
 }  // namespace

@@ -28,6 +28,11 @@ int main(int argc, char** argv) {
   }
   for (const auto& c : vpm::cli::commands()) {
     if (c.name != args[0]) continue;
+    if (args.size() == 2 && (args[1] == "--help" || args[1] == "-h")) {
+      std::cout << "usage: " << c.synopsis << "\n(all commands also take --quiet and --verbose; "
+                << "README.md and docs/ describe every option)\n";
+      return vpm::kExitOk;
+    }
     try {
       return c.run(std::vector<std::string>(args.begin() + 1, args.end()));
     } catch (const vpm::InputError& e) {

@@ -256,3 +256,17 @@ TEST_CASE("vpm demo: meshes, maps and registers Colin27 and a deformed copy, Dic
   CHECK(run_status(std::string(VPM_BINARY) + " demo --out " + out + " --grid 2 2>/dev/null") == 2);
   CHECK(run_status(std::string(VPM_BINARY) + " demo --out " + out + " --data " + tmp("nothing") + " 2>/dev/null") == 2);
 }
+
+TEST_CASE("vpm CMD --help prints the command's usage on stdout and exits 0") {
+  for (const char* c : {"map", "register", "mesh-image", "initial-map", "stats", "convert", "devices", "demo"}) {
+    INFO(c);
+    const std::string out = tmp(std::string("help_") + c + ".txt");
+    REQUIRE(run_status(std::string(VPM_BINARY) + " " + c + " --help > " + out + " 2>/dev/null") == 0);
+    std::ifstream in(out);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    CHECK_THAT(ss.str(), Catch::StartsWith(std::string("usage: vpm ") + c));
+  }
+  // an unknown option is still an error
+  CHECK(run_status(std::string(VPM_BINARY) + " map --no-such-option 2>/dev/null") == 2);
+}
