@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "moser_field.hpp"
+#include "parallel.hpp"
 #include "volume_map_solve.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
@@ -281,20 +282,22 @@ void polish_step(Ctx& c, Points& x, VolumeMapRound& r, Points& dx_out) {
   // per-tet scaled gradients s_{t,k} = vol_t grad phi_k / m_t
   std::vector<Eigen::Vector3d> sg(4 * static_cast<size_t>(c.m));
   Eigen::VectorXd b(c.m);
-  for (int t = 0; t < c.m; ++t) {
-    const Eigen::Vector3d a = x.row(c.tets(t, 0)).transpose();
-    Eigen::Matrix3d M;
-    for (int q = 0; q < 3; ++q) M.col(q) = x.row(c.tets(t, q + 1)).transpose() - a;
-    const Eigen::Matrix3d Mi = M.inverse();
-    const double s = vol(t) / target(t);
-    Eigen::Vector3d g0 = Eigen::Vector3d::Zero();
-    for (int q = 0; q < 3; ++q) {
-      sg[4 * t + q + 1] = s * Mi.row(q).transpose();
-      g0 -= sg[4 * t + q + 1];
+  detail::parallel_for(c.m, 8192, [&](int t0, int t1) {
+    for (int t = t0; t < t1; ++t) {
+      const Eigen::Vector3d a = x.row(c.tets(t, 0)).transpose();
+      Eigen::Matrix3d M;
+      for (int q = 0; q < 3; ++q) M.col(q) = x.row(c.tets(t, q + 1)).transpose() - a;
+      const Eigen::Matrix3d Mi = M.inverse();
+      const double s = vol(t) / target(t);
+      Eigen::Vector3d g0 = Eigen::Vector3d::Zero();
+      for (int q = 0; q < 3; ++q) {
+        sg[4 * t + q + 1] = s * Mi.row(q).transpose();
+        g0 -= sg[4 * t + q + 1];
+      }
+      sg[4 * t] = g0;
+      b(t) = 1.0 - vol(t) / target(t);
     }
-    sg[4 * t] = g0;
-    b(t) = 1.0 - vol(t) / target(t);
-  }
+  });
   std::vector<Eigen::Vector3d> nrm(static_cast<size_t>(c.n), Eigen::Vector3d::Zero());
   for (int v = 0; v < c.n; ++v)
     if (c.boundary[v]) nrm[v] = x.row(v).transpose().normalized();
@@ -312,16 +315,30 @@ void polish_step(Ctx& c, Points& x, VolumeMapRound& r, Points& dx_out) {
       }
   };
   auto apply = [&](const Points& d, Eigen::VectorXd& out) {  // out = A d (d already projected)
-    for (int t = 0; t < c.m; ++t) {
-      double s = 0;
-      for (int k = 0; k < 4; ++k) s += sg[4 * t + k].dot(d.row(c.tets(t, k)).transpose());
-      out(t) = s;
-    }
+    detail::parallel_for(c.m, 8192, [&](int t0, int t1) {
+      for (int t = t0; t < t1; ++t) {
+        double s = 0;
+        for (int k = 0; k < 4; ++k) s += sg[4 * t + k].dot(d.row(c.tets(t, k)).transpose());
+        out(t) = s;
+      }
+    });
   };
-  auto apply_t = [&](const Eigen::VectorXd& y, Points& out) {  // out = A^T y
-    out.setZero(c.n, 3);
-    for (int t = 0; t < c.m; ++t)
-      for (int k = 0; k < 4; ++k) out.row(c.tets(t, k)) += y(t) * sg[4 * t + k].transpose();
+  // out = A^T y: tets split into chunks, each scattering into its own buffer (no races), then
+  // the buffers summed in chunk order (the result does not depend on the thread count's timing).
+  const int chunks = c.m >= 8192 ? 2 : 1;
+  std::vector<Points> part(static_cast<size_t>(chunks));
+  auto apply_t = [&](const Eigen::VectorXd& y, Points& out) {
+    const int per = (c.m + chunks - 1) / chunks;
+    detail::parallel_for(chunks, 2, [&](int k0, int k1) {
+      for (int j = k0; j < k1; ++j) {
+        Points& o = part[static_cast<size_t>(j)];
+        o.setZero(c.n, 3);
+        for (int t = j * per; t < std::min(c.m, (j + 1) * per); ++t)
+          for (int k = 0; k < 4; ++k) o.row(c.tets(t, k)) += y(t) * sg[4 * t + k].transpose();
+      }
+    });
+    out = part[0];
+    for (int j = 1; j < chunks; ++j) out += part[static_cast<size_t>(j)];
     project(out);
   };
   // CGLS
