@@ -1,5 +1,7 @@
 // vpm mesh-image: NIfTI image (or closed surface) -> quality tet mesh, optional atlas labels.
+#include <cstdlib>
 #include <iostream>
+#include <sstream>
 
 #include "cli.hpp"
 #include "vpm/error.hpp"
@@ -9,11 +11,11 @@
 
 namespace {
 const char* kUsage =
-    "vpm mesh-image IMAGE.nii[.gz]|SURFACE.off -o OUT [--threshold T] [--labels ATLAS.nii[.gz]] "
+    "vpm mesh-image IMAGE.nii[.gz]|SURFACE.off -o OUT [--threshold T | --label L[,L...]] [--labels ATLAS.nii[.gz]] "
     "[--target-vertices N | --max-volume V] [--smooth S] [--close-at-border] [--report R.json]";
 
 int run(const std::vector<std::string>& argv) {
-  vpm::cli::Args args(argv, {"--threshold", "--labels", "--target-vertices", "--max-volume", "--smooth",
+  vpm::cli::Args args(argv, {"--threshold", "--label", "--labels", "--target-vertices", "--max-volume", "--smooth",
                              "--report", "--radius-edge", "--min-dihedral", "--max-closing-radius"},
                       {"--close-at-border"});
   args.expect_positional(1, std::string("usage: ") + kUsage);
@@ -23,6 +25,20 @@ int run(const std::vector<std::string>& argv) {
     throw vpm::InputError("give either --target-vertices or --max-volume, not both");
   vpm::MeshImageOptions o;
   o.threshold = args.get_double("--threshold", o.threshold);
+  if (args.has("--threshold") && args.has("--label"))
+    throw vpm::InputError("give either --threshold or --label, not both");
+  if (const auto sel = args.get("--label")) {
+    if (sel->empty()) throw vpm::InputError("--label: empty (expected L or L1,L2,...)");
+    std::string item;
+    std::stringstream ss(*sel);
+    while (std::getline(ss, item, ',')) {
+      char* end = nullptr;
+      const long v = std::strtol(item.c_str(), &end, 10);
+      if (item.empty() || *end != '\0')
+        throw vpm::InputError("--label: '" + item + "' is not an integer label (expected L or L1,L2,...)");
+      o.select_labels.push_back(static_cast<int>(v));
+    }
+  }
   o.target_vertices = args.get_int("--target-vertices", o.target_vertices);
   o.max_volume = args.get_double("--max-volume", 0.0);
   if (args.has("--max-volume") && !(o.max_volume > 0)) throw vpm::InputError("--max-volume must be > 0");

@@ -564,6 +564,11 @@ TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out
   }
   report["input"]["affine_source"] = img.affine_source;
   report["input"]["threshold"] = o.threshold;
+  if (!o.select_labels.empty()) {
+    Json sel = Json::array();
+    for (int l : o.select_labels) sel.push_back(l);
+    report["input"]["select_labels"] = sel;
+  }
   if (img.data.size() != img.size() || img.size() == 0) throw InputError(src + ": image has no data");
 
   if (atlas) {
@@ -580,7 +585,10 @@ TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out
 
   // ---- mask: threshold, largest 6-connected component, cavities filled -------------------
   auto t0 = stamp();
-  if (o.progress) o.progress("mask (value > " + fmt(o.threshold) + ")");
+  std::string label_list;
+  for (int l : o.select_labels) label_list += (label_list.empty() ? "" : ",") + std::to_string(l);
+  if (o.progress)
+    o.progress(o.select_labels.empty() ? "mask (value > " + fmt(o.threshold) + ")" : "mask (labels " + label_list + ")");
   const Grid3 G{img.dims[0], img.dims[1], img.dims[2]};
   std::vector<uint8_t> mask(G.size());
   size_t count = 0;
@@ -588,9 +596,17 @@ TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out
   for (size_t i = 0; i < G.size(); ++i) {
     const float v = img.data[i];
     lo = std::min(lo, v), hi = std::max(hi, v);
-    mask[i] = v > o.threshold;
+    if (o.select_labels.empty()) {
+      mask[i] = v > o.threshold;
+    } else {
+      const long l = std::lround(v);
+      mask[i] = std::find(o.select_labels.begin(), o.select_labels.end(), l) != o.select_labels.end();
+    }
     count += mask[i];
   }
+  if (count == 0 && !o.select_labels.empty())
+    throw InputError(src + ": mask is empty: no voxel has label " + label_list + " (values range " + fmt(lo) +
+                     " .. " + fmt(hi) + ")");
   if (count == 0)
     throw InputError(src + ": mask is empty: no voxel is above the threshold " + fmt(o.threshold) +
                      " (values range " + fmt(lo) + " .. " + fmt(hi) + ")");

@@ -346,3 +346,40 @@ TEST_CASE("Colin27 at the paper's size with AAL labels") {
     CHECK(rep["labels"][std::to_string(l)]["volume_mm3"].number() == Approx(n).epsilon(0.10));
   }
 }
+
+TEST_CASE("mesh-image --label meshes one structure of a label image: AAL thalamus, volume near its voxel count") {
+  if (!have_pipeline()) { WARN("built without NIfTI/CGAL/TetGen: skipped"); return; }
+  if (!fs::exists(kMricron + "aal.nii.gz")) {
+    WARN("mricron-data is not installed: AAL run skipped");
+    return;
+  }
+  MeshImageOptions o;
+  o.select_labels = {77};  // Thalamus_L, 8,700 voxels of 1 mm^3
+  o.target_vertices = 1500;
+  Json rep;
+  const TetMesh m = mesh_image_file(kMricron + "aal.nii.gz", o, &rep);
+  CHECK(euler_of_boundary(m) == 2);
+  CHECK(rep["input"]["mask_voxels"].number() == 8700);
+  CHECK(tet_volumes(m.vertices, m.tets).sum() == Approx(8700).epsilon(0.10));
+  // its centroid is where the left thalamus is (x < 0 in MNI space), not the whole brain's
+  Eigen::RowVector3d c = m.vertices.colwise().mean();
+  CHECK(c(0) < -5);
+  // two labels (left and right thalamus) form two components: the largest is kept
+  o.select_labels = {77, 78};
+  Json rep2;
+  const TetMesh both = mesh_image_file(kMricron + "aal.nii.gz", o, &rep2);
+  CHECK(euler_of_boundary(both) == 2);
+  // a label the image does not have is a clear error
+  o.select_labels = {9999};
+  CHECK(input_error_of([&] { mesh_image_file(kMricron + "aal.nii.gz", o); }).find("no voxel has label 9999") !=
+        std::string::npos);
+  // the command: a malformed label list and --threshold with --label are usage errors (exit 2)
+  const std::string out = kTmp + "/label_bad_out.vtu";
+  for (const char* bad : {"--label 77,x", "--label 77 --threshold 3", "--label ''"}) {
+    INFO(bad);
+    const int rc = std::system((std::string(VPM_BINARY) + " mesh-image " + kMricron + "aal.nii.gz " + bad + " -o " +
+                                out + " 2>/dev/null").c_str());
+    CHECK(WEXITSTATUS(rc) == 2);
+  }
+  CHECK(!fs::exists(out));
+}

@@ -17,6 +17,7 @@
 // mesh_image().
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "vpm/image.hpp"
 #include "vpm/json.hpp"
@@ -27,6 +28,10 @@ namespace vpm {
 struct MeshImageOptions {
   /// Mask = voxels with value > threshold.
   double threshold = 0.0;
+  /// When not empty, the mask is instead the voxels whose value, rounded to an integer, is one
+  /// of these labels (one structure, or several, of a label image such as an atlas or a
+  /// segmentation); `threshold` is then ignored.
+  std::vector<int> select_labels;
   /// Target number of mesh vertices (the paper's brain has about 5,200). Ignored when
   /// max_volume > 0.
   int target_vertices = 5200;
