@@ -87,9 +87,9 @@ struct VolumeMapOptions {
   /// vertices moving tangentially (slide) or not at all (fixed); x += dx, halved while it folds.
   /// They target the per-tet distortion that vertex-based Moser rounds cannot see.
   /// At most this many (they stop when the tet mean |r-1| improves by less than 1 %). With
-  /// rounds == -1 the Moser rounds hand over to the polish as soon as a round gains less than
-  /// half on the vertex mean |r-1|. A polish step that folds is untangled locally like a round,
-  /// then halved.
+  /// rounds == -1 the Moser rounds hand over to the polish once a round gains less than half on
+  /// the vertex mean |r-1| with it within 5 x tolerance, or gains less than a fifth. A polish
+  /// step that folds is untangled locally like a round, then halved.
   int polish_rounds = 8;
   int polish_iterations = 60;
   /// Skip the Moser rounds: only the polish rounds run (method moser). Registration uses it to
