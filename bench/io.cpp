@@ -6,34 +6,13 @@
 #include <filesystem>
 #include <string>
 
+#include "support/fixtures.hpp"
 #include "vpm/io.hpp"
 #include "vpm/json.hpp"
 
 namespace {
 vpm::TetMesh cube(int n) {
-  vpm::TetMesh m;
-  const int s = n + 1;
-  m.vertices.resize(s * s * s, 3);
-  auto id = [s](int i, int j, int k) { return i + s * (j + s * k); };
-  for (int k = 0; k < s; ++k)
-    for (int j = 0; j < s; ++j)
-      for (int i = 0; i < s; ++i)
-        m.vertices.row(id(i, j, k)) << double(i) / n, double(j) / n, double(k) / n;
-  static constexpr int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
-  m.tets.resize(6 * n * n * n, 4);
-  int t = 0;
-  for (int k = 0; k < n; ++k)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i)
-        for (const auto& p : perms) {
-          int c[3] = {i, j, k};
-          m.tets(t, 0) = id(c[0], c[1], c[2]);
-          for (int q = 0; q < 3; ++q) {
-            ++c[p[q]];
-            m.tets(t, q + 1) = id(c[0], c[1], c[2]);
-          }
-          ++t;
-        }
+  vpm::TetMesh m = vpm::test::cube_mesh(n);
   vpm::FieldValues label(m.num_tets(), 1), ratio(m.num_vertices(), 1);
   for (int i = 0; i < m.num_tets(); ++i) label(i, 0) = 1 + i % 3;
   for (int i = 0; i < m.num_vertices(); ++i) ratio(i, 0) = 1.0 + 1.0 / (7.0 + i);

@@ -15,6 +15,7 @@
 #include <random>
 #include <string>
 
+#include "support/fixtures.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/geometry.hpp"
@@ -33,41 +34,13 @@ namespace {
 // Tets of the outer layer with four vertices on one cube face become flat on the sphere.
 // (n+1)^3 vertices, 6 n^3 tets.
 TetMesh ball_mesh(int n) {
-  TetMesh m;
-  const int s = n + 1;
-  m.vertices.resize(s * s * s, 3);
-  auto id = [s](int i, int j, int k) { return i + s * (j + s * k); };
-  for (int k = 0; k < s; ++k)
-    for (int j = 0; j < s; ++j)
-      for (int i = 0; i < s; ++i) {
-        Eigen::RowVector3d p(2.0 * i / n - 1, 2.0 * j / n - 1, 2.0 * k / n - 1);
-        const double inf = p.cwiseAbs().maxCoeff(), r = p.norm();
-        if (r > 0) p *= (1 - inf) + inf * inf / r;
-        m.vertices.row(id(i, j, k)) = p;
-      }
-  static constexpr int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
-  m.tets.resize(6 * n * n * n, 4);
-  int t = 0;
-  for (int k = 0; k < n; ++k)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i)
-        for (const auto& p : perms) {
-          int c[3] = {i, j, k}, v[4];
-          v[0] = id(c[0], c[1], c[2]);
-          for (int q = 0; q < 3; ++q) {
-            ++c[p[q]];
-            v[q + 1] = id(c[0], c[1], c[2]);
-          }
-          m.tets.row(t++) << v[0], v[1], v[2], v[3];
-        }
-  // orientation from the cube (Kuhn tets alternate), then check the map kept every sign
-  Points cube(m.vertices.rows(), 3);
-  for (int k = 0; k < s; ++k)
-    for (int j = 0; j < s; ++j)
-      for (int i = 0; i < s; ++i) cube.row(id(i, j, k)) << i, j, k;
-  const Eigen::VectorXd vc = tet_volumes(cube, m.tets);
-  for (int i = 0; i < m.tets.rows(); ++i)
-    if (vc(i) < 0) std::swap(m.tets(i, 2), m.tets(i, 3));
+  TetMesh m = vpm::test::cube_mesh(n);  // [0,1]^3, positively oriented Kuhn tets
+  for (Eigen::Index v = 0; v < m.vertices.rows(); ++v) {
+    Eigen::RowVector3d p = 2.0 * m.vertices.row(v).array() - 1.0;
+    const double inf = p.cwiseAbs().maxCoeff(), r = p.norm();
+    if (r > 0) p *= (1 - inf) + inf * inf / r;
+    m.vertices.row(v) = p;
+  }
   const Eigen::VectorXd vol = tet_volumes(m.vertices, m.tets);
   if (vol.minCoeff() <= 0) throw std::runtime_error("ball_mesh: the cube-to-ball map inverted a tet");
   return m;
