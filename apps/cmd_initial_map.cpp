@@ -17,12 +17,6 @@ const char* kUsage =
     "vpm initial-map MESH -o OUT [--untangle never|if-folded|always] [--area-correction] "
     "[--no-split] [--report REPORT.json] [--quiet] [--verbose]";
 
-std::string pct(double x) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.2f %%", 100 * x);
-  return b;
-}
-
 int run(const std::vector<std::string>& argv) {
   vpm::cli::Args args(argv, {"--untangle", "--report"}, {"--area-correction", "--no-split"});
   args.expect_positional(1, kUsage);
@@ -61,7 +55,7 @@ int run(const std::vector<std::string>& argv) {
   const vpm::Json* fb = im.report.find("folds_before_untangle");
   vpm::cli::info("wrote " + *out + ": " + std::to_string(outm.num_vertices()) + " vertices, " +
                  std::to_string(outm.num_tets()) + " tets; vertex mean |r-1| " +
-                 pct(mm.vertex_volume_ratio.mean_abs_dev) + ", tet " + pct(mm.tet_volume_ratio.mean_abs_dev) +
+                 vpm::cli::pct(mm.vertex_volume_ratio.mean_abs_dev) + ", tet " + vpm::cli::pct(mm.tet_volume_ratio.mean_abs_dev) +
                  ", harmonic folds " + std::to_string(fb ? static_cast<int>(fb->number()) : 0) + " -> 0");
   if (report_path) {
     vpm::Json j = im.report;

@@ -20,12 +20,6 @@ const char* kUsage =
     "[--boundary slide|fixed] [--solver cg|paper] [--rk-steps N] [--report REPORT.json] "
     "[--quiet] [--verbose]";
 
-std::string pct(double x) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.2f %%", 100 * x);
-  return b;
-}
-
 int run(const std::vector<std::string>& argv) {
   vpm::cli::Args args(argv,
                       {"--rounds", "--tolerance", "--method", "--boundary", "--solver", "--report",
@@ -75,10 +69,10 @@ int run(const std::vector<std::string>& argv) {
 
   vpm::cli::info("wrote " + *out + ": " + std::to_string(bm.mesh.num_vertices()) + " vertices, " +
                  std::to_string(bm.mesh.num_tets()) + " tets; vertex mean |r-1| " +
-                 pct(bm.initial.vertex_volume_ratio.mean_abs_dev) + " -> " +
-                 pct(bm.final.vertex_volume_ratio.mean_abs_dev) + ", tet " +
-                 pct(bm.initial.tet_volume_ratio.mean_abs_dev) + " -> " +
-                 pct(bm.final.tet_volume_ratio.mean_abs_dev) + ", 0 folds");
+                 vpm::cli::pct(bm.initial.vertex_volume_ratio.mean_abs_dev) + " -> " +
+                 vpm::cli::pct(bm.final.vertex_volume_ratio.mean_abs_dev) + ", tet " +
+                 vpm::cli::pct(bm.initial.tet_volume_ratio.mean_abs_dev) + " -> " +
+                 vpm::cli::pct(bm.final.tet_volume_ratio.mean_abs_dev) + ", 0 folds");
   if (report_path) vpm::write_json_file(*report_path, bm.report);
   return 0;
 }
