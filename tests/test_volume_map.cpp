@@ -11,6 +11,7 @@
 #include "support/fixtures.hpp"
 #include "support/shapes.hpp"
 #include "moser_field.hpp"
+#include "polish.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/geometry.hpp"
@@ -169,6 +170,49 @@ TEST_CASE("volume map: polish_only runs only polish rounds and never moves pinne
   bad = o;
   bad.method = VolumeMapMethod::vsem;
   CHECK_THROWS_AS(volume_preserving_map(*host, im.mesh.vertices, im.mesh.tets, y, bad), InputError);
+}
+
+TEST_CASE("polish direction: host and device agree, fixed vertices stay, sphere vertices move tangentially") {
+  const InitialMapResult& im = ellipsoid_start();
+  const Points& x = im.ball;
+  const Tets& T = im.mesh.tets;
+  const int n = static_cast<int>(x.rows());
+  const Eigen::VectorXd v0 = tet_volumes(im.mesh.vertices, T);
+  const Eigen::VectorXd target = v0 / v0.sum() * tet_volumes(x, T).sum();
+  const auto boundary = boundary_vertex_mask(n, boundary_faces(T));
+  std::vector<char> pinned(static_cast<size_t>(n), 0);
+  for (int v = 0; v < n; v += 11) pinned[static_cast<size_t>(v)] = 1;
+  auto cl = test::opencl_device();
+  for (bool slide : {true, false}) {
+    INFO("slide " << slide);
+    const std::vector<char> freedom = detail::polish_freedom(boundary, slide, pinned);
+    const detail::PolishDirection h = detail::polish_direction_host(x, T, target, freedom, 40);
+    CHECK(h.iterations == 40);
+    CHECK(h.residual < 1.0);  // the step reduces the linearised residual
+    for (int v = 0; v < n; ++v) {
+      if (freedom[v] == detail::kPolishFixed) CHECK(h.dx.row(v).norm() == 0.0);
+      if (freedom[v] == detail::kPolishTangent) CHECK(std::abs(h.dx.row(v).dot(x.row(v).normalized())) < 1e-12);
+    }
+    if (!cl) {
+      WARN("no OpenCL device: device polish not compared");
+      continue;
+    }
+    // Same arithmetic: after a few iterations the directions agree to round-off. Later
+    // iterates of CGLS amplify the different summation order (loss of orthogonality), so at
+    // 40 iterations only the residual reached is compared.
+    detail::DevicePolisher dp(*cl, T, n, freedom);
+    const detail::PolishDirection h8 = detail::polish_direction_host(x, T, target, freedom, 8);
+    const detail::PolishDirection d8 = dp.direction(x, target, 8);
+    CHECK(d8.iterations == 8);
+    CHECK(d8.residual == Approx(h8.residual).epsilon(1e-10));
+    CHECK((d8.dx - h8.dx).cwiseAbs().maxCoeff() < 1e-10 * h8.dx.cwiseAbs().maxCoeff());
+    const detail::PolishDirection d = dp.direction(x, target, 40);  // buffers reused
+    CHECK(d.iterations == 40);
+    CHECK(d.residual == Approx(h.residual).epsilon(1e-3));
+    CHECK(d.dx.allFinite());
+    const detail::PolishDirection d2 = dp.direction(x, target, 40);
+    CHECK(d2.dx == d.dx);
+  }
 }
 
 TEST_CASE("volume map: --boundary fixed keeps the boundary vertices in place") {

@@ -1,0 +1,51 @@
+#pragma once
+// Private: the search direction of one polish step of the volume map (vpm/volume_map.hpp):
+// CGLS from dx = 0 on the linearised relative tet volumes,
+//   min |A dx - b|,  A_(t, v) = vol_t grad phi_v / target_t,  b_t = 1 - vol_t / target_t,
+// early-stopped after `iterations` (the minimum-norm start is the regularisation), with each
+// vertex free, tangent to the unit sphere, or fixed. Host reference and OpenCL
+// (kernels/polish.cl), same arithmetic.
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+#include "vpm/mesh.hpp"
+
+namespace vpm {
+class Device;
+}
+
+namespace vpm::detail {
+
+/// Freedom of each vertex in a polish step.
+enum PolishFreedom : char { kPolishFree = 0, kPolishTangent = 1, kPolishFixed = 2 };
+
+/// Per-vertex freedom: pinned -> fixed; boundary -> tangent when sliding, else fixed.
+/// `boundary` n entries, `pinned` n entries or empty.
+std::vector<char> polish_freedom(const std::vector<char>& boundary, bool slide, const std::vector<char>& pinned);
+
+struct PolishDirection {
+  Points dx;           ///< n x 3
+  int iterations = 0;  ///< CGLS iterations done (fewer than asked when A^T r vanished)
+  double residual = 0; ///< |b - A dx| / |b|
+};
+
+/// Host reference. `x` n x 3 positions, `tets` m x 4, `target` m target volumes (same total as
+/// x's), `freedom` n entries (polish_freedom).
+PolishDirection polish_direction_host(const Points& x, const Tets& tets, const Eigen::VectorXd& target,
+                                      const std::vector<char>& freedom, int iterations);
+
+/// OpenCL: connectivity (vertex -> tet-corner incidence) and freedom uploaded once; each call
+/// uploads x and target, runs the iterations without a host synchronisation, reads dx back.
+class DevicePolisher {
+ public:
+  DevicePolisher(Device& device, const Tets& tets, int num_vertices, const std::vector<char>& freedom);
+  ~DevicePolisher();
+  PolishDirection direction(const Points& x, const Eigen::VectorXd& target, int iterations);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace vpm::detail

@@ -1,0 +1,166 @@
+// Polish step of the volume map on the device (host reference: polish_direction_host in
+// host/polish.cpp): CGLS on the linearised relative tet volumes, min |A dx - b| with
+//   A_(t, v) = vol_t grad phi_v / target_t   (v a corner of tet t),   b_t = 1 - vol_t / target_t,
+// dx restricted per vertex (free / tangent to the sphere / zero). The iterations run without a
+// host synchronisation: scalars live in S, reductions are per-work-item partials combined by a
+// single work item (polish_scalars).
+//
+// Reductions use a fixed grid of G work items (global size G) with a grid stride.
+
+#define P_GAMMA 0  // |A^T r|^2 of the current iterate
+#define P_ALPHA 1
+#define P_BETA 2
+#define P_STOP 3   // 1 once gamma or |A p|^2 vanished: later iterations change nothing
+#define P_ITER 4   // iterations done
+#define P_BB 5     // |b|^2
+#define P_RR 6     // |r|^2 (filled by P_OP_RR)
+
+#define P_OP_INIT 0   // gamma = sum; bb from the second half; stop if gamma <= 0
+#define P_OP_ALPHA 1  // alpha = gamma / sum (0 when stopped or sum <= 0, then stop)
+#define P_OP_BETA 2   // beta = sum / gamma, gamma = sum; iter++ unless stopped
+#define P_OP_RR 3     // rr = sum
+
+#define STRIDE_BEGIN(n) for (int i = get_global_id(0); i < (n); i += get_global_size(0))
+
+// Per tet t: sg[12 t + 3 k + c] = vol_t / target_t * d lambda_k / d x_c, b[t], r[t] = b[t].
+__kernel void polish_setup(const int m, __global const int* tets, __global const real* x,
+                           __global const real* target, __global real* sg, __global real* b,
+                           __global real* r) {
+  const int t = get_global_id(0);
+  if (t >= m) return;
+  const int i0 = tets[4 * t], i1 = tets[4 * t + 1], i2 = tets[4 * t + 2], i3 = tets[4 * t + 3];
+  const real ax = x[3 * i0], ay = x[3 * i0 + 1], az = x[3 * i0 + 2];
+  // columns of M: e1, e2, e3 (edges from corner 0)
+  const real e1x = x[3 * i1] - ax, e1y = x[3 * i1 + 1] - ay, e1z = x[3 * i1 + 2] - az;
+  const real e2x = x[3 * i2] - ax, e2y = x[3 * i2 + 1] - ay, e2z = x[3 * i2 + 2] - az;
+  const real e3x = x[3 * i3] - ax, e3y = x[3 * i3 + 1] - ay, e3z = x[3 * i3 + 2] - az;
+  // rows of M^-1 = (e2 x e3, e3 x e1, e1 x e2) / det
+  const real c1x = e2y * e3z - e2z * e3y, c1y = e2z * e3x - e2x * e3z, c1z = e2x * e3y - e2y * e3x;
+  const real c2x = e3y * e1z - e3z * e1y, c2y = e3z * e1x - e3x * e1z, c2z = e3x * e1y - e3y * e1x;
+  const real c3x = e1y * e2z - e1z * e2y, c3y = e1z * e2x - e1x * e2z, c3z = e1x * e2y - e1y * e2x;
+  const real det = e1x * c1x + e1y * c1y + e1z * c1z;
+  const real vol = det / 6.0;
+  const real s = vol / target[t] / det;  // vol / target times the 1/det of the inverse
+  __global real* g = sg + 12 * t;
+  g[3] = s * c1x; g[4] = s * c1y; g[5] = s * c1z;
+  g[6] = s * c2x; g[7] = s * c2y; g[8] = s * c2z;
+  g[9] = s * c3x; g[10] = s * c3y; g[11] = s * c3z;
+  g[0] = -(g[3] + g[6] + g[9]);
+  g[1] = -(g[4] + g[7] + g[10]);
+  g[2] = -(g[5] + g[8] + g[11]);
+  const real bt = 1.0 - vol / target[t];
+  b[t] = bt;
+  r[t] = bt;
+}
+
+// q = A p; partial[g] = |q|^2 over this work item's tets
+__kernel void polish_apply(const int m, __global const int* tets, __global const real* sg,
+                           __global const real* p, __global real* q, __global real* partial) {
+  real acc = 0.0;
+  STRIDE_BEGIN(m) {
+    __global const real* g = sg + 12 * i;
+    real s = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      const int v = tets[4 * i + k];
+      s += g[3 * k] * p[3 * v] + g[3 * k + 1] * p[3 * v + 1] + g[3 * k + 2] * p[3 * v + 2];
+    }
+    q[i] = s;
+    acc += s * s;
+  }
+  partial[get_global_id(0)] = acc;
+}
+
+// s = P A^T y (gather over the vertex's tet slots 4 t + k; P: flags 0 free, 1 tangent to the
+// sphere at x_v, 2 zero); partial[g] = |s|^2, partial[G + g] = |y|^2 over this work item's
+// range of y (used once for |b|^2 and for the final |r|^2).
+__kernel void polish_apply_t(const int n, const int m, __global const int* inc_ptr,
+                             __global const int* inc_slot, __global const real* sg,
+                             __global const real* y, __global const char* flags,
+                             __global const real* x, __global real* s, __global real* partial) {
+  real acc = 0.0;
+  STRIDE_BEGIN(n) {
+    real sx = 0.0, sy = 0.0, sz = 0.0;
+    if (flags[i] != 2) {
+      for (int j = inc_ptr[i]; j < inc_ptr[i + 1]; ++j) {
+        const int slot = inc_slot[j];
+        const real w = y[slot >> 2];
+        __global const real* g = sg + 3 * slot;
+        sx += w * g[0];
+        sy += w * g[1];
+        sz += w * g[2];
+      }
+      if (flags[i] == 1) {
+        const real px = x[3 * i], py = x[3 * i + 1], pz = x[3 * i + 2];
+        const real inv = 1.0 / sqrt(px * px + py * py + pz * pz);
+        const real nx = px * inv, ny = py * inv, nz = pz * inv;
+        const real dn = sx * nx + sy * ny + sz * nz;
+        sx -= dn * nx;
+        sy -= dn * ny;
+        sz -= dn * nz;
+      }
+    }
+    s[3 * i] = sx;
+    s[3 * i + 1] = sy;
+    s[3 * i + 2] = sz;
+    acc += sx * sx + sy * sy + sz * sz;
+  }
+  real yy = 0.0;
+  STRIDE_BEGIN(m) yy += y[i] * y[i];
+  partial[get_global_id(0)] = acc;
+  partial[get_global_size(0) + get_global_id(0)] = yy;
+}
+
+__kernel void polish_scalars(const int G, const int op, __global const real* partial,
+                             __global real* S) {
+  if (get_global_id(0) != 0) return;
+  real p0 = 0.0, p1 = 0.0;
+  for (int g = 0; g < G; ++g) p0 += partial[g];
+  if (op == P_OP_INIT || op == P_OP_RR)
+    for (int g = 0; g < G; ++g) p1 += partial[G + g];
+  if (op == P_OP_INIT) {
+    S[P_GAMMA] = p0;
+    S[P_BB] = p1;
+    S[P_STOP] = p0 > 0.0 ? 0.0 : 1.0;
+    S[P_ITER] = 0.0;
+    S[P_ALPHA] = 0.0;
+    S[P_BETA] = 0.0;
+  } else if (op == P_OP_ALPHA) {
+    if (S[P_STOP] != 0.0 || !(p0 > 0.0)) {
+      S[P_STOP] = 1.0;
+      S[P_ALPHA] = 0.0;
+    } else {
+      S[P_ALPHA] = S[P_GAMMA] / p0;
+    }
+  } else if (op == P_OP_BETA) {
+    if (S[P_STOP] == 0.0) {
+      S[P_BETA] = p0 / S[P_GAMMA];
+      S[P_GAMMA] = p0;
+      S[P_ITER] += 1.0;
+      if (!(p0 > 0.0)) S[P_STOP] = 1.0;
+    } else {
+      S[P_BETA] = 0.0;
+    }
+  } else if (op == P_OP_RR) {
+    S[P_RR] = p1;
+  }
+}
+
+// dx += alpha p (3n entries); r -= alpha q (m entries)
+__kernel void polish_update(const int n3, const int m, __global const real* S, __global real* dx,
+                            __global const real* p, __global real* r, __global const real* q) {
+  const real alpha = S[P_ALPHA];
+  STRIDE_BEGIN(n3) dx[i] += alpha * p[i];
+  STRIDE_BEGIN(m) r[i] -= alpha * q[i];
+}
+
+// p = s + beta p; with beta = 0 (the first call, or once stopped) p = s, never reading p
+// (the buffer starts uninitialised: 0 * NaN would be NaN)
+__kernel void polish_update_p(const int n3, __global const real* S, __global real* p,
+                              __global const real* s) {
+  const real beta = S[P_BETA];
+  if (beta == 0.0) {
+    STRIDE_BEGIN(n3) p[i] = s[i];
+  } else {
+    STRIDE_BEGIN(n3) p[i] = s[i] + beta * p[i];
+  }
+}
