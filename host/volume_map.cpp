@@ -153,7 +153,6 @@ std::vector<int> folded_list(const Points& x, const Tets& tets) {
   return out;
 }
 
-
 // Local untangling of the folded tets of x (boundary fixed; when sliding and `before` is given,
 // boundary triangles flipped on the sphere are unflipped first). Returns the folds left.
 int untangle_folds(Ctx& c, Points& x, double* seconds, const Points* before = nullptr) {
