@@ -1,7 +1,7 @@
 // Registration benchmark: 20 random landmarks moved by up to 0.2 ball radii on ball
 // meshes of about the paper's size (26k tets) and ~1M tets. Prints a table and writes JSON.
 //
-//   vpm_bench_register [--quick] [--runs R] [--large N] [--out FILE]
+//   vpm_bench_register [--quick] [--runs R] [--large N] [--out FILE]   (N: cube subdivisions, 6 N^3 tets; 55)
 //
 // The device is VPM_DEVICE's (PoCL CPU here). Times are medians of R runs.
 #include <algorithm>
@@ -167,7 +167,13 @@ int main(int argc, char** argv) {
     const std::string a = argv[i];
     if (a == "--quick") quick = true;
     else if (a == "--runs" && i + 1 < argc) runs = std::atoi(argv[++i]);
-    else if (a == "--large" && i + 1 < argc) large = std::atoi(argv[++i]);
+    else if (a == "--large" && i + 1 < argc) {
+      large = std::atoi(argv[++i]);  // cube subdivisions n: 6 n^3 tets
+      if (large < 2 || large > 150) {
+        std::cerr << "vpm_bench_register: --large " << argv[i] << ": subdivisions n (6 n^3 tets) must be 2..150\n";
+        return 2;
+      }
+    }
     else if (a == "--out" && i + 1 < argc) out = argv[++i];
     else {
       std::cerr << "usage: vpm_bench_register [--quick] [--runs R] [--large N] [--out FILE]\n";

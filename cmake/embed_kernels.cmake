@@ -1,4 +1,5 @@
-# Turns kernels/*.cl into one C++ source: vpm::detail::embedded_kernel_sources().
+# Turns kernels/*.cl and *.clh into one C++ source: vpm::detail::embedded_kernel_sources(),
+# keyed by the file name without extension (kernels/common.clh -> "common").
 # Usage: cmake -DOUT=file.cpp -DSOURCES="a.cl|b.cl" -P embed_kernels.cmake
 string(REPLACE "|" ";" SOURCES "${SOURCES}")
 set(body "")

@@ -191,6 +191,14 @@ size_t Device::padded(size_t n) const {
   return std::max(g, local_size_);
 }
 
+bool Device::group_reduce() const { return !host_ && desc_.type != "cpu"; }
+
+size_t Device::reduction_partials(size_t global) const {
+  return group_reduce() ? padded(global) / local_size_ : padded(global);
+}
+
+size_t Device::combine_items() const { return group_reduce() ? local_size_ : 1; }
+
 void Device::launch(bc::kernel& k, size_t n) {
   size_t global = padded(n);
   size_t local = local_size_;
@@ -207,11 +215,13 @@ bc::kernel Device::kernel(const std::string& program, const std::string& kernel_
     if (s == sources.end()) throw std::runtime_error("no embedded kernel program '" + program + "'");
     const std::string preamble =
         "#pragma OPENCL EXTENSION cl_khr_fp64 : enable\n"
-        "typedef double real;\ntypedef double2 real2;\ntypedef double3 real3;\ntypedef double4 real4;\n"
-        "#line 1\n";
-    bc::program prog = bc::program::create_with_source(preamble + s->second, context_);
+        "typedef double real;\ntypedef double2 real2;\ntypedef double3 real3;\ntypedef double4 real4;\n";
+    const std::string common = sources.at("common");  // kernels/common.clh
+    bc::program prog = bc::program::create_with_source(preamble + common + "\n#line 1\n" + s->second, context_);
+    std::string build_options = "-cl-std=CL1.2 -DLS=" + std::to_string(local_size_);
+    if (group_reduce()) build_options += " -DGROUP_REDUCE";
     try {
-      prog.build("-cl-std=CL1.2 " + options);
+      prog.build(build_options + " " + options);
     } catch (const bc::opencl_error&) {
       throw std::runtime_error("OpenCL build of kernels/" + program + ".cl failed on " + name() +
                                ":\n" + prog.build_log());

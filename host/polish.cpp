@@ -130,7 +130,7 @@ struct DevicePolisher::Impl {
         partial(d.context()), S(d.context()) {}
   void scalars(int op) {
     k_scalars.set_arg(1, op);
-    dev.launch(k_scalars, 1);
+    dev.launch(k_scalars, dev.combine_items());
   }
 };
 
@@ -197,7 +197,7 @@ DevicePolisher::DevicePolisher(Device& dev, const Tets& tets, int n, const std::
   I.k_apply_t.set_arg(8, I.s);
   I.k_apply_t.set_arg(9, I.partial);
   I.k_scalars = dev.kernel("polish", "polish_scalars");
-  I.k_scalars.set_arg(0, static_cast<int>(I.G));
+  I.k_scalars.set_arg(0, static_cast<int>(dev.reduction_partials(I.G)));
   I.k_scalars.set_arg(2, I.partial);
   I.k_scalars.set_arg(3, I.S);
   I.k_update = dev.kernel("polish", "polish_update");

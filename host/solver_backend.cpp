@@ -213,7 +213,7 @@ ClBackend::ClBackend(Device& dev, int n)
   k_dot_.set_arg(3, partial_);
   k_dot2_.set_arg(0, n);
   k_dot2_.set_arg(5, partial_);
-  k_finalize_.set_arg(0, static_cast<int>(groups_));
+  k_finalize_.set_arg(0, static_cast<int>(dev.reduction_partials(groups_)));
   k_finalize_.set_arg(2, partial_);
   k_finalize_.set_arg(3, s_);
   k_cg_init_.set_arg(0, n);
@@ -321,7 +321,7 @@ void ClBackend::spmv_scaled(Vec y, Vec x) {
 
 void ClBackend::finalize(Op op) {
   k_finalize_.set_arg(1, static_cast<int>(op));
-  dev_.launch(k_finalize_, 1);
+  dev_.launch(k_finalize_, dev_.combine_items());
 }
 
 void ClBackend::dot(Vec a, Vec b, Op op) {

@@ -1,10 +1,6 @@
 // Geometry kernels: per-tet signed volumes and per-vertex dual volumes.
 // Positions are n x 3 row-major doubles; tets are m x 4 row-major ints.
 
-inline real3 load3(__global const real* x, int i) {
-  return (real3)(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
-}
-
 // vol[t] = det[b-a, c-a, d-a] / 6
 __kernel void tet_volumes(const int m, __global const real* x, __global const int* tets,
                           __global real* vol) {

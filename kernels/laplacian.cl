@@ -4,10 +4,6 @@
 // Local edge index of corners (a, b): (0,1)=0 (0,2)=1 (0,3)=2 (1,2)=3 (1,3)=4 (2,3)=5.
 __constant int kEdge[16] = {-1, 0, 1, 2, 0, -1, 3, 4, 1, 3, -1, 5, 2, 4, 5, -1};
 
-inline real3 lload3(__global const real* x, int i) {
-  return (real3)(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
-}
-
 // Per tet: the six off-diagonal stiffness entries K_ab = -(c_a . c_b) / (6 det) with
 // c_1 = e2 x e3, c_2 = e3 x e1, c_3 = e1 x e2, c_0 = -(c_1 + c_2 + c_3) (det grad phi_a = c_a),
 // and the signed volume det / 6.
@@ -15,10 +11,10 @@ __kernel void tet_weights(const int m, __global const real* x, __global const in
                           __global real* w, __global real* vol) {
   const int t = get_global_id(0);
   if (t >= m) return;
-  const real3 p0 = lload3(x, tets[4 * t]);
-  const real3 e1 = lload3(x, tets[4 * t + 1]) - p0;
-  const real3 e2 = lload3(x, tets[4 * t + 2]) - p0;
-  const real3 e3 = lload3(x, tets[4 * t + 3]) - p0;
+  const real3 p0 = load3(x, tets[4 * t]);
+  const real3 e1 = load3(x, tets[4 * t + 1]) - p0;
+  const real3 e2 = load3(x, tets[4 * t + 2]) - p0;
+  const real3 e3 = load3(x, tets[4 * t + 3]) - p0;
   const real3 c1 = cross(e2, e3), c2 = cross(e3, e1), c3 = cross(e1, e2);
   const real3 c0 = -(c1 + c2 + c3);
   const real det = dot(e1, c1);

@@ -16,10 +16,6 @@
 #define INSIDE_EPS (-1e-12)
 #define OUTSIDE_CLAMP (-0.05)
 
-inline real3 ld3(__global const real* x, int i) {
-  return (real3)(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
-}
-
 inline void bary(__global const real* inv, int t, real3 p, real* l) {
   __global const real* q = inv + 12 * t;
   const real3 d = p - (real3)(q[0], q[1], q[2]);
@@ -122,7 +118,7 @@ __kernel void moser_velocity(const int n, __global const real* x, __global const
     vel[3 * i + 2] = 0.0;
     return;
   }
-  real3 p = ld3(x, i) + c * ld3(kprev, i);
+  real3 p = load3(x, i) + c * load3(kprev, i);
   if (on_b) p = p / length(p);
   real l[4];
   int st[3] = {0, 0, 0};
@@ -133,7 +129,7 @@ __kernel void moser_velocity(const int n, __global const real* x, __global const
   real r = 0.0;
   for (int k = 0; k < 4; ++k) {
     const int v = tets[4 * tet + k];
-    g += l[k] * ld3(grad, v);
+    g += l[k] * load3(grad, v);
     r += l[k] * rho0[v];
   }
   real3 u = g / ((1.0 - t) * r + t);
@@ -158,7 +154,7 @@ __kernel void moser_rk_update(const int n, __global real* x, __global const real
   if (i >= n) return;
   const int on_b = boundary[i];
   if (on_b && !slide) return;
-  real3 p = ld3(x, i) + (dt / 6.0) * (ld3(k1, i) + 2.0 * ld3(k2, i) + 2.0 * ld3(k3, i) + ld3(k4, i));
+  real3 p = load3(x, i) + (dt / 6.0) * (load3(k1, i) + 2.0 * load3(k2, i) + 2.0 * load3(k3, i) + load3(k4, i));
   if (on_b) p = p / length(p);
   x[3 * i] = p.x;
   x[3 * i + 1] = p.y;

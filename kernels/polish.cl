@@ -2,8 +2,8 @@
 // host/polish.cpp): CGLS on the linearised relative tet volumes, min |A dx - b| with
 //   A_(t, v) = vol_t grad phi_v / target_t   (v a corner of tet t),   b_t = 1 - vol_t / target_t,
 // dx restricted per vertex (free / tangent to the sphere / zero). The iterations run without a
-// host synchronisation: scalars live in S, reductions are per-work-item partials combined by a
-// single work item (polish_scalars).
+// host synchronisation: scalars live in S, reductions store partials (STORE_PARTIALS,
+// kernels/common.clh) that polish_scalars combines.
 //
 // Reductions use a fixed grid of G work items (global size G) with a grid stride.
 
@@ -56,6 +56,7 @@ __kernel void polish_setup(const int m, __global const int* tets, __global const
 // q = A p; partial[g] = |q|^2 over this work item's tets
 __kernel void polish_apply(const int m, __global const int* tets, __global const real* sg,
                            __global const real* p, __global real* q, __global real* partial) {
+  REDUCE_SCRATCH;
   real acc = 0.0;
   STRIDE_BEGIN(m) {
     __global const real* g = sg + 12 * i;
@@ -67,7 +68,7 @@ __kernel void polish_apply(const int m, __global const int* tets, __global const
     q[i] = s;
     acc += s * s;
   }
-  partial[get_global_id(0)] = acc;
+  STORE_PARTIALS(acc, 0.0, partial);
 }
 
 // s = P A^T y (gather over the vertex's tet slots 4 t + k; P: flags 0 free, 1 tangent to the
@@ -77,6 +78,7 @@ __kernel void polish_apply_t(const int n, const int m, __global const int* inc_p
                              __global const int* inc_slot, __global const real* sg,
                              __global const real* y, __global const char* flags,
                              __global const real* x, __global real* s, __global real* partial) {
+  REDUCE_SCRATCH;
   real acc = 0.0;
   STRIDE_BEGIN(n) {
     real sx = 0.0, sy = 0.0, sz = 0.0;
@@ -106,17 +108,15 @@ __kernel void polish_apply_t(const int n, const int m, __global const int* inc_p
   }
   real yy = 0.0;
   STRIDE_BEGIN(m) yy += y[i] * y[i];
-  partial[get_global_id(0)] = acc;
-  partial[get_global_size(0) + get_global_id(0)] = yy;
+  STORE_PARTIALS(acc, yy, partial);
 }
 
 __kernel void polish_scalars(const int G, const int op, __global const real* partial,
                              __global real* S) {
+  REDUCE_SCRATCH;
+  real p0, p1;
+  COMBINE_PARTIALS(G, partial, op == P_OP_INIT || op == P_OP_RR, p0, p1);
   if (get_global_id(0) != 0) return;
-  real p0 = 0.0, p1 = 0.0;
-  for (int g = 0; g < G; ++g) p0 += partial[g];
-  if (op == P_OP_INIT || op == P_OP_RR)
-    for (int g = 0; g < G; ++g) p1 += partial[G + g];
   if (op == P_OP_INIT) {
     S[P_GAMMA] = p0;
     S[P_BB] = p1;

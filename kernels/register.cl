@@ -3,10 +3,6 @@
 // Points, centres and coefficients are n x 3 row-major doubles. One work item per point,
 // looping over the centres (the dominant cost: centres x points x 4 stages x steps).
 
-inline real3 reg_load3(__global const real* x, int i) {
-  return (real3)(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
-}
-
 // Free kernel: Phi(r) c = [(4l - 4l^2 |r|^2) c + 4l^2 r (r.c)] exp(-l |r|^2)
 inline real3 apply_free(const real3 r, const real3 c, const real l) {
   const real r2 = dot(r, r);
@@ -34,10 +30,10 @@ inline real3 field_at(const real3 x, const int begin, const int end, __global co
   real3 u = (real3)(0.0, 0.0, 0.0);
   if (tangent) {
     for (int j = begin; j < end; ++j)
-      u += apply_tangent(x, reg_load3(centres, j), reg_load3(coefs, j), l);
+      u += apply_tangent(x, load3(centres, j), load3(coefs, j), l);
   } else {
     for (int j = begin; j < end; ++j)
-      u += apply_free(x - reg_load3(centres, j), reg_load3(coefs, j), l);
+      u += apply_free(x - load3(centres, j), load3(coefs, j), l);
   }
   return u;
 }
@@ -48,7 +44,7 @@ __kernel void eval_field(const int n, __global const real* x, const int nc,
                          const int tangent, __global real* out) {
   const int i = get_global_id(0);
   if (i >= n) return;
-  const real3 u = field_at(reg_load3(x, i), 0, nc, centres, coefs, l, tangent);
+  const real3 u = field_at(load3(x, i), 0, nc, centres, coefs, l, tangent);
   out[3 * i] = u.x;
   out[3 * i + 1] = u.y;
   out[3 * i + 2] = u.z;
@@ -62,7 +58,7 @@ __kernel void rk4_advect(const int n, __global real* x, const int steps, const r
                          __global const real* coefs, const real l, const int tangent) {
   const int i = get_global_id(0);
   if (i >= n) return;
-  real3 p = reg_load3(x, i);
+  real3 p = load3(x, i);
   for (int k = 0; k < steps; ++k) {
     __global const int* s = slot + 4 * k;  // slots 2k, 2k+1, 2k+2 as (begin, end) pairs
     const real3 k1 = field_at(p, s[0], s[1], centres, coefs, l, tangent);

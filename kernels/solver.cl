@@ -2,10 +2,10 @@
 // BiCGSTAB vector updates, and two-stage dot products. Scalars (alpha, beta, ...) stay on the
 // device in a small array S; the host reads one residual per iteration.
 //
-// Reductions run on a fixed number G of work items (global size G, a multiple of the local
-// size): each writes one partial sum, a single work item then combines them ("finalize").
-// With -DCHUNKED (CPU devices) each work item sums a contiguous chunk, else a grid stride
-// (coalesced on GPUs).
+// Reductions run on a fixed grid of G work items (a multiple of the local size) and store
+// partial sums with STORE_PARTIALS; "finalize" combines them (kernels/common.clh: per work item
+// on CPUs, per work group on GPUs). With -DCHUNKED (CPU devices) each work item sums a
+// contiguous chunk, else a grid stride (coalesced on GPUs).
 
 // Scalar slots (keep in sync with host/solver_backend.hpp)
 #define S_RZ 0
@@ -100,25 +100,26 @@ __kernel void inv_row_squares(const int n, __global const int* row_ptr, __global
 // partial[g] = a . b over this work item's range
 __kernel void dot_partial(const int n, __global const real* a, __global const real* b,
                           __global real* partial) {
+  REDUCE_SCRATCH;
   real s = 0.0;
   RANGE_BEGIN(n) s += a[i] * b[i];
-  partial[get_global_id(0)] = s;
+  STORE_PARTIALS(s, 0.0, partial);
 }
 
 // partial[g] = a . b, partial[G + g] = c . e
 __kernel void dot2_partial(const int n, __global const real* a, __global const real* b,
                            __global const real* c, __global const real* e,
                            __global real* partial) {
+  REDUCE_SCRATCH;
   real s = 0.0, t = 0.0;
   RANGE_BEGIN(n) {
     s += a[i] * b[i];
     t += c[i] * e[i];
   }
-  partial[get_global_id(0)] = s;
-  partial[get_global_size(0) + get_global_id(0)] = t;
+  STORE_PARTIALS(s, t, partial);
 }
 
-// One work item combines the partial sums and updates the scalars.
+// Combines the partial sums (one work group, or one item on CPUs) and updates the scalars.
 #define OP_CG_INIT 0   // S[RZ] = p0, S[RR] = p1
 #define OP_CG_ALPHA 1  // S[ALPHA] = S[RZ] / p0
 #define OP_CG_BETA 2   // S[BETA] = p0 / S[RZ], S[RZ] = p0, S[RR] = p1
@@ -129,12 +130,10 @@ __kernel void dot2_partial(const int n, __global const real* a, __global const r
 #define OP_NORM 7      // S[RR] = p0
 __kernel void finalize(const int G, const int op, __global const real* partial,
                        __global real* S) {
+  REDUCE_SCRATCH;
+  real p0, p1;
+  COMBINE_PARTIALS(G, partial, op == OP_CG_INIT || op == OP_CG_BETA || op == OP_BI_INIT || op == OP_BI_OMEGA || op == OP_BI_BETA, p0, p1);
   if (get_global_id(0) != 0) return;
-  real p0 = 0.0, p1 = 0.0;
-  for (int g = 0; g < G; ++g) p0 += partial[g];
-  if (op == OP_CG_INIT || op == OP_CG_BETA || op == OP_BI_INIT || op == OP_BI_OMEGA ||
-      op == OP_BI_BETA)
-    for (int g = 0; g < G; ++g) p1 += partial[G + g];
   switch (op) {
     case OP_CG_INIT: S[S_RZ] = p0; S[S_RR] = p1; break;
     case OP_CG_ALPHA: S[S_ALPHA] = S[S_RZ] / p0; break;
@@ -154,6 +153,7 @@ __kernel void finalize(const int G, const int op, __global const real* partial,
 // CG start: p = d r; partials r . p and r . r
 __kernel void cg_init(const int n, __global const real* r, __global const real* d,
                       __global real* p, __global real* partial) {
+  REDUCE_SCRATCH;
   real s = 0.0, t = 0.0;
   RANGE_BEGIN(n) {
     const real ri = r[i], pi = d[i] * ri;
@@ -161,14 +161,14 @@ __kernel void cg_init(const int n, __global const real* r, __global const real* 
     s += ri * pi;
     t += ri * ri;
   }
-  partial[get_global_id(0)] = s;
-  partial[get_global_size(0) + get_global_id(0)] = t;
+  STORE_PARTIALS(s, t, partial);
 }
 
 // CG: x += alpha p; r -= alpha q; partials r . d r and r . r
 __kernel void cg_update_xr(const int n, __global const real* S, __global real* x,
                            __global real* r, __global const real* p, __global const real* q,
                            __global const real* d, __global real* partial) {
+  REDUCE_SCRATCH;
   const real alpha = S[S_ALPHA];
   real s = 0.0, t = 0.0;
   RANGE_BEGIN(n) {
@@ -178,8 +178,7 @@ __kernel void cg_update_xr(const int n, __global const real* S, __global real* x
     s += ri * d[i] * ri;
     t += ri * ri;
   }
-  partial[get_global_id(0)] = s;
-  partial[get_global_size(0) + get_global_id(0)] = t;
+  STORE_PARTIALS(s, t, partial);
 }
 
 // CG: p = d r + beta p
@@ -203,6 +202,7 @@ __kernel void bicg_update(const int n, __global const real* S, __global real* x,
                           __global real* r, __global const real* s, __global const real* t,
                           __global const real* p, __global const real* d,
                           __global const real* r0, __global real* partial) {
+  REDUCE_SCRATCH;
   const real alpha = S[S_ALPHA], omega = S[S_OMEGA];
   real a = 0.0, b = 0.0;
   RANGE_BEGIN(n) {
@@ -212,8 +212,7 @@ __kernel void bicg_update(const int n, __global const real* S, __global real* x,
     a += r0[i] * ri;
     b += ri * ri;
   }
-  partial[get_global_id(0)] = a;
-  partial[get_global_size(0) + get_global_id(0)] = b;
+  STORE_PARTIALS(a, b, partial);
 }
 
 // BiCGSTAB: p = r + beta (p - omega v)

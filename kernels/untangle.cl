@@ -1,10 +1,6 @@
 // Untangling energy of Garanzha et al. 2021 (see include/vpm/untangle.hpp), one work item per
 // active tet, and the per-vertex gather of the gradient (no atomics: CSR of contributions).
 
-inline real3 ut_load3(__global const real* x, int i) {
-  return (real3)(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
-}
-
 // For active tet a (vertices tv[4a..4a+3], R^-1 row-major in rinv[9a..], weight w[a]):
 //   e[a] = w f(J), d[a] = det J, and if want_grad: gt[12a + 3k + c] = dE/dx of corner k.
 __kernel void untangle_tet(const int m, const real eps, const real theta, const int want_grad,
@@ -13,10 +9,10 @@ __kernel void untangle_tet(const int m, const real eps, const real theta, const 
                            __global real* d, __global real* gt) {
   const int a = get_global_id(0);
   if (a >= m) return;
-  const real3 p0 = ut_load3(x, tv[4 * a]);
-  const real3 c0 = ut_load3(x, tv[4 * a + 1]) - p0;
-  const real3 c1 = ut_load3(x, tv[4 * a + 2]) - p0;
-  const real3 c2 = ut_load3(x, tv[4 * a + 3]) - p0;
+  const real3 p0 = load3(x, tv[4 * a]);
+  const real3 c0 = load3(x, tv[4 * a + 1]) - p0;
+  const real3 c1 = load3(x, tv[4 * a + 2]) - p0;
+  const real3 c2 = load3(x, tv[4 * a + 3]) - p0;
   __global const real* R = rinv + 9 * a;
   const real3 J0 = c0 * R[0] + c1 * R[3] + c2 * R[6];
   const real3 J1 = c0 * R[1] + c1 * R[4] + c2 * R[7];

@@ -75,6 +75,16 @@ class Device {
   /// Enqueues `k` over `n` work items (global size padded; kernels must guard `i < n`).
   void launch(boost::compute::kernel& k, size_t n);
 
+  /// Two-stage reductions (kernels/common.clh): true when each work group sums its work
+  /// items' partials in local memory before writing (GPUs), false when every work item writes
+  /// its own (CPU devices, where barriers are slow). Every program is built with -DLS=<local
+  /// size>, and with -DGROUP_REDUCE when this is true.
+  bool group_reduce() const;
+  /// Number of partial-sum pairs a reduction kernel launched over `global` work items writes.
+  size_t reduction_partials(size_t global) const;
+  /// Work items to launch a combining kernel (COMBINE_PARTIALS) with: one group or one item.
+  size_t combine_items() const;
+
  private:
   Device() = default;
   bool host_ = true;
