@@ -191,7 +191,10 @@ size_t Device::padded(size_t n) const {
   return std::max(g, local_size_);
 }
 
-bool Device::group_reduce() const { return !host_ && desc_.type != "cpu"; }
+bool Device::group_reduce() const {
+  if (host_) return false;
+  return group_reduce_override_ ? *group_reduce_override_ : desc_.type != "cpu";
+}
 
 size_t Device::reduction_partials(size_t global) const {
   return group_reduce() ? padded(global) / local_size_ : padded(global);
@@ -207,7 +210,7 @@ void Device::launch(bc::kernel& k, size_t n) {
 
 bc::kernel Device::kernel(const std::string& program, const std::string& kernel_name,
                           const std::string& options) {
-  const std::string key = program + "|" + options;
+  const std::string key = program + "|" + options + (group_reduce() ? "|group" : "");
   auto it = programs_.find(key);
   if (it == programs_.end()) {
     const auto& sources = detail::embedded_kernel_sources();

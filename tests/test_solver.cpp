@@ -53,6 +53,40 @@ TEST_CASE("Neumann CG: residual reached, zero mean, host and device agree") {
   }
 }
 
+TEST_CASE("both reduction modes (per work item, per work group) give the host's CG and BiCGSTAB") {
+  auto cl = test::opencl_device();
+  if (!cl) {
+    WARN("no OpenCL device: reduction modes not compared");
+    return;
+  }
+  const TetMesh m = jittered_ball(7, 0.2);
+  const int n = m.num_vertices();
+  const Eigen::VectorXd b = zero_sum_random(n, 5);
+  auto solve = [&](Device& dev, SolverMethod method) {
+    SolverOptions o;
+    o.method = method;
+    PoissonSolver s(dev, n, m.tets, o);
+    s.set_positions(m.vertices);
+    Eigen::VectorXd x;
+    const SolverStats st = s.solve_neumann(b, x);
+    return std::make_pair(st, x);
+  };
+  for (SolverMethod method : {SolverMethod::cg, SolverMethod::bicgstab}) {
+    auto host = Device::host();
+    const auto [hs, hx] = solve(*host, method);
+    for (bool group : {false, true}) {
+      INFO("method " << static_cast<int>(method) << ", group reduce " << group);
+      test::GroupReduceScope scope(*cl, group);
+      REQUIRE(cl->group_reduce() == group);
+      const auto [ds, dx] = solve(*cl, method);
+      // round-off differs with the summation order, so the counts differ by a few percent
+      CHECK(std::abs(ds.iterations - hs.iterations) <= hs.iterations / 4);
+      CHECK(ds.relative_residual <= 1e-8);
+      CHECK((dx - hx).norm() <= 1e-6 * hx.norm());
+    }
+  }
+}
+
 TEST_CASE("Dirichlet CG reproduces a linear field (the harmonic map of an affine boundary)") {
   const TetMesh m = jittered_ball(6, 0.25, 9);
   const int n = m.num_vertices();

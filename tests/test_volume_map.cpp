@@ -200,18 +200,23 @@ TEST_CASE("polish direction: host and device agree, fixed vertices stay, sphere 
     // Same arithmetic: after a few iterations the directions agree to round-off. Later
     // iterates of CGLS amplify the different summation order (loss of orthogonality), so at
     // 40 iterations only the residual reached is compared.
-    detail::DevicePolisher dp(*cl, T, n, freedom);
-    const detail::PolishDirection h8 = detail::polish_direction_host(x, T, target, freedom, 8);
-    const detail::PolishDirection d8 = dp.direction(x, target, 8);
-    CHECK(d8.iterations == 8);
-    CHECK(d8.residual == Approx(h8.residual).epsilon(1e-10));
-    CHECK((d8.dx - h8.dx).cwiseAbs().maxCoeff() < 1e-10 * h8.dx.cwiseAbs().maxCoeff());
-    const detail::PolishDirection d = dp.direction(x, target, 40);  // buffers reused
-    CHECK(d.iterations == 40);
-    CHECK(d.residual == Approx(h.residual).epsilon(1e-3));
-    CHECK(d.dx.allFinite());
-    const detail::PolishDirection d2 = dp.direction(x, target, 40);
-    CHECK(d2.dx == d.dx);
+    // Both reduction modes: per work item (CPU devices) and per work group (GPUs).
+    for (bool group : {false, true}) {
+      INFO("group reduce " << group);
+      test::GroupReduceScope scope(*cl, group);
+      detail::DevicePolisher dp(*cl, T, n, freedom);
+      const detail::PolishDirection h8 = detail::polish_direction_host(x, T, target, freedom, 8);
+      const detail::PolishDirection d8 = dp.direction(x, target, 8);
+      CHECK(d8.iterations == 8);
+      CHECK(d8.residual == Approx(h8.residual).epsilon(1e-10));
+      CHECK((d8.dx - h8.dx).cwiseAbs().maxCoeff() < 1e-10 * h8.dx.cwiseAbs().maxCoeff());
+      const detail::PolishDirection d = dp.direction(x, target, 40);  // buffers reused
+      CHECK(d.iterations == 40);
+      CHECK(d.residual == Approx(h.residual).epsilon(1e-3));
+      CHECK(d.dx.allFinite());
+      const detail::PolishDirection d2 = dp.direction(x, target, 40);
+      CHECK(d2.dx == d.dx);
+    }
   }
 }
 

@@ -14,6 +14,7 @@
 #include <boost/compute/kernel.hpp>
 #include <boost/compute/program.hpp>
 #include <map>
+#include <optional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -80,6 +81,9 @@ class Device {
   /// its own (CPU devices, where barriers are slow). Every program is built with -DLS=<local
   /// size>, and with -DGROUP_REDUCE when this is true.
   bool group_reduce() const;
+  /// Overrides group_reduce() for the kernels built from now on (nullopt: the device's own
+  /// rule). Tests use it to run the GPU reduction path on a CPU device.
+  void set_group_reduce(std::optional<bool> on) { group_reduce_override_ = on; }
   /// Number of partial-sum pairs a reduction kernel launched over `global` work items writes.
   size_t reduction_partials(size_t global) const;
   /// Work items to launch a combining kernel (COMBINE_PARTIALS) with: one group or one item.
@@ -93,6 +97,7 @@ class Device {
   boost::compute::context context_;
   boost::compute::command_queue queue_;
   size_t local_size_ = 64;
+  std::optional<bool> group_reduce_override_;
   std::map<std::string, boost::compute::program> programs_;
 };
 
