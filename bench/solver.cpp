@@ -29,7 +29,7 @@
 #include <thread>
 #include <vector>
 
-#include "solver_backend.hpp"
+#include "linalg/solver_backend.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/json.hpp"

@@ -1,6 +1,6 @@
 // Moser rounds: point location in the round's background mesh, interpolation of the fixed
 // field v(y, t) = grad psi(y) / ((1 - t) rho0(y) + t), and the RK4 stages.
-// Must match host/moser_field.cpp (the host reference) line for line.
+// Must match host/map/moser_field.cpp and host/mesh/tet_grid.cpp (the host reference) line for line.
 //
 // Background data (uploaded once per round):
 //   inv   m x 12: corner a (3), then the rows of [b-a, c-a, d-a]^-1 (9): lambda_{1..3} = Minv (p - a)

@@ -1,5 +1,5 @@
 // Polish step of the volume map on the device (host reference: polish_direction_host in
-// host/polish.cpp): CGLS on the linearised relative tet volumes, min |A dx - b| with
+// host/map/polish.cpp): CGLS on the linearised relative tet volumes, min |A dx - b| with
 //   A_(t, v) = vol_t grad phi_v / target_t   (v a corner of tet t),   b_t = 1 - vol_t / target_t,
 // dx restricted per vertex (free / tangent to the sphere / zero). The iterations run without a
 // host synchronisation: scalars live in S, reductions store partials (STORE_PARTIALS,

@@ -7,7 +7,7 @@
 // on CPUs, per work group on GPUs). With -DCHUNKED (CPU devices) each work item sums a
 // contiguous chunk, else a grid stride (coalesced on GPUs).
 
-// Scalar slots (keep in sync with host/solver_backend.hpp)
+// Scalar slots (keep in sync with host/linalg/solver_backend.hpp)
 #define S_RZ 0
 #define S_RR 1
 #define S_ALPHA 2

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "moser_field.hpp"
-#include "parallel.hpp"
+#include "mesh/tet_grid.hpp"
+#include "core/parallel.hpp"
 
 namespace vpm {
 
@@ -12,7 +12,7 @@ struct TetLocator::Impl {
   Points x;
   Tets tets;
   std::vector<int> nbr;
-  detail::MoserField background;  // geometry and grid only (no field values)
+  detail::TetGrid background;
 };
 
 TetLocator::TetLocator(const Points& vertices, const Tets& tets) : impl_(std::make_unique<Impl>()) {
@@ -27,7 +27,7 @@ TetLocator& TetLocator::operator=(TetLocator&&) noexcept = default;
 
 Location TetLocator::locate(const Eigen::Vector3d& p, int hint) const {
   Location out;
-  const detail::MoserField& f = impl_->background;
+  const detail::TetGrid& f = impl_->background;
   if (f.m == 0) return out;
   if (hint < 0 || hint >= f.m) {  // start from a tet of p's grid cell when it has one
     int idx[3];

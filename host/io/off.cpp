@@ -1,9 +1,9 @@
 // Geomview .off surfaces: "OFF" (also COFF/NOFF/CNOFF: extra vertex columns ignored), counts
 // "nv nf ne" (on the OFF line or the next), nv vertex lines, nf face lines "k i1 .. ik [color]",
 // 0-based; polygons are fan-triangulated. '#' starts a comment.
-#include "atomic_file.hpp"
-#include "io_formats.hpp"
-#include "io_text.hpp"
+#include "core/atomic_file.hpp"
+#include "io/formats.hpp"
+#include "io/text.hpp"
 #include "vpm/error.hpp"
 
 namespace vpm::detail {

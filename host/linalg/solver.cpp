@@ -4,7 +4,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "solver_backend.hpp"
+#include "linalg/solver_backend.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 

@@ -1,8 +1,8 @@
 // File-format dispatch by extension; the formats live in host/io_<format>.cpp.
 #include "vpm/io.hpp"
 
-#include "io_formats.hpp"
-#include "io_text.hpp"
+#include "io/formats.hpp"
+#include "io/text.hpp"
 #include "vpm/error.hpp"
 
 namespace vpm {

@@ -7,10 +7,10 @@
 #include <cstring>
 #include <map>
 
-#include "atomic_file.hpp"
-#include "io_formats.hpp"
-#include "io_text.hpp"
-#include "io_xml.hpp"
+#include "core/atomic_file.hpp"
+#include "io/formats.hpp"
+#include "io/text.hpp"
+#include "io/xml.hpp"
 #include "vpm/error.hpp"
 
 namespace vpm::detail {

@@ -1,4 +1,4 @@
-// Landmark CSV reader (vpm/registration.hpp).
+// Landmark CSV reader and writer (vpm/landmarks.hpp).
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -6,9 +6,9 @@
 #include <fstream>
 #include <sstream>
 
-#include "atomic_file.hpp"
+#include "core/atomic_file.hpp"
 #include "vpm/error.hpp"
-#include "vpm/registration.hpp"
+#include "vpm/landmarks.hpp"
 
 namespace vpm {
 

@@ -9,9 +9,9 @@
 #include <memory>
 #include <sstream>
 
-#include "moser_field.hpp"
-#include "polish.hpp"
-#include "volume_map_solve.hpp"
+#include "map/moser_field.hpp"
+#include "map/polish.hpp"
+#include "map/volume_map_solve.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/geometry.hpp"

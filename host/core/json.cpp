@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "atomic_file.hpp"
+#include "core/atomic_file.hpp"
 
 namespace vpm {
 

@@ -8,9 +8,9 @@
 #include <numeric>
 #include <unordered_map>
 
-#include "atomic_file.hpp"
-#include "io_formats.hpp"
-#include "io_text.hpp"
+#include "core/atomic_file.hpp"
+#include "io/formats.hpp"
+#include "io/text.hpp"
 #include "vpm/error.hpp"
 
 namespace vpm::detail {

@@ -1,4 +1,4 @@
-#include "polish.hpp"
+#include "map/polish.hpp"
 
 #include <Eigen/Dense>
 #include <boost/compute/algorithm/copy.hpp>
@@ -6,7 +6,7 @@
 #include <boost/compute/container/vector.hpp>
 #include <cmath>
 
-#include "parallel.hpp"
+#include "core/parallel.hpp"
 #include "vpm/device.hpp"
 #include "vpm/geometry.hpp"
 

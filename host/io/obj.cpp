@@ -3,9 +3,9 @@
 // Every other statement (vn, vt, g, o, s, usemtl, l, ...) is ignored. '#' starts a comment.
 #include <charconv>
 
-#include "atomic_file.hpp"
-#include "io_formats.hpp"
-#include "io_text.hpp"
+#include "core/atomic_file.hpp"
+#include "io/formats.hpp"
+#include "io/text.hpp"
 #include "vpm/error.hpp"
 
 namespace vpm::detail {

@@ -1,4 +1,4 @@
-#include "solver_backend.hpp"
+#include "linalg/solver_backend.hpp"
 
 #include <cmath>
 #include <stdexcept>

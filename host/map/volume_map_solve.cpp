@@ -1,4 +1,4 @@
-#include "volume_map_solve.hpp"
+#include "map/volume_map_solve.hpp"
 
 #include <Eigen/Dense>
 #include <Eigen/IterativeLinearSolvers>

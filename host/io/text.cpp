@@ -1,4 +1,4 @@
-#include "io_text.hpp"
+#include "io/text.hpp"
 
 #include <algorithm>
 #include <cctype>

@@ -2,7 +2,7 @@
 #include <cmath>
 #include <vector>
 
-#include "parallel.hpp"
+#include "core/parallel.hpp"
 #include "vpm/image.hpp"
 
 namespace vpm {

@@ -1,0 +1,42 @@
+#pragma once
+// Private: point location in a tet mesh (barycentric coordinates, walks through face
+// neighbours, a uniform grid fallback), used by vpm::TetLocator (vpm/locate.hpp) and by the
+// volume map's Moser field (map/moser_field.hpp). kernels/moser.cl has the same walk on the
+// device, line for line.
+#include <Eigen/Core>
+#include <vector>
+
+#include "vpm/mesh.hpp"
+
+namespace vpm::detail {
+
+/// nbr[4 t + k] = the tet sharing the face of tet t opposite its corner k, or -1 (boundary).
+std::vector<int> tet_neighbors(const Tets& tets);
+
+/// A tet mesh prepared for point location: per-tet affine maps for barycentric coordinates,
+/// face neighbours for walks, and a uniform grid of tets for the fallback search.
+struct TetGrid {
+  int n = 0, m = 0;
+  const Tets* tets = nullptr;        ///< m x 4 (owned by the caller)
+  const std::vector<int>* nbr = nullptr;
+  std::vector<double> inv;           ///< m x 12: corner a, then rows of [b-a, c-a, d-a]^-1
+  double lo[3] = {0, 0, 0};
+  double inv_h = 1;
+  int dims[3] = {1, 1, 1};
+  std::vector<int> cell_start;       ///< cells + 1
+  std::vector<int> cell_tets;
+};
+
+/// Fills inv and the grid of `f` for background positions `x` (n x 3).
+void build_background(TetGrid& f, const Points& x, const Tets& tets, const std::vector<int>& nbr);
+
+/// Barycentric coordinates l[0..3] of `p` in tet `t` of the background `f`.
+void bary(const TetGrid& f, int t, const Eigen::Vector3d& p, double* l);
+
+/// Point location: walks from tet `t` towards `p` through face neighbours (at most 64 steps),
+/// else searches the grid cell of `p`. Returns the tet containing `p` with its barycentric
+/// coordinates in `l`; a point outside the mesh gets the best tet found and coordinates clamped
+/// to it. `st` (3 counters: walk steps, grid fallbacks, clamped) is incremented.
+int locate(const TetGrid& f, const Eigen::Vector3d& p, int t, double* l, long long* st);
+
+}  // namespace vpm::detail
