@@ -104,10 +104,5 @@ void progress(const std::string& line) {
   else if (verbosity().terminal) std::cerr << '\r' << line << "\033[K" << std::flush;
 }
 
-std::string pct(double fraction) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.2f %%", 100 * fraction);
-  return b;
-}
 
 }  // namespace vpm::cli

@@ -49,8 +49,6 @@ struct Verbosity {
 Verbosity& verbosity();
 /// Prints to stderr unless quiet; progress lines only when stderr is a terminal or verbose.
 void info(const std::string& line);
-/// A fraction as a percentage with two decimals ("1.23 %").
-std::string pct(double fraction);
 void progress(const std::string& line);
 
 }  // namespace vpm::cli

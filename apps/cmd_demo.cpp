@@ -23,12 +23,15 @@
 #include "vpm/json.hpp"
 #include "vpm/mesh_image.hpp"
 #include "vpm/registration.hpp"
+#include "vpm/timing.hpp"
+#include "vpm/format.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+using vpm::Clock;
+using vpm::seconds_since;
+using vpm::strprintf;
 
 const char* kUsage =
     "vpm demo [--out DIR] [--data DIR] [--target-vertices N] [--grid N] [--width-factor F] [--quiet] [--verbose]";
@@ -78,11 +81,6 @@ std::map<int, std::string> aal_names(const std::string& path) {
   return names;
 }
 
-std::string fmt(const char* f, double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, f, v);
-  return b;
-}
 
 // Meshes, maps and writes one subject; returns the map and fills `report`.
 vpm::BallMap mesh_and_map(vpm::Device& dev, const vpm::Image& image, const vpm::Image& atlas,
@@ -91,17 +89,17 @@ vpm::BallMap mesh_and_map(vpm::Device& dev, const vpm::Image& image, const vpm::
   auto t0 = Clock::now();
   vpm::Json mesh_report;
   vpm::TetMesh mesh = vpm::mesh_image(image, mo, &mesh_report, &atlas);
-  const double t_mesh = since(t0);
+  const double t_mesh = seconds_since(t0);
   vpm::write_mesh((out / (name + ".vtu")).string(), mesh);
   const vpm::ValidationReport vr = vpm::validate_mesh(mesh, name);
   vpm::cli::info("demo: " + name + ": " + std::to_string(mesh.num_vertices()) + " vertices, " +
                  std::to_string(mesh.num_tets()) + " tets, smallest dihedral " +
-                 fmt("%.1f", vr.min_dihedral_deg) + " deg (" + fmt("%.1f", t_mesh) + " s); mapping");
+                 strprintf("%.1f", vr.min_dihedral_deg) + " deg (" + strprintf("%.1f", t_mesh) + " s); mapping");
   t0 = Clock::now();
   vpm::BallMapOptions bo;
   bo.volume.progress = [&](const std::string& s) { vpm::cli::progress("demo: " + name + ": " + s); };
   vpm::BallMap bm = vpm::map_to_ball(dev, mesh, vr, name, bo);
-  const double t_map = since(t0);
+  const double t_map = seconds_since(t0);
   vpm::write_mesh((out / (name + "_ball.vtu")).string(), bm.mesh);
   vpm::write_json_file((out / (name + "_map.json")).string(), bm.report);
   report = vpm::Json::object();
@@ -148,7 +146,7 @@ int run(const std::vector<std::string>& argv) {
   const auto pull = [&](const Eigen::Vector3d& x) { return deformation(centre, x); };
   const Image image_b = resample_image(image, pull, Interpolation::linear);
   const Image atlas_b = resample_image(atlas, pull, Interpolation::nearest);
-  timings["read_and_deform"] = since(t0);
+  timings["read_and_deform"] = seconds_since(t0);
 
   // 1-3. Mesh and map both subjects.
   Json subjects = Json::object();
@@ -173,7 +171,7 @@ int run(const std::vector<std::string>& argv) {
   t0 = Clock::now();
   Points registered = subj.mesh.vertices;
   const RegistrationResult reg = register_landmarks(dev, registered, subj.mesh.tets, src, dst, ro);
-  timings["register"] = since(t0);
+  timings["register"] = seconds_since(t0);
   const MapMetrics rm = map_metrics(dev, subj.mesh.vertices, registered, subj.mesh.tets);
   TetMesh reg_mesh = subj.mesh;
   reg_mesh.vertices = registered;
@@ -191,8 +189,8 @@ int run(const std::vector<std::string>& argv) {
   const auto d_after = dice_overlap(s_t, s_after, kEvaluated);
   const auto l_before = dice_overlap(s_t, s_before, landmark_labels);
   const auto l_after = dice_overlap(s_t, s_after, landmark_labels);
-  timings["overlap"] = since(t0);
-  timings["total"] = since(t_start);
+  timings["overlap"] = seconds_since(t0);
+  timings["total"] = seconds_since(t_start);
 
   const std::map<int, std::string> names = aal_names((data / "aal.nii.txt").string());
   auto name_of = [&](int l) { return names.count(l) ? names.at(l) : "label " + std::to_string(l); };
@@ -243,27 +241,27 @@ int run(const std::vector<std::string>& argv) {
   row("", "colin27", "subject");
   row("mesh vertices / tets", std::to_string(int(num(js_t, "vertices"))) + "/" + std::to_string(int(num(js_t, "tets"))),
       std::to_string(int(num(js_s, "vertices"))) + "/" + std::to_string(int(num(js_s, "tets"))));
-  row("smallest dihedral angle (deg)", fmt("%.1f", num(js_t, "min_dihedral_deg")), fmt("%.1f", num(js_s, "min_dihedral_deg")));
+  row("smallest dihedral angle (deg)", strprintf("%.1f", num(js_t, "min_dihedral_deg")), strprintf("%.1f", num(js_s, "min_dihedral_deg")));
   row("initial map: vertex / tet |r-1|",
-      fmt("%.1f%%", 100 * tmpl.initial.vertex_volume_ratio.mean_abs_dev) + " / " + fmt("%.1f%%", 100 * tmpl.initial.tet_volume_ratio.mean_abs_dev),
-      fmt("%.1f%%", 100 * subj.initial.vertex_volume_ratio.mean_abs_dev) + " / " + fmt("%.1f%%", 100 * subj.initial.tet_volume_ratio.mean_abs_dev));
+      strprintf("%.1f%%", 100 * tmpl.initial.vertex_volume_ratio.mean_abs_dev) + " / " + strprintf("%.1f%%", 100 * tmpl.initial.tet_volume_ratio.mean_abs_dev),
+      strprintf("%.1f%%", 100 * subj.initial.vertex_volume_ratio.mean_abs_dev) + " / " + strprintf("%.1f%%", 100 * subj.initial.tet_volume_ratio.mean_abs_dev));
   row("volume map: vertex / tet |r-1|",
-      fmt("%.2f%%", 100 * tmpl.final.vertex_volume_ratio.mean_abs_dev) + " / " + fmt("%.2f%%", 100 * tmpl.final.tet_volume_ratio.mean_abs_dev),
-      fmt("%.2f%%", 100 * subj.final.vertex_volume_ratio.mean_abs_dev) + " / " + fmt("%.2f%%", 100 * subj.final.tet_volume_ratio.mean_abs_dev));
+      strprintf("%.2f%%", 100 * tmpl.final.vertex_volume_ratio.mean_abs_dev) + " / " + strprintf("%.2f%%", 100 * tmpl.final.tet_volume_ratio.mean_abs_dev),
+      strprintf("%.2f%%", 100 * subj.final.vertex_volume_ratio.mean_abs_dev) + " / " + strprintf("%.2f%%", 100 * subj.final.tet_volume_ratio.mean_abs_dev));
   row("inverted tets", std::to_string(tmpl.final.inverted_tets), std::to_string(subj.final.inverted_tets));
-  row("mesh + map seconds", fmt("%.1f", num(js_t, "mesh_seconds")) + " + " + fmt("%.1f", num(js_t, "map_seconds")),
-      fmt("%.1f", num(js_s, "mesh_seconds")) + " + " + fmt("%.1f", num(js_s, "map_seconds")));
+  row("mesh + map seconds", strprintf("%.1f", num(js_t, "mesh_seconds")) + " + " + strprintf("%.1f", num(js_t, "map_seconds")),
+      strprintf("%.1f", num(js_s, "mesh_seconds")) + " + " + strprintf("%.1f", num(js_s, "map_seconds")));
   t << "registration of subject to colin27: " << landmark_labels.size() << " region centroids, landmark rms "
-    << fmt("%.1e", reg.landmark_rms_error) << ", max |u.n| " << fmt("%.1e", reg.max_normal_velocity)
-    << ", vertex / tet |r-1| " << fmt("%.2f%%", 100 * rm.vertex_volume_ratio.mean_abs_dev) << " / "
-    << fmt("%.2f%%", 100 * rm.tet_volume_ratio.mean_abs_dev) << ", " << rm.inverted_tets << " inverted, "
-    << fmt("%.1f", num(timings, "register")) << " s\n";
+    << strprintf("%.1e", reg.landmark_rms_error) << ", max |u.n| " << strprintf("%.1e", reg.max_normal_velocity)
+    << ", vertex / tet |r-1| " << strprintf("%.2f%%", 100 * rm.vertex_volume_ratio.mean_abs_dev) << " / "
+    << strprintf("%.2f%%", 100 * rm.tet_volume_ratio.mean_abs_dev) << ", " << rm.inverted_tets << " inverted, "
+    << strprintf("%.1f", num(timings, "register")) << " s\n";
   t << "Dice with colin27 in the ball (" << samples.rows() << " points; held-out regions):\n";
   row("", "before", "after");
   for (size_t i = 0; i < kEvaluated.size(); ++i)
-    row(name_of(kEvaluated[i]), fmt("%.3f", d_before[i].dice), fmt("%.3f", d_after[i].dice));
-  row("mean of the landmark regions", fmt("%.3f", mean_dice(l_before)), fmt("%.3f", mean_dice(l_after)));
-  t << "total " << fmt("%.1f", num(timings, "total")) << " s; wrote " << (out / "demo.json").string()
+    row(name_of(kEvaluated[i]), strprintf("%.3f", d_before[i].dice), strprintf("%.3f", d_after[i].dice));
+  row("mean of the landmark regions", strprintf("%.3f", mean_dice(l_before)), strprintf("%.3f", mean_dice(l_after)));
+  t << "total " << strprintf("%.1f", num(timings, "total")) << " s; wrote " << (out / "demo.json").string()
     << " and the meshes (.vtu, open in ParaView) in " << out.string() << "\n";
   std::cout << t.str();
   return 0;

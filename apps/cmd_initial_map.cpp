@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "cli.hpp"
+#include "vpm/format.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/initial_map.hpp"
@@ -55,7 +56,7 @@ int run(const std::vector<std::string>& argv) {
   const vpm::Json* fb = im.report.find("folds_before_untangle");
   vpm::cli::info("wrote " + *out + ": " + std::to_string(outm.num_vertices()) + " vertices, " +
                  std::to_string(outm.num_tets()) + " tets; vertex mean |r-1| " +
-                 vpm::cli::pct(mm.vertex_volume_ratio.mean_abs_dev) + ", tet " + vpm::cli::pct(mm.tet_volume_ratio.mean_abs_dev) +
+                 vpm::pct(mm.vertex_volume_ratio.mean_abs_dev) + ", tet " + vpm::pct(mm.tet_volume_ratio.mean_abs_dev) +
                  ", harmonic folds " + std::to_string(fb ? static_cast<int>(fb->number()) : 0) + " -> 0");
   if (report_path) {
     vpm::Json j = im.report;

@@ -3,17 +3,20 @@
 #include <cstdio>
 
 #include "cli.hpp"
+#include "vpm/format.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/ball_map.hpp"
 #include "vpm/io.hpp"
 #include "vpm/json.hpp"
 #include "vpm/validate.hpp"
+#include "vpm/timing.hpp"
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+using vpm::Clock;
+using vpm::seconds_since;
+
 
 const char* kUsage =
     "vpm map MESH -o OUT [--rounds R] [--tolerance T] [--method moser|paper|vsem] "
@@ -52,7 +55,7 @@ int run(const std::vector<std::string>& argv) {
   auto t0 = Clock::now();
   vpm::TetMesh mesh = vpm::read_mesh(in);
   const vpm::ValidationReport vr = vpm::validate_mesh(mesh, in);
-  const double t_read = since(t0);
+  const double t_read = seconds_since(t0);
   vpm::cli::progress("read " + in + ": " + std::to_string(mesh.num_vertices()) + " vertices, " +
                      std::to_string(mesh.num_tets()) + " tets");
 
@@ -64,15 +67,15 @@ int run(const std::vector<std::string>& argv) {
   vpm::write_mesh(*out, bm.mesh);
   vpm::Json& timings = bm.report["timings_s"];
   timings["read"] = t_read;
-  timings["write"] = since(t0);
-  timings["total"] = since(t_start);
+  timings["write"] = seconds_since(t0);
+  timings["total"] = seconds_since(t_start);
 
   vpm::cli::info("wrote " + *out + ": " + std::to_string(bm.mesh.num_vertices()) + " vertices, " +
                  std::to_string(bm.mesh.num_tets()) + " tets; vertex mean |r-1| " +
-                 vpm::cli::pct(bm.initial.vertex_volume_ratio.mean_abs_dev) + " -> " +
-                 vpm::cli::pct(bm.final.vertex_volume_ratio.mean_abs_dev) + ", tet " +
-                 vpm::cli::pct(bm.initial.tet_volume_ratio.mean_abs_dev) + " -> " +
-                 vpm::cli::pct(bm.final.tet_volume_ratio.mean_abs_dev) + ", 0 folds");
+                 vpm::pct(bm.initial.vertex_volume_ratio.mean_abs_dev) + " -> " +
+                 vpm::pct(bm.final.vertex_volume_ratio.mean_abs_dev) + ", tet " +
+                 vpm::pct(bm.initial.tet_volume_ratio.mean_abs_dev) + " -> " +
+                 vpm::pct(bm.final.tet_volume_ratio.mean_abs_dev) + ", 0 folds");
   if (report_path) vpm::write_json_file(*report_path, bm.report);
   return 0;
 }

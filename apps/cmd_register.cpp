@@ -11,6 +11,7 @@
 #include "vpm/json.hpp"
 #include "vpm/metrics.hpp"
 #include "vpm/registration.hpp"
+#include "vpm/timing.hpp"
 
 namespace {
 
@@ -20,13 +21,10 @@ constexpr const char* kUsage =
     "[--boundary tangent|samples|none] [--field per-step|steady] [--no-rigid] [--no-untangle] "
     "[--no-restore] [--quiet]";
 
-double since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 int run(const std::vector<std::string>& argv) {
   using namespace vpm;
-  const auto t_start = std::chrono::steady_clock::now();
+  const auto t_start = Clock::now();
   cli::Args args(argv,
                  {"--landmarks", "--targets", "--steps", "--report", "--width", "--lambda",
                   "--width-factor", "--boundary", "--field", "--boundary-samples"},
@@ -66,7 +64,7 @@ int run(const std::vector<std::string>& argv) {
   opt.untangle = !args.has("--no-untangle");
   opt.restore_volumes = !args.has("--no-restore");
 
-  auto t0 = std::chrono::steady_clock::now();
+  auto t0 = Clock::now();
   TetMesh mesh = read_mesh(in);
   for (int t = 0; t < mesh.num_tets(); ++t)
     for (int c = 0; c < 4; ++c)
@@ -78,7 +76,7 @@ int run(const std::vector<std::string>& argv) {
   if (lm.points.rows() != tg.points.rows())
     throw InputError(*src + " has " + std::to_string(lm.points.rows()) + " landmarks but " + *dst +
                      " has " + std::to_string(tg.points.rows()) + " targets");
-  const double t_read = since(t0);
+  const double t_read = seconds_since(t0);
   cli::info("register: " + std::to_string(mesh.num_vertices()) + " vertices, " +
             std::to_string(mesh.num_tets()) + " tets, " + std::to_string(lm.points.rows()) +
             " landmarks, " + std::to_string(opt.steps) + " steps");
@@ -87,7 +85,7 @@ int run(const std::vector<std::string>& argv) {
   const Points before = mesh.vertices;
   Points ball = mesh.vertices;
   RegistrationResult res;
-  t0 = std::chrono::steady_clock::now();
+  t0 = Clock::now();
   try {
     res = register_landmarks(dev, ball, mesh.tets, lm.points, tg.points, opt);
   } catch (const InputError& e) {
@@ -104,17 +102,17 @@ int run(const std::vector<std::string>& argv) {
     }
     throw InputError(msg);
   }
-  const double t_register = since(t0);
+  const double t_register = seconds_since(t0);
 
-  t0 = std::chrono::steady_clock::now();
+  t0 = Clock::now();
   const MapMetrics mm = map_metrics(dev, before, ball, mesh.tets);
-  const double t_metrics = since(t0);
+  const double t_metrics = seconds_since(t0);
   mesh.vertices = ball;
   mesh.set_point_field("vertex_volume_ratio", mm.vertex_ratio);
   mesh.set_cell_field("tet_volume_ratio", mm.tet_ratio);
-  t0 = std::chrono::steady_clock::now();
+  t0 = Clock::now();
   write_mesh(*out, mesh);
-  const double t_write = since(t0);
+  const double t_write = seconds_since(t0);
 
   std::ostringstream line;
   line.precision(3);
@@ -144,7 +142,7 @@ int run(const std::vector<std::string>& argv) {
     timings["register"] = t_register;
     timings["metrics"] = t_metrics;
     timings["write"] = t_write;
-    timings["total"] = since(t_start);
+    timings["total"] = seconds_since(t_start);
     r["timings_s"] = timings;
     write_json_file(*report_path, r);
   }

@@ -17,6 +17,7 @@
 #include "vpm/metrics.hpp"
 #include "vpm/topology.hpp"
 #include "vpm/validate.hpp"
+#include "vpm/format.hpp"
 
 namespace {
 
@@ -52,16 +53,11 @@ MeshStats mesh_stats(const vpm::TetMesh& m) {
   return s;
 }
 
-std::string fmt(double x) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.6g", x);
-  return buf;
-}
 
 void print_ratio(std::ostream& out, const char* name, const vpm::RatioStats& r) {
-  out << name << "  mean|r-1| " << fmt(r.mean_abs_dev) << "  std log " << fmt(r.std_log)
-      << "  p99|log| " << fmt(r.p99_abs_log) << "  max|log| " << fmt(r.max_abs_log) << "  min "
-      << fmt(r.min) << "  max " << fmt(r.max) << '\n';
+  out << name << "  mean|r-1| " << vpm::format_sig(r.mean_abs_dev, 6) << "  std log " << vpm::format_sig(r.std_log, 6)
+      << "  p99|log| " << vpm::format_sig(r.p99_abs_log, 6) << "  max|log| " << vpm::format_sig(r.max_abs_log, 6) << "  min "
+      << vpm::format_sig(r.min, 6) << "  max " << vpm::format_sig(r.max, 6) << '\n';
 }
 
 int run(const std::vector<std::string>& argv) {
@@ -119,16 +115,16 @@ int run(const std::vector<std::string>& argv) {
         << "boundary faces      " << st.boundary_faces << '\n'
         << "euler (V-E+F-T)     " << st.euler << "  (1 for a ball)\n"
         << "boundary euler      " << st.boundary_euler << "  (2 for a sphere)\n"
-        << "min dihedral angle  " << fmt(st.min_dihedral) << " deg at tet " << st.min_dihedral_tet
+        << "min dihedral angle  " << vpm::format_sig(st.min_dihedral, 6) << " deg at tet " << st.min_dihedral_tet
         << '\n'
-        << "total volume        " << fmt(st.volume) << '\n';
+        << "total volume        " << vpm::format_sig(st.volume, 6) << '\n';
     if (!against) out << "reoriented tets     " << st.reoriented << '\n';
     if (metrics) {
       out << "against             " << *against << '\n'
           << "inverted tets       " << metrics->inverted_tets << '\n';
       print_ratio(out, "vertex volume ratio", metrics->vertex_volume_ratio);
       print_ratio(out, "tet volume ratio   ", metrics->tet_volume_ratio);
-      out << "boundary max radius error  " << fmt(metrics->boundary_max_radius_error) << '\n';
+      out << "boundary max radius error  " << vpm::format_sig(metrics->boundary_max_radius_error, 6) << '\n';
     }
     std::cout << out.str();
   }

@@ -9,6 +9,7 @@
 #include "support/fixtures.hpp"
 #include "vpm/io.hpp"
 #include "vpm/json.hpp"
+#include "vpm/timing.hpp"
 
 namespace {
 vpm::TetMesh cube(int n) {
@@ -19,9 +20,6 @@ vpm::TetMesh cube(int n) {
   m.set_cell_field("label", label, true);
   m.set_point_field("vertex_volume_ratio", ratio);
   return m;
-}
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 }  // namespace
 
@@ -36,12 +34,12 @@ int main(int argc, char** argv) {
   j["tets"] = m.num_tets();
   for (const char* ext : {".node", ".mesh", ".vtu", ".msh"}) {
     const std::string path = dir + "/bench_io" + ext;
-    auto t0 = std::chrono::steady_clock::now();
+    vpm::Stopwatch sw;
     vpm::write_mesh(path, m);
-    const double w = seconds_since(t0);
-    t0 = std::chrono::steady_clock::now();
+    const double w = sw.seconds();
+    sw.restart();
     const vpm::TetMesh r = vpm::read_mesh(path);
-    const double rd = seconds_since(t0);
+    const double rd = sw.seconds();
     double mb = std::filesystem::file_size(path) / 1e6;
     if (std::string(ext) == ".node") mb += std::filesystem::file_size(dir + "/bench_io.ele") / 1e6;
     const bool same = r.vertices == m.vertices && r.tets == m.tets;

@@ -35,16 +35,15 @@
 #include "vpm/json.hpp"
 #include "vpm/laplacian.hpp"
 #include "vpm/solver.hpp"
+#include "vpm/timing.hpp"
 
 // Usage: see the top of this file; --eigen-threads N runs Eigen with N threads only (default:
 // all hardware threads and 1 thread, both reported).
 using namespace vpm;
 namespace bc = boost::compute;
-using Clock = std::chrono::steady_clock;
 
 namespace {
 
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -206,7 +205,7 @@ int main(int argc, char** argv) try {
       const auto t0 = Clock::now();
 #pragma omp parallel for
       for (int i = 0; i < tn; ++i) A[i] = B[i] + 0.5 * C[i];
-      t.push_back(since(t0));
+      t.push_back(seconds_since(t0));
     }
     host_triad_gbs = 24.0 * tn / median(t) / 1e9;
     if (!dev.is_host()) {
@@ -225,7 +224,7 @@ int main(int argc, char** argv) try {
         const auto t0 = Clock::now();
         dev.launch(k, tn);
         q.finish();
-        t.push_back(since(t0));
+        t.push_back(seconds_since(t0));
       }
       triad_gbs = 24.0 * tn / median(t) / 1e9;
     } else {
@@ -324,7 +323,7 @@ int main(int argc, char** argv) try {
           const auto t0 = Clock::now();
           eigen_cg.compute(Kp);
           x_eigen = eigen_cg.solve(bp);
-          const double sec = since(t0);
+          const double sec = seconds_since(t0);
           eigen_iterations = int(eigen_cg.iterations());
           if (eigen_cg.info() != Eigen::Success) throw NumericalError("Eigen CG did not converge");
           return sec;
@@ -335,7 +334,7 @@ int main(int argc, char** argv) try {
           Eigen::VectorXd y(n);
           const auto t0 = Clock::now();
           for (int k = 0; k < 5; ++k) y.noalias() = Kp * bp;
-          return since(t0) / 5;
+          return seconds_since(t0) / 5;
         };
         e.triad = host_triad_gbs;
         entries.push_back(std::move(e));
@@ -369,7 +368,7 @@ int main(int argc, char** argv) try {
             *vx = variant == 0 ? viennacl::linalg::solve(*vA, *vb, tag, *vpc)
                                : viennacl::linalg::solve(*vA, *vb, tag);
             viennacl::backend::finish();
-            const double sec = since(t0);
+            const double sec = seconds_since(t0);
             vcl_iterations = int(tag.iters());
             return sec;
           };
@@ -382,7 +381,7 @@ int main(int argc, char** argv) try {
             const auto t0 = Clock::now();
             for (int k = 0; k < 20; ++k) *vy = viennacl::linalg::prod(*vA, *vb);
             viennacl::backend::finish();
-            return since(t0) / 20;
+            return seconds_since(t0) / 20;
           };
           e.triad = triad_gbs;
           entries.push_back(std::move(e));
@@ -409,7 +408,7 @@ int main(int argc, char** argv) try {
         const auto t0 = Clock::now();
         for (int k = 0; k < 20; ++k) cl_bk->spmv(detail::VQ, detail::VP, false);
         dev.queue().finish();
-        return since(t0) / 20;
+        return seconds_since(t0) / 20;
       }
       if (!host_bk) {
         host_bk = std::make_unique<detail::HostBackend>(n);
@@ -418,7 +417,7 @@ int main(int argc, char** argv) try {
       }
       const auto t0 = Clock::now();
       for (int k = 0; k < 5; ++k) host_bk->spmv(detail::VQ, detail::VP, false);
-      return since(t0) / 5;
+      return seconds_since(t0) / 5;
     };
 
     // warm-up (kernel builds, first launches), then interleaved repeats

@@ -29,11 +29,13 @@
 #include "vpm/metrics.hpp"
 #include "vpm/validate.hpp"
 #include "vpm/volume_map.hpp"
+#include "vpm/timing.hpp"
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+using vpm::Clock;
+using vpm::seconds_since;
+
 
 double median(std::vector<double> v) {
   if (v.empty()) return 0;
@@ -210,7 +212,7 @@ int main(int argc, char** argv) {
   for (auto& [name, mesh] : meshes) {
     auto t0 = Clock::now();
     const vpm::InitialMapResult im = vpm::initial_map(dev, mesh);
-    const double t_init = since(t0);
+    const double t_init = seconds_since(t0);
     const vpm::MapMetrics m0 = vpm::map_metrics(dev, im.mesh.vertices, im.ball, im.mesh.tets);
     vpm::Json jmesh = vpm::Json::object();
     jmesh["name"] = name;

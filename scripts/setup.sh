@@ -2,7 +2,7 @@
 # Installs every Debian 12 package vpm needs. Idempotent, non-interactive.
 set -euo pipefail
 PKGS=(
-  cmake g++ make pkg-config git
+  cmake g++ make pkg-config git python3
   pocl-opencl-icd ocl-icd-opencl-dev opencl-headers opencl-clhpp-headers clinfo
   libeigen3-dev libboost-dev catch2
   libtet1.5-dev tetgen libnifti2-dev zlib1g-dev mricron-data

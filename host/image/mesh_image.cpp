@@ -20,36 +20,23 @@
 #include "vpm/geometry.hpp"
 #include "vpm/io.hpp"
 #include "vpm/topology.hpp"
+#include "vpm/format.hpp"
+#include "vpm/timing.hpp"
 
 namespace vpm {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-// Wall-clock and process CPU time of a stage.
-struct Stamp {
-  Clock::time_point wall;
-  std::clock_t cpu;
-};
-Stamp stamp() { return {Clock::now(), std::clock()}; }
-double seconds_since(const Stamp& t0) { return std::chrono::duration<double>(Clock::now() - t0.wall).count(); }
 // report.timings_s[key] = wall seconds, report.cpu_s[key] = process CPU seconds.
-void record(Json& report, const std::string& key, const Stamp& t0) {
-  report["timings_s"][key] = seconds_since(t0);
-  report["cpu_s"][key] = double(std::clock() - t0.cpu) / CLOCKS_PER_SEC;
-}
-
-std::string fmt(double x, int prec = 4) {
-  std::ostringstream s;
-  s.precision(prec);
-  s << x;
-  return s.str();
+void record(Json& report, const std::string& key, const Stopwatch& t0) {
+  report["timings_s"][key] = t0.seconds();
+  report["cpu_s"][key] = t0.cpu_seconds();
 }
 
 std::string world_str(const Image& img, int i, int j, int k) {
   const Eigen::Vector3d w = img.to_world(Eigen::Vector3d(i, j, k));
   return "voxel (" + std::to_string(i) + "," + std::to_string(j) + "," + std::to_string(k) +
-         ") = (" + fmt(w.x()) + ", " + fmt(w.y()) + ", " + fmt(w.z()) + ") mm";
+         ") = (" + format_sig(w.x()) + ", " + format_sig(w.y()) + ", " + format_sig(w.z()) + ") mm";
 }
 
 // ---- a 3-D grid of bytes with flood fills -------------------------------------------------
@@ -370,14 +357,14 @@ void check_closed_genus0(const TriSurface& s, const std::string& source, const s
 TetMesh surface_to_tets(const TriSurface& raw, const Resolution& res, const MeshImageOptions& o,
                         Json& report, const std::string& source, bool already_checked) {
   if (!already_checked) check_closed_genus0(raw, source, "the input surface");
-  auto t0 = stamp();
-  if (o.progress) o.progress("remeshing the surface to edge " + fmt(res.edge, 3) + " mm");
+  Stopwatch t0;
+  if (o.progress) o.progress("remeshing the surface to edge " + format_sig(res.edge, 3) + " mm");
   TriSurface s = remesh_surface(raw, res.edge, o.remesh_iterations);
   record(report, "remesh", t0);
   check_closed_genus0(s, source, "the remeshed surface");
   report["surface"] = surface_json(s);
 
-  t0 = stamp();
+  t0.restart();
   TetgenOptions to;
   to.radius_edge = o.radius_edge;
   to.min_dihedral_deg = o.min_dihedral_deg;
@@ -552,7 +539,7 @@ TetMesh tetrahedralize_surface(const TriSurface&, const TetgenOptions&, Json*) {
 // ---- the pipeline --------------------------------------------------------------------------
 
 TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out, const Image* atlas) {
-  const auto t_total = stamp();
+  const Stopwatch t_total;
   Json report = Json::object();
   const std::string src = img.path.empty() ? std::string("image") : img.path;
   report["input"]["path"] = src;
@@ -580,15 +567,15 @@ TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out
     const double diff = (atlas->affine - img.affine).cwiseAbs().maxCoeff();
     if (diff > 1e-3)
       throw InputError(asrc + ": atlas affine (" + atlas->affine_source + ") differs from the image affine (" +
-                       img.affine_source + ") of " + src + " by up to " + fmt(diff) + " mm: not the same grid");
+                       img.affine_source + ") of " + src + " by up to " + format_sig(diff) + " mm: not the same grid");
   }
 
   // ---- mask: threshold, largest 6-connected component, cavities filled -------------------
-  auto t0 = stamp();
+  Stopwatch t0;
   std::string label_list;
   for (int l : o.select_labels) label_list += (label_list.empty() ? "" : ",") + std::to_string(l);
   if (o.progress)
-    o.progress(o.select_labels.empty() ? "mask (value > " + fmt(o.threshold) + ")" : "mask (labels " + label_list + ")");
+    o.progress(o.select_labels.empty() ? "mask (value > " + format_sig(o.threshold) + ")" : "mask (labels " + label_list + ")");
   const Grid3 G{img.dims[0], img.dims[1], img.dims[2]};
   std::vector<uint8_t> mask(G.size());
   size_t count = 0;
@@ -605,11 +592,11 @@ TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out
     count += mask[i];
   }
   if (count == 0 && !o.select_labels.empty())
-    throw InputError(src + ": mask is empty: no voxel has label " + label_list + " (values range " + fmt(lo) +
-                     " .. " + fmt(hi) + ")");
+    throw InputError(src + ": mask is empty: no voxel has label " + label_list + " (values range " + format_sig(lo) +
+                     " .. " + format_sig(hi) + ")");
   if (count == 0)
-    throw InputError(src + ": mask is empty: no voxel is above the threshold " + fmt(o.threshold) +
-                     " (values range " + fmt(lo) + " .. " + fmt(hi) + ")");
+    throw InputError(src + ": mask is empty: no voxel is above the threshold " + format_sig(o.threshold) +
+                     " (values range " + format_sig(lo) + " .. " + format_sig(hi) + ")");
   const auto [removed, filled] = keep_largest_fill_cavities(G, mask, kN6);
   int bx[2] = {G.nx, -1}, by[2] = {G.ny, -1}, bz[2] = {G.nz, -1};
   count = 0;
@@ -640,7 +627,7 @@ TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out
   record(report, "mask", t0);
 
   // ---- resolution, smoothing, resampling ----------------------------------------------------
-  t0 = stamp();
+  t0.restart();
   const Resolution res = resolution_for(mask_volume, o);
   const double min_sp = std::min({img.spacing[0], img.spacing[1], img.spacing[2]});
   const double grid = std::max(0.7 * res.edge, min_sp);
@@ -649,7 +636,7 @@ TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out
   report["parameters"]["grid_mm"] = grid;
   report["parameters"]["smooth_sigma_mm"] = sigma;
   report["parameters"]["max_volume_mm3"] = res.max_volume;
-  if (o.progress) o.progress("smoothing (sigma " + fmt(sigma, 3) + " mm) and resampling (" + fmt(grid, 3) + " mm)");
+  if (o.progress) o.progress("smoothing (sigma " + format_sig(sigma, 3) + " mm) and resampling (" + format_sig(grid, 3) + " mm)");
   // Cropped, padded float copy of the mask.
   int pad[3], c0[3], cn[3];
   const int lo_b[3] = {bx[0], by[0], bz[0]}, hi_b[3] = {bx[1], by[1], bz[1]};
@@ -692,7 +679,7 @@ TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out
   record(report, "grid", t0);
 
   // ---- topology: one component, no cavities, genus 0 (closing at growing radii) ----------
-  t0 = stamp();
+  t0.restart();
   if (o.progress) o.progress("topology check");
   const float iso = 0.5f;
   std::vector<uint8_t> B0(E.size());
@@ -702,7 +689,7 @@ TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out
       for (int x = 0; x < E.nx; ++x)
         if (x == 0 || y == 0 || z == 0 || x == E.nx - 1 || y == E.ny - 1 || z == E.nz - 1) B0[E.idx(x, y, z)] = 0;
   if (std::find(B0.begin(), B0.end(), 1) == B0.end())
-    throw InputError(src + ": the mask vanishes after smoothing (sigma " + fmt(sigma) + " mm): it is thinner than "
+    throw InputError(src + ": the mask vanishes after smoothing (sigma " + format_sig(sigma) + " mm): it is thinner than "
                      "the mesh resolution; lower --smooth or raise --target-vertices");
   Json& topo = report["topology"];
   topo["repairs"] = Json::array();
@@ -729,7 +716,7 @@ TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out
     if (radius > o.max_closing_radius)
       throw InputError(src + ": the mask surface has genus " + std::to_string(st.genus()) + " (Euler characteristic " +
                        std::to_string(st.euler) + ") and morphological closing up to radius " +
-                       std::to_string(o.max_closing_radius) + " grid cells (" + fmt(o.max_closing_radius * grid) +
+                       std::to_string(o.max_closing_radius) + " grid cells (" + format_sig(o.max_closing_radius * grid) +
                        " mm) did not remove the handles; cannot make a genus-0 boundary");
     if (o.progress) o.progress("genus " + std::to_string(st.genus()) + ": closing with radius " + std::to_string(radius));
     B = B0;
@@ -751,7 +738,7 @@ TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out
   record(report, "topology", t0);
 
   // ---- surface to world coordinates ---------------------------------------------------------
-  t0 = stamp();
+  t0.restart();
   for (int v = 0; v < surf.vertices.rows(); ++v) {
     Eigen::Vector3d ijk;
     for (int d = 0; d < 3; ++d) ijk[d] = c0[d] + surf.vertices(v, d) * step[d];
@@ -765,7 +752,7 @@ TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out
   TetMesh mesh = surface_to_tets(surf, res, o, report, src, true);
 
   if (atlas) {
-    t0 = stamp();
+    t0.restart();
     if (o.progress) o.progress("labels");
     Json labels = label_mesh(mesh, *atlas);
     // voxel counts per label inside the atlas, for comparison
@@ -791,7 +778,7 @@ TetMesh mesh_image(const Image& img, const MeshImageOptions& o, Json* report_out
 }
 
 TetMesh mesh_surface(const TriSurface& surface, const MeshImageOptions& o, Json* report_out, const std::string& source) {
-  const auto t_total = stamp();
+  const Stopwatch t_total;
   Json report = Json::object();
   report["input"]["path"] = source;
   check_closed_genus0(surface, source, "the input surface");
@@ -819,7 +806,7 @@ TetMesh mesh_image_file(const std::string& path, const MeshImageOptions& o, Json
   };
   if (ends_with(".off") || ends_with(".obj") || ends_with(".stl")) {
     if (!labels_path.empty()) throw InputError("--labels needs an image input, not a surface (" + path + ")");
-    const auto t0 = stamp();
+    const Stopwatch t0;
     TriSurface s;
     try {
       s = read_surface(path);
@@ -834,7 +821,7 @@ TetMesh mesh_image_file(const std::string& path, const MeshImageOptions& o, Json
     if (report) (*report)["timings_s"]["read"] = r["timings_s"]["read"], (*report)["cpu_s"]["read"] = r["cpu_s"]["read"];
     return m;
   }
-  const auto t0 = stamp();
+  const Stopwatch t0;
   Image img = read_nifti(path);
   Image atlas;
   if (!labels_path.empty()) atlas = read_nifti(labels_path);

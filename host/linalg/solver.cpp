@@ -7,6 +7,8 @@
 #include "linalg/solver_backend.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
+#include "vpm/timing.hpp"
+#include "vpm/format.hpp"
 
 namespace vpm {
 
@@ -34,18 +36,12 @@ namespace {
 
 using namespace detail;
 
-std::string fmt(double v) {
-  std::ostringstream s;
-  s.precision(3);
-  s << v;
-  return s.str();
-}
 
 [[noreturn]] void not_converged(SolverMethod m, double rel, int its, double tol, int n,
                                 const char* why) {
   throw NumericalError(std::string("solver ") + to_string(m) + " " + why + ": relative residual " +
-                       fmt(rel) + " after " + std::to_string(its) + " iterations (tolerance " +
-                       fmt(tol) + ", " + std::to_string(n) + " unknowns)");
+                       format_sig(rel, 3) + " after " + std::to_string(its) + " iterations (tolerance " +
+                       format_sig(tol, 3) + ", " + std::to_string(n) + " unknowns)");
 }
 
 // y = (A D) x, or (A^T A D) x for the normal equations (uses VTMP).
@@ -186,9 +182,6 @@ SolverStats solve_system(BK& bk, const SolverOptions& opt, const std::vector<cha
   return st;
 }
 
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 CsrMatrix transpose(const CsrMatrix& a) {
   CsrMatrix t;
@@ -269,7 +262,7 @@ SparseSolver::SparseSolver(Device& device, const CsrMatrix& a, SolverOptions opt
 SparseSolver::~SparseSolver() = default;
 
 SolverStats SparseSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = Clock::now();
   auto& s = *impl_;
   const int n = s.a.rows;
   if (b.size() != n)
@@ -326,7 +319,7 @@ void PoissonSolver::set_positions(const Points& vertices) {
 }
 
 SolverStats PoissonSolver::solve_neumann(const Eigen::VectorXd& b_in, Eigen::VectorXd& x) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = Clock::now();
   const int n = laplacian_.num_vertices();
   if (!impl_->assembled) throw std::logic_error("PoissonSolver: set_positions() was not called");
   if (b_in.size() != n)
@@ -337,8 +330,8 @@ SolverStats PoissonSolver::solve_neumann(const Eigen::VectorXd& b_in, Eigen::Vec
     throw InputError("PoissonSolver::solve_neumann: right side is not finite");
   if (std::abs(sum) > options_.neumann_tolerance * asum)
     throw InputError("PoissonSolver::solve_neumann: incompatible Neumann right side: sum " +
-                     fmt(sum) + " vs sum|b| " + fmt(asum) + " (relative " + fmt(sum / asum) +
-                     " > tolerance " + fmt(options_.neumann_tolerance) +
+                     format_sig(sum, 3) + " vs sum|b| " + format_sig(asum, 3) + " (relative " + format_sig(sum / asum, 3) +
+                     " > tolerance " + format_sig(options_.neumann_tolerance, 3) +
                      "); a singular Laplacian system needs a zero-sum right side");
   Eigen::VectorXd b = b_in.array() - (n > 0 ? sum / n : 0.0);
   if (x.size() != n) x = Eigen::VectorXd::Zero(n);
@@ -353,7 +346,7 @@ SolverStats PoissonSolver::solve_neumann(const Eigen::VectorXd& b_in, Eigen::Vec
 
 SolverStats PoissonSolver::solve_dirichlet(const std::vector<char>& fixed, const FieldValues& values,
                                            FieldValues& x, const FieldValues* rhs) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = Clock::now();
   const int n = laplacian_.num_vertices();
   if (!impl_->assembled) throw std::logic_error("PoissonSolver: set_positions() was not called");
   if (static_cast<int>(fixed.size()) != n)

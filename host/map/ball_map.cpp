@@ -5,18 +5,13 @@
 
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
+#include "vpm/timing.hpp"
+#include "vpm/format.hpp"
 
 namespace vpm {
 
 namespace {
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-std::string pct(double x) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.2f %%", 100 * x);
-  return b;
-}
 
 std::string quality(const ValidationReport& v) {
   char q[160];
@@ -36,7 +31,7 @@ BallMap map_to_ball(Device& device, const TetMesh& input, const ValidationReport
 
   auto t0 = Clock::now();
   InitialMapResult im = initial_map(device, input, options.initial);  // its errors name the quality
-  timings["initial_map"] = since(t0);
+  timings["initial_map"] = seconds_since(t0);
   BallMap out;
   out.initial = map_metrics(device, im.mesh.vertices, im.ball, im.mesh.tets);
   say("initial map: vertex mean |r-1| " + pct(out.initial.vertex_volume_ratio.mean_abs_dev) + ", tet " +
@@ -54,7 +49,7 @@ BallMap map_to_ball(Device& device, const TetMesh& input, const ValidationReport
     } catch (const NumericalError& e) {
       throw NumericalError(source + ": " + e.what() + quality(validation) + "; nothing written");
     }
-    timings["volume_map"] = since(t0);
+    timings["volume_map"] = seconds_since(t0);
     vm_report = vm.report;
     if (const Json* r = vm.report.find("rounds")) rounds = *r;
     if (const Json* t = vm.report.find("timings_s"))
@@ -63,7 +58,7 @@ BallMap map_to_ball(Device& device, const TetMesh& input, const ValidationReport
   }
   t0 = Clock::now();
   out.final = map_metrics(device, im.mesh.vertices, ball, im.mesh.tets);
-  timings["metrics"] = since(t0);
+  timings["metrics"] = seconds_since(t0);
   if (out.final.inverted_tets > 0)  // never hand on a folded map
     throw NumericalError(source + ": the map has " + std::to_string(out.final.inverted_tets) +
                          " inverted tets; nothing written (vertex mean |r-1| reached " +
@@ -77,7 +72,7 @@ BallMap map_to_ball(Device& device, const TetMesh& input, const ValidationReport
     out.mesh.set_point_field("original_position", im.mesh.vertices);
   out.mesh.set_point_field("vertex_volume_ratio", out.final.vertex_ratio);
   out.mesh.set_cell_field("tet_volume_ratio", out.final.tet_ratio);
-  timings["total"] = since(t_start);
+  timings["total"] = seconds_since(t_start);
 
   Json& j = out.report = Json::object();
   j["device"] = device.name();

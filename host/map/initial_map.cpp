@@ -23,23 +23,17 @@
 #include "vpm/solver.hpp"
 #include "vpm/topology.hpp"
 #include "vpm/untangle.hpp"
+#include "vpm/timing.hpp"
+#include "vpm/format.hpp"
 
 namespace vpm {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 using SpMat = Eigen::SparseMatrix<double>;
 using Trip = Eigen::Triplet<double>;
 
-std::string fmt(double v, int prec = 4) {
-  std::ostringstream s;
-  s.precision(prec);
-  s << v;
-  return s.str();
-}
 
 // ------------------------------------------------------------------------------ split
 
@@ -717,7 +711,7 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
     for (Eigen::Index i = 0; i < v.size(); ++i)
       if (!(v(i) > 0))
         throw InputError("initial_map: input tet " + std::to_string(i) +
-                         " is not positively oriented (volume " + fmt(v(i)) + "); validate the mesh first");
+                         " is not positively oriented (volume " + format_sig(v(i)) + "); validate the mesh first");
   }
 
   // input quality
@@ -751,11 +745,11 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
   }
   auto quality_note = [&]() {
     const Eigen::Vector3d c = tet_centroid(input.vertices, input.tets, static_cast<int>(worst));
-    return "input smallest dihedral angle " + fmt(min_dih) + " deg at tet " + std::to_string(worst) + " (" +
-           fmt(c(0)) + ", " + fmt(c(1)) + ", " + fmt(c(2)) + ")";
+    return "input smallest dihedral angle " + format_sig(min_dih) + " deg at tet " + std::to_string(worst) + " (" +
+           format_sig(c(0)) + ", " + format_sig(c(1)) + ", " + format_sig(c(2)) + ")";
   };
 
-  const double t_quality = since(t0);
+  const double t_quality = seconds_since(t0);
 
   // 1. split
   t0 = Clock::now();
@@ -781,7 +775,7 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
   }
   rep["refined"]["vertices"] = n;
   rep["refined"]["tets"] = m.num_tets();
-  const double t_split = since(t0);
+  const double t_split = seconds_since(t0);
 
   // 2. boundary
   t0 = Clock::now();
@@ -796,7 +790,7 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
     throw NumericalError("initial_map: the boundary map to the sphere flipped " +
                          std::to_string(sm.flipped_triangles) + " of " + std::to_string(surf.triangles.rows()) +
                          " triangles; " + quality_note());
-  const double t_boundary = since(t0);
+  const double t_boundary = seconds_since(t0);
 
   // 3. harmonic interior
   t0 = Clock::now();
@@ -831,7 +825,7 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
     if (res.boundary[i]) res.ball.row(i) = sm.sphere.row(i);
   const int folds_harmonic = static_cast<int>(inverted_tets(res.ball, m.tets).size());
   rep["harmonic"]["inverted_tets"] = folds_harmonic;
-  const double t_harmonic = since(t0);
+  const double t_harmonic = seconds_since(t0);
 
   // 4. untangle
   t0 = Clock::now();
@@ -863,7 +857,7 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
     }
   }
   rep["folds_after_untangle"] = folds;
-  const double t_untangle = since(t0);
+  const double t_untangle = seconds_since(t0);
 
   // Boundary exactly on the sphere.
   double rad_err = 0;
@@ -876,8 +870,8 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
     std::string where;
     for (size_t i = 0; i < bad.size() && i < 3; ++i) {
       const Eigen::Vector3d c = tet_centroid(m.vertices, m.tets, bad[i]);
-      where += (i ? "; " : "") + std::string("tet ") + std::to_string(bad[i]) + " at (" + fmt(c(0)) + ", " +
-               fmt(c(1)) + ", " + fmt(c(2)) + ")";
+      where += (i ? "; " : "") + std::string("tet ") + std::to_string(bad[i]) + " at (" + format_sig(c(0)) + ", " +
+               format_sig(c(1)) + ", " + format_sig(c(2)) + ")";
     }
     throw NumericalError("initial_map: " + std::to_string(bad.size()) +
                          " tets remain folded after untangling (harmonic map folded " +
@@ -888,12 +882,12 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
   rep["metrics"] = to_json(mm);
   Json& tm = rep["timings_s"];
   tm["input_quality"] = t_quality;
-  tm["metrics"] = since(t0);
+  tm["metrics"] = seconds_since(t0);
   tm["split"] = t_split;
   tm["boundary"] = t_boundary;
   tm["harmonic"] = t_harmonic;
   tm["untangle"] = t_untangle;
-  tm["total"] = since(t_total);
+  tm["total"] = seconds_since(t_total);
   return res;
 }
 

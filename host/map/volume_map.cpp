@@ -19,6 +19,8 @@
 
 #if __has_include("vpm/untangle.hpp")
 #include "vpm/untangle.hpp"
+#include "vpm/timing.hpp"
+#include "vpm/format.hpp"
 #define VPM_VOLUME_MAP_HAVE_UNTANGLE 1
 #else
 #define VPM_VOLUME_MAP_HAVE_UNTANGLE 0
@@ -107,14 +109,7 @@ DistortionPair volume_distortion(const Points& ref, const Points& x, const Tets&
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-std::string fmt(const char* f, double a, double b = 0, double c = 0) {
-  char buf[256];
-  std::snprintf(buf, sizeof buf, f, a, b, c);
-  return buf;
-}
 
 struct Ctx {
   Device& dev;
@@ -172,7 +167,7 @@ int untangle_folds(Ctx& c, Points& x, double* seconds, const Points* before = nu
     }
   }
 #endif
-  if (seconds) *seconds += since(t0);
+  if (seconds) *seconds += seconds_since(t0);
   return static_cast<int>(folded.size());
 }
 
@@ -215,7 +210,7 @@ void solve_round(Ctx& c, const Points& x, Eigen::VectorXd& V, Eigen::VectorXd& t
   const detail::SolveStats s = c.solver->neumann(x, b, c.psi);
   r.solver_iterations += s.iterations;
   r.solver_residual = std::max(r.solver_residual, s.residual);
-  r.time_solve += since(t0);
+  r.time_solve += seconds_since(t0);
 }
 
 // One Moser round on [0, t_end]: x in/out.
@@ -230,7 +225,7 @@ void moser_round(Ctx& c, Points& x, double t_end, VolumeMapRound& r) {
   f.grad = vertex_gradients(c, x, G, vol);
   f.rho0.resize(static_cast<size_t>(c.n));
   for (int i = 0; i < c.n; ++i) f.rho0[i] = V(i) > 0 ? target(i) / V(i) : 1.0;
-  r.time_field += since(t1);
+  r.time_field += seconds_since(t1);
 
   const auto t2 = Clock::now();
   detail::AdvectParams p;
@@ -245,7 +240,7 @@ void moser_round(Ctx& c, Points& x, double t_end, VolumeMapRound& r) {
   } else {
     detail::advect_host(f, c.boundary, p, x, hint, &st);
   }
-  r.time_advect += since(t2);
+  r.time_advect += seconds_since(t2);
   r.walk_steps_per_location = st.locations ? double(st.walk_steps) / double(st.locations) : 0.0;
   r.grid_fallbacks += st.grid_fallbacks;
   r.clamped += st.clamped;
@@ -261,7 +256,7 @@ void paper_step(Ctx& c, Points& x, double dt, VolumeMapRound& r) {
   const auto G = detail::tet_gradients(f, c.psi);
   const Eigen::VectorXd vol = tet_volumes(x, c.tets);
   const std::vector<double> g = vertex_gradients(c, x, G, vol);
-  r.time_field += since(t1);
+  r.time_field += seconds_since(t1);
   const auto t2 = Clock::now();
   for (int i = 0; i < c.n; ++i) {
     if (c.boundary[i] && !c.slide) continue;
@@ -270,7 +265,7 @@ void paper_step(Ctx& c, Points& x, double dt, VolumeMapRound& r) {
     if (c.boundary[i]) p.normalize();
     x.row(i) = p.transpose();
   }
-  r.time_advect += since(t2);
+  r.time_advect += seconds_since(t2);
 }
 
 // Polish: one Gauss-Newton direction on the relative tet volumes (host/polish.hpp): on a GPU
@@ -290,7 +285,7 @@ void polish_step(Ctx& c, Points& x, VolumeMapRound& r, Points& dx_out) {
   }
   r.solver_iterations += d.iterations;
   r.solver_residual = d.residual;
-  r.time_solve += since(t0);
+  r.time_solve += seconds_since(t0);
   dx_out = std::move(d.dx);
 }
 
@@ -398,7 +393,7 @@ VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, cons
       const detail::SolveStats s = c.solver->dirichlet(K, c.boundary, vsem_target);
       r.solver_iterations = s.iterations;
       r.solver_residual = s.residual;
-      r.time_solve += since(t0);
+      r.time_solve += seconds_since(t0);
     }
     for (int attempt = 0; attempt <= opt.max_step_halvings; ++attempt) {
       if (attempt > 0) ball = saved;
@@ -429,7 +424,7 @@ VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, cons
     d = volume_distortion(reference, ball, tets);
     r.vertex_mean_abs_dev = d.vertex;
     r.tet_mean_abs_dev = d.tet;
-    r.time_total = since(t_round);
+    r.time_total = seconds_since(t_round);
     tt_solve += r.time_solve;
     tt_field += r.time_field;
     tt_adv += r.time_advect;
@@ -439,7 +434,7 @@ VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, cons
     if (opt.progress) {
       std::string line = std::string(to_string(opt.method)) + " round " + std::to_string(k) + "/" +
                          std::to_string(max_rounds) +
-                         fmt(": vertex mean |r-1| %.4f, tet %.4f, %.2f s", d.vertex, d.tet, r.time_total);
+                         strprintf(": vertex mean |r-1| %.4f, tet %.4f, %.2f s", d.vertex, d.tet, r.time_total);
       if (r.folds_before_untangle) line += ", folds " + std::to_string(r.folds_before_untangle) +
                                            (r.discarded ? " (round discarded)" : " (untangled)");
       opt.progress(line);
@@ -490,7 +485,7 @@ VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, cons
       if (folds == 0) break;
       step *= 0.5;
     }
-    r.time_advect += since(t2) - r.time_untangle;
+    r.time_advect += seconds_since(t2) - r.time_untangle;
     tt_unt += r.time_untangle;
     const DistortionPair dp = volume_distortion(reference, ball, tets);
     const bool stalled = dp.tet > 0.99 * d.tet;
@@ -503,14 +498,14 @@ VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, cons
     r.folds = 0;
     r.vertex_mean_abs_dev = d.vertex;
     r.tet_mean_abs_dev = d.tet;
-    r.time_total = since(t_round);
+    r.time_total = seconds_since(t_round);
     tt_solve += r.time_solve;
     tt_adv += r.time_advect;
     res.rounds.push_back(r);
     rounds_json.push_back(r.to_json());
     if (opt.progress)
       opt.progress("polish " + std::to_string(k) + "/" + std::to_string(n_polish) +
-                   fmt(": vertex mean |r-1| %.4f, tet %.4f, %.2f s", d.vertex, d.tet, r.time_total) +
+                   strprintf(": vertex mean |r-1| %.4f, tet %.4f, %.2f s", d.vertex, d.tet, r.time_total) +
                    (r.discarded ? " (discarded)" : ""));
     if (r.discarded || stalled) break;
   }
@@ -544,7 +539,7 @@ VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, cons
   jt["field"] = tt_field;
   jt["advect"] = tt_adv;
   jt["untangle"] = tt_unt;
-  jt["total"] = since(t_start);
+  jt["total"] = seconds_since(t_start);
   j["timings_s"] = jt;
   res.report = j;
   return res;

@@ -9,6 +9,7 @@
 #include "vpm/error.hpp"
 #include "vpm/solver.hpp"
 #include "vpm/sparse.hpp"
+#include "vpm/timing.hpp"
 
 namespace vpm::detail {
 
@@ -38,8 +39,6 @@ Eigen::SparseMatrix<double> weighted_stiffness(const Points& x, const Tets& tets
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 }  // namespace
 
@@ -73,7 +72,7 @@ SolveStats MapSolver::neumann(const Points& x, const Eigen::VectorXd& b_in, Eige
   SolveStats st;
   st.iterations = s.iterations;
   st.residual = s.relative_residual;
-  st.seconds = since(t0);
+  st.seconds = seconds_since(t0);
   return st;
 }
 
@@ -111,7 +110,7 @@ SolveStats MapSolver::dirichlet(const Eigen::SparseMatrix<double>& K, const std:
     for (int i = 0; i < n; ++i)
       if (idx[i] >= 0) X(i, c) = xc(idx[i]);
   }
-  st.seconds = since(t0);
+  st.seconds = seconds_since(t0);
   return st;
 }
 

@@ -14,6 +14,7 @@
 #include "vpm/geometry.hpp"
 #include "vpm/topology.hpp"
 #include "vpm/untangle.hpp"
+#include "vpm/timing.hpp"
 
 namespace vpm {
 
@@ -21,10 +22,6 @@ namespace bc = boost::compute;
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 std::string fmt3(const Eigen::Vector3d& p) {
   std::ostringstream s;
