@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "vpm/error.hpp"
+
 namespace vpm::cli {
 
 /// Parsed arguments of one sub-command: positionals and --options.
@@ -27,6 +29,17 @@ class Args {
   std::vector<std::string> positional_;
   std::map<std::string, std::string> values_;
 };
+
+/// Runs `parse` (a library parser of an option's value, e.g. parse_volume_map_method) and
+/// prefixes an InputError it throws with "option FLAG: ", so the message names the flag.
+template <class F>
+auto parse_option(const std::string& flag, F&& parse) -> decltype(parse()) {
+  try {
+    return parse();
+  } catch (const InputError& e) {
+    throw InputError("option " + flag + ": " + e.what());
+  }
+}
 
 struct Command {
   std::string name;

@@ -101,7 +101,7 @@ vpm::BallMap mesh_and_map(vpm::Device& dev, const vpm::Image& image, const vpm::
   vpm::BallMap bm = vpm::map_to_ball(dev, mesh, vr, name, bo);
   const double t_map = seconds_since(t0);
   vpm::write_mesh((out / (name + "_ball.vtu")).string(), bm.mesh);
-  vpm::write_json_file((out / (name + "_map.json")).string(), bm.report);
+  vpm::write_json_file((out / (name + "_map.json")).string(), vpm::to_json(bm));
   report = vpm::Json::object();
   report["vertices"] = mesh.num_vertices();
   report["tets"] = mesh.num_tets();

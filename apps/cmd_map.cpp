@@ -40,8 +40,8 @@ int run(const std::vector<std::string>& argv) {
   if (vo.rounds < -1) throw vpm::InputError("option --rounds: must be >= 0");
   vo.tolerance = args.get_double("--tolerance", 0.01);
   if (!(vo.tolerance >= 0)) throw vpm::InputError("option --tolerance: must be >= 0");
-  vo.method = vpm::parse_volume_map_method(args.get("--method", "moser"));
-  vo.boundary = vpm::parse_map_boundary(args.get("--boundary", "auto"));
+  vo.method = vpm::cli::parse_option("--method", [&] { return vpm::parse_volume_map_method(args.get("--method", "moser")); });
+  vo.boundary = vpm::cli::parse_option("--boundary", [&] { return vpm::parse_map_boundary(args.get("--boundary", "auto")); });
   vo.solver = args.get("--solver", "cg");
   if (vo.solver != "cg" && vo.solver != "paper")
     throw vpm::InputError("option --solver: '" + vo.solver + "' is not one of cg, paper");
@@ -65,7 +65,8 @@ int run(const std::vector<std::string>& argv) {
 
   t0 = Clock::now();
   vpm::write_mesh(*out, bm.mesh);
-  vpm::Json& timings = bm.report["timings_s"];
+  vpm::Json report = vpm::to_json(bm);
+  vpm::Json& timings = report["timings_s"];
   timings["read"] = t_read;
   timings["write"] = seconds_since(t0);
   timings["total"] = seconds_since(t_start);
@@ -76,7 +77,7 @@ int run(const std::vector<std::string>& argv) {
                  vpm::pct(bm.final.vertex_volume_ratio.mean_abs_dev) + ", tet " +
                  vpm::pct(bm.initial.tet_volume_ratio.mean_abs_dev) + " -> " +
                  vpm::pct(bm.final.tet_volume_ratio.mean_abs_dev) + ", 0 folds");
-  if (report_path) vpm::write_json_file(*report_path, bm.report);
+  if (report_path) vpm::write_json_file(*report_path, report);
   return 0;
 }
 

@@ -236,12 +236,11 @@ int main(int argc, char** argv) {
           error = e.what();
           break;
         }
-        const vpm::Json& t = *last.report.find("timings_s");
-        tot.push_back(t.find("total")->number());
-        sol.push_back(t.find("solve")->number());
-        fld.push_back(t.find("field")->number());
-        adv.push_back(t.find("advect")->number());
-        unt.push_back(t.find("untangle")->number());
+        tot.push_back(last.timings.total);
+        sol.push_back(last.timings.solve);
+        fld.push_back(last.timings.field);
+        adv.push_back(last.timings.advect);
+        unt.push_back(last.timings.untangle);
       }
       vpm::Json j = vpm::Json::object();
       j["method"] = var.name;
@@ -265,7 +264,7 @@ int main(int argc, char** argv) {
       t["advect"] = median(adv);
       t["untangle"] = median(unt);
       j["timings_s_median"] = t;
-      j["report"] = last.report;
+      j["report"] = vpm::to_json(last);
       jv.push_back(j);
       std::printf("%-12s %-13s %8.4f %8.4f %8.4f %8.4f %5d %6zu %7.3f %7.3f %7.3f %7.3f %7.3f\n", name.c_str(),
                   var.name.c_str(), m0.vertex_volume_ratio.mean_abs_dev, m0.tet_volume_ratio.mean_abs_dev,

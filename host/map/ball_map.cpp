@@ -1,6 +1,5 @@
 #include "vpm/ball_map.hpp"
 
-#include <chrono>
 #include <cstdio>
 
 #include "vpm/device.hpp"
@@ -24,41 +23,31 @@ std::string quality(const ValidationReport& v) {
 BallMap map_to_ball(Device& device, const TetMesh& input, const ValidationReport& validation,
                     const std::string& source, const BallMapOptions& options) {
   const auto t_start = Clock::now();
-  Json timings = Json::object();
   const auto say = [&](const std::string& line) {
     if (options.volume.progress) options.volume.progress(line);
   };
-
+  BallMap out;
   auto t0 = Clock::now();
   InitialMapResult im = initial_map(device, input, options.initial);  // its errors name the quality
-  timings["initial_map"] = seconds_since(t0);
-  BallMap out;
+  out.timings.initial_map = seconds_since(t0);
   out.initial = map_metrics(device, im.mesh.vertices, im.ball, im.mesh.tets);
   say("initial map: vertex mean |r-1| " + pct(out.initial.vertex_volume_ratio.mean_abs_dev) + ", tet " +
       pct(out.initial.tet_volume_ratio.mean_abs_dev) + ", " + std::to_string(out.initial.inverted_tets) +
       " folds");
 
   Points ball = im.ball;
-  Json vm_report;
-  Json rounds = Json::array();
   if (options.volume.rounds != 0) {
     t0 = Clock::now();
-    VolumeMapResult vm;
     try {
-      vm = volume_preserving_map(device, im.mesh.vertices, im.mesh.tets, ball, options.volume);
+      out.volume_map = volume_preserving_map(device, im.mesh.vertices, im.mesh.tets, ball, options.volume);
     } catch (const NumericalError& e) {
       throw NumericalError(source + ": " + e.what() + quality(validation) + "; nothing written");
     }
-    timings["volume_map"] = seconds_since(t0);
-    vm_report = vm.report;
-    if (const Json* r = vm.report.find("rounds")) rounds = *r;
-    if (const Json* t = vm.report.find("timings_s"))
-      for (const char* k : {"solve", "field", "advect", "untangle"})
-        if (const Json* v = t->find(k)) timings[std::string("volume_map_") + k] = *v;
+    out.timings.volume_map = seconds_since(t0);
   }
   t0 = Clock::now();
   out.final = map_metrics(device, im.mesh.vertices, ball, im.mesh.tets);
-  timings["metrics"] = seconds_since(t0);
+  out.timings.metrics = seconds_since(t0);
   if (out.final.inverted_tets > 0)  // never hand on a folded map
     throw NumericalError(source + ": the map has " + std::to_string(out.final.inverted_tets) +
                          " inverted tets; nothing written (vertex mean |r-1| reached " +
@@ -72,27 +61,51 @@ BallMap map_to_ball(Device& device, const TetMesh& input, const ValidationReport
     out.mesh.set_point_field("original_position", im.mesh.vertices);
   out.mesh.set_point_field("vertex_volume_ratio", out.final.vertex_ratio);
   out.mesh.set_cell_field("tet_volume_ratio", out.final.tet_ratio);
-  timings["total"] = seconds_since(t_start);
+  out.device = device.name();
+  out.input_vertices = input.num_vertices();
+  out.input_tets = input.num_tets();
+  out.input_min_dihedral_deg = validation.min_dihedral_deg;
+  out.input_reoriented_tets = validation.reoriented_tets;
+  out.refined_vertices = im.mesh.num_vertices();
+  out.refined_tets = im.mesh.num_tets();
+  out.initial_map = std::move(im.report);
+  out.timings.total = seconds_since(t_start);
+  return out;
+}
 
-  Json& j = out.report = Json::object();
-  j["device"] = device.name();
+Json to_json(const BallMap& b) {
+  Json j = Json::object();
+  j["device"] = b.device;
   Json jin = Json::object();
-  jin["vertices"] = input.num_vertices();
-  jin["tets"] = input.num_tets();
-  jin["min_dihedral_deg"] = validation.min_dihedral_deg;
-  jin["reoriented_tets"] = validation.reoriented_tets;
+  jin["vertices"] = b.input_vertices;
+  jin["tets"] = b.input_tets;
+  jin["min_dihedral_deg"] = b.input_min_dihedral_deg;
+  jin["reoriented_tets"] = b.input_reoriented_tets;
   j["input"] = jin;
   Json jref = Json::object();
-  jref["vertices"] = im.mesh.num_vertices();
-  jref["tets"] = im.mesh.num_tets();
+  jref["vertices"] = b.refined_vertices;
+  jref["tets"] = b.refined_tets;
   j["refined"] = jref;
-  j["initial"] = to_json(out.initial);
-  j["final"] = to_json(out.final);
+  j["initial"] = to_json(b.initial);
+  j["final"] = to_json(b.final);
+  Json rounds = Json::array();
+  Json t = Json::object();
+  t["initial_map"] = b.timings.initial_map;
+  if (b.volume_map) {
+    for (const VolumeMapRound& r : b.volume_map->rounds) rounds.push_back(to_json(r));
+    t["volume_map"] = b.timings.volume_map;
+    t["volume_map_solve"] = b.volume_map->timings.solve;
+    t["volume_map_field"] = b.volume_map->timings.field;
+    t["volume_map_advect"] = b.volume_map->timings.advect;
+    t["volume_map_untangle"] = b.volume_map->timings.untangle;
+  }
+  t["metrics"] = b.timings.metrics;
+  t["total"] = b.timings.total;
   j["rounds"] = rounds;
-  j["timings_s"] = timings;
-  j["initial_map"] = im.report;
-  if (options.volume.rounds != 0) j["volume_map"] = vm_report;
-  return out;
+  j["timings_s"] = t;
+  j["initial_map"] = to_json(b.initial_map);
+  if (b.volume_map) j["volume_map"] = to_json(*b.volume_map);
+  return j;
 }
 
 }  // namespace vpm

@@ -35,20 +35,45 @@ RatioStats ratio_stats(const Eigen::VectorXd& r) {
   return s;
 }
 
-MapMetrics map_metrics(Device& dev, const Points& ref, const Points& mapped, const Tets& tets) {
-  MapMetrics m;
-  const Eigen::VectorXd v0 = tet_volumes(dev, ref, tets);
-  const Eigen::VectorXd v1 = tet_volumes(dev, mapped, tets);
+void volume_ratios(const Eigen::VectorXd& v0, const Eigen::VectorXd& v1, const Tets& tets, Eigen::Index n,
+                   Eigen::VectorXd& tet_ratio, Eigen::VectorXd& vertex_ratio) {
   const double s0 = v0.sum(), s1 = v1.sum();
-  m.inverted_tets = static_cast<int>((v1.array() <= 0).count());
-  m.tet_ratio = (v1 / s1).array() / (v0 / s0).array();
-  Eigen::VectorXd d0 = Eigen::VectorXd::Zero(ref.rows()), d1 = Eigen::VectorXd::Zero(ref.rows());
+  tet_ratio = (v1 / s1).array() / (v0 / s0).array();
+  Eigen::VectorXd d0 = Eigen::VectorXd::Zero(n), d1 = Eigen::VectorXd::Zero(n);
   for (Eigen::Index t = 0; t < tets.rows(); ++t)
     for (int c = 0; c < 4; ++c) {
       d0(tets(t, c)) += 0.25 * v0(t);
       d1(tets(t, c)) += 0.25 * v1(t);
     }
-  m.vertex_ratio = (d1 / s1).array() / (d0 / s0).array();
+  vertex_ratio = (d1 / s1).array() / (d0 / s0).array();
+}
+
+DistortionPair volume_distortion(const Points& ref, const Points& x, const Tets& tets) {
+  const Eigen::VectorXd v0 = tet_volumes(ref, tets), v1 = tet_volumes(x, tets);
+  Eigen::VectorXd tr, vr;
+  volume_ratios(v0, v1, tets, ref.rows(), tr, vr);
+  DistortionPair d;
+  for (Eigen::Index t = 0; t < tr.size(); ++t) {
+    d.tet += std::fabs(tr(t) - 1.0);
+    d.folds += v1(t) <= 0;
+  }
+  int used = 0;
+  for (Eigen::Index i = 0; i < vr.size(); ++i)
+    if (!std::isnan(vr(i))) {
+      d.vertex += std::fabs(vr(i) - 1.0);
+      ++used;
+    }
+  d.tet /= std::max<Eigen::Index>(1, tets.rows());
+  d.vertex /= std::max(1, used);
+  return d;
+}
+
+MapMetrics map_metrics(Device& dev, const Points& ref, const Points& mapped, const Tets& tets) {
+  MapMetrics m;
+  const Eigen::VectorXd v0 = tet_volumes(dev, ref, tets);
+  const Eigen::VectorXd v1 = tet_volumes(dev, mapped, tets);
+  m.inverted_tets = static_cast<int>((v1.array() <= 0).count());
+  volume_ratios(v0, v1, tets, ref.rows(), m.tet_ratio, m.vertex_ratio);
   m.tet_volume_ratio = ratio_stats(m.tet_ratio);
   m.vertex_volume_ratio = ratio_stats(m.vertex_ratio);
   const Triangles bf = boundary_faces(tets);

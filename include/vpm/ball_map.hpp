@@ -2,6 +2,7 @@
 // The whole `vpm map` stage as one call: a validated tet mesh -> fold-free initial map to the
 // unit ball (vpm/initial_map.hpp) -> volume-preserving map (vpm/volume_map.hpp) -> metrics ->
 // the output mesh with its fields and the report of DESIGN.md section 6.
+#include <optional>
 #include <string>
 
 #include "vpm/initial_map.hpp"
@@ -15,10 +16,19 @@ namespace vpm {
 
 class Device;
 
+// Transitional until the initial map's report is typed (issue 11 in progress).
+using InitialMapReport = Json;
+inline Json to_json(const InitialMapReport& report) { return report; }
+
 struct BallMapOptions {
   InitialMapOptions initial{};
   /// volume.rounds == 0 stops after the initial map.
   VolumeMapOptions volume{};
+};
+
+/// Seconds spent in the stages of map_to_ball.
+struct BallMapTimings {
+  double initial_map = 0, volume_map = 0, metrics = 0, total = 0;
 };
 
 struct BallMap {
@@ -30,13 +40,22 @@ struct BallMap {
   TetMesh mesh;
   MapMetrics initial;  ///< metrics of the initial map
   MapMetrics final;    ///< metrics of the returned map (inverted_tets == 0)
-  /// {"device", "input": {"vertices","tets","min_dihedral_deg","reoriented_tets"},
-  ///  "refined": {"vertices","tets"}, "initial": METRICS, "final": METRICS, "rounds": [...],
-  ///  "timings_s": {"total","initial_map","volume_map","volume_map_solve","volume_map_field",
-  ///  "volume_map_advect","volume_map_untangle","metrics"}, "initial_map": {...},
-  ///  "volume_map": {...} (when rounds != 0)}. The caller adds "read"/"write" timings.
-  Json report;
+  std::string device;  ///< Device::name() of the device that ran it
+  int input_vertices = 0, input_tets = 0;
+  double input_min_dihedral_deg = 0;  ///< from the validation report
+  int input_reoriented_tets = 0;      ///< from the validation report
+  int refined_vertices = 0, refined_tets = 0;  ///< after the boundary-edge split
+  InitialMapReport initial_map;        ///< what the initial map did
+  std::optional<VolumeMapResult> volume_map;  ///< absent when options.volume.rounds == 0
+  BallMapTimings timings;
 };
+
+/// The report of DESIGN.md section 6: {"device", "input": {"vertices","tets","min_dihedral_deg",
+/// "reoriented_tets"}, "refined": {"vertices","tets"}, "initial": METRICS, "final": METRICS,
+/// "rounds": [...], "timings_s": {"total","initial_map","volume_map","volume_map_solve",
+/// "volume_map_field","volume_map_advect","volume_map_untangle","metrics"}, "initial_map": {...},
+/// "volume_map": {...} (when it ran)}. `vpm map` adds "read"/"write" to "timings_s".
+Json to_json(const BallMap& map);
 
 /// Maps `input` (validated by validate_mesh, whose report is `validation`) to the unit ball so
 /// that local volumes are preserved. `source` names the input in messages. Runs on `device`.

@@ -30,6 +30,22 @@ struct MapMetrics {
   Eigen::VectorXd tet_ratio;          ///< per-tet ratios r_t (length m)
 };
 
+/// Normalised volume ratios of `mapped_volumes` against `reference_volumes` (signed tet
+/// volumes, length m, of the same `tets` on n vertices): tet_ratio (m) = (v1_t / sum v1) /
+/// (v0_t / sum v0), vertex_ratio (n) the same for dual volumes (a quarter of each incident
+/// tet's volume; NaN at a vertex in no tet).
+void volume_ratios(const Eigen::VectorXd& reference_volumes, const Eigen::VectorXd& mapped_volumes,
+                   const Tets& tets, Eigen::Index n, Eigen::VectorXd& tet_ratio, Eigen::VectorXd& vertex_ratio);
+
+/// The two summary numbers the map's iterations watch, computed on the host: mean |r - 1| of the
+/// vertex (dual) and tet volume ratios of `mapped` against `reference` (both n x 3, same
+/// `tets`; vertices in no tet are skipped), and the tets with signed volume <= 0.
+struct DistortionPair {
+  double vertex = 0, tet = 0;
+  int folds = 0;
+};
+DistortionPair volume_distortion(const Points& reference, const Points& mapped, const Tets& tets);
+
 /// Computes MapMetrics. `reference_vertices` and `mapped_vertices` are n x 3 with the same
 /// `tets` (m x 4). Volumes come from `device` (host or OpenCL).
 MapMetrics map_metrics(Device& device, const Points& reference_vertices,

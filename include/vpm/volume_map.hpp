@@ -40,13 +40,15 @@
 
 #include "vpm/json.hpp"
 #include "vpm/mesh.hpp"
+#include "vpm/metrics.hpp"
 
 namespace vpm {
 
 class Device;
 
 enum class VolumeMapMethod { moser, paper, vsem };
-/// "moser", "paper", "vsem" (InputError otherwise).
+/// "moser", "paper", "vsem"; InputError otherwise (message: "volume map method 'NAME' is not
+/// one of moser, paper, vsem").
 VolumeMapMethod parse_volume_map_method(const std::string& name);
 const char* to_string(VolumeMapMethod m);
 
@@ -58,6 +60,13 @@ enum class MapBoundary {
 /// "auto", "slide", "fixed" (InputError otherwise).
 MapBoundary parse_map_boundary(const std::string& name);
 const char* to_string(MapBoundary m);
+
+/// Where a part of a stage runs when the device is an OpenCL device.
+enum class ExecutionPlace {
+  automatic,  ///< the stage's rule (documented at each option)
+  host,       ///< the host reference, even with an OpenCL device
+  device,     ///< the OpenCL kernels (the host reference when the device is `host`)
+};
 
 struct VolumeMapOptions {
   VolumeMapMethod method = VolumeMapMethod::moser;
@@ -100,8 +109,13 @@ struct VolumeMapOptions {
   /// and the untangling; only with polish_only (InputError otherwise: Moser rounds move every
   /// vertex along the flow).
   std::vector<char> pinned;
-  /// Run point location / RK stages on the host even when the device is OpenCL (tests).
-  bool force_host_advection = false;
+  /// Where the RK4 advection (point location and field interpolation) runs: automatic = on
+  /// the OpenCL device when there is one (kernels/moser.cl), else the host reference.
+  ExecutionPlace advection = ExecutionPlace::automatic;
+  /// Where the polish's CGLS runs: automatic = the OpenCL kernels (kernels/polish.cl) on GPUs,
+  /// the threaded host loops otherwise (on PoCL the kernels were 2x slower than the host loops
+  /// at 1.1M tets: 3.1-4.7 s against 1.7-2.2 s per step).
+  ExecutionPlace polish = ExecutionPlace::automatic;
   /// Called with one line per round (progress display); may be empty.
   std::function<void(const std::string&)> progress;
 };
@@ -125,7 +139,17 @@ struct VolumeMapRound {
   long long clamped = 0;
   // Seconds.
   double time_solve = 0, time_field = 0, time_advect = 0, time_untangle = 0, time_total = 0;
-  Json to_json() const;
+};
+
+/// {"round", "kind", "vertex_mean_abs_dev", "tet_mean_abs_dev", "folds_before_untangle",
+///  "folds", "untangled", "discarded", "t_end", "solver_iterations", "solver_residual",
+///  "walk_steps_per_location", "grid_fallbacks", "clamped",
+///  "timings_s": {"solve", "field", "advect", "untangle", "total"}}
+Json to_json(const VolumeMapRound& round);
+
+/// Seconds spent in the parts of a volume map, summed over its rounds.
+struct VolumeMapTimings {
+  double solve = 0, field = 0, advect = 0, untangle = 0, total = 0;
 };
 
 struct VolumeMapResult {
@@ -133,12 +157,21 @@ struct VolumeMapResult {
   double initial_vertex_mean_abs_dev = 0, initial_tet_mean_abs_dev = 0;
   double final_vertex_mean_abs_dev = 0, final_tet_mean_abs_dev = 0;
   int final_folds = 0;     ///< always 0 on return
-  std::string stop_reason; ///< of the Moser rounds: "tolerance", "rounds", "stalled", "fold"
-  /// {"method", "boundary", "solver", "rk_steps", "rounds": [VolumeMapRound::to_json...],
-  ///  "initial": {"vertex_mean_abs_dev","tet_mean_abs_dev"}, "final": {...}, "stop_reason",
-  ///  "timings_s": {"solve","field","advect","untangle","total"}}
-  Json report;
+  std::string stop_reason; ///< of the Moser rounds: "tolerance", "rounds", "stalled", "fold", "polish_only"
+  // What ran:
+  VolumeMapMethod method = VolumeMapMethod::moser;
+  bool slide = true;          ///< boundary vertices slid on the sphere (else fixed)
+  std::string solver = "cg";  ///< VolumeMapOptions::solver
+  int rk_steps = 40;
+  bool device_advection = false;  ///< the advection ran on the OpenCL device
+  VolumeMapTimings timings;
 };
+
+/// {"method", "boundary", "solver", "rk_steps", "advection", "local_untangle_available",
+///  "initial": {"vertex_mean_abs_dev", "tet_mean_abs_dev"},
+///  "final": {"vertex_mean_abs_dev", "tet_mean_abs_dev", "inverted_tets"}, "stop_reason",
+///  "rounds": [to_json(round)...], "timings_s": {"solve", "field", "advect", "untangle", "total"}}
+Json to_json(const VolumeMapResult& result);
 
 /// Maps `ball` (n x 3; in: a fold-free map of the mesh to the closed unit ball with boundary
 /// vertices on the sphere; out: the volume-preserving map) of the mesh (`reference` n x 3, the
@@ -150,13 +183,5 @@ struct VolumeMapResult {
 /// NumericalError `ball` holds the last fold-free map (or the input if none).
 VolumeMapResult volume_preserving_map(Device& device, const Points& reference, const Tets& tets,
                                       Points& ball, const VolumeMapOptions& options = {});
-
-/// Normalised volume ratios of a map (DESIGN.md 5): mean |r - 1| of vertex dual volumes and of
-/// tet volumes of `mapped` against `reference` (both n x 3, same `tets`), host computation.
-struct DistortionPair {
-  double vertex = 0, tet = 0;
-  int folds = 0;
-};
-DistortionPair volume_distortion(const Points& reference, const Points& mapped, const Tets& tets);
 
 }  // namespace vpm

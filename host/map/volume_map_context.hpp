@@ -1,0 +1,74 @@
+#pragma once
+// Private: the state one volume-preserving map carries through its rounds (vpm/volume_map.hpp)
+// and the steps the rounds are made of (map/volume_map_steps.cpp). The driver is
+// map/volume_map.cpp, the round loops map/volume_map_rounds.cpp.
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+#include "map/moser_field.hpp"
+#include "map/polish.hpp"
+#include "map/volume_map_solve.hpp"
+#include "vpm/mesh.hpp"
+#include "vpm/volume_map.hpp"
+
+namespace vpm {
+class Device;
+}
+
+namespace vpm::detail {
+
+struct MapContext {
+  Device& dev;
+  const Points& ref;
+  const Tets& tets;
+  const VolumeMapOptions& opt;
+  int n = 0, m = 0;
+  bool slide = true;
+  std::vector<char> boundary;
+  std::vector<char> frozen;       // never moved by untangling: boundary or pinned
+  std::vector<int> nbr;
+  std::vector<int> vertex_tet;    // one tet incident to each vertex
+  Eigen::VectorXd ref_dual;       // input dual volumes / input total volume
+  Eigen::VectorXd ref_tet;        // input tet volumes / input total volume
+  std::unique_ptr<MapSolver> solver;
+  std::unique_ptr<DeviceAdvector> advector;
+  Eigen::VectorXd psi;
+  Triangles bfaces;  // boundary faces (outward), built on first use
+  std::vector<char> freedom;                          // polish: free / tangent / fixed per vertex
+  std::unique_ptr<DevicePolisher> polisher;   // polish on the device, built on first use
+  bool polish_on_device = false;                      // VolumeMapOptions::polish resolved
+
+  MapContext(Device& d, const Points& r, const Tets& t, const VolumeMapOptions& o) : dev(d), ref(r), tets(t), opt(o) {}
+  bool pinned(int v) const { return !opt.pinned.empty() && opt.pinned[static_cast<size_t>(v)]; }
+};
+
+/// Tets of `x` with signed volume <= 0 (volumes on the context's device).
+int count_folds(MapContext& c, const Points& x);
+
+/// Local untangling of the folded tets of x (boundary fixed; when sliding and `before` is given,
+/// boundary triangles flipped on the sphere are unflipped first). Adds its time to *seconds.
+/// Returns the folds left.
+int untangle_folds(MapContext& c, Points& x, double* seconds, const Points* before = nullptr);
+
+/// One Moser round on [0, t_end] (DESIGN.md 4.1 step 5): x in/out; statistics into `r`.
+void moser_round(MapContext& c, Points& x, double t_end, VolumeMapRound& r);
+
+/// The paper's explicit step (4.3): re-solve on the current geometry, x += dt grad psi / rho.
+void paper_step(MapContext& c, Points& x, double dt, VolumeMapRound& r);
+
+/// One Gauss-Newton direction of the polish on the relative tet volumes (map/polish.hpp), on
+/// the device or the host threads (VolumeMapOptions::polish). x is not changed.
+void polish_step(MapContext& c, const Points& x, VolumeMapRound& r, Points& dx_out);
+
+/// Moves the boundary vertices that are not pinned back onto the unit sphere (when sliding).
+void project_boundary(const MapContext& c, Points& x);
+
+/// The Moser / paper / vsem rounds of volume_preserving_map: x in/out, rounds appended to
+/// `res`, `d` in: the distortion of x, out: after the last accepted round.
+void run_rounds(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& d);
+
+/// The polish rounds after them (method moser).
+void run_polish(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& d);
+
+}  // namespace vpm::detail

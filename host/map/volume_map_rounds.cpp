@@ -1,0 +1,207 @@
+// The round loops of the volume-preserving map (map/volume_map_context.hpp): Moser rounds
+// (or the paper's steps, or vsem iterations), each fold-checked, then the polish rounds.
+#include <algorithm>
+#include <string>
+
+#include "map/volume_map_context.hpp"
+#include "vpm/format.hpp"
+#include "vpm/geometry.hpp"
+#include "vpm/timing.hpp"
+
+namespace vpm::detail {
+
+namespace {
+
+int round_cap(const VolumeMapOptions& opt) {
+  if (opt.polish_only) return 0;
+  if (opt.rounds >= 0) return opt.rounds;
+  if (opt.max_rounds > 0) return opt.max_rounds;
+  if (opt.method == VolumeMapMethod::moser) return 8;
+  if (opt.method == VolumeMapMethod::paper) return opt.paper_steps;
+  return 15;
+}
+
+// vsem: weights *= current normalised tet volume ratio; the harmonic map of the reweighted
+// stiffness with the boundary frozen is the round's target.
+Points vsem_target(MapContext& c, const Points& x, Eigen::VectorXd& w, VolumeMapRound& r) {
+  const Eigen::VectorXd v1 = tet_volumes(x, c.tets);
+  const Eigen::VectorXd ratio = (v1 / v1.sum()).array() / c.ref_tet.array();
+  w.array() *= ratio.array().max(1e-6);
+  w /= w.mean();
+  const auto t0 = Clock::now();
+  const auto K = weighted_stiffness(c.ref, c.tets, &w);
+  Points target = x;
+  const SolveStats s = c.solver->dirichlet(K, c.boundary, target);
+  r.solver_iterations = s.iterations;
+  r.solver_residual = s.residual;
+  r.time_solve += seconds_since(t0);
+  return target;
+}
+
+// Runs one round from `saved` on [0, t_end], halving t_end while it folds beyond repair.
+// Returns the folds left (0: accepted); r.t_end is the interval used.
+int fold_free_round(MapContext& c, Points& x, const Points& saved, double t_end,
+                    const Points& vsem_goal, VolumeMapRound& r) {
+  int folds = 0;
+  for (int attempt = 0; attempt <= c.opt.max_step_halvings; ++attempt) {
+    if (attempt > 0) x = saved;
+    if (c.opt.method == VolumeMapMethod::moser) {
+      moser_round(c, x, t_end, r);
+    } else if (c.opt.method == VolumeMapMethod::paper) {
+      paper_step(c, x, t_end, r);
+    } else {
+      x = saved + t_end * (vsem_goal - saved);
+    }
+    folds = count_folds(c, x);
+    r.folds_before_untangle = folds;
+    if (folds > 0) {
+      r.untangled = c.opt.local_untangle;
+      folds = untangle_folds(c, x, &r.time_untangle, &saved);
+    }
+    r.t_end = t_end;
+    if (folds == 0) break;
+    t_end *= 0.5;
+  }
+  return folds;
+}
+
+void add_times(VolumeMapTimings& t, const VolumeMapRound& r) {
+  t.solve += r.time_solve;
+  t.field += r.time_field;
+  t.advect += r.time_advect;
+  t.untangle += r.time_untangle;
+}
+
+void say_round(const MapContext& c, int k, int max_rounds, const DistortionPair& d, const VolumeMapRound& r) {
+  if (!c.opt.progress) return;
+  std::string line = std::string(to_string(c.opt.method)) + " round " + std::to_string(k) + "/" +
+                     std::to_string(max_rounds) +
+                     strprintf(": vertex mean |r-1| %.4f, tet %.4f, %.2f s", d.vertex, d.tet, r.time_total);
+  if (r.folds_before_untangle)
+    line += ", folds " + std::to_string(r.folds_before_untangle) + (r.discarded ? " (round discarded)" : " (untangled)");
+  c.opt.progress(line);
+}
+
+// Automatic stop: hand over to the polish rounds once a round gains less than half and the
+// distortion is within 5x the tolerance (polish steps remove the last few percent; far from the
+// goal, as on a C-shaped caudate at 9 %, more rounds still pay), or when a round gains less
+// than a fifth.
+bool stalled(const VolumeMapOptions& opt, double vertex, double prev_vertex) {
+  return opt.rounds < 0 && opt.method == VolumeMapMethod::moser && opt.polish_rounds > 0 &&
+         vertex > opt.tolerance &&
+         ((vertex > 0.5 * prev_vertex && vertex <= 5 * opt.tolerance) || vertex > 0.8 * prev_vertex);
+}
+
+}  // namespace
+
+void run_rounds(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& d) {
+  const VolumeMapOptions& opt = c.opt;
+  const int max_rounds = round_cap(opt);
+  res.stop_reason = opt.polish_only ? "polish_only" : "rounds";
+  double paper_dt = 1.0 / std::max(1, opt.paper_steps);
+  Eigen::VectorXd vsem_w = Eigen::VectorXd::Ones(c.m);
+  double prev_vertex = d.vertex;
+  for (int k = 1; k <= max_rounds; ++k) {
+    if (opt.rounds < 0 && d.vertex <= opt.tolerance) {
+      res.stop_reason = "tolerance";
+      break;
+    }
+    const auto t_round = Clock::now();
+    VolumeMapRound r;
+    r.round = k;
+    r.kind = to_string(opt.method);
+    const Points saved = x;
+    Points vsem_goal;
+    if (opt.method == VolumeMapMethod::vsem) vsem_goal = vsem_target(c, x, vsem_w, r);
+    const double t_end = opt.method == VolumeMapMethod::paper ? paper_dt : 1.0;
+    const int folds = fold_free_round(c, x, saved, t_end, vsem_goal, r);
+    r.folds = 0;
+    if (folds > 0) {  // not repairable: undo the round
+      x = saved;
+      r.discarded = true;
+    }
+    if (opt.method == VolumeMapMethod::paper && !r.discarded) paper_dt = r.t_end;
+    d = volume_distortion(c.ref, x, c.tets);
+    r.vertex_mean_abs_dev = d.vertex;
+    r.tet_mean_abs_dev = d.tet;
+    r.time_total = seconds_since(t_round);
+    add_times(res.timings, r);
+    res.rounds.push_back(r);
+    say_round(c, k, max_rounds, d, r);
+    if (r.discarded) {
+      res.stop_reason = "fold";
+      break;
+    }
+    if (stalled(opt, d.vertex, prev_vertex)) {
+      res.stop_reason = "stalled";
+      break;
+    }
+    prev_vertex = d.vertex;
+  }
+  if (res.stop_reason == "rounds" && opt.rounds < 0 && d.vertex <= opt.tolerance) res.stop_reason = "tolerance";
+}
+
+namespace {
+
+// Applies the polish direction dx from `saved`, halving the step while it folds beyond repair.
+// Returns the folds left.
+int fold_free_polish(MapContext& c, Points& x, const Points& saved, const Points& dx, VolumeMapRound& r) {
+  double step = 1.0;
+  int folds = 0;
+  for (int attempt = 0; attempt <= c.opt.max_step_halvings + 2; ++attempt) {
+    x = saved + step * dx;
+    project_boundary(c, x);
+    folds = count_folds(c, x);
+    if (attempt == 0) r.folds_before_untangle = folds;
+    if (folds > 0) {
+      r.untangled = c.opt.local_untangle;
+      folds = untangle_folds(c, x, &r.time_untangle, &saved);
+    }
+    r.t_end = step;
+    if (folds == 0) break;
+    step *= 0.5;
+  }
+  return folds;
+}
+
+}  // namespace
+
+void run_polish(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& d) {
+  const VolumeMapOptions& opt = c.opt;
+  const int n_polish = opt.method == VolumeMapMethod::moser && opt.rounds != 0 ? opt.polish_rounds : 0;
+  for (int k = 1; k <= n_polish; ++k) {
+    const auto t_round = Clock::now();
+    VolumeMapRound r;
+    r.round = static_cast<int>(res.rounds.size()) + 1;
+    r.kind = "polish";
+    const Points saved = x;
+    Points dx;
+    polish_step(c, x, r, dx);
+    const auto t2 = Clock::now();
+    const int folds = fold_free_polish(c, x, saved, dx, r);
+    r.time_advect += seconds_since(t2) - r.time_untangle;
+    const DistortionPair dp = volume_distortion(c.ref, x, c.tets);
+    const bool no_gain = dp.tet > 0.99 * d.tet;
+    if (folds > 0 || dp.tet >= d.tet) {  // no progress or folded: undo and stop polishing
+      x = saved;
+      r.discarded = true;
+    } else {
+      d = dp;
+    }
+    r.folds = 0;
+    r.vertex_mean_abs_dev = d.vertex;
+    r.tet_mean_abs_dev = d.tet;
+    r.time_total = seconds_since(t_round);
+    res.timings.solve += r.time_solve;
+    res.timings.advect += r.time_advect;
+    res.timings.untangle += r.time_untangle;
+    res.rounds.push_back(r);
+    if (opt.progress)
+      opt.progress("polish " + std::to_string(k) + "/" + std::to_string(n_polish) +
+                   strprintf(": vertex mean |r-1| %.4f, tet %.4f, %.2f s", d.vertex, d.tet, r.time_total) +
+                   (r.discarded ? " (discarded)" : ""));
+    if (r.discarded || no_gain) break;
+  }
+}
+
+}  // namespace vpm::detail

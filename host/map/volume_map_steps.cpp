@@ -1,0 +1,179 @@
+// The steps of the volume-preserving map's rounds (map/volume_map_context.hpp).
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+#include "map/volume_map_context.hpp"
+#include "vpm/device.hpp"
+#include "vpm/geometry.hpp"
+#include "vpm/timing.hpp"
+#include "vpm/topology.hpp"
+#include "vpm/untangle.hpp"
+
+namespace vpm::detail {
+
+int count_folds(MapContext& c, const Points& x) {
+  const Eigen::VectorXd v = tet_volumes(c.dev, x, c.tets);
+  return static_cast<int>((v.array() <= 0).count());
+}
+
+namespace {
+
+std::vector<int> folded_list(const Points& x, const Tets& tets) {
+  const Eigen::VectorXd v = tet_volumes(x, tets);
+  std::vector<int> out;
+  for (Eigen::Index t = 0; t < v.size(); ++t)
+    if (v(t) <= 0) out.push_back(static_cast<int>(t));
+  return out;
+}
+
+}  // namespace
+
+// Local untangling of the folded tets of x (boundary fixed; when sliding and `before` is given,
+// boundary triangles flipped on the sphere are unflipped first). Returns the folds left.
+int untangle_folds(MapContext& c, Points& x, double* seconds, const Points* before) {
+  const auto t0 = Clock::now();
+  std::vector<int> folded = folded_list(x, c.tets);
+  if (folded.empty()) return 0;
+  if (c.opt.local_untangle && c.slide && before) {
+    if (c.bfaces.rows() == 0) c.bfaces = boundary_faces(c.tets);
+    unflip_sphere_faces(*before, c.bfaces, x, c.opt.pinned);
+    folded = folded_list(x, c.tets);
+  }
+  if (c.opt.local_untangle) {
+    for (int rings = 2; rings <= 4 && !folded.empty(); rings += 2) {
+      untangle_local(c.ref, c.tets, x, c.frozen, folded, rings, untangle_local_options());
+      folded = folded_list(x, c.tets);
+    }
+  }
+  if (seconds) *seconds += seconds_since(t0);
+  return static_cast<int>(folded.size());
+}
+
+namespace {
+
+// Vertex gradients (eq. 13): volume-weighted averages of the per-tet gradients; normal part
+// removed at boundary vertices (or zero there when the boundary is fixed).
+std::vector<double> vertex_gradients(const MapContext& c, const Points& x,
+                                     const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& G,
+                                     const Eigen::VectorXd& vol) {
+  std::vector<double> g(3 * static_cast<size_t>(c.n), 0.0), w(static_cast<size_t>(c.n), 0.0);
+  for (int t = 0; t < c.m; ++t)
+    for (int k = 0; k < 4; ++k) {
+      const int v = c.tets(t, k);
+      w[v] += vol(t);
+      for (int d = 0; d < 3; ++d) g[3 * v + d] += vol(t) * G(t, d);
+    }
+  for (int v = 0; v < c.n; ++v) {
+    Eigen::Map<Eigen::Vector3d> gv(&g[3 * static_cast<size_t>(v)]);
+    if (w[v] > 0) gv /= w[v];
+    if (c.boundary[v]) {
+      if (!c.slide) {
+        gv.setZero();
+      } else {
+        const Eigen::Vector3d nrm = x.row(v).transpose().normalized();
+        gv -= gv.dot(nrm) * nrm;
+      }
+    }
+  }
+  return g;
+}
+
+// Dual volumes, targets rescaled to the current total, rho0 = m / V, and the Neumann solve
+// K psi = m - V. Returns V and m.
+void solve_round(MapContext& c, const Points& x, Eigen::VectorXd& V, Eigen::VectorXd& target,
+                 VolumeMapRound& r) {
+  const auto t0 = Clock::now();
+  V = dual_volumes(c.dev, x, c.tets);
+  target = c.ref_dual * V.sum();
+  const Eigen::VectorXd b = target - V;
+  c.psi.setZero(c.n);
+  const detail::SolveStats s = c.solver->neumann(x, b, c.psi);
+  r.solver_iterations += s.iterations;
+  r.solver_residual = std::max(r.solver_residual, s.residual);
+  r.time_solve += seconds_since(t0);
+}
+
+}  // namespace
+
+// One Moser round on [0, t_end]: x in/out.
+void moser_round(MapContext& c, Points& x, double t_end, VolumeMapRound& r) {
+  Eigen::VectorXd V, target;
+  solve_round(c, x, V, target, r);
+  const auto t1 = Clock::now();
+  detail::MoserField f;
+  detail::build_background(f, x, c.tets, c.nbr);
+  const auto G = detail::tet_gradients(f, c.psi);
+  const Eigen::VectorXd vol = tet_volumes(x, c.tets);
+  f.grad = vertex_gradients(c, x, G, vol);
+  f.rho0.resize(static_cast<size_t>(c.n));
+  for (int i = 0; i < c.n; ++i) f.rho0[i] = V(i) > 0 ? target(i) / V(i) : 1.0;
+  r.time_field += seconds_since(t1);
+
+  const auto t2 = Clock::now();
+  detail::AdvectParams p;
+  p.steps = std::max(1, c.opt.rk_steps);
+  p.t_end = t_end;
+  p.slide = c.slide;
+  std::vector<int> hint = c.vertex_tet;
+  detail::AdvectStats st;
+  if (c.advector) {
+    c.advector->set_field(f);
+    c.advector->advect(p, x, hint, &st);
+  } else {
+    detail::advect_host(f, c.boundary, p, x, hint, &st);
+  }
+  r.time_advect += seconds_since(t2);
+  r.walk_steps_per_location = st.locations ? double(st.walk_steps) / double(st.locations) : 0.0;
+  r.grid_fallbacks += st.grid_fallbacks;
+  r.clamped += st.clamped;
+}
+
+// The paper's explicit step: re-solve on the current geometry, x += dt grad psi / rho.
+void paper_step(MapContext& c, Points& x, double dt, VolumeMapRound& r) {
+  Eigen::VectorXd V, target;
+  solve_round(c, x, V, target, r);
+  const auto t1 = Clock::now();
+  detail::MoserField f;
+  detail::build_background(f, x, c.tets, c.nbr);
+  const auto G = detail::tet_gradients(f, c.psi);
+  const Eigen::VectorXd vol = tet_volumes(x, c.tets);
+  const std::vector<double> g = vertex_gradients(c, x, G, vol);
+  r.time_field += seconds_since(t1);
+  const auto t2 = Clock::now();
+  for (int i = 0; i < c.n; ++i) {
+    if (c.boundary[i] && !c.slide) continue;
+    const double rho = V(i) > 0 ? target(i) / V(i) : 1.0;
+    Eigen::Vector3d p = x.row(i).transpose() + dt / rho * Eigen::Vector3d(g[3 * i], g[3 * i + 1], g[3 * i + 2]);
+    if (c.boundary[i]) p.normalize();
+    x.row(i) = p.transpose();
+  }
+  r.time_advect += seconds_since(t2);
+}
+
+// Polish: one Gauss-Newton direction on the relative tet volumes (map/polish.hpp).
+void polish_step(MapContext& c, const Points& x, VolumeMapRound& r, Points& dx_out) {
+  const auto t0 = Clock::now();
+  const Eigen::VectorXd vol = tet_volumes(x, c.tets);
+  const Eigen::VectorXd target = c.ref_tet * vol.sum();
+  if (c.freedom.empty()) c.freedom = detail::polish_freedom(c.boundary, c.slide, c.opt.pinned);
+  detail::PolishDirection d;
+  if (c.polish_on_device) {
+    if (!c.polisher) c.polisher = std::make_unique<detail::DevicePolisher>(c.dev, c.tets, c.n, c.freedom);
+    d = c.polisher->direction(x, target, c.opt.polish_iterations);
+  } else {
+    d = detail::polish_direction_host(x, c.tets, target, c.freedom, c.opt.polish_iterations);
+  }
+  r.solver_iterations += d.iterations;
+  r.solver_residual = d.residual;
+  r.time_solve += seconds_since(t0);
+  dx_out = std::move(d.dx);
+}
+
+void project_boundary(const MapContext& c, Points& x) {
+  if (!c.slide) return;
+  for (int i = 0; i < c.n; ++i)
+    if (c.boundary[i] && !c.pinned(i)) x.row(i).normalize();
+}
+
+}  // namespace vpm::detail
