@@ -169,22 +169,9 @@ void CotanLaplacian::assemble(Device& device, const Points& x) {
     s.mass = bc::vector<double>(static_cast<size_t>(n), device.context());
     s.k_weights = device.kernel("laplacian", "tet_weights");
     s.k_rows = device.kernel("laplacian", "assemble_rows");
-    s.k_weights.set_arg(0, static_cast<int>(m));
-    s.k_weights.set_arg(1, s.x);
-    s.k_weights.set_arg(2, s.tets);
-    s.k_weights.set_arg(3, s.w);
-    s.k_weights.set_arg(4, s.vol);
-    s.k_rows.set_arg(0, n);
-    s.k_rows.set_arg(1, s.row_ptr);
-    s.k_rows.set_arg(2, s.inc_offset);
-    s.k_rows.set_arg(3, s.inc_tet);
-    s.k_rows.set_arg(4, s.tets);
-    s.k_rows.set_arg(5, s.slot);
-    s.k_rows.set_arg(6, s.diag);
-    s.k_rows.set_arg(7, s.w);
-    s.k_rows.set_arg(8, s.vol);
-    s.k_rows.set_arg(9, s.val);
-    s.k_rows.set_arg(10, s.mass);
+    s.k_weights.set_args(static_cast<int>(m), s.x, s.tets, s.w, s.vol);
+    s.k_rows.set_args(n, s.row_ptr, s.inc_offset, s.inc_tet, s.tets, s.slot, s.diag, s.w, s.vol,
+                      s.val, s.mass);
   }
   auto& s = *dev_;
   bc::copy(x.data(), x.data() + x.size(), s.x.begin(), q);

@@ -214,54 +214,19 @@ ClBackend::ClBackend(Device& dev, int n)
   k_dot2_.set_arg(0, n);
   k_dot2_.set_arg(5, partial_);
   k_finalize_.set_arg(0, static_cast<int>(dev.reduction_partials(groups_)));
-  k_finalize_.set_arg(2, partial_);
-  k_finalize_.set_arg(3, s_);
-  k_cg_init_.set_arg(0, n);
-  k_cg_init_.set_arg(1, vec_[VR]);
-  k_cg_init_.set_arg(2, d_);
-  k_cg_init_.set_arg(3, vec_[VP]);
-  k_cg_init_.set_arg(4, partial_);
-  k_cg_xr_.set_arg(0, n);
-  k_cg_xr_.set_arg(1, s_);
-  k_cg_xr_.set_arg(2, vec_[VX]);
-  k_cg_xr_.set_arg(3, vec_[VR]);
-  k_cg_xr_.set_arg(4, vec_[VP]);
-  k_cg_xr_.set_arg(5, vec_[VQ]);
-  k_cg_xr_.set_arg(6, d_);
-  k_cg_xr_.set_arg(7, partial_);
-  k_cg_p_.set_arg(0, n);
-  k_cg_p_.set_arg(1, s_);
-  k_cg_p_.set_arg(2, vec_[VR]);
-  k_cg_p_.set_arg(3, d_);
-  k_cg_p_.set_arg(4, vec_[VP]);
-  k_bicg_s_.set_arg(0, n);
-  k_bicg_s_.set_arg(1, s_);
-  k_bicg_s_.set_arg(2, vec_[VR]);
-  k_bicg_s_.set_arg(3, vec_[VQ]);
-  k_bicg_s_.set_arg(4, vec_[VS]);
-  k_bicg_update_.set_arg(0, n);
-  k_bicg_update_.set_arg(1, s_);
-  k_bicg_update_.set_arg(2, vec_[VX]);
-  k_bicg_update_.set_arg(3, vec_[VR]);
-  k_bicg_update_.set_arg(4, vec_[VS]);
-  k_bicg_update_.set_arg(5, vec_[VT]);
-  k_bicg_update_.set_arg(6, vec_[VP]);
-  k_bicg_update_.set_arg(7, d_);
-  k_bicg_update_.set_arg(8, vec_[VR0]);
-  k_bicg_update_.set_arg(9, partial_);
-  k_bicg_p_.set_arg(0, n);
-  k_bicg_p_.set_arg(1, s_);
-  k_bicg_p_.set_arg(2, vec_[VR]);
-  k_bicg_p_.set_arg(3, vec_[VQ]);
-  k_bicg_p_.set_arg(4, vec_[VP]);
+  set_args_at(k_finalize_, 2, partial_, s_);
+  k_cg_init_.set_args(n, vec_[VR], d_, vec_[VP], partial_);
+  k_cg_xr_.set_args(n, s_, vec_[VX], vec_[VR], vec_[VP], vec_[VQ], d_, partial_);
+  k_cg_p_.set_args(n, s_, vec_[VR], d_, vec_[VP]);
+  k_bicg_s_.set_args(n, s_, vec_[VR], vec_[VQ], vec_[VS]);
+  k_bicg_update_.set_args(n, s_, vec_[VX], vec_[VR], vec_[VS], vec_[VT], vec_[VP], d_, vec_[VR0],
+                          partial_);
+  k_bicg_p_.set_args(n, s_, vec_[VR], vec_[VQ], vec_[VP]);
 }
 
 void ClBackend::set_csr_args(bc::kernel& k, bool transpose) {
-  k.set_arg(0, n_);
-  k.set_arg(1, transpose ? *t_row_ptr_ : *row_ptr_);
-  k.set_arg(2, transpose ? *t_col_ : *col_);
-  k.set_arg(3, transpose ? *t_val_ : *val_);
-  k.set_arg(4, mask_);
+  k.set_args(n_, transpose ? *t_row_ptr_ : *row_ptr_, transpose ? *t_col_ : *col_,
+             transpose ? *t_val_ : *val_, mask_);
 }
 
 void ClBackend::set_matrix(bc::vector<int>* row_ptr, bc::vector<int>* col, bc::vector<double>* val,
@@ -300,22 +265,18 @@ void ClBackend::download(Vec v, double* data) {
 }
 
 void ClBackend::residual(Vec r, Vec b, Vec x) {
-  k_residual_.set_arg(5, vec_[b]);
-  k_residual_.set_arg(6, vec_[x]);
-  k_residual_.set_arg(7, vec_[r]);
+  set_args_at(k_residual_, 5, vec_[b], vec_[x], vec_[r]);
   dev_.launch(k_residual_, n_);
 }
 
 void ClBackend::spmv(Vec y, Vec x, bool transpose) {
   auto& k = transpose ? k_spmv_t_ : k_spmv_;
-  k.set_arg(5, vec_[x]);
-  k.set_arg(6, vec_[y]);
+  set_args_at(k, 5, vec_[x], vec_[y]);
   dev_.launch(k, n_);
 }
 
 void ClBackend::spmv_scaled(Vec y, Vec x) {
-  k_spmv_scaled_.set_arg(6, vec_[x]);
-  k_spmv_scaled_.set_arg(7, vec_[y]);
+  set_args_at(k_spmv_scaled_, 6, vec_[x], vec_[y]);
   dev_.launch(k_spmv_scaled_, n_);
 }
 
@@ -325,17 +286,13 @@ void ClBackend::finalize(Op op) {
 }
 
 void ClBackend::dot(Vec a, Vec b, Op op) {
-  k_dot_.set_arg(1, vec_[a]);
-  k_dot_.set_arg(2, vec_[b]);
+  set_args_at(k_dot_, 1, vec_[a], vec_[b]);
   dev_.launch(k_dot_, groups_);
   finalize(op);
 }
 
 void ClBackend::dot2(Vec a, Vec b, Vec c, Vec e, Op op) {
-  k_dot2_.set_arg(1, vec_[a]);
-  k_dot2_.set_arg(2, vec_[b]);
-  k_dot2_.set_arg(3, vec_[c]);
-  k_dot2_.set_arg(4, vec_[e]);
+  set_args_at(k_dot2_, 1, vec_[a], vec_[b], vec_[c], vec_[e]);
   dev_.launch(k_dot2_, groups_);
   finalize(op);
 }

@@ -162,40 +162,15 @@ void DeviceAdvector::advect(const AdvectParams& prm, Points& x, std::vector<int>
   bc::copy(zd.begin(), zd.end(), s.k4.begin(), q);
   const double dt = prm.t_end / prm.steps;
   auto& kv = s.kvel;
-  kv.set_arg(0, s.n);
-  kv.set_arg(1, s.x);
-  kv.set_arg(5, static_cast<int>(prm.slide));
-  kv.set_arg(6, s.boundary);
-  kv.set_arg(7, s.hint);
-  kv.set_arg(8, s.inv);
-  kv.set_arg(9, s.tets);
-  kv.set_arg(10, s.nbr);
-  kv.set_arg(11, s.grad);
-  kv.set_arg(12, s.rho0);
-  kv.set_arg(13, s.lo[0]);
-  kv.set_arg(14, s.lo[1]);
-  kv.set_arg(15, s.lo[2]);
-  kv.set_arg(16, s.inv_h);
-  kv.set_arg(17, s.dims[0]);
-  kv.set_arg(18, s.dims[1]);
-  kv.set_arg(19, s.dims[2]);
-  kv.set_arg(20, s.cell_start);
-  kv.set_arg(21, s.cell_tets);
+  kv.set_args(s.n, s.x);
+  set_args_at(kv, 5, static_cast<int>(prm.slide), s.boundary, s.hint, s.inv, s.tets, s.nbr, s.grad,
+                     s.rho0, s.lo[0], s.lo[1], s.lo[2], s.inv_h, s.dims[0], s.dims[1], s.dims[2],
+                     s.cell_start, s.cell_tets);
   kv.set_arg(23, s.stats);
   auto& ku = s.kupd;
-  ku.set_arg(0, s.n);
-  ku.set_arg(1, s.x);
-  ku.set_arg(2, s.k1);
-  ku.set_arg(3, s.k2);
-  ku.set_arg(4, s.k3);
-  ku.set_arg(5, s.k4);
-  ku.set_arg(6, dt);
-  ku.set_arg(7, static_cast<int>(prm.slide));
-  ku.set_arg(8, s.boundary);
+  ku.set_args(s.n, s.x, s.k1, s.k2, s.k3, s.k4, dt, static_cast<int>(prm.slide), s.boundary);
   auto stage = [&](bc::vector<double>& kin, double c, double t, bc::vector<double>& out) {
-    kv.set_arg(2, kin);
-    kv.set_arg(3, c);
-    kv.set_arg(4, t);
+    set_args_at(kv, 2, kin, c, t);
     kv.set_arg(22, out);
     s.dev.launch(kv, static_cast<size_t>(s.n));
   };

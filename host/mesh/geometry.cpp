@@ -39,10 +39,7 @@ void device_tet_volumes(Device& dev, const Points& x, const Tets& t, bc::vector<
   bc::vector<int> dt(t.data(), t.data() + t.size(), q);
   vol.resize(static_cast<size_t>(t.rows()), q);
   auto k = dev.kernel("geometry", "tet_volumes");
-  k.set_arg(0, static_cast<int>(t.rows()));
-  k.set_arg(1, dx);
-  k.set_arg(2, dt);
-  k.set_arg(3, vol);
+  k.set_args(static_cast<int>(t.rows()), dx, dt, vol);
   dev.launch(k, static_cast<size_t>(t.rows()));
 }
 }  // namespace
@@ -66,11 +63,7 @@ Eigen::VectorXd dual_volumes(Device& dev, const Points& x, const Tets& t) {
   bc::vector<int> tof(inc.tet_of.begin(), inc.tet_of.end(), q);
   bc::vector<double> dual(static_cast<size_t>(x.rows()), dev.context());
   auto k = dev.kernel("geometry", "dual_volumes");
-  k.set_arg(0, static_cast<int>(x.rows()));
-  k.set_arg(1, off);
-  k.set_arg(2, tof);
-  k.set_arg(3, vol);
-  k.set_arg(4, dual);
+  k.set_args(static_cast<int>(x.rows()), off, tof, vol, dual);
   dev.launch(k, static_cast<size_t>(x.rows()));
   Eigen::VectorXd out(x.rows());
   bc::copy(dual.begin(), dual.end(), out.data(), q);

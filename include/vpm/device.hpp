@@ -21,6 +21,14 @@
 
 namespace vpm {
 
+/// Sets arguments first, first + 1, ... of kernel `k` to `args`: a run in the middle or at the
+/// end of a kernel's argument list (Boost.Compute's k.set_args(...) sets a run from 0).
+template <class... T>
+void set_args_at(boost::compute::kernel& k, size_t first, const T&... args) {
+  size_t i = first;
+  (k.set_arg(i++, args), ...);
+}
+
 /// One OpenCL device as the ICD loader reports it.
 struct DeviceDescription {
   int platform_index = -1;
