@@ -45,6 +45,46 @@ Args::Args(std::vector<std::string> argv, std::vector<std::string> value_options
   verbosity().verbose = has("--verbose");
 }
 
+namespace {
+std::vector<std::string> option_flags(const Command& c, bool with_value) {
+  std::vector<std::string> out;
+  for (const OptionSpec& o : c.options)
+    if (o.value.empty() != with_value) out.push_back(o.flag);
+  return out;
+}
+std::string option_text(const OptionSpec& o) { return o.value.empty() ? o.flag : o.flag + " " + o.value; }
+}  // namespace
+
+Args::Args(std::vector<std::string> argv, const Command& command)
+    : Args(std::move(argv), option_flags(command, true), option_flags(command, false)) {}
+
+std::string synopsis(const Command& c) {
+  std::string s = "vpm " + c.name;
+  if (!c.operands.empty()) s += " " + c.operands;
+  for (size_t i = 0; i < c.options.size(); ++i) {
+    const OptionSpec& o = c.options[i];
+    if (o.hidden) continue;
+    std::string item = option_text(o);
+    while (o.group != 0 && i + 1 < c.options.size() && c.options[i + 1].group == o.group)
+      item += " | " + option_text(c.options[++i]);
+    s += o.required ? " " + item : " [" + item + "]";
+  }
+  return s;
+}
+
+std::string help_text(const Command& c) {
+  std::string s = "usage: " + synopsis(c) + "\n" + c.summary + "\n";
+  size_t width = 0;
+  for (const OptionSpec& o : c.options) width = std::max(width, option_text(o).size());
+  if (!c.options.empty()) s += "options:\n";
+  for (const OptionSpec& o : c.options) {
+    const std::string t = option_text(o);
+    s += "  " + t + std::string(width + 2 - t.size(), ' ') + o.help + "\n";
+  }
+  s += "every command also takes --quiet (no messages) and --verbose (progress lines)\n";
+  return s;
+}
+
 std::optional<std::string> Args::get(const std::string& opt) const {
   auto it = values_.find(opt);
   if (it == values_.end()) return std::nullopt;

@@ -10,12 +10,14 @@
 
 namespace vpm::cli {
 
+struct Command;
+
 /// Parsed arguments of one sub-command: positionals and --options.
 class Args {
  public:
-  /// `flags` lists options that take no value (e.g. "--quiet"); every other --option takes one.
-  Args(std::vector<std::string> argv, std::vector<std::string> value_options,
-       std::vector<std::string> flags);
+  /// Parses `argv` by the command's option table (options with an empty value are flags;
+  /// --quiet and --verbose are always accepted).
+  Args(std::vector<std::string> argv, const Command& command);
   const std::vector<std::string>& positional() const { return positional_; }
   bool has(const std::string& opt) const { return values_.count(opt) > 0; }
   std::optional<std::string> get(const std::string& opt) const;
@@ -26,6 +28,8 @@ class Args {
   void expect_positional(size_t n, const std::string& usage) const;
 
  private:
+  /// `flags` lists options that take no value; every other --option in `value_options` takes one.
+  Args(std::vector<std::string> argv, std::vector<std::string> value_options, std::vector<std::string> flags);
   std::vector<std::string> positional_;
   std::map<std::string, std::string> values_;
 };
@@ -41,11 +45,30 @@ auto parse_option(const std::string& flag, F&& parse) -> decltype(parse()) {
   }
 }
 
-struct Command {
-  std::string name;
-  std::string synopsis;  ///< one usage line
-  int (*run)(const std::vector<std::string>& argv);
+/// One option of a command. The table of a command's options is the single source of its
+/// parsing (Args), its synopsis and its --help text; README's command synopsis is checked
+/// against `vpm --help` by tests/test_cli.cpp.
+struct OptionSpec {
+  std::string flag;         ///< "--rounds"
+  std::string value;        ///< placeholder of its value ("R", "moser|paper|vsem"); empty: a flag
+  std::string help;         ///< one line: what it does, its default
+  bool required = false;    ///< shown without brackets; the command checks its presence
+  int group = 0;            ///< consecutive options with the same non-zero group are alternatives
+  bool hidden = false;      ///< accepted and listed by --help, left out of the synopsis
 };
+
+struct Command {
+  std::string name;      ///< "map"
+  std::string operands;  ///< "MESH -o OUT"
+  std::string summary;   ///< one line for `vpm --help`
+  std::vector<OptionSpec> options;
+  int (*run)(const Command& self, const std::vector<std::string>& argv);
+};
+
+/// "vpm NAME OPERANDS [--flag VALUE] [--a A | --b B] ..." from the command's table.
+std::string synopsis(const Command& c);
+/// The synopsis, the summary and one line per option (and --quiet, --verbose).
+std::string help_text(const Command& c);
 
 /// Registry filled by static Registrar objects in each cmd_*.cpp.
 std::vector<Command>& commands();

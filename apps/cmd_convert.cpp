@@ -6,9 +6,9 @@
 #include "vpm/io.hpp"
 
 namespace {
-int run(const std::vector<std::string>& argv) {
-  vpm::cli::Args args(argv, {}, {});
-  args.expect_positional(2, "vpm convert IN OUT");
+int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
+  vpm::cli::Args args(argv, self);
+  args.expect_positional(2, vpm::cli::synopsis(self));
   const std::string& in = args.positional()[0];
   const std::string& out = args.positional()[1];
   if (vpm::is_surface_path(in) && vpm::is_surface_path(out)) {
@@ -32,7 +32,5 @@ int run(const std::vector<std::string>& argv) {
                  std::to_string(m.num_tets()) + " tets");
   return 0;
 }
-vpm::cli::Registrar reg({"convert",
-                         "vpm convert IN OUT               convert between mesh (or surface) formats",
-                         run});
+vpm::cli::Registrar reg({"convert", "IN OUT", "convert between mesh (or surface) formats, chosen by extension", {}, run});
 }  // namespace

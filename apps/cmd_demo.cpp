@@ -33,8 +33,6 @@ using vpm::Clock;
 using vpm::seconds_since;
 using vpm::strprintf;
 
-const char* kUsage =
-    "vpm demo [--out DIR] [--data DIR] [--target-vertices N] [--grid N] [--width-factor F] [--quiet] [--verbose]";
 
 // Regions whose overlap is measured; they are never used as landmarks (held out).
 const std::vector<int> kEvaluated = {71, 72, 77, 78};  // Caudate_L/R, Thalamus_L/R
@@ -113,9 +111,10 @@ vpm::BallMap mesh_and_map(vpm::Device& dev, const vpm::Image& image, const vpm::
   return bm;
 }
 
-int run(const std::vector<std::string>& argv) {
+int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
+  const std::string kUsage = vpm::cli::synopsis(self);
   using namespace vpm;
-  cli::Args args(argv, {"--out", "--data", "--target-vertices", "--grid", "--width-factor"}, {});
+  cli::Args args(argv, self);
   args.expect_positional(0, std::string("usage: ") + kUsage);
   const fs::path out = args.get("--out", "out/demo");
   const fs::path data = args.get("--data", "/usr/share/mricron/templates");
@@ -267,5 +266,12 @@ int run(const std::vector<std::string>& argv) {
   return 0;
 }
 
-vpm::cli::Registrar reg({"demo", kUsage, run});
+vpm::cli::Registrar reg(
+    {"demo", "", "the whole pipeline on Debian's Colin27 brain and a deformed copy",
+     {{"--out", "DIR", "output folder (default out/demo)"},
+      {"--data", "DIR", "mricron templates folder (default /usr/share/mricron/templates)"},
+      {"--target-vertices", "N", "mesh density (default 5200, the paper's size)"},
+      {"--grid", "N", "ball grid for the Dice overlap, N^3 points (default 96)"},
+      {"--width-factor", "F", "registration kernel width factor (default 0.5)"}},
+     run});
 }  // namespace

@@ -7,9 +7,9 @@
 #include "vpm/error.hpp"
 
 namespace {
-int run(const std::vector<std::string>& argv) {
-  vpm::cli::Args args(argv, {}, {});
-  args.expect_positional(0, "vpm devices");
+int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
+  vpm::cli::Args args(argv, self);
+  args.expect_positional(0, vpm::cli::synopsis(self));
   std::string why;
   const auto devs = vpm::list_opencl_devices(&why);
   const char* env = std::getenv("VPM_DEVICE");
@@ -32,5 +32,5 @@ int run(const std::vector<std::string>& argv) {
   if (!error.empty()) throw vpm::InputError(error);
   return 0;
 }
-vpm::cli::Registrar reg({"devices", "vpm devices                      list compute devices", run});
+vpm::cli::Registrar reg({"devices", "", "list the compute devices and mark the one VPM_DEVICE selects", {}, run});
 }  // namespace

@@ -14,12 +14,9 @@
 
 namespace {
 
-const char* kUsage =
-    "vpm initial-map MESH -o OUT [--untangle never|if-folded|always] [--area-correction] "
-    "[--no-split] [--report REPORT.json] [--quiet] [--verbose]";
-
-int run(const std::vector<std::string>& argv) {
-  vpm::cli::Args args(argv, {"--untangle", "--report"}, {"--area-correction", "--no-split"});
+int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
+  const std::string kUsage = vpm::cli::synopsis(self);
+  vpm::cli::Args args(argv, self);
   args.expect_positional(1, kUsage);
   const std::string in = args.positional()[0];
   const auto out = args.get("-o");
@@ -66,5 +63,10 @@ int run(const std::vector<std::string>& argv) {
   return 0;
 }
 
-vpm::cli::Registrar reg({"initial-map", kUsage, run});
+vpm::cli::Registrar reg({"initial-map", "MESH -o OUT", "the fold-free initial map to the unit ball (paper 4.1)",
+                         {{"--untangle", "never|if-folded|always", "untangle the harmonic map (default if-folded)"},
+                          {"--area-correction", "", "equalise areas on the sphere before the interior map"},
+                          {"--no-split", "", "do not split interior edges between boundary vertices"},
+                          {"--report", "REPORT.json", "write the report (stages, metrics, timings)"}},
+                         run});
 }  // namespace

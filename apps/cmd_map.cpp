@@ -18,16 +18,9 @@ using vpm::Clock;
 using vpm::seconds_since;
 
 
-const char* kUsage =
-    "vpm map MESH -o OUT [--rounds R] [--tolerance T] [--method moser|paper|vsem] "
-    "[--boundary slide|fixed] [--solver cg|paper] [--rk-steps N] [--report REPORT.json] "
-    "[--quiet] [--verbose]";
-
-int run(const std::vector<std::string>& argv) {
-  vpm::cli::Args args(argv,
-                      {"--rounds", "--tolerance", "--method", "--boundary", "--solver", "--report",
-                       "--rk-steps"},
-                      {});
+int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
+  const std::string kUsage = vpm::cli::synopsis(self);
+  vpm::cli::Args args(argv, self);
   args.expect_positional(1, kUsage);
   const std::string in = args.positional()[0];
   const auto out = args.get("-o");
@@ -81,5 +74,13 @@ int run(const std::vector<std::string>& argv) {
   return 0;
 }
 
-vpm::cli::Registrar reg({"map", kUsage, run});
+vpm::cli::Registrar reg({"map", "MESH -o OUT", "map a tet mesh to the unit ball, preserving local volumes",
+                         {{"--rounds", "R", "Moser rounds (default: until --tolerance, at most 8; 0: the initial map only)"},
+                          {"--tolerance", "T", "stop at this vertex mean |r-1| (default 0.01)"},
+                          {"--method", "moser|paper|vsem", "moser (default) or a peer method for comparison"},
+                          {"--boundary", "slide|fixed", "boundary vertices slide on the sphere (moser default) or stay"},
+                          {"--solver", "cg|paper", "Jacobi CG (default) or the paper's BiCGSTAB on the normal equations"},
+                          {"--rk-steps", "N", "RK4 steps per Moser round (default 40)"},
+                          {"--report", "REPORT.json", "write the report (metrics, rounds, timings)"}},
+                         run});
 }  // namespace

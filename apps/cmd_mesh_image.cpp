@@ -10,14 +10,9 @@
 #include "vpm/mesh_image.hpp"
 
 namespace {
-const char* kUsage =
-    "vpm mesh-image IMAGE.nii[.gz]|SURFACE.off -o OUT [--threshold T | --label L[,L...]] [--labels ATLAS.nii[.gz]] "
-    "[--target-vertices N | --max-volume V] [--smooth S] [--close-at-border] [--report R.json]";
-
-int run(const std::vector<std::string>& argv) {
-  vpm::cli::Args args(argv, {"--threshold", "--label", "--labels", "--target-vertices", "--max-volume", "--smooth",
-                             "--report", "--radius-edge", "--min-dihedral", "--max-closing-radius"},
-                      {"--close-at-border"});
+int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
+  const std::string kUsage = vpm::cli::synopsis(self);
+  vpm::cli::Args args(argv, self);
   args.expect_positional(1, std::string("usage: ") + kUsage);
   const auto out = args.get("-o");
   if (!out) throw vpm::InputError(std::string("missing -o OUT; usage: ") + kUsage);
@@ -65,5 +60,18 @@ int run(const std::vector<std::string>& argv) {
   vpm::cli::info(line);
   return 0;
 }
-vpm::cli::Registrar reg({"mesh-image", kUsage, run});
+vpm::cli::Registrar reg(
+    {"mesh-image", "IMAGE.nii[.gz]|SURFACE.off|.obj|.stl -o OUT", "image mask or closed surface -> quality tet mesh",
+     {{"--threshold", "T", "mask = voxels above T (default 0)", false, 1},
+      {"--label", "L[,L...]", "mask = voxels with these labels (a label image)", false, 1},
+      {"--labels", "ATLAS.nii[.gz]", "attach atlas labels (cell and point field `label`)"},
+      {"--target-vertices", "N", "surface density for about N boundary vertices (default 5200)", false, 2},
+      {"--max-volume", "V", "largest tet volume in mm^3 (sets the density instead)", false, 2},
+      {"--smooth", "S", "Gaussian smoothing of the mask in mm (default: from the density)"},
+      {"--close-at-border", "", "cap a mask that touches the image border"},
+      {"--radius-edge", "Q", "TetGen radius-edge bound (default 1.5)"},
+      {"--min-dihedral", "D", "TetGen smallest dihedral angle bound, degrees (default 12)"},
+      {"--max-closing-radius", "R", "largest morphological closing tried for genus 0, grid cells (default 6)"},
+      {"--report", "R.json", "write the report (sizes, quality, topology, timings)"}},
+     run});
 }  // namespace

@@ -15,20 +15,13 @@
 
 namespace {
 
-constexpr const char* kUsage =
-    "vpm register MAPPED -o OUT --landmarks SRC.csv --targets DST.csv [--steps K] "
-    "[--report R.json] [--width W | --lambda L | --width-factor F | --width-loo] "
-    "[--boundary tangent|samples|none] [--field per-step|steady] [--no-rigid] [--no-untangle] "
-    "[--no-restore] [--quiet]";
 
 
-int run(const std::vector<std::string>& argv) {
+int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
+  const std::string kUsage = vpm::cli::synopsis(self);
   using namespace vpm;
   const auto t_start = Clock::now();
-  cli::Args args(argv,
-                 {"--landmarks", "--targets", "--steps", "--report", "--width", "--lambda",
-                  "--width-factor", "--boundary", "--field", "--boundary-samples"},
-                 {"--width-loo", "--no-rigid", "--no-untangle", "--no-restore"});
+  cli::Args args(argv, self);
   args.expect_positional(1, kUsage);
   const std::string in = args.positional()[0];
   const auto out = args.get("-o");
@@ -149,5 +142,21 @@ int run(const std::vector<std::string>& argv) {
   return 0;
 }
 
-vpm::cli::Registrar reg({"register", kUsage, run});
+vpm::cli::Registrar reg(
+    {"register", "MAPPED -o OUT", "register a mapped mesh: move landmarks to targets by a divergence-free flow",
+     {{"--landmarks", "SRC.csv", "landmarks in MAPPED's ball (x,y,z or vertex_id a line)", true},
+      {"--targets", "DST.csv", "their targets, paired line by line", true},
+      {"--steps", "K", "pathline samples and RK4 steps (default 50)"},
+      {"--report", "R.json", "write the report (landmark errors, metrics, timings)"},
+      {"--width", "W", "Gaussian width of the RBF kernel in ball units", false, 1},
+      {"--lambda", "L", "kernel exponent lambda = 1 / width^2", false, 1},
+      {"--width-factor", "F", "width = F x the mean nearest-neighbour spacing of the landmarks (default 0.5)", false, 1},
+      {"--width-loo", "", "choose the width factor by leave-one-out", false, 1},
+      {"--boundary", "tangent|samples|none", "sphere-tangent kernel (default), eq. 29 samples, or none"},
+      {"--boundary-samples", "N", "sphere samples for --boundary samples (default 200)", false, 0, true},
+      {"--field", "per-step|steady", "a field per RK4 stage (default) or the paper's steady field"},
+      {"--no-rigid", "", "skip the rotation step"},
+      {"--no-untangle", "", "skip local untangling (folded results exit 3)"},
+      {"--no-restore", "", "skip the volume restoration after the flow"}},
+     run});
 }  // namespace

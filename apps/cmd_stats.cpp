@@ -60,9 +60,9 @@ void print_ratio(std::ostream& out, const char* name, const vpm::RatioStats& r) 
       << vpm::format_sig(r.min, 6) << "  max " << vpm::format_sig(r.max, 6) << '\n';
 }
 
-int run(const std::vector<std::string>& argv) {
-  vpm::cli::Args args(argv, {"--against", "--report"}, {});
-  const std::string usage = "vpm stats MESH [--against REF] [--report R.json] [--quiet]";
+int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
+  vpm::cli::Args args(argv, self);
+  const std::string usage = vpm::cli::synopsis(self);
   args.expect_positional(1, usage);
   const std::string path = args.positional()[0];
   const auto against = args.get("--against");
@@ -150,7 +150,8 @@ int run(const std::vector<std::string>& argv) {
   return 0;
 }
 
-vpm::cli::Registrar reg({"stats",
-                         "vpm stats MESH [--against REF] [--report R.json]  mesh statistics, map metrics",
+vpm::cli::Registrar reg({"stats", "MESH", "mesh statistics, and the metrics of a map against its input",
+                         {{"--against", "REF", "the input mesh MESH was mapped from: volume ratios, folds"},
+                          {"--report", "R.json", "write the statistics as JSON"}},
                          run});
 }  // namespace

@@ -11,7 +11,7 @@ namespace {
 void usage(std::ostream& out) {
   out << "vpm " VPM_VERSION ": volume-preserving mapping and registration of 3-D shapes\n"
          "usage:\n";
-  for (const auto& c : vpm::cli::commands()) out << "  " << c.synopsis << '\n';
+  for (const auto& c : vpm::cli::commands()) out << "  " << vpm::cli::synopsis(c) << "\n      " << c.summary << '\n';
   out << "environment: VPM_DEVICE=host|cpu|gpu|P:D|name-substring selects the compute device\n";
 }
 }  // namespace
@@ -29,12 +29,11 @@ int main(int argc, char** argv) {
   for (const auto& c : vpm::cli::commands()) {
     if (c.name != args[0]) continue;
     if (args.size() == 2 && (args[1] == "--help" || args[1] == "-h")) {
-      std::cout << "usage: " << c.synopsis << "\n(all commands also take --quiet and --verbose; "
-                << "README.md and docs/ describe every option)\n";
+      std::cout << vpm::cli::help_text(c);
       return vpm::kExitOk;
     }
     try {
-      return c.run(std::vector<std::string>(args.begin() + 1, args.end()));
+      return c.run(c, std::vector<std::string>(args.begin() + 1, args.end()));
     } catch (const vpm::InputError& e) {
       std::cerr << "vpm " << c.name << ": error: " << e.what() << '\n';
       return vpm::kExitInput;

@@ -12,6 +12,7 @@
 
 #include "support/devices.hpp"
 #include "support/fixtures.hpp"
+#include "support/process.hpp"
 #include "support/shapes.hpp"
 #include "vpm/ball_map.hpp"
 #include "vpm/collective.hpp"
@@ -32,10 +33,7 @@ namespace {
 
 std::string tmp(const std::string& name) { return std::string(VPM_TEST_TMP) + "/collective_" + name; }
 
-int run_status(const std::string& cmd) {
-  const int s = std::system(cmd.c_str());
-  return WIFEXITED(s) ? WEXITSTATUS(s) : -1;
-}
+using test::run_status;
 
 // Labels by octant sign of the tet centroid's x: 1 for x > 0, 2 otherwise.
 std::vector<int> half_labels(const TetMesh& m) {
@@ -256,18 +254,4 @@ TEST_CASE("vpm demo: meshes, maps and registers Colin27 and a deformed copy, Dic
   // bad option: exit 2
   CHECK(run_status(std::string(VPM_BINARY) + " demo --out " + out + " --grid 2 2>/dev/null") == 2);
   CHECK(run_status(std::string(VPM_BINARY) + " demo --out " + out + " --data " + tmp("nothing") + " 2>/dev/null") == 2);
-}
-
-TEST_CASE("vpm CMD --help prints the command's usage on stdout and exits 0") {
-  for (const char* c : {"map", "register", "mesh-image", "initial-map", "stats", "convert", "devices", "demo"}) {
-    INFO(c);
-    const std::string out = tmp(std::string("help_") + c + ".txt");
-    REQUIRE(run_status(std::string(VPM_BINARY) + " " + c + " --help > " + out + " 2>/dev/null") == 0);
-    std::ifstream in(out);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    CHECK_THAT(ss.str(), Catch::StartsWith(std::string("usage: vpm ") + c));
-  }
-  // an unknown option is still an error
-  CHECK(run_status(std::string(VPM_BINARY) + " map --no-such-option 2>/dev/null") == 2);
 }
