@@ -13,6 +13,7 @@
 #include <sys/wait.h>
 
 #include "support/fixtures.hpp"
+#include "support/process.hpp"
 #include "vpm/config.hpp"
 #include "vpm/error.hpp"
 #include "vpm/io.hpp"
@@ -26,12 +27,7 @@ namespace {
 std::string tmp(const std::string& name) { return std::string(VPM_TEST_TMP) + "/io_" + name; }
 std::string bad(const std::string& name) { return std::string(VPM_TEST_DATA) + "/bad/" + name; }
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using test::slurp;
 
 void spit(const std::string& path, const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;

@@ -9,6 +9,7 @@
 
 #include "support/devices.hpp"
 #include "support/fixtures.hpp"
+#include "support/process.hpp"
 #include "support/shapes.hpp"
 #include "map/moser_field.hpp"
 #include "map/polish.hpp"

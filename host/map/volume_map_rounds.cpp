@@ -38,31 +38,42 @@ Points vsem_target(MapContext& c, const Points& x, Eigen::VectorXd& w, VolumeMap
   return target;
 }
 
-// Runs one round from `saved` on [0, t_end], halving t_end while it folds beyond repair.
-// Returns the folds left (0: accepted); r.t_end is the interval used.
-int fold_free_round(MapContext& c, Points& x, const Points& saved, double t_end,
-                    const Points& vsem_goal, VolumeMapRound& r) {
+// Moves x from `saved` by move(attempt, step) and checks it: a move that folds is untangled
+// locally, and if folds remain it is tried again with the step halved, up to `max_attempts`
+// more times. r.folds_before_untangle counts the folds of every attempt (`each_attempt`) or of
+// the first; r.t_end is the step used. Returns the folds left (0: accepted).
+template <class Move>
+int fold_free(MapContext& c, Points& x, const Points& saved, double step, int max_attempts, bool each_attempt,
+              VolumeMapRound& r, Move move) {
   int folds = 0;
-  for (int attempt = 0; attempt <= c.opt.max_step_halvings; ++attempt) {
-    if (attempt > 0) x = saved;
-    if (c.opt.method == VolumeMapMethod::moser) {
-      moser_round(c, x, t_end, r);
-    } else if (c.opt.method == VolumeMapMethod::paper) {
-      paper_step(c, x, t_end, r);
-    } else {
-      x = saved + t_end * (vsem_goal - saved);
-    }
+  for (int attempt = 0; attempt <= max_attempts; ++attempt) {
+    move(attempt, step);
     folds = count_folds(c, x);
-    r.folds_before_untangle = folds;
+    if (each_attempt || attempt == 0) r.folds_before_untangle = folds;
     if (folds > 0) {
       r.untangled = c.opt.local_untangle;
       folds = untangle_folds(c, x, &r.time_untangle, &saved);
     }
-    r.t_end = t_end;
+    r.t_end = step;
     if (folds == 0) break;
-    t_end *= 0.5;
+    step *= 0.5;
   }
   return folds;
+}
+
+// One round from `saved` on [0, t_end] (t_end halved while it folds beyond repair).
+int fold_free_round(MapContext& c, Points& x, const Points& saved, double t_end, const Points& vsem_goal,
+                    VolumeMapRound& r) {
+  return fold_free(c, x, saved, t_end, c.opt.max_step_halvings, true, r, [&](int attempt, double step) {
+    if (attempt > 0) x = saved;
+    if (c.opt.method == VolumeMapMethod::moser) {
+      moser_round(c, x, step, r);
+    } else if (c.opt.method == VolumeMapMethod::paper) {
+      paper_step(c, x, step, r);
+    } else {
+      x = saved + step * (vsem_goal - saved);
+    }
+  });
 }
 
 void add_times(VolumeMapTimings& t, const VolumeMapRound& r) {
@@ -143,25 +154,12 @@ void run_rounds(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& 
 
 namespace {
 
-// Applies the polish direction dx from `saved`, halving the step while it folds beyond repair.
-// Returns the folds left.
+// The polish direction dx applied from `saved` (the step halved while it folds beyond repair).
 int fold_free_polish(MapContext& c, Points& x, const Points& saved, const Points& dx, VolumeMapRound& r) {
-  double step = 1.0;
-  int folds = 0;
-  for (int attempt = 0; attempt <= c.opt.max_step_halvings + 2; ++attempt) {
+  return fold_free(c, x, saved, 1.0, c.opt.max_step_halvings + 2, false, r, [&](int, double step) {
     x = saved + step * dx;
     project_boundary(c, x);
-    folds = count_folds(c, x);
-    if (attempt == 0) r.folds_before_untangle = folds;
-    if (folds > 0) {
-      r.untangled = c.opt.local_untangle;
-      folds = untangle_folds(c, x, &r.time_untangle, &saved);
-    }
-    r.t_end = step;
-    if (folds == 0) break;
-    step *= 0.5;
-  }
-  return folds;
+  });
 }
 
 }  // namespace

@@ -94,18 +94,26 @@ void solve_round(MapContext& c, const Points& x, Eigen::VectorXd& V, Eigen::Vect
   r.time_solve += seconds_since(t0);
 }
 
+// The solve of a round and its field on the background x: f's grid and vertex gradients.
+void solve_and_field(MapContext& c, const Points& x, Eigen::VectorXd& V, Eigen::VectorXd& target,
+                     detail::MoserField& f, VolumeMapRound& r) {
+  solve_round(c, x, V, target, r);
+  const auto t1 = Clock::now();
+  detail::build_background(f, x, c.tets, c.nbr);
+  const auto G = detail::tet_gradients(f, c.psi);
+  const Eigen::VectorXd vol = tet_volumes(x, c.tets);
+  f.grad = vertex_gradients(c, x, G, vol);
+  r.time_field += seconds_since(t1);
+}
+
 }  // namespace
 
 // One Moser round on [0, t_end]: x in/out.
 void moser_round(MapContext& c, Points& x, double t_end, VolumeMapRound& r) {
   Eigen::VectorXd V, target;
-  solve_round(c, x, V, target, r);
-  const auto t1 = Clock::now();
   detail::MoserField f;
-  detail::build_background(f, x, c.tets, c.nbr);
-  const auto G = detail::tet_gradients(f, c.psi);
-  const Eigen::VectorXd vol = tet_volumes(x, c.tets);
-  f.grad = vertex_gradients(c, x, G, vol);
+  solve_and_field(c, x, V, target, f, r);
+  const auto t1 = Clock::now();
   f.rho0.resize(static_cast<size_t>(c.n));
   for (int i = 0; i < c.n; ++i) f.rho0[i] = V(i) > 0 ? target(i) / V(i) : 1.0;
   r.time_field += seconds_since(t1);
@@ -132,14 +140,9 @@ void moser_round(MapContext& c, Points& x, double t_end, VolumeMapRound& r) {
 // The paper's explicit step: re-solve on the current geometry, x += dt grad psi / rho.
 void paper_step(MapContext& c, Points& x, double dt, VolumeMapRound& r) {
   Eigen::VectorXd V, target;
-  solve_round(c, x, V, target, r);
-  const auto t1 = Clock::now();
   detail::MoserField f;
-  detail::build_background(f, x, c.tets, c.nbr);
-  const auto G = detail::tet_gradients(f, c.psi);
-  const Eigen::VectorXd vol = tet_volumes(x, c.tets);
-  const std::vector<double> g = vertex_gradients(c, x, G, vol);
-  r.time_field += seconds_since(t1);
+  solve_and_field(c, x, V, target, f, r);
+  const std::vector<double>& g = f.grad;
   const auto t2 = Clock::now();
   for (int i = 0; i < c.n; ++i) {
     if (c.boundary[i] && !c.slide) continue;
