@@ -16,13 +16,7 @@ namespace {
 // A cube mesh with interior vertices jittered (keeps tets positive for small jitter), so the
 // weights are irregular and some are negative.
 TetMesh jittered_cube(int n, double amount, unsigned seed = 7) {
-  TetMesh m = test::cube_mesh(n);
-  const auto bnd = boundary_vertex_mask(m.num_vertices(), boundary_faces(m.tets));
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-amount / n, amount / n);
-  for (int i = 0; i < m.num_vertices(); ++i)
-    if (!bnd[i]) m.vertices.row(i) += Eigen::RowVector3d(u(rng), u(rng), u(rng));
-  return m;
+  return test::jitter_interior(test::cube_mesh(n), n, amount, seed);
 }
 
 double max_abs(const CsrMatrix& a) {

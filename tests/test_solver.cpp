@@ -13,13 +13,7 @@ using namespace vpm;
 
 namespace {
 TetMesh jittered_ball(int n, double amount, unsigned seed = 1) {
-  TetMesh m = test::ball_mesh(n);
-  const auto bnd = boundary_vertex_mask(m.num_vertices(), boundary_faces(m.tets));
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-amount / n, amount / n);
-  for (int i = 0; i < m.num_vertices(); ++i)
-    if (!bnd[i]) m.vertices.row(i) += Eigen::RowVector3d(u(rng), u(rng), u(rng));
-  return m;
+  return test::jitter_interior(test::ball_mesh(n), n, amount, seed);
 }
 
 Eigen::VectorXd zero_sum_random(int n, unsigned seed) {

@@ -3,8 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
+#include <vector>
 
 #include "vpm/geometry.hpp"
+#include "vpm/topology.hpp"
 
 namespace vpm::test {
 
@@ -28,6 +31,29 @@ TetMesh ball_mesh(int n) {
     if (r > 0) p *= inf / r;  // cube shell of "radius" inf -> sphere of radius inf
     m.vertices.row(i) = p;
   }
+  return m;
+}
+
+TetMesh jitter_interior(TetMesh m, int n, double amount, unsigned seed) {
+  const auto bnd = boundary_vertex_mask(m.num_vertices(), boundary_faces(m.tets));
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-amount / n, amount / n);
+  for (int i = 0; i < m.num_vertices(); ++i)
+    if (!bnd[i]) m.vertices.row(i) += Eigen::RowVector3d(u(rng), u(rng), u(rng));
+  return m;
+}
+
+TetMesh tunnel_cube() {
+  TetMesh m = cube_mesh(3);
+  std::vector<int> keep;
+  for (int t = 0; t < m.num_tets(); ++t) {
+    Eigen::RowVector3d c = Eigen::RowVector3d::Zero();
+    for (int k = 0; k < 4; ++k) c += m.vertices.row(m.tets(t, k)) / 4;
+    if (!(c(0) > 1.0 / 3 && c(0) < 2.0 / 3 && c(1) > 1.0 / 3 && c(1) < 2.0 / 3)) keep.push_back(t);
+  }
+  Tets t2(static_cast<Eigen::Index>(keep.size()), 4);
+  for (size_t i = 0; i < keep.size(); ++i) t2.row(static_cast<Eigen::Index>(i)) = m.tets.row(keep[i]);
+  m.tets = t2;
   return m;
 }
 

@@ -15,4 +15,12 @@ TetMesh single_tet();
 /// cube's surface lies on the unit sphere ("squircle" map), keeping all tets positive.
 TetMesh ball_mesh(int n);
 
+/// `m` with its interior (non-boundary) vertices moved by uniform random offsets of up to
+/// amount / n per coordinate (std::mt19937 seeded with `seed`), so cotangent weights become
+/// irregular and some negative while small amounts keep every tet positive.
+TetMesh jitter_interior(TetMesh m, int n, double amount, unsigned seed);
+
+/// cube_mesh(3) without its centre column of cells: a solid torus (boundary genus 1).
+TetMesh tunnel_cube();
+
 }  // namespace vpm::test
