@@ -1,0 +1,165 @@
+// PoissonSolver and the one-call solve functions (vpm/solver.hpp), over the Krylov solvers of
+// linalg/krylov.hpp.
+#include "vpm/solver.hpp"
+
+#include <cmath>
+
+#include "linalg/krylov.hpp"
+#include "linalg/solver_backend.hpp"
+#include "vpm/device.hpp"
+#include "vpm/error.hpp"
+#include "vpm/format.hpp"
+
+namespace vpm {
+
+namespace bc = boost::compute;
+using detail::ClBackend;
+using detail::HostBackend;
+using detail::solve_system;
+
+struct PoissonSolver::Impl {
+  std::unique_ptr<HostBackend> host;
+  std::unique_ptr<ClBackend> cl;
+  std::vector<char> mask;  // the mask the backend holds
+  bool assembled = false;
+  template <class F>
+  auto with(F&& f) {
+    return host ? f(*host) : f(*cl);
+  }
+  void set_mask(const std::vector<char>& m) {
+    if (m == mask) return;
+    mask = m;
+    if (host) host->set_mask(mask);
+    else cl->set_mask(mask);
+  }
+};
+
+PoissonSolver::PoissonSolver(Device& device, int num_vertices, const Tets& tets, SolverOptions options)
+    : device_(device), laplacian_(num_vertices, tets), options_(options), impl_(std::make_unique<Impl>()) {
+  impl_->mask.assign(num_vertices, 0);
+  if (device.is_host()) {
+    impl_->host = std::make_unique<HostBackend>(num_vertices);
+    impl_->host->set_mask(impl_->mask);
+  } else {
+    impl_->cl = std::make_unique<ClBackend>(device, num_vertices);
+  }
+}
+
+PoissonSolver::~PoissonSolver() = default;
+
+void PoissonSolver::set_positions(const Points& vertices) {
+  laplacian_.assemble(device_, vertices);
+  if (impl_->host) {
+    impl_->host->set_matrix(&laplacian_.matrix(), nullptr);
+  } else {
+    impl_->cl->set_matrix(&laplacian_.device_row_ptr(), &laplacian_.device_col(),
+                          &laplacian_.device_values(), nullptr, nullptr, nullptr);
+  }
+  impl_->assembled = true;
+}
+
+SolverStats PoissonSolver::solve_neumann(const Eigen::VectorXd& b_in, Eigen::VectorXd& x) {
+  const auto t0 = Clock::now();
+  const int n = laplacian_.num_vertices();
+  if (!impl_->assembled) throw std::logic_error("PoissonSolver: set_positions() was not called");
+  if (b_in.size() != n)
+    throw InputError("PoissonSolver::solve_neumann: right side has length " +
+                     std::to_string(b_in.size()) + ", expected " + std::to_string(n));
+  const double sum = b_in.sum(), asum = b_in.cwiseAbs().sum();
+  if (!std::isfinite(sum))
+    throw InputError("PoissonSolver::solve_neumann: right side is not finite");
+  if (std::abs(sum) > options_.neumann_tolerance * asum)
+    throw InputError("PoissonSolver::solve_neumann: incompatible Neumann right side: sum " +
+                     format_sig(sum, 3) + " vs sum|b| " + format_sig(asum, 3) + " (relative " + format_sig(sum / asum, 3) +
+                     " > tolerance " + format_sig(options_.neumann_tolerance, 3) +
+                     "); a singular Laplacian system needs a zero-sum right side");
+  Eigen::VectorXd b = b_in.array() - (n > 0 ? sum / n : 0.0);
+  if (x.size() != n) x = Eigen::VectorXd::Zero(n);
+  impl_->set_mask(std::vector<char>(n, 0));
+  SolverStats st =
+      impl_->with([&](auto& bk) { return solve_system(bk, options_, impl_->mask, b.data(), x.data()); });
+  if (n > 0) x.array() -= x.mean();
+  st.seconds = seconds_since(t0);
+  last_ = st;
+  return st;
+}
+
+SolverStats PoissonSolver::solve_dirichlet(const std::vector<char>& fixed, const FieldValues& values,
+                                           FieldValues& x, const FieldValues* rhs) {
+  const auto t0 = Clock::now();
+  const int n = laplacian_.num_vertices();
+  if (!impl_->assembled) throw std::logic_error("PoissonSolver: set_positions() was not called");
+  if (static_cast<int>(fixed.size()) != n)
+    throw InputError("PoissonSolver::solve_dirichlet: fixed mask has length " +
+                     std::to_string(fixed.size()) + ", expected " + std::to_string(n));
+  if (values.rows() != n)
+    throw InputError("PoissonSolver::solve_dirichlet: values have " + std::to_string(values.rows()) +
+                     " rows, expected " + std::to_string(n));
+  const Eigen::Index k = values.cols();
+  if (rhs && (rhs->rows() != n || rhs->cols() != k))
+    throw InputError("PoissonSolver::solve_dirichlet: rhs shape does not match values");
+  std::vector<char> mask(n);
+  bool any = false;
+  for (int i = 0; i < n; ++i) {
+    mask[i] = fixed[i] ? 1 : 0;
+    any = any || mask[i];
+  }
+  if (!any && n > 0)
+    throw InputError("PoissonSolver::solve_dirichlet: no vertex is fixed (the system is singular; "
+                     "use solve_neumann)");
+  if (x.rows() != n || x.cols() != k) x = FieldValues::Zero(n, k);
+  impl_->set_mask(mask);
+  SolverStats total;
+  Eigen::VectorXd b(n), xc(n);
+  for (Eigen::Index c = 0; c < k; ++c) {
+    for (int i = 0; i < n; ++i) {
+      b[i] = rhs ? (*rhs)(i, c) : 0.0;
+      xc[i] = mask[i] ? values(i, c) : x(i, c);
+    }
+    const SolverStats st =
+        impl_->with([&](auto& bk) { return solve_system(bk, options_, mask, b.data(), xc.data()); });
+    total.iterations += st.iterations;
+    total.relative_residual = std::max(total.relative_residual, st.relative_residual);
+    x.col(c) = xc;
+  }
+  total.seconds = seconds_since(t0);
+  last_ = total;
+  return total;
+}
+
+// ------------------------------------------------------------------ one-call helpers ------
+
+Eigen::VectorXd solve_neumann(const Points& vertices, const Tets& tets, const Eigen::VectorXd& b,
+                              const SolverOptions& options, Device* device, SolverStats* stats) {
+  Device& dev = device ? *device : Device::current();
+  PoissonSolver s(dev, static_cast<int>(vertices.rows()), tets, options);
+  s.set_positions(vertices);
+  Eigen::VectorXd x;
+  const SolverStats st = s.solve_neumann(b, x);
+  if (stats) *stats = st;
+  return x;
+}
+
+FieldValues solve_dirichlet(const Points& vertices, const Tets& tets, const std::vector<char>& fixed,
+                            const FieldValues& values, const SolverOptions& options, Device* device,
+                            SolverStats* stats) {
+  Device& dev = device ? *device : Device::current();
+  PoissonSolver s(dev, static_cast<int>(vertices.rows()), tets, options);
+  s.set_positions(vertices);
+  FieldValues x;
+  const SolverStats st = s.solve_dirichlet(fixed, values, x);
+  if (stats) *stats = st;
+  return x;
+}
+
+Eigen::VectorXd solve(const CsrMatrix& a, const Eigen::VectorXd& b, const SolverOptions& options,
+                      Device* device, SolverStats* stats) {
+  Device& dev = device ? *device : Device::current();
+  SparseSolver s(dev, a, options);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(a.rows);
+  const SolverStats st = s.solve(b, x);
+  if (stats) *stats = st;
+  return x;
+}
+
+}  // namespace vpm
