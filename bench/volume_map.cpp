@@ -23,6 +23,7 @@
 
 #include "vpm/device.hpp"
 #include "vpm/initial_map.hpp"
+#include "vpm/icosphere.hpp"
 #include "vpm/io.hpp"
 #include "vpm/json.hpp"
 #include "vpm/mesh_image.hpp"
@@ -44,40 +45,10 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-// Icosphere (level subdivisions of the icosahedron) scaled to semi-axes a, b, c.
+// The icosphere of `level` subdivisions scaled to semi-axes a, b, c.
 vpm::TriSurface ellipsoid_surface(int level, double a, double b, double c) {
-  const double t = (1 + std::sqrt(5.0)) / 2;
-  std::vector<Eigen::Vector3d> V = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                                    {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  for (auto& v : V) v.normalize();
-  std::vector<std::array<int, 3>> F = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11},
-                                       {1, 5, 9}, {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
-                                       {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8}, {3, 8, 9},
-                                       {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
-  for (int l = 0; l < level; ++l) {
-    std::map<std::pair<int, int>, int> mid;
-    auto m = [&](int i, int j) {
-      auto key = std::minmax(i, j);
-      auto it = mid.find(key);
-      if (it != mid.end()) return it->second;
-      V.push_back((V[i] + V[j]).normalized());
-      return mid[key] = static_cast<int>(V.size()) - 1;
-    };
-    std::vector<std::array<int, 3>> G;
-    for (auto& f : F) {
-      const int ab = m(f[0], f[1]), bc = m(f[1], f[2]), ca = m(f[2], f[0]);
-      G.push_back({f[0], ab, ca});
-      G.push_back({f[1], bc, ab});
-      G.push_back({f[2], ca, bc});
-      G.push_back({ab, bc, ca});
-    }
-    F = G;
-  }
-  vpm::TriSurface s;
-  s.vertices.resize(static_cast<Eigen::Index>(V.size()), 3);
-  for (size_t i = 0; i < V.size(); ++i) s.vertices.row(i) << a * V[i].x(), b * V[i].y(), c * V[i].z();
-  s.triangles.resize(static_cast<Eigen::Index>(F.size()), 3);
-  for (size_t i = 0; i < F.size(); ++i) s.triangles.row(i) << F[i][0], F[i][1], F[i][2];
+  vpm::TriSurface s = vpm::icosphere(level);
+  s.vertices = s.vertices * Eigen::Vector3d(a, b, c).asDiagonal();
   return s;
 }
 

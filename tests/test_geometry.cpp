@@ -1,9 +1,14 @@
 #include <catch2/catch.hpp>
+#include <Eigen/Geometry>
+#include <cmath>
+#include <map>
 
 #include "support/devices.hpp"
 #include "support/fixtures.hpp"
 #include "vpm/device.hpp"
 #include "vpm/geometry.hpp"
+#include "vpm/icosphere.hpp"
+#include "vpm/error.hpp"
 #include "vpm/metrics.hpp"
 
 using namespace vpm;
@@ -75,4 +80,35 @@ TEST_CASE("metrics count inverted tets and measure distortion") {
   CHECK(mm.inverted_tets > 0);
   CHECK(mm.tet_volume_ratio.mean_abs_dev > 0.01);
   CHECK(mm.tet_volume_ratio.max_abs_log > 100);  // inverted ratios enter as 1e-300
+}
+
+TEST_CASE("icosphere: 20 * 4^L outward triangles on the unit sphere, a closed genus-0 surface") {
+  for (int level : {0, 1, 3}) {
+    INFO("level " << level);
+    const TriSurface s = icosphere(level);
+    const long f = 20L << (2 * level);
+    CHECK(s.triangles.rows() == f);
+    CHECK(s.vertices.rows() == f / 2 + 2);  // Euler: V - E + F = 2 with E = 3F/2
+    for (Eigen::Index i = 0; i < s.vertices.rows(); ++i) CHECK(std::abs(s.vertices.row(i).norm() - 1) < 1e-15);
+    std::map<std::pair<int, int>, int> directed;
+    double volume = 0;
+    for (Eigen::Index t = 0; t < s.triangles.rows(); ++t) {
+      const Eigen::Vector3d a = s.vertices.row(s.triangles(t, 0)), b = s.vertices.row(s.triangles(t, 1)),
+                            c = s.vertices.row(s.triangles(t, 2));
+      const double v = a.dot(b.cross(c)) / 6;  // the tet (origin, a, b, c)
+      CHECK(v > 0);                             // every triangle faces outward
+      volume += v;
+      for (int k = 0; k < 3; ++k) ++directed[{s.triangles(t, k), s.triangles(t, (k + 1) % 3)}];
+    }
+    // closed and consistently oriented: every directed edge once, its reverse once
+    CHECK(directed.size() == static_cast<size_t>(3 * f));
+    for (const auto& [e, n] : directed) {
+      CHECK(n == 1);
+      CHECK(directed.count({e.second, e.first}) == 1);
+    }
+    CHECK(volume < 4 * M_PI / 3);  // inscribed polyhedron
+    if (level == 3) CHECK(volume > 0.99 * 4 * M_PI / 3);
+  }
+  CHECK_THROWS_AS(icosphere(-1), InputError);
+  CHECK_THROWS_AS(icosphere(11), InputError);
 }
