@@ -132,6 +132,132 @@ std::string histogram_svg(const std::string& title, const Eigen::VectorXd& vi, c
   return s.str();
 }
 
+using NamedMesh = std::pair<std::string, vpm::TetMesh>;
+
+// The given mesh files, else Colin27 at the paper's size (when mricron-data is installed) and
+// the ellipsoid.
+std::vector<NamedMesh> load_meshes(const std::vector<std::string>& paths) {
+  std::vector<NamedMesh> meshes;
+  for (const auto& p : paths) {
+    vpm::TetMesh m = vpm::read_mesh(p);
+    vpm::validate_mesh(m, p);
+    meshes.emplace_back(std::filesystem::path(p).filename().string(), std::move(m));
+  }
+  if (!paths.empty()) return meshes;
+  const std::string colin = "/usr/share/mricron/templates/ch2bet.nii.gz";
+  vpm::MeshImageOptions mo;
+  mo.target_vertices = 5200;
+  if (std::filesystem::exists(colin)) {
+    try {
+      meshes.emplace_back("colin27", vpm::mesh_image_file(colin, mo));
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "colin27 skipped: %s\n", e.what());
+    }
+  }
+  try {
+    mo.target_vertices = 5000;
+    meshes.emplace_back("ellipsoid", vpm::mesh_surface(ellipsoid_surface(4, 1.8, 1.0, 0.6), mo));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "ellipsoid skipped: %s\n", e.what());
+  }
+  return meshes;
+}
+
+// `runs` maps of one variant from the same initial map: the last result, its map, the medians.
+struct VariantRuns {
+  vpm::VolumeMapResult last;
+  vpm::Points ball;
+  std::string error;
+  std::vector<double> total, solve, field, advect, untangle;
+};
+
+VariantRuns run_variant(vpm::Device& dev, const vpm::InitialMapResult& im, const Variant& var, int runs) {
+  VariantRuns v;
+  for (int r = 0; r < runs; ++r) {
+    v.ball = im.ball;
+    try {
+      v.last = vpm::volume_preserving_map(dev, im.mesh.vertices, im.mesh.tets, v.ball, var.options);
+    } catch (const std::exception& e) {
+      v.error = e.what();
+      return v;
+    }
+    v.total.push_back(v.last.timings.total);
+    v.solve.push_back(v.last.timings.solve);
+    v.field.push_back(v.last.timings.field);
+    v.advect.push_back(v.last.timings.advect);
+    v.untangle.push_back(v.last.timings.untangle);
+  }
+  return v;
+}
+
+vpm::Json variant_json(const Variant& var, const VariantRuns& v, const vpm::MapMetrics& m1) {
+  vpm::Json j = vpm::Json::object();
+  j["method"] = var.name;
+  int folds_seen = 0;
+  for (const auto& r : v.last.rounds) folds_seen += r.folds_before_untangle;
+  j["final"] = vpm::to_json(m1);
+  j["rounds"] = static_cast<int>(v.last.rounds.size());
+  j["folds_during_rounds"] = folds_seen;
+  j["stop_reason"] = v.last.stop_reason;
+  vpm::Json t = vpm::Json::object();
+  t["total"] = median(v.total);
+  t["solve"] = median(v.solve);
+  t["field"] = median(v.field);
+  t["advect"] = median(v.advect);
+  t["untangle"] = median(v.untangle);
+  j["timings_s_median"] = t;
+  j["report"] = vpm::to_json(v.last);
+  return j;
+}
+
+// Every variant on one mesh; prints a row each; writes the histogram of the first moser map.
+vpm::Json bench_mesh(vpm::Device& dev, const NamedMesh& named, int runs, const std::string& out_dir, bool& svg_done) {
+  const auto& [name, mesh] = named;
+  auto t0 = Clock::now();
+  const vpm::InitialMapResult im = vpm::initial_map(dev, mesh);
+  const double t_init = seconds_since(t0);
+  const vpm::MapMetrics m0 = vpm::map_metrics(dev, im.mesh.vertices, im.ball, im.mesh.tets);
+  vpm::Json jmesh = vpm::Json::object();
+  jmesh["name"] = name;
+  jmesh["vertices"] = mesh.num_vertices();
+  jmesh["tets"] = mesh.num_tets();
+  jmesh["refined_vertices"] = im.mesh.num_vertices();
+  jmesh["refined_tets"] = im.mesh.num_tets();
+  jmesh["initial_map_s"] = t_init;
+  jmesh["initial"] = vpm::to_json(m0);
+  vpm::Json jv = vpm::Json::array();
+  for (const auto& var : variants()) {
+    const VariantRuns v = run_variant(dev, im, var, runs);
+    if (!v.error.empty()) {
+      vpm::Json j = vpm::Json::object();
+      j["method"] = var.name;
+      j["error"] = v.error;
+      std::printf("%-12s %-13s failed: %s\n", name.c_str(), var.name.c_str(), v.error.c_str());
+      jv.push_back(j);
+      continue;
+    }
+    const vpm::MapMetrics m1 = vpm::map_metrics(dev, im.mesh.vertices, v.ball, im.mesh.tets);
+    jv.push_back(variant_json(var, v, m1));
+    std::printf("%-12s %-13s %8.4f %8.4f %8.4f %8.4f %5d %6zu %7.3f %7.3f %7.3f %7.3f %7.3f\n", name.c_str(),
+                var.name.c_str(), m0.vertex_volume_ratio.mean_abs_dev, m0.tet_volume_ratio.mean_abs_dev,
+                m1.vertex_volume_ratio.mean_abs_dev, m1.tet_volume_ratio.mean_abs_dev, m1.inverted_tets,
+                v.last.rounds.size(), median(v.solve), median(v.field), median(v.advect), median(v.untangle),
+                median(v.total));
+    std::fflush(stdout);
+    if (!svg_done && var.name == "moser") {
+      svg_done = true;
+      const std::string svg = histogram_svg(
+          name + ": " + std::to_string(im.mesh.num_vertices()) + " vertices, " + std::to_string(im.mesh.num_tets()) +
+              " tets (vpm map, moser)",
+          m0.vertex_ratio, m1.vertex_ratio, m0.tet_ratio, m1.tet_ratio, m0.vertex_volume_ratio.mean_abs_dev,
+          m1.vertex_volume_ratio.mean_abs_dev, m0.tet_volume_ratio.mean_abs_dev, m1.tet_volume_ratio.mean_abs_dev);
+      std::ofstream(out_dir + "/histogram.svg") << svg;
+    }
+  }
+  jmesh["methods"] = jv;
+  return jmesh;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -145,32 +271,7 @@ int main(int argc, char** argv) {
   }
   std::filesystem::create_directories(out_dir);
   vpm::Device& dev = vpm::Device::current();
-
-  std::vector<std::pair<std::string, vpm::TetMesh>> meshes;
-  if (paths.empty()) {
-    const std::string colin = "/usr/share/mricron/templates/ch2bet.nii.gz";
-    vpm::MeshImageOptions mo;
-    mo.target_vertices = 5200;
-    if (std::filesystem::exists(colin)) {
-      try {
-        meshes.emplace_back("colin27", vpm::mesh_image_file(colin, mo));
-      } catch (const std::exception& e) {
-        std::fprintf(stderr, "colin27 skipped: %s\n", e.what());
-      }
-    }
-    try {
-      mo.target_vertices = 5000;
-      meshes.emplace_back("ellipsoid", vpm::mesh_surface(ellipsoid_surface(4, 1.8, 1.0, 0.6), mo));
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "ellipsoid skipped: %s\n", e.what());
-    }
-  } else {
-    for (const auto& p : paths) {
-      vpm::TetMesh m = vpm::read_mesh(p);
-      vpm::validate_mesh(m, p);
-      meshes.emplace_back(std::filesystem::path(p).filename().string(), std::move(m));
-    }
-  }
+  const std::vector<NamedMesh> meshes = load_meshes(paths);
 
   vpm::Json results = vpm::Json::object();
   results["device"] = dev.name();
@@ -180,81 +281,7 @@ int main(int argc, char** argv) {
   std::printf("%-12s %-13s %8s %8s %8s %8s %5s %6s %7s %7s %7s %7s %7s\n", "mesh", "method", "v.init",
               "t.init", "v.final", "t.final", "folds", "rounds", "solve", "field", "advect", "untangl", "total");
   bool svg_done = false;
-  for (auto& [name, mesh] : meshes) {
-    auto t0 = Clock::now();
-    const vpm::InitialMapResult im = vpm::initial_map(dev, mesh);
-    const double t_init = seconds_since(t0);
-    const vpm::MapMetrics m0 = vpm::map_metrics(dev, im.mesh.vertices, im.ball, im.mesh.tets);
-    vpm::Json jmesh = vpm::Json::object();
-    jmesh["name"] = name;
-    jmesh["vertices"] = mesh.num_vertices();
-    jmesh["tets"] = mesh.num_tets();
-    jmesh["refined_vertices"] = im.mesh.num_vertices();
-    jmesh["refined_tets"] = im.mesh.num_tets();
-    jmesh["initial_map_s"] = t_init;
-    jmesh["initial"] = vpm::to_json(m0);
-    vpm::Json jv = vpm::Json::array();
-    for (const auto& var : variants()) {
-      std::vector<double> tot, sol, fld, adv, unt;
-      vpm::VolumeMapResult last;
-      vpm::Points ball;
-      std::string error;
-      for (int r = 0; r < runs; ++r) {
-        ball = im.ball;
-        try {
-          last = vpm::volume_preserving_map(dev, im.mesh.vertices, im.mesh.tets, ball, var.options);
-        } catch (const std::exception& e) {
-          error = e.what();
-          break;
-        }
-        tot.push_back(last.timings.total);
-        sol.push_back(last.timings.solve);
-        fld.push_back(last.timings.field);
-        adv.push_back(last.timings.advect);
-        unt.push_back(last.timings.untangle);
-      }
-      vpm::Json j = vpm::Json::object();
-      j["method"] = var.name;
-      if (!error.empty()) {
-        j["error"] = error;
-        std::printf("%-12s %-13s failed: %s\n", name.c_str(), var.name.c_str(), error.c_str());
-        jv.push_back(j);
-        continue;
-      }
-      const vpm::MapMetrics m1 = vpm::map_metrics(dev, im.mesh.vertices, ball, im.mesh.tets);
-      int folds_seen = 0;
-      for (const auto& r : last.rounds) folds_seen += r.folds_before_untangle;
-      j["final"] = vpm::to_json(m1);
-      j["rounds"] = static_cast<int>(last.rounds.size());
-      j["folds_during_rounds"] = folds_seen;
-      j["stop_reason"] = last.stop_reason;
-      vpm::Json t = vpm::Json::object();
-      t["total"] = median(tot);
-      t["solve"] = median(sol);
-      t["field"] = median(fld);
-      t["advect"] = median(adv);
-      t["untangle"] = median(unt);
-      j["timings_s_median"] = t;
-      j["report"] = vpm::to_json(last);
-      jv.push_back(j);
-      std::printf("%-12s %-13s %8.4f %8.4f %8.4f %8.4f %5d %6zu %7.3f %7.3f %7.3f %7.3f %7.3f\n", name.c_str(),
-                  var.name.c_str(), m0.vertex_volume_ratio.mean_abs_dev, m0.tet_volume_ratio.mean_abs_dev,
-                  m1.vertex_volume_ratio.mean_abs_dev, m1.tet_volume_ratio.mean_abs_dev, m1.inverted_tets,
-                  last.rounds.size(), median(sol), median(fld), median(adv), median(unt), median(tot));
-      std::fflush(stdout);
-      if (!svg_done && var.name == "moser") {
-        svg_done = true;
-        const std::string svg = histogram_svg(
-            name + ": " + std::to_string(im.mesh.num_vertices()) + " vertices, " +
-                std::to_string(im.mesh.num_tets()) + " tets (vpm map, moser)",
-            m0.vertex_ratio, m1.vertex_ratio, m0.tet_ratio, m1.tet_ratio, m0.vertex_volume_ratio.mean_abs_dev,
-            m1.vertex_volume_ratio.mean_abs_dev, m0.tet_volume_ratio.mean_abs_dev, m1.tet_volume_ratio.mean_abs_dev);
-        std::ofstream(out_dir + "/histogram.svg") << svg;
-      }
-    }
-    jmesh["methods"] = jv;
-    jm.push_back(jmesh);
-  }
+  for (const auto& named : meshes) jm.push_back(bench_mesh(dev, named, runs, out_dir, svg_done));
   results["meshes"] = jm;
   vpm::write_json_file(out_dir + "/volume_map.json", results);
   std::printf("wrote %s/volume_map.json and %s/histogram.svg\n", out_dir.c_str(), out_dir.c_str());
