@@ -14,45 +14,13 @@
 #include "vpm/geometry.hpp"
 #include "vpm/io.hpp"
 #include "vpm/json.hpp"
+#include "vpm/mesh_stats.hpp"
 #include "vpm/metrics.hpp"
 #include "vpm/topology.hpp"
 #include "vpm/validate.hpp"
 #include "vpm/format.hpp"
 
 namespace {
-
-struct MeshStats {
-  int vertices = 0, tets = 0, boundary_faces = 0, edges = 0, faces = 0;
-  int euler = 0;           // V - E + F - T of the tet complex (1 for a ball)
-  int boundary_euler = 0;  // of the boundary surface (2 for a sphere)
-  double min_dihedral = 0;
-  int min_dihedral_tet = -1;
-  double volume = 0;
-  int reoriented = 0;
-};
-
-MeshStats mesh_stats(const vpm::TetMesh& m) {
-  MeshStats s;
-  s.vertices = m.num_vertices();
-  s.tets = m.num_tets();
-  const vpm::Triangles bf = vpm::boundary_faces(m.tets);
-  s.boundary_faces = static_cast<int>(bf.rows());
-  s.edges = static_cast<int>(vpm::unique_edges(m.tets).rows());
-  // Every interior face is shared by two tets, every boundary face belongs to one
-  // (faces shared by more than two tets are rejected by validation).
-  s.faces = (4 * s.tets + s.boundary_faces) / 2;
-  s.euler = s.vertices - s.edges + s.faces - s.tets;
-  s.boundary_euler = vpm::surface_topology(s.vertices, bf).euler;
-  if (s.tets > 0) {
-    const auto angles = vpm::dihedral_angles_deg(m.vertices, m.tets);
-    Eigen::Index r = 0, c = 0;
-    s.min_dihedral = angles.minCoeff(&r, &c);
-    s.min_dihedral_tet = static_cast<int>(r);
-  }
-  s.volume = vpm::tet_volumes(m.vertices, m.tets).sum();
-  return s;
-}
-
 
 void print_ratio(std::ostream& out, const char* name, const vpm::RatioStats& r) {
   out << name << "  mean|r-1| " << vpm::format_sig(r.mean_abs_dev, 6) << "  std log " << vpm::format_sig(r.std_log, 6)
@@ -71,41 +39,21 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
 
   vpm::TetMesh mesh = vpm::read_mesh(path);
   vpm::TetMesh ref;
-  MeshStats st;
+  vpm::ValidateOptions opt;
+  opt.require_ball_topology = false;
+  int reoriented = 0;
   std::optional<vpm::MapMetrics> metrics;
   if (against) {
     ref = vpm::read_mesh(*against);
     const vpm::Tets as_read = ref.tets;
-    vpm::ValidateOptions opt;
-    opt.require_ball_topology = false;
     vpm::validate_mesh(ref, *against, opt);
-    if (mesh.num_vertices() != ref.num_vertices())
-      throw vpm::InputError(path + ": has " + std::to_string(mesh.num_vertices()) +
-                            " vertices but " + *against + " has " +
-                            std::to_string(ref.num_vertices()) + " (not a map of it)");
-    if (mesh.num_tets() != ref.num_tets())
-      throw vpm::InputError(path + ": has " + std::to_string(mesh.num_tets()) + " tets but " +
-                            *against + " has " + std::to_string(ref.num_tets()) +
-                            " (not a map of it)");
-    for (int t = 0; t < mesh.num_tets(); ++t)
-      if (mesh.tets.row(t) != as_read.row(t) && mesh.tets.row(t) != ref.tets.row(t))
-        throw vpm::InputError(path + ": tet " + std::to_string(t) + " differs from tet " +
-                              std::to_string(t) + " of " + *against +
-                              " (--against needs the same tets)");
-    for (Eigen::Index i = 0; i < mesh.vertices.size(); ++i)
-      if (!std::isfinite(mesh.vertices.data()[i]))
-        throw vpm::InputError(path + ": vertex " + std::to_string(i / 3) +
-                              ": non-finite coordinate");
+    vpm::check_map_of(mesh, path, ref, as_read, *against);
     mesh.tets = ref.tets;  // orientation taken from the input
-    st = mesh_stats(mesh);
     metrics = vpm::map_metrics(vpm::Device::current(), ref.vertices, mesh.vertices, ref.tets);
   } else {
-    vpm::ValidateOptions opt;
-    opt.require_ball_topology = false;
-    const vpm::ValidationReport rep = vpm::validate_mesh(mesh, path, opt);
-    st = mesh_stats(mesh);
-    st.reoriented = rep.reoriented_tets;
+    reoriented = vpm::validate_mesh(mesh, path, opt).reoriented_tets;
   }
+  const vpm::MeshStats st = vpm::mesh_stats(mesh);
 
   if (!quiet) {
     std::ostringstream out;
@@ -115,10 +63,10 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
         << "boundary faces      " << st.boundary_faces << '\n'
         << "euler (V-E+F-T)     " << st.euler << "  (1 for a ball)\n"
         << "boundary euler      " << st.boundary_euler << "  (2 for a sphere)\n"
-        << "min dihedral angle  " << vpm::format_sig(st.min_dihedral, 6) << " deg at tet " << st.min_dihedral_tet
+        << "min dihedral angle  " << vpm::format_sig(st.min_dihedral_deg, 6) << " deg at tet " << st.min_dihedral_tet
         << '\n'
         << "total volume        " << vpm::format_sig(st.volume, 6) << '\n';
-    if (!against) out << "reoriented tets     " << st.reoriented << '\n';
+    if (!against) out << "reoriented tets     " << reoriented << '\n';
     if (metrics) {
       out << "against             " << *against << '\n'
           << "inverted tets       " << metrics->inverted_tets << '\n';
@@ -134,16 +82,8 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
     const vpm::TetMesh& input = against ? ref : mesh;
     j["input"]["vertices"] = input.num_vertices();
     j["input"]["tets"] = input.num_tets();
-    vpm::Json& m = j["mesh"];
-    m["path"] = path;
-    m["vertices"] = st.vertices;
-    m["tets"] = st.tets;
-    m["boundary_faces"] = st.boundary_faces;
-    m["euler"] = st.euler;
-    m["boundary_euler"] = st.boundary_euler;
-    m["min_dihedral_deg"] = st.min_dihedral;
-    m["min_dihedral_tet"] = st.min_dihedral_tet;
-    m["volume"] = st.volume;
+    j["mesh"] = vpm::to_json(st);
+    j["mesh"]["path"] = path;
     if (metrics) j["metrics"] = vpm::to_json(*metrics);
     vpm::write_json_file(*report_path, j);
   }
