@@ -1,0 +1,163 @@
+// Canonical volume elements (vpm/elements.hpp): ids, exact volumes, adjacency, sample points
+// inside their element and uniform in volume, point -> element lookup, definitions.
+#include <catch2/catch.hpp>
+#include <Eigen/Geometry>
+#include <cmath>
+#include <set>
+
+#include "vpm/elements.hpp"
+#include "vpm/error.hpp"
+
+using namespace vpm;
+
+namespace {
+// Direction d in the spherical triangle f of the elements' sphere (with a round-off margin).
+bool in_triangle(const CanonicalElements& el, int f, const Eigen::Vector3d& d, double eps = 1e-12) {
+  const auto& s = el.sphere();
+  Eigen::Vector3d v[3];
+  for (int k = 0; k < 3; ++k) v[k] = s.vertices.row(s.triangles(f, k)).transpose();
+  for (int k = 0; k < 3; ++k)
+    if (v[k].cross(v[(k + 1) % 3]).dot(d) < -eps) return false;
+  return true;
+}
+}  // namespace
+
+TEST_CASE("elements: ids, counts and exact volumes that fill the ball") {
+  for (auto [level, shells] : {std::pair{0, 1}, {1, 3}, {3, 8}}) {
+    INFO("level " << level << ", shells " << shells);
+    ElementDefinition d;
+    d.level = level;
+    d.shells = shells;
+    d.samples = 4;
+    const CanonicalElements el(d);
+    CHECK(el.triangles() == (20 << (2 * level)));
+    CHECK(el.size() == el.triangles() * shells);
+    double total = 0;
+    for (int e = 0; e < el.size(); ++e) {
+      CHECK(el.id(el.shell_of(e), el.triangle_of(e)) == e);
+      CHECK(el.volume(e) > 0);
+      total += el.volume(e);
+    }
+    CHECK(total == Approx(4 * M_PI / 3).epsilon(1e-12));
+    CHECK(el.radius(0) == 0);
+    CHECK(el.radius(shells) == Approx(1));
+    // equal-volume shells: every shell holds 1/K of the ball
+    double shell0 = 0;
+    for (int f = 0; f < el.triangles(); ++f) shell0 += el.volume(el.id(0, f));
+    CHECK(shell0 == Approx(4 * M_PI / 3 / shells).epsilon(1e-12));
+    const ElementVolumeStats st = el.volume_stats();
+    CHECK(st.mean == Approx(4 * M_PI / 3 / el.size()));
+    CHECK(st.min <= st.mean * (1 + 1e-12));
+    CHECK(st.max >= st.mean * (1 - 1e-12));
+    if (level == 0) CHECK(st.std_relative < 1e-12);  // the icosahedron's faces are congruent
+    if (level == 3) CHECK(st.max / st.min < 2.0);
+  }
+}
+
+TEST_CASE("elements: adjacency is symmetric: three neighbours in the shell, one each side across shells") {
+  ElementDefinition d;
+  d.level = 2;
+  d.shells = 3;
+  d.samples = 1;
+  const CanonicalElements el(d);
+  for (int e = 0; e < el.size(); ++e) {
+    const auto nb = el.neighbours(e);
+    const int k = el.shell_of(e);
+    CHECK(nb.size() == static_cast<size_t>(3 + (k > 0) + (k + 1 < 3)));
+    CHECK(std::set<int>(nb.begin(), nb.end()).size() == nb.size());
+    for (int n : nb) {
+      const auto back = el.neighbours(n);
+      CHECK(std::find(back.begin(), back.end(), e) != back.end());
+      if (el.shell_of(n) == k) {  // same shell: the triangles share an edge
+        int shared = 0;
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j)
+            shared += el.sphere().triangles(el.triangle_of(e), i) == el.sphere().triangles(el.triangle_of(n), j);
+        CHECK(shared == 2);
+      } else {
+        CHECK(el.triangle_of(n) == el.triangle_of(e));
+      }
+    }
+  }
+}
+
+TEST_CASE("elements: samples lie in their element, are uniform in volume and the same every time") {
+  ElementDefinition d;
+  d.level = 1;
+  d.shells = 2;
+  d.samples = 2048;
+  const CanonicalElements el(d);
+  const Points& p = el.samples();
+  REQUIRE(p.rows() == static_cast<Eigen::Index>(el.size()) * d.samples);
+  for (int e = 0; e < el.size(); e += 7) {
+    const int k = el.shell_of(e), f = el.triangle_of(e);
+    const double r0 = el.radius(k), r1 = el.radius(k + 1);
+    double mean_r3 = 0;
+    // the triangle split at its edge midpoints: each quarter gets samples in proportion to its area
+    const auto& s = el.sphere();
+    Eigen::Vector3d v[3];
+    for (int i = 0; i < 3; ++i) v[i] = s.vertices.row(s.triangles(f, i)).transpose();
+    const Eigen::Vector3d m01 = (v[0] + v[1]).normalized(), m12 = (v[1] + v[2]).normalized(),
+                          m20 = (v[2] + v[0]).normalized();
+    auto omega = [](const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+      return 2 * std::atan2(a.dot(b.cross(c)), 1 + a.dot(b) + b.dot(c) + c.dot(a));
+    };
+    const double corner_area = omega(v[0], m01, m20), total_area = omega(v[0], v[1], v[2]);
+    int in_corner = 0;
+    for (int i = 0; i < d.samples; ++i) {
+      const Eigen::Vector3d x = p.row(static_cast<Eigen::Index>(e) * d.samples + i).transpose();
+      const double r = x.norm();
+      CHECK(r >= r0 - 1e-12);
+      CHECK(r <= r1 + 1e-12);
+      CHECK(in_triangle(el, f, x / r, 1e-9));
+      CHECK(el.element_of(x) == e);
+      mean_r3 += r * r * r / d.samples;
+      const Eigen::Vector3d dir = x / r;
+      in_corner += v[0].cross(m01).dot(dir) >= 0 && m01.cross(m20).dot(dir) >= 0 && m20.cross(v[0]).dot(dir) >= 0;
+    }
+    CHECK(mean_r3 == Approx(0.5 * (r0 * r0 * r0 + r1 * r1 * r1)).epsilon(0.01));
+    CHECK(double(in_corner) / d.samples == Approx(corner_area / total_area).margin(0.01));
+  }
+  const CanonicalElements again(d);
+  CHECK(again.samples() == p);
+}
+
+TEST_CASE("elements: element_of finds the element of any ball point") {
+  ElementDefinition d;
+  d.level = 3;
+  d.shells = 8;
+  d.samples = 1;
+  const CanonicalElements el(d);
+  std::srand(7);
+  for (int i = 0; i < 2000; ++i) {
+    Eigen::Vector3d x = Eigen::Vector3d::Random();
+    if (x.norm() > 1) continue;
+    const int e = el.element_of(x);
+    REQUIRE(e >= 0);
+    const double r = x.norm();
+    CHECK(r >= el.radius(el.shell_of(e)) - 1e-12);
+    CHECK(r <= el.radius(el.shell_of(e) + 1) + 1e-12);
+    CHECK(in_triangle(el, el.triangle_of(e), x / r));
+  }
+  CHECK(el.element_of(Eigen::Vector3d(0, 0, 1.01)) == -1);
+  CHECK(el.element_of(Eigen::Vector3d(0, 0, 1)) >= 0);
+  CHECK(el.element_of(Eigen::Vector3d::Zero()) >= 0);
+}
+
+TEST_CASE("elements: definitions round-trip through JSON and bad ones are refused") {
+  ElementDefinition d;
+  d.level = 4;
+  d.shells = 16;
+  d.samples = 32;
+  CHECK(element_definition_from_json(to_json(d), "t.json") == d);
+  CHECK(d != ElementDefinition{});
+  Json j = to_json(d);
+  j["generator_version"] = 99;
+  CHECK_THROWS_WITH(element_definition_from_json(j, "t.json"), Catch::Contains("t.json") && Catch::Contains("version 99"));
+  Json k = to_json(d);
+  k["shells"] = 0;
+  CHECK_THROWS_WITH(element_definition_from_json(k, "t.json"), Catch::Contains("shells 0"));
+  ElementDefinition bad;
+  bad.level = 8;
+  CHECK_THROWS_AS(CanonicalElements(bad), InputError);
+}
