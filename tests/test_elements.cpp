@@ -3,10 +3,13 @@
 #include <catch2/catch.hpp>
 #include <Eigen/Geometry>
 #include <cmath>
+#include <algorithm>
 #include <set>
+#include <string>
 
 #include "vpm/elements.hpp"
 #include "vpm/error.hpp"
+#include "support/process.hpp"
 
 using namespace vpm;
 
@@ -160,4 +163,21 @@ TEST_CASE("elements: definitions round-trip through JSON and bad ones are refuse
   ElementDefinition bad;
   bad.level = 8;
   CHECK_THROWS_AS(CanonicalElements(bad), InputError);
+}
+
+TEST_CASE("vpm elements writes the element table and its sidecar, bad values exit 2") {
+  const std::string dir = VPM_TEST_TMP;
+  const std::string tsv = dir + "/elements_l1.tsv";
+  REQUIRE(test::run_status(std::string(VPM_BINARY) + " elements -o " + tsv + " --level 1 --shells 2 --quiet") == 0);
+  const std::string text = test::slurp(tsv);
+  CHECK_THAT(text, Catch::StartsWith("element\tshell\ttriangle\tvolume\tcentre_x\tcentre_y\tcentre_z\n"));
+  CHECK(std::count(text.begin(), text.end(), '\n') == 1 + 80 * 2);
+  const Json side = Json::parse(test::slurp(dir + "/elements_l1.json"));
+  ElementDefinition d;
+  d.level = 1;
+  d.shells = 2;
+  CHECK(element_definition_from_json(*side.find("definition"), "sidecar") == d);
+  CHECK(side.find("elements")->number() == 160);
+  CHECK(test::run_status(std::string(VPM_BINARY) + " elements -o " + dir + "/bad.tsv --level 9 2>/dev/null") == 2);
+  CHECK(test::run_status(std::string(VPM_BINARY) + " elements 2>/dev/null") == 2);
 }

@@ -84,4 +84,15 @@ class CanonicalElements {
   Points samples_;
 };
 
+/// Writes the element table of `elements`: a TSV at `tsv_path` with a header line and one row per
+/// element, `element shell triangle volume centre_x centre_y centre_z` (centre: the direction of
+/// the triangle's centroid at the radius halving the shell's volume), and beside it a JSON
+/// sidecar (the path with .tsv replaced by .json, else .json appended) holding the definition,
+/// the element count, the volume statistics and the column descriptions. Both files are written
+/// under temporary names and renamed; InputError naming the path when one cannot be written.
+void write_element_table(const std::string& tsv_path, const CanonicalElements& elements);
+
+/// The sidecar path of a table: "a/b.tsv" -> "a/b.json"; any other name gets ".json" appended.
+std::string sidecar_path(const std::string& table_path);
+
 }  // namespace vpm
