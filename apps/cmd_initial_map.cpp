@@ -50,13 +50,12 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   outm.set_point_field("vertex_volume_ratio", mm.vertex_ratio);
   outm.set_cell_field("tet_volume_ratio", mm.tet_ratio);
   vpm::write_mesh(*out, outm);
-  const vpm::Json* fb = im.report.find("folds_before_untangle");
   vpm::cli::info("wrote " + *out + ": " + std::to_string(outm.num_vertices()) + " vertices, " +
                  std::to_string(outm.num_tets()) + " tets; vertex mean |r-1| " +
                  vpm::pct(mm.vertex_volume_ratio.mean_abs_dev) + ", tet " + vpm::pct(mm.tet_volume_ratio.mean_abs_dev) +
-                 ", harmonic folds " + std::to_string(fb ? static_cast<int>(fb->number()) : 0) + " -> 0");
+                 ", harmonic folds " + std::to_string(im.report.folds_before_untangle) + " -> 0");
   if (report_path) {
-    vpm::Json j = im.report;
+    vpm::Json j = vpm::to_json(im.report);
     j["input"]["reoriented_tets"] = vr.reoriented_tets;
     vpm::write_json_file(*report_path, j);
   }

@@ -34,12 +34,6 @@ double median(std::vector<double> v) {
   const size_t n = v.size();
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
-double num(const Json& j, const std::string& a, const std::string& b = "", const std::string& c = "") {
-  const Json* p = j.find(a);
-  if (p && !b.empty()) p = p->find(b);
-  if (p && !c.empty()) p = p->find(c);
-  return p && p->type() == Json::Type::Number ? p->number() : -1;
-}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -107,17 +101,17 @@ int main(int argc, char** argv) {
   for (const auto& [name, mesh] : shapes) {
     if (!only.empty() && name.find(only) == std::string::npos) continue;
     std::vector<double> ts, tb, th, tu, tt;
-    Json last;
+    InitialMapReport last;
     std::string error;
     for (int r = 0; r < runs; ++r) {
       try {
         const InitialMapResult res = initial_map(dev, mesh, opt);
         last = res.report;
-        ts.push_back(num(last, "timings_s", "split"));
-        tb.push_back(num(last, "timings_s", "boundary"));
-        th.push_back(num(last, "timings_s", "harmonic"));
-        tu.push_back(num(last, "timings_s", "untangle"));
-        tt.push_back(num(last, "timings_s", "total"));
+        ts.push_back(last.timings.split);
+        tb.push_back(last.timings.boundary);
+        th.push_back(last.timings.harmonic);
+        tu.push_back(last.timings.untangle);
+        tt.push_back(last.timings.total);
       } catch (const NumericalError& e) {
         error = e.what();
         break;
@@ -139,15 +133,13 @@ int main(int argc, char** argv) {
     t["harmonic"] = median(th);
     t["untangle"] = median(tu);
     t["total"] = median(tt);
-    row["report"] = last;
+    row["report"] = to_json(last);
     rows.push_back(row);
     std::printf("%-28s %7d %7d | %7.3f %7.3f %7.3f %7.3f %7.3f | %5d %5d | %7.4f %7.4f | %6.3f %6.2f\n",
                 name.c_str(), mesh.num_vertices(), mesh.num_tets(), median(ts), median(tb), median(th),
-                median(tu), median(tt), static_cast<int>(num(last, "folds_before_untangle")),
-                static_cast<int>(num(last, "folds_after_untangle")),
-                num(last, "metrics", "vertex_volume_ratio", "mean_abs_dev"),
-                num(last, "metrics", "tet_volume_ratio", "mean_abs_dev"),
-                num(last, "boundary", "area_distortion_final"), num(last, "input_quality", "min_dihedral_deg"));
+                median(tu), median(tt), last.folds_before_untangle, last.folds_after_untangle,
+                last.metrics.vertex_volume_ratio.mean_abs_dev, last.metrics.tet_volume_ratio.mean_abs_dev,
+                last.boundary.area_distortion_final, last.min_dihedral_deg);
   }
   root["results"] = rows;
   std::filesystem::create_directories(std::filesystem::path(out).parent_path().empty()

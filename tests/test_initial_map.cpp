@@ -35,7 +35,8 @@ void check_map(const InitialMapResult& r, const TetMesh& input) {
   CHECK(err < 1e-12);
   CHECK(rmax < 1.0);
   CHECK(count_four_boundary_tets(m.tets, b) == 0);
-  CHECK(r.report.find("folds_after_untangle")->number() == 0);
+  CHECK(r.report.folds_after_untangle == 0);
+  CHECK(to_json(r.report).find("folds_after_untangle")->number() == 0);
 }
 }  // namespace
 
@@ -88,7 +89,7 @@ TEST_CASE("sphere map of a closed surface: no flipped triangles, balanced") {
   const auto b = boundary_vertex_mask(m.num_vertices(), s.triangles);
   for (int i = 0; i < m.num_vertices(); ++i)
     if (b[i]) CHECK(std::abs(r.sphere.row(i).norm() - 1) < 1e-14);
-  CHECK(r.report.find("area_distortion_balanced")->number() < r.report.find("area_distortion_conformal")->number() + 1e-12);
+  CHECK(r.report.area_distortion_balanced < r.report.area_distortion_conformal + 1e-12);
 }
 
 TEST_CASE("initial map of convex and non-convex shapes is fold-free") {
@@ -111,7 +112,7 @@ TEST_CASE("harmonic folds are untangled, without untangling the map is refused")
   const TetMesh in = test::ellipsoid_mesh(8);  // slivers near the rim: the harmonic map folds
   InitialMapOptions opt;
   const InitialMapResult r = initial_map(dev, in, opt);
-  CHECK(r.report.find("folds_before_untangle")->number() > 0);
+  CHECK(r.report.folds_before_untangle > 0);
   check_map(r, in);
 
   opt.untangle = InitialMapOptions::Untangle::Never;
@@ -125,7 +126,7 @@ TEST_CASE("harmonic folds are untangled, without untangling the map is refused")
   }
   opt.throw_on_folds = false;
   const InitialMapResult folded = initial_map(dev, in, opt);
-  CHECK(folded.report.find("folds_after_untangle")->number() > 0);
+  CHECK(folded.report.folds_after_untangle > 0);
   CHECK(!inverted_tets(folded.ball, folded.mesh.tets).empty());
 }
 
@@ -137,8 +138,9 @@ TEST_CASE("global untangling (Always) keeps the map fold-free") {
   opt.untangle = InitialMapOptions::Untangle::Always;
   const InitialMapResult r = initial_map(dev, in, opt);
   check_map(r, in);
-  REQUIRE(r.report.find("untangle") != nullptr);
-  CHECK(r.report.find("untangle")->find("scope")->string() == "global");
+  REQUIRE(r.report.untangle);
+  CHECK(!r.report.untangle->local);
+  CHECK(to_json(r.report).find("untangle")->find("scope")->string() == "global");
 }
 
 TEST_CASE("area correction on the sphere lowers the boundary area distortion") {
@@ -149,9 +151,11 @@ TEST_CASE("area correction on the sphere lowers the boundary area distortion") {
   opt.area_correction = true;
   const InitialMapResult r = initial_map(dev, in, opt);
   check_map(r, in);
-  const Json& b = *r.report.find("boundary");
-  CHECK(b.find("area_correction_steps")->number() > 0);
-  CHECK(b.find("area_distortion_final")->number() < 0.5 * b.find("area_distortion_conformal")->number());
+  const SphereMapReport& b = r.report.boundary;
+  REQUIRE(b.area_correction_steps);
+  CHECK(*b.area_correction_steps > 0);
+  CHECK(b.area_distortion_final < 0.5 * b.area_distortion_conformal);
+  CHECK(to_json(r.report).find("boundary")->find("area_correction_steps")->number() == *b.area_correction_steps);
 }
 
 TEST_CASE("a boundary map that cannot be made fold-free is refused with NumericalError") {

@@ -16,10 +16,6 @@ namespace vpm {
 
 class Device;
 
-// Transitional until the initial map's report is typed (issue 11 in progress).
-using InitialMapReport = Json;
-inline Json to_json(const InitialMapReport& report) { return report; }
-
 struct BallMapOptions {
   InitialMapOptions initial{};
   /// volume.rounds == 0 stops after the initial map.

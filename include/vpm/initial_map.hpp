@@ -26,11 +26,13 @@
 // number of folded tets, where they are, and the smallest dihedral angle of the input (meshes
 // with slivers of 0.01-0.05 degrees are known to defeat this pipeline, DESIGN.md 4.2).
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "vpm/json.hpp"
 #include "vpm/mesh.hpp"
+#include "vpm/metrics.hpp"
 #include "vpm/untangle.hpp"
 
 namespace vpm {
@@ -63,11 +65,95 @@ struct InitialMapOptions {
   /// boundary fixed, same energy and theta), then globally if folds remain. 0: global only.
   int local_untangle_rings = 3;
   /// Throw NumericalError when folds remain (the default and the contract of `vpm map`).
-  /// false: return the folded map and let the caller read report["folds_after_untangle"].
+  /// false: return the folded map and let the caller read report.folds_after_untangle.
   bool throw_on_folds = true;
-  /// Number of worst tets (smallest dihedral angle) listed in report["input_quality"].
+  /// Number of worst tets (smallest dihedral angle) listed in report.worst.
   int report_worst_tets = 5;
 };
+
+/// What step 2 (the boundary to the sphere) did. Optional fields are absent when their step did
+/// not run. area_distortion_* = mean over boundary triangles of |area ratio - 1| (areas
+/// normalised).
+struct SphereMapReport {
+  int vertices = 0, faces = 0;                  ///< of the boundary surface
+  std::string planar_weights = "cotangent";     ///< or "clamped cotangent" (second attempt)
+  int flipped_after_conformal = 0;
+  std::optional<int> flipped_after_south_pole;  ///< when the correction produced a map
+  std::optional<bool> south_pole_correction;    ///< kept or not (when enabled)
+  bool mirrored = false;                        ///< the map was reflected to face outwards
+  double area_distortion_conformal = 0;
+  // Moebius balancing (when enabled):
+  std::optional<int> moebius_iterations;
+  double moebius_centroid_norm = 0, area_distortion_balanced = 0;
+  bool moebius_kept = false;
+  std::optional<int> area_correction_steps;  ///< InitialMapOptions::area_correction
+  std::optional<int> flipped_before_repair;  ///< chord triangles facing inwards, repaired by
+  std::optional<int> repair_steps;           ///< ... this many area-flow steps
+  double area_distortion_final = 0;
+  int flipped_triangles = 0;
+};
+/// {"vertices", "faces", "planar_weights", "flipped_after_conformal", "flipped_after_south_pole"?,
+///  "south_pole_correction"?, "mirrored", "area_distortion_conformal", "moebius_iterations"?,
+///  "moebius_centroid_norm"?, "area_distortion_balanced"?, "moebius_kept"?,
+///  "area_correction_steps"?, "flipped_before_repair"?, "repair_steps"?, "area_distortion_final",
+///  "flipped_triangles"} (? = only when present)
+Json to_json(const SphereMapReport& report);
+
+/// A tet of poor quality in the input.
+struct WorstTet {
+  int tet = -1;
+  double min_dihedral_deg = 0;
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+};
+
+/// One run of the untangler inside the initial map.
+struct InitialUntangle {
+  UntangleResult result;
+  bool local = false;  ///< local (folded tets and `rings` rings free) or global
+  int rings = 0;
+};
+
+/// What the initial map did, stage by stage.
+struct InitialMapReport {
+  std::string device;
+  int input_vertices = 0, input_tets = 0;
+  // input quality
+  double min_dihedral_deg = 0;
+  int min_dihedral_tet = -1;
+  int tets_below_1deg = 0, tets_below_5deg = 0;
+  std::vector<WorstTet> worst;  ///< InitialMapOptions::report_worst_tets smallest dihedral angles
+  // step 1
+  int split_rounds = 0, inserted_vertices = 0, four_boundary_tets_before = 0, four_boundary_tets_after = 0,
+      centroid_splits = 0;
+  int refined_vertices = 0, refined_tets = 0;
+  SphereMapReport boundary;  ///< step 2
+  // step 3
+  bool harmonic_on_device = false;
+  int harmonic_iterations = 0;
+  double harmonic_relative_residual = 0;
+  int folds_before_untangle = 0;  ///< inverted tets of the harmonic map
+  // step 4
+  std::optional<InitialUntangle> untangle;              ///< the last untangling run
+  std::optional<InitialUntangle> untangle_local_failed;  ///< a local run that left folds
+  int folds_after_untangle = 0;
+  double boundary_max_radius_error = 0;
+  MapMetrics metrics;  ///< of the returned map against the refined input
+  struct Timings {
+    double input_quality = 0, metrics = 0, split = 0, boundary = 0, harmonic = 0, untangle = 0, total = 0;
+  } timings;
+};
+
+/// {"device", "input": {"vertices","tets"}, "input_quality": {"min_dihedral_deg",
+///  "min_dihedral_tet","tets_below_1deg","tets_below_5deg","worst": [{"tet","min_dihedral_deg",
+///  "centroid"}], "warning"? (below 1 degree)}, "split": {"rounds","inserted_vertices",
+///  "four_boundary_tets_before","four_boundary_tets_after","centroid_splits"},
+///  "refined": {"vertices","tets"}, "boundary": to_json(SphereMapReport),
+///  "harmonic": {"solver","iterations","relative_residual","inverted_tets"},
+///  "folds_before_untangle", "untangle"? (to_json(UntangleResult) + "scope", "rings"),
+///  "untangle_local_failed"?, "folds_after_untangle", "boundary_max_radius_error",
+///  "metrics": to_json(MapMetrics), "timings_s": {"input_quality","metrics","split","boundary",
+///  "harmonic","untangle","total"}}
+Json to_json(const InitialMapReport& report);
 
 struct InitialMapResult {
   /// The refined mesh in input coordinates: input vertices first (input order), then the
@@ -80,19 +166,7 @@ struct InitialMapResult {
   Points ball;
   /// Boundary vertex mask of `mesh` (1 = on the sphere), n entries.
   std::vector<char> boundary;
-  /// Report: {"device", "input": {"vertices","tets"}, "refined": {"vertices","tets"},
-  ///   "split": {"rounds","inserted_vertices","four_boundary_tets_before","four_boundary_tets_after",
-  ///             "centroid_splits"},
-  ///   "input_quality": {"min_dihedral_deg","min_dihedral_tet","tets_below_1deg",
-  ///                     "tets_below_5deg","worst": [{"tet","min_dihedral_deg","centroid"}]},
-  ///   "boundary": {"vertices","faces","flipped_triangles","area_distortion_conformal",
-  ///                "area_distortion_balanced","area_distortion_final","moebius_iterations",...},
-  ///   "harmonic": {"inverted_tets"}, "untangle": UntangleResult::to_json() (when run),
-  ///   "folds_before_untangle", "folds_after_untangle", "metrics": to_json(map_metrics),
-  ///   "timings_s": {"input_quality","split","boundary","harmonic","untangle",
-  ///   "metrics","total"}}
-  /// area_distortion_* = mean over boundary triangles of |area ratio - 1| (areas normalised).
-  Json report;
+  InitialMapReport report;
 };
 
 /// Maps `input` (validated tet mesh: positively oriented tets, boundary one closed genus-0
@@ -127,7 +201,7 @@ int count_four_boundary_tets(const Tets& tets, const std::vector<char>& boundary
 struct SphereMapResult {
   Points sphere;       ///< k x 3 unit vectors, one per surface vertex (rows of `vertices`)
   int flipped_triangles = 0;
-  Json report;         ///< the "boundary" object described above
+  SphereMapReport report;
 };
 /// Step 2 for a closed genus-0 triangle surface with outward orientation (vertices unused by
 /// a triangle are mapped to (0,0,1) and ignored). Throws InputError if not genus 0.

@@ -1,0 +1,45 @@
+#pragma once
+// Private: the numerical steps of the boundary-to-sphere map (map/sphere_map.cpp): a surface
+// cotangent Laplacian and Dirichlet solve for the planar conformal map, stereographic
+// projection, the south-pole correction, Moebius balancing and the area-equalising flow.
+// The surface Laplacian here is of a triangle surface (2-D cotangents); the linalg layer's is
+// of tet meshes.
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <vector>
+
+#include "vpm/mesh.hpp"
+
+namespace vpm::detail {
+
+using SpMat = Eigen::SparseMatrix<double>;
+
+/// Cotangent weights w_ij = (cot a + cot b)/2 of a triangle surface as a Laplacian L
+/// (L_ii = sum_j w_ij, L_ij = -w_ij), k x k. `clamp` > 0 replaces weights below clamp * mean.
+SpMat cot_laplacian(const Points& p, const Triangles& f, double clamp);
+
+/// Solves A_FF u_F = -A_FB u_B for the columns of u (k x c), rows with fixed[i] given, by sparse
+/// Cholesky (iterative = false) or Jacobi CG to relative residual `tol` (warm start from u).
+/// Returns false if the solve failed or the result is not finite.
+bool dirichlet_solve(const SpMat& A, const std::vector<char>& fixed, Eigen::MatrixXd& u, bool iterative = false,
+                     double tol = 1e-10, int* iterations = nullptr);
+
+/// Inverse stereographic projection of plane points z (k x 2) to the unit sphere, the plane's
+/// origin going to the south pole.
+Points inverse_stereo_north(const Eigen::MatrixXd& z);
+
+/// Scales every row of s to unit length.
+void normalize_rows(Points& s);
+
+/// South-pole correction (Choi, Lam & Lui 2015): composes s with the quasi-conformal map whose
+/// Beltrami coefficient cancels the distortion near the north pole. False when it failed.
+bool south_pole_correction(const Points& in, const Triangles& f, Points& s);
+
+/// Moves the w-weighted centroid of the sphere points s to the origin by Moebius maps of the
+/// ball; returns the iterations, *final_norm the centroid's norm reached.
+int moebius_balance(const Eigen::VectorXd& w, Points& s, int max_it, double tol, double* final_norm);
+
+/// Area-equalising flow on the sphere (see map/sphere_steps.cpp); returns the steps taken.
+int area_flow(const Points& in, const Triangles& f, Points& s, int steps, bool until_unflipped);
+
+}  // namespace vpm::detail
