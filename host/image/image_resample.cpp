@@ -30,6 +30,17 @@ float sample(const Image& im, const Eigen::Vector3d& v, Interpolation mode) {
 }
 }  // namespace
 
+float sample_image(const Image& image, const Eigen::Vector3d& x, Interpolation interpolation) {
+  return sample(image, image.to_voxel(x), interpolation);
+}
+
+bool inside_grid(const Image& image, const Eigen::Vector3d& x) {
+  const Eigen::Vector3d v = image.to_voxel(x);
+  for (int c = 0; c < 3; ++c)
+    if (!(v(c) >= -0.5 && v(c) <= image.dims[c] - 0.5)) return false;
+  return true;
+}
+
 Image resample_image(const Image& image, const std::function<Eigen::Vector3d(const Eigen::Vector3d&)>& pull,
                      Interpolation interpolation) {
   Image out = image;

@@ -51,6 +51,14 @@ void write_nifti(const std::string& path, const Image& image);
 /// Interpolation for resample_image: nearest voxel (labels) or trilinear (intensities).
 enum class Interpolation { nearest, linear };
 
+/// `image` read at world position `x` (mm): the nearest voxel or trilinear between the eight
+/// around it; voxels outside the grid count as 0.
+float sample_image(const Image& image, const Eigen::Vector3d& x, Interpolation interpolation);
+
+/// Whether world position `x` lies within the voxel grid of `image` (within half a voxel of
+/// the outermost voxel centres).
+bool inside_grid(const Image& image, const Eigen::Vector3d& x);
+
 /// An image on the grid of `image` (same dims and affine) whose value at each voxel centre x
 /// (world mm) is `image` read at pull(x): `pull` maps output world positions to input world
 /// positions, so resampling through the inverse of a deformation applies the deformation.

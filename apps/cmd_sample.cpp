@@ -1,0 +1,74 @@
+// vpm sample REGISTERED -o TABLE.tsv: per-element features of one subject (vpm/sampling.hpp).
+#include <sstream>
+
+#include "cli.hpp"
+#include "vpm/elements.hpp"
+#include "vpm/error.hpp"
+#include "vpm/image.hpp"
+#include "vpm/io.hpp"
+#include "vpm/sampling.hpp"
+
+namespace {
+
+// "pet=a.nii.gz,t1=b.nii" -> {(pet, a.nii.gz), (t1, b.nii)}
+std::vector<std::pair<std::string, std::string>> named_images(const std::string& spec) {
+  std::vector<std::pair<std::string, std::string>> out;
+  std::stringstream ss(spec);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    const auto eq = item.find('=');
+    if (eq == 0 || eq == std::string::npos || eq + 1 == item.size())
+      throw vpm::InputError("option --images: '" + item + "' is not NAME=IMAGE.nii[.gz]");
+    const std::string name = item.substr(0, eq);
+    for (char c : name)
+      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_')
+        throw vpm::InputError("option --images: feature name '" + name + "' must be letters, digits or _");
+    out.emplace_back(name, item.substr(eq + 1));
+  }
+  return out;
+}
+
+int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
+  vpm::cli::Args args(argv, self);
+  args.expect_positional(1, "usage: " + vpm::cli::synopsis(self));
+  const std::string mesh_path = args.positional()[0];
+  const auto out = args.get("-o");
+  if (!out) throw vpm::InputError("missing -o TABLE.tsv; usage: " + vpm::cli::synopsis(self));
+  if (!args.has("--images") && !args.has("--labels"))
+    throw vpm::InputError("nothing to sample: give --images NAME=IMAGE[,...] and/or --labels LABELS");
+  vpm::ElementTable table;
+  table.definition.level = args.get_int("--level", table.definition.level);
+  table.definition.shells = args.get_int("--shells", table.definition.shells);
+  table.definition.samples = args.get_int("--samples", table.definition.samples);
+  table.subject = args.get("--subject", "");
+  table.mesh = mesh_path;
+  const auto images = named_images(args.get("--images", ""));
+
+  const vpm::TetMesh mesh = vpm::read_mesh(mesh_path);
+  const vpm::Field* native = mesh.find_point_field("original_position");
+  if (!native || native->values.cols() != 3)
+    throw vpm::InputError(mesh_path + ": no point field original_position (3 components): not a mapped mesh "
+                          "(vpm map or vpm register writes it)");
+  const vpm::CanonicalElements el(table.definition);
+  const vpm::Points positions = vpm::pull_back_samples(el, mesh.vertices, mesh.tets, native->values);
+  for (const auto& [name, path] : images) table.features.push_back(vpm::sample_feature(el, positions, vpm::read_nifti(path), name));
+  if (const auto labels = args.get("--labels"))
+    table.label_images.push_back(vpm::sample_label_fractions(el, positions, vpm::read_nifti(*labels)));
+  vpm::write_subject_table(*out, table);
+  vpm::cli::info("wrote " + *out + " and " + vpm::sidecar_path(*out) + ": " + std::to_string(el.size()) +
+                 " elements x " + std::to_string(table.definition.samples) + " samples, " +
+                 std::to_string(images.size()) + " features" + (args.has("--labels") ? " and label fractions" : ""));
+  return 0;
+}
+
+vpm::cli::Registrar reg(
+    {"sample", "REGISTERED -o TABLE.tsv", "per-element features of a subject: element samples read in its images",
+     {{"--images", "NAME=IMAGE[,NAME=IMAGE...]", "images to read (trilinear, world mm): columns NAME_mean/_std/_count"},
+      {"--labels", "LABELS.nii[.gz]", "a label image: per-element label fractions (label_<id> columns)"},
+      {"--subject", "ID", "subject id recorded in the sidecar"},
+      {"--level", "L", "element definition: icosphere subdivisions (default 3)"},
+      {"--shells", "K", "element definition: radial shells (default 8)"},
+      {"--samples", "S", "element definition: samples per element (default 64)"}},
+     run});
+
+}  // namespace

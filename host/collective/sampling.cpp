@@ -1,0 +1,149 @@
+#include "vpm/sampling.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <map>
+
+#include "core/atomic_file.hpp"
+#include "core/parallel.hpp"
+#include "vpm/error.hpp"
+#include "vpm/locate.hpp"
+
+namespace vpm {
+
+Points pull_back_samples(const CanonicalElements& el, const Points& ball, const Tets& tets, const Points& native) {
+  if (ball.rows() != native.rows())
+    throw InputError("pull_back_samples: the ball mesh has " + std::to_string(ball.rows()) +
+                     " vertices but its native positions " + std::to_string(native.rows()));
+  const TetLocator locator(ball, tets);
+  const Points& s = el.samples();
+  const std::vector<Location> loc = locator.locate_all(s);
+  Points out(s.rows(), 3);
+  detail::parallel_for(static_cast<int>(s.rows()), 4096, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i) {
+      Eigen::RowVector3d p = Eigen::RowVector3d::Zero();
+      for (int k = 0; k < 4; ++k) p += loc[i].bary[k] * native.row(tets(loc[i].tet, k));
+      out.row(i) = p;
+    }
+  });
+  return out;
+}
+
+ElementFeature sample_feature(const CanonicalElements& el, const Points& positions, const Image& image,
+                              const std::string& name) {
+  const int n = el.size(), S = el.definition().samples;
+  ElementFeature f;
+  f.name = name;
+  f.source = image.path;
+  f.mean.assign(n, 0.0);
+  f.std.assign(n, 0.0);
+  f.count.assign(n, 0);
+  detail::parallel_for(n, 64, [&](int begin, int end) {
+    for (int e = begin; e < end; ++e) {
+      double sum = 0, sum2 = 0;
+      int c = 0;
+      for (int s = 0; s < S; ++s) {
+        const Eigen::Vector3d x = positions.row(static_cast<Eigen::Index>(e) * S + s).transpose();
+        if (!inside_grid(image, x)) continue;
+        const double v = sample_image(image, x, Interpolation::linear);
+        sum += v;
+        sum2 += v * v;
+        ++c;
+      }
+      f.count[e] = c;
+      if (c == 0) continue;
+      f.mean[e] = sum / c;
+      f.std[e] = std::sqrt(std::max(0.0, sum2 / c - f.mean[e] * f.mean[e]));
+    }
+  });
+  return f;
+}
+
+ElementLabels sample_label_fractions(const CanonicalElements& el, const Points& positions, const Image& labels) {
+  const int n = el.size(), S = el.definition().samples;
+  std::vector<int> lab(static_cast<size_t>(positions.rows()), 0);
+  detail::parallel_for(static_cast<int>(positions.rows()), 4096, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i)
+      lab[i] = static_cast<int>(std::lround(sample_image(labels, positions.row(i).transpose(), Interpolation::nearest)));
+  });
+  std::map<int, int> column;
+  for (int l : lab)
+    if (l != 0) column.emplace(l, 0);
+  ElementLabels out;
+  out.source = labels.path;
+  for (auto& [l, c] : column) {
+    c = static_cast<int>(out.labels.size());
+    out.labels.push_back(l);
+  }
+  out.fraction.assign(out.labels.size(), std::vector<double>(n, 0.0));
+  for (int e = 0; e < n; ++e)
+    for (int s = 0; s < S; ++s) {
+      const int l = lab[static_cast<size_t>(e) * S + s];
+      if (l != 0) out.fraction[column.at(l)][e] += 1.0 / S;
+    }
+  return out;
+}
+
+namespace {
+
+Json table_sidecar(const ElementTable& t, const CanonicalElements& el) {
+  Json j = Json::object();
+  j["definition"] = to_json(t.definition);
+  j["elements"] = el.size();
+  j["subject"] = t.subject;
+  j["mesh"] = t.mesh;
+  Json feats = Json::array();
+  for (const ElementFeature& f : t.features) {
+    Json o = Json::object();
+    o["name"] = f.name;
+    o["source"] = f.source;
+    o["interpolation"] = "trilinear";
+    feats.push_back(o);
+  }
+  j["features"] = feats;
+  Json labs = Json::array();
+  for (const ElementLabels& l : t.label_images) {
+    Json o = Json::object();
+    o["source"] = l.source;
+    o["labels"] = static_cast<long>(l.labels.size());
+    labs.push_back(o);
+  }
+  j["label_images"] = labs;
+  Json c = Json::object();
+  c["samples"] = "sample points of the element (the same for every subject)";
+  c["<feature>_mean"] = "mean of the image over the element's samples inside the image grid";
+  c["<feature>_std"] = "population standard deviation over those samples";
+  c["<feature>_count"] = "samples inside the image grid";
+  c["label_<id>"] = "fraction of the element's samples on that label (nearest voxel)";
+  j["columns"] = c;
+  return j;
+}
+
+}  // namespace
+
+void write_subject_table(const std::string& tsv_path, const ElementTable& t) {
+  const CanonicalElements el(t.definition);
+  for (const ElementFeature& f : t.features)
+    if (f.mean.size() != static_cast<size_t>(el.size()))
+      throw InputError(tsv_path + ": feature " + f.name + " has " + std::to_string(f.mean.size()) +
+                       " elements, the definition " + std::to_string(el.size()));
+  detail::AtomicFile file(tsv_path);
+  std::ostream& out = file.stream();
+  out << "element\tshell\ttriangle\tsamples";
+  for (const ElementFeature& f : t.features) out << '\t' << f.name << "_mean\t" << f.name << "_std\t" << f.name << "_count";
+  for (const ElementLabels& l : t.label_images)
+    for (int id : l.labels) out << "\tlabel_" << id;
+  out << '\n' << std::setprecision(10);
+  for (int e = 0; e < el.size(); ++e) {
+    out << e << '\t' << el.shell_of(e) << '\t' << el.triangle_of(e) << '\t' << t.definition.samples;
+    for (const ElementFeature& f : t.features) out << '\t' << f.mean[e] << '\t' << f.std[e] << '\t' << f.count[e];
+    for (const ElementLabels& l : t.label_images)
+      for (const auto& col : l.fraction) out << '\t' << col[e];
+    out << '\n';
+  }
+  write_json_file(sidecar_path(tsv_path), table_sidecar(t, el));
+  file.commit();
+}
+
+}  // namespace vpm
