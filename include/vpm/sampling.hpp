@@ -59,4 +59,9 @@ ElementLabels sample_label_fractions(const CanonicalElements& elements, const Po
 /// Atomic; InputError naming the path when it cannot be written.
 void write_subject_table(const std::string& tsv_path, const ElementTable& table);
 
+/// Reads a subject table written by write_subject_table (the TSV and its JSON sidecar). Throws
+/// InputError naming the file and line when a column, a row or the sidecar is missing or
+/// malformed, or when the rows do not match the sidecar's element definition.
+ElementTable read_subject_table(const std::string& tsv_path);
+
 }  // namespace vpm

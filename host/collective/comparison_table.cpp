@@ -1,0 +1,40 @@
+// The comparison table writer (vpm/statistics.hpp).
+#include <iomanip>
+
+#include "core/atomic_file.hpp"
+#include "vpm/statistics.hpp"
+
+namespace vpm {
+
+void write_comparison(const std::string& tsv_path, const CanonicalElements& el, const Reference& ref,
+                      const std::vector<std::string>& normal_tables, const std::string& patient_table,
+                      const std::vector<double>& x, const CompareOptions& opt, const Comparison& c) {
+  detail::AtomicFile file(tsv_path);
+  std::ostream& out = file.stream();
+  out << "element\tshell\ttriangle\tpatient\treference_mean\treference_std\tz\tcluster\n" << std::setprecision(10);
+  for (int e = 0; e < el.size(); ++e)
+    out << e << '\t' << el.shell_of(e) << '\t' << el.triangle_of(e) << '\t' << x[e] << '\t' << ref.mean[e] << '\t'
+        << ref.std[e] << '\t' << c.z[e] << '\t' << c.cluster[e] << '\n';
+  Json j = Json::object();
+  j["definition"] = to_json(ref.definition);
+  Json r = Json::object();
+  r["feature"] = ref.feature;
+  r["normalisation"] = to_string(ref.normalisation);
+  r["subjects"] = ref.subjects;
+  Json tables = Json::array();
+  for (const std::string& t : normal_tables) tables.push_back(t);
+  r["tables"] = tables;
+  j["reference"] = r;
+  j["patient"] = patient_table;
+  Json o = Json::object();
+  o["threshold"] = opt.threshold;
+  o["fdr_q"] = opt.fdr_q;
+  o["min_cluster"] = opt.min_cluster;
+  o["sign"] = opt.sign;
+  j["options"] = o;
+  j["result"] = to_json(c);
+  write_json_file(sidecar_path(tsv_path), j);
+  file.commit();
+}
+
+}  // namespace vpm

@@ -1,0 +1,181 @@
+#include "vpm/statistics.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <numeric>
+
+#include "vpm/error.hpp"
+
+namespace vpm {
+
+namespace {
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+}  // namespace
+
+Normalisation parse_normalisation(const std::string& name) {
+  if (name == "none") return Normalisation::none;
+  if (name == "proportional") return Normalisation::proportional;
+  throw InputError("normalisation '" + name + "' is not one of none, proportional");
+}
+
+const char* to_string(Normalisation n) { return n == Normalisation::none ? "none" : "proportional"; }
+
+std::vector<double> normalised_feature(const ElementTable& t, const std::string& name, Normalisation n) {
+  const auto f = std::find_if(t.features.begin(), t.features.end(), [&](const ElementFeature& x) { return x.name == name; });
+  if (f == t.features.end()) throw InputError(t.subject + ": no feature '" + name + "' in the table");
+  double sum = 0, count = 0;
+  for (size_t e = 0; e < f->mean.size(); ++e) {
+    sum += f->mean[e] * f->count[e];
+    count += f->count[e];
+  }
+  const double scale = n == Normalisation::proportional && sum != 0 ? count / sum : 1.0;
+  std::vector<double> v(f->mean.size());
+  for (size_t e = 0; e < v.size(); ++e) v[e] = f->count[e] > 0 ? f->mean[e] * scale : kNaN;
+  return v;
+}
+
+Reference build_reference(const std::vector<ElementTable>& normals, const std::vector<std::string>& names,
+                          const std::string& feature, Normalisation normalisation) {
+  if (normals.size() < 3) throw InputError("reference: needs at least 3 normals, got " + std::to_string(normals.size()));
+  Reference r;
+  r.definition = normals[0].definition;
+  r.feature = feature;
+  r.normalisation = normalisation;
+  r.subjects = static_cast<int>(normals.size());
+  std::vector<std::vector<double>> values;
+  for (size_t i = 0; i < normals.size(); ++i) {
+    if (normals[i].definition != r.definition)
+      throw InputError(names[i] + ": element definition differs from " + names[0] + "'s (level/shells/samples " +
+                       std::to_string(normals[i].definition.level) + "/" + std::to_string(normals[i].definition.shells) +
+                       "/" + std::to_string(normals[i].definition.samples) + " vs " + std::to_string(r.definition.level) +
+                       "/" + std::to_string(r.definition.shells) + "/" + std::to_string(r.definition.samples) + ")");
+    ElementTable named = normals[i];
+    named.subject = names[i];
+    values.push_back(normalised_feature(named, feature, normalisation));
+  }
+  const size_t n = values[0].size();
+  r.mean.assign(n, kNaN);
+  r.std.assign(n, kNaN);
+  for (size_t e = 0; e < n; ++e) {
+    double s = 0, s2 = 0;
+    int c = 0;
+    for (const auto& v : values)
+      if (!std::isnan(v[e])) {
+        s += v[e];
+        ++c;
+      }
+    if (c < 2) continue;
+    const double mean = s / c;
+    for (const auto& v : values)
+      if (!std::isnan(v[e])) s2 += (v[e] - mean) * (v[e] - mean);
+    r.mean[e] = mean;
+    r.std[e] = std::sqrt(s2 / (c - 1));
+  }
+  return r;
+}
+
+namespace {
+
+// Benjamini-Hochberg: the smallest |z| whose two-sided p-value passes at rate q (infinity when
+// none does). Candidates are limited to the requested sign.
+double fdr_threshold(const std::vector<double>& z, double q, int sign) {
+  std::vector<double> p;
+  for (double v : z)
+    if (!std::isnan(v) && (sign == 0 || v * sign > 0)) p.push_back(std::erfc(std::abs(v) / std::sqrt(2.0)));
+  std::sort(p.begin(), p.end());
+  double cut = -1;
+  for (size_t i = 0; i < p.size(); ++i)
+    if (p[i] <= q * double(i + 1) / double(p.size())) cut = p[i];
+  if (cut < 0) return std::numeric_limits<double>::infinity();
+  // |z| with erfc(|z| / sqrt 2) == cut, by bisection
+  double lo = 0, hi = 40;
+  for (int it = 0; it < 200; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (std::erfc(mid / std::sqrt(2.0)) > cut ? lo : hi) = mid;
+  }
+  return hi;
+}
+
+// Connected components of candidate elements of one sign; clusters of at least min_size kept.
+std::vector<FocusCluster> clusters_of(const CanonicalElements& el, const std::vector<double>& z, double cut, int sign,
+                                      int min_size) {
+  const int n = el.size();
+  std::vector<char> seen(n, 0);
+  std::vector<FocusCluster> out;
+  for (int s0 = 0; s0 < n; ++s0) {
+    if (seen[s0] || std::isnan(z[s0]) || z[s0] * sign < cut) continue;
+    FocusCluster c;
+    c.sign = sign;
+    std::vector<int> stack{s0};
+    seen[s0] = 1;
+    while (!stack.empty()) {
+      const int e = stack.back();
+      stack.pop_back();
+      c.elements.push_back(e);
+      for (int nb : el.neighbours(e))
+        if (!seen[nb] && !std::isnan(z[nb]) && z[nb] * sign >= cut) {
+          seen[nb] = 1;
+          stack.push_back(nb);
+        }
+    }
+    if (static_cast<int>(c.elements.size()) < min_size) continue;
+    std::sort(c.elements.begin(), c.elements.end());
+    for (int e : c.elements) {
+      c.volume += el.volume(e);
+      if (c.peak_element < 0 || z[e] * sign > c.peak_z * sign) {
+        c.peak_element = e;
+        c.peak_z = z[e];
+      }
+    }
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+}  // namespace
+
+Comparison compare_to_reference(const CanonicalElements& el, const Reference& ref, const ElementTable& patient,
+                                const CompareOptions& opt) {
+  if (patient.definition != ref.definition || el.definition() != ref.definition)
+    throw InputError(patient.subject + ": element definition differs from the reference's");
+  const std::vector<double> x = normalised_feature(patient, ref.feature, ref.normalisation);
+  Comparison c;
+  c.z.assign(x.size(), kNaN);
+  for (size_t e = 0; e < x.size(); ++e)
+    if (!std::isnan(x[e]) && !std::isnan(ref.mean[e]) && ref.std[e] > 0) c.z[e] = (x[e] - ref.mean[e]) / ref.std[e];
+  c.threshold_used = opt.fdr_q > 0 ? fdr_threshold(c.z, opt.fdr_q, opt.sign) : opt.threshold;
+  for (int sign : {1, -1}) {
+    if (opt.sign != 0 && opt.sign != sign) continue;
+    for (FocusCluster& f : clusters_of(el, c.z, c.threshold_used, sign, opt.min_cluster)) c.clusters.push_back(std::move(f));
+  }
+  std::stable_sort(c.clusters.begin(), c.clusters.end(),
+                   [](const FocusCluster& a, const FocusCluster& b) { return a.elements.size() > b.elements.size(); });
+  c.cluster.assign(x.size(), 0);
+  for (size_t i = 0; i < c.clusters.size(); ++i) {
+    c.clusters[i].id = static_cast<int>(i) + 1;
+    for (int e : c.clusters[i].elements) c.cluster[e] = c.clusters[i].id;
+  }
+  return c;
+}
+
+Json to_json(const Comparison& c) {
+  Json j = Json::object();
+  j["threshold"] = c.threshold_used;
+  Json list = Json::array();
+  for (const FocusCluster& f : c.clusters) {
+    Json o = Json::object();
+    o["id"] = f.id;
+    o["sign"] = f.sign;
+    o["elements"] = static_cast<long>(f.elements.size());
+    o["volume"] = f.volume;
+    o["peak_element"] = f.peak_element;
+    o["peak_z"] = f.peak_z;
+    list.push_back(o);
+  }
+  j["clusters"] = list;
+  return j;
+}
+
+}  // namespace vpm

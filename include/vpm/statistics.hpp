@@ -1,0 +1,82 @@
+#pragma once
+// Cohort statistics over the canonical elements (paper 6.2; docs/collective.md): a reference
+// from the normals' subject tables (vpm/sampling.hpp), a patient's per-element z-scores, and
+// foci: elements beyond a threshold in clusters of adjacent elements.
+#include <string>
+#include <vector>
+
+#include "vpm/elements.hpp"
+#include "vpm/json.hpp"
+#include "vpm/sampling.hpp"
+
+namespace vpm {
+
+/// Subject-wise intensity normalisation before comparing subjects.
+enum class Normalisation {
+  none,          ///< the feature as sampled
+  proportional,  ///< divided by the subject's global mean (count-weighted mean over elements), as PET analyses do
+};
+/// "none", "proportional"; InputError otherwise.
+Normalisation parse_normalisation(const std::string& name);
+const char* to_string(Normalisation n);
+
+/// The feature `name` of `table`, normalised; elements without samples are NaN. InputError when
+/// the table has no such feature.
+std::vector<double> normalised_feature(const ElementTable& table, const std::string& name, Normalisation n);
+
+/// Per-element reference statistics over the normals.
+struct Reference {
+  ElementDefinition definition;
+  std::string feature;
+  Normalisation normalisation = Normalisation::proportional;
+  int subjects = 0;
+  std::vector<double> mean, std;  ///< per element (sample standard deviation, n - 1); NaN without data
+};
+
+/// The reference of `normals` (at least 3). `names` (same length) name the tables in messages.
+/// InputError when the element definitions differ or a table lacks the feature.
+Reference build_reference(const std::vector<ElementTable>& normals, const std::vector<std::string>& names,
+                          const std::string& feature, Normalisation normalisation);
+
+struct CompareOptions {
+  double threshold = 3.0;  ///< |z| beyond which an element is a candidate (ignored with fdr_q > 0)
+  double fdr_q = 0;        ///< > 0: Benjamini-Hochberg threshold at this false discovery rate instead
+  int min_cluster = 3;     ///< foci: clusters of at least this many adjacent candidate elements
+  /// +1: only increases (hyper), -1: only decreases (hypo), 0: both (clusters never mix signs)
+  int sign = 0;
+};
+
+/// A cluster of adjacent focus elements of one sign.
+struct FocusCluster {
+  int id = 0;                 ///< 1-based, largest first
+  int sign = 1;               ///< +1 above the normals, -1 below
+  std::vector<int> elements;  ///< ascending
+  double volume = 0;          ///< ball volume (sum of element volumes; the ball is 4 pi / 3)
+  int peak_element = -1;
+  double peak_z = 0;
+};
+
+struct Comparison {
+  std::vector<double> z;       ///< per element (NaN where the reference or the patient has no data)
+  std::vector<int> cluster;    ///< per element: FocusCluster::id, 0 when not a focus
+  std::vector<FocusCluster> clusters;
+  double threshold_used = 0;   ///< |z| cut actually applied (the FDR threshold when fdr_q > 0)
+};
+
+/// z = (patient - mean) / std per element and its foci. InputError when the definitions differ.
+Comparison compare_to_reference(const CanonicalElements& elements, const Reference& reference,
+                                const ElementTable& patient, const CompareOptions& options = {});
+
+/// {"threshold", "clusters": [{"id","sign","elements","volume","peak_element","peak_z"}]}
+Json to_json(const Comparison& comparison);
+
+/// Writes the comparison as TSV (one row per element: element, shell, triangle, patient,
+/// reference_mean, reference_std, z, cluster) and its JSON sidecar (definition, reference:
+/// feature, normalisation, subjects and their tables, the patient's table, options, clusters).
+/// Atomic; InputError naming the path when it cannot be written.
+void write_comparison(const std::string& tsv_path, const CanonicalElements& elements, const Reference& reference,
+                      const std::vector<std::string>& normal_tables, const std::string& patient_table,
+                      const std::vector<double>& patient_values, const CompareOptions& options,
+                      const Comparison& comparison);
+
+}  // namespace vpm
