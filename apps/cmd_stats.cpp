@@ -1,7 +1,7 @@
 // vpm stats MESH [--against REF] [--report R.json] [--quiet]
 // Reads and validates MESH and prints its size, topology, quality and volume. With --against,
 // MESH is a mapped mesh and REF the input it was mapped from (same tets): REF is validated,
-// MESH must have the same tets, and the distortion metrics of DESIGN.md section 5 are printed.
+// MESH must have the same tets, and the distortion metrics of docs/design.md 5 are printed.
 #include <cmath>
 #include <cstdio>
 #include <optional>

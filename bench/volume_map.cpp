@@ -1,6 +1,6 @@
 // vpm_bench_volume_map [--runs N] [--out DIR] [MESH...]: the volume-preserving map methods
 // (moser = Moser rounds + polish, the default of `vpm map`; moser-recipe = Moser rounds only,
-// DESIGN.md 4.1; moser-fixed = frozen boundary; paper = the paper's re-solving loop; vsem =
+// docs/design.md 4.1; moser-fixed = frozen boundary; paper = the paper's re-solving loop; vsem =
 // reweighted harmonic fixed point) on the same meshes, from the same initial map.
 //
 // Meshes: the given files, else Colin27 at the paper's size (mesh_image of ch2bet.nii.gz,

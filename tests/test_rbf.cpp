@@ -185,7 +185,7 @@ TEST_CASE("near-duplicate samples are merged, wider Gaussians are worse conditio
   CHECK(info.merged == 1);
   CHECK(info.max_residual < 1e-9);
 
-  // DESIGN.md 4.3: 200 random points, lambda 1 vs 64
+  // docs/design.md 4.3: 200 random points, lambda 1 vs 64
   const Points q = random_ball(200, 1.0, 13);
   const Points w = random_vectors(200, 0.1, 14);
   opt.estimate_condition = true;

@@ -357,7 +357,7 @@ TEST_CASE("point location: walk, grid fallback and clamping give exact P1 transp
 }
 
 TEST_CASE("vpm map: an input whose map cannot be made fold-free exits 3 and writes nothing") {
-  // bent_mesh(3): a 270-degree C whose conformal boundary map flips triangles (DESIGN.md 4.2:
+  // bent_mesh(3): a 270-degree C whose conformal boundary map flips triangles (docs/design.md 4.2:
   // appendages defeat the conformal start). If a later version maps it, the output must be
   // fold-free.
   const std::string vpm = VPM_BINARY;

@@ -1,5 +1,5 @@
 #pragma once
-// Private: one reader/writer pair per file format (host/io_<format>.cpp); io.cpp dispatches.
+// Private: one reader/writer pair per file format (host/io/<format>.cpp); io.cpp dispatches.
 #include <string>
 
 #include "vpm/mesh.hpp"

@@ -1,5 +1,5 @@
 // Step 1 of the initial map (vpm/initial_map.hpp): split interior edges whose ends are both on
-// the boundary, so no tet has four boundary vertices (DESIGN.md 4.1 step 1).
+// the boundary, so no tet has four boundary vertices (docs/design.md 4.1 step 1).
 #include "vpm/initial_map.hpp"
 
 #include <Eigen/Dense>

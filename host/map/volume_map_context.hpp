@@ -51,7 +51,7 @@ int count_folds(MapContext& c, const Points& x);
 /// Returns the folds left.
 int untangle_folds(MapContext& c, Points& x, double* seconds, const Points* before = nullptr);
 
-/// One Moser round on [0, t_end] (DESIGN.md 4.1 step 5): x in/out; statistics into `r`.
+/// One Moser round on [0, t_end] (docs/design.md 4.1 step 5): x in/out; statistics into `r`.
 void moser_round(MapContext& c, Points& x, double t_end, VolumeMapRound& r);
 
 /// The paper's explicit step (4.3): re-solve on the current geometry, x += dt grad psi / rho.

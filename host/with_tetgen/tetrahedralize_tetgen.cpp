@@ -272,7 +272,7 @@ TetMesh tetrahedralize_surface(const TriSurface& surface, const TetgenOptions& o
   }
   drop_unused_vertices(mesh);
   // What point insertion left: split the longest interior edge of each remaining such tet
-  // at its midpoint (DESIGN.md 4.1 step 1); the new vertex is interior.
+  // at its midpoint (docs/design.md 4.1 step 1); the new vertex is interior.
   if (std::getenv("VPM_DEBUG_TETGEN")) {
     const auto dih = dihedral_angles_deg(mesh.vertices, mesh.tets);
     std::fprintf(stderr, "tetgen: %d tets, min dihedral %.3f, %d four-boundary-vertex tets\n", mesh.num_tets(), dih.minCoeff(), bad);

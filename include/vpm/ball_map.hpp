@@ -1,7 +1,7 @@
 #pragma once
 // The whole `vpm map` stage as one call: a validated tet mesh -> fold-free initial map to the
 // unit ball (vpm/initial_map.hpp) -> volume-preserving map (vpm/volume_map.hpp) -> metrics ->
-// the output mesh with its fields and the report of DESIGN.md section 6.
+// the output mesh with its fields and the report of docs/design.md 6.
 #include <optional>
 #include <string>
 
@@ -32,7 +32,7 @@ struct BallMap {
   /// boundary-edge split; positions in the closed unit ball (boundary on the sphere), every tet
   /// positively oriented. Input point and cell fields carried; point fields
   /// `original_position` (n x 3, input coordinates) and `vertex_volume_ratio`, cell field
-  /// `tet_volume_ratio` (normalised ratios against the input, DESIGN.md 5).
+  /// `tet_volume_ratio` (normalised ratios against the input, docs/design.md 5).
   TetMesh mesh;
   MapMetrics initial;  ///< metrics of the initial map
   MapMetrics final;    ///< metrics of the returned map (inverted_tets == 0)
@@ -46,7 +46,7 @@ struct BallMap {
   BallMapTimings timings;
 };
 
-/// The report of DESIGN.md section 6: {"device", "input": {"vertices","tets","min_dihedral_deg",
+/// The report of docs/design.md 6: {"device", "input": {"vertices","tets","min_dihedral_deg",
 /// "reoriented_tets"}, "refined": {"vertices","tets"}, "initial": METRICS, "final": METRICS,
 /// "rounds": [...], "timings_s": {"total","initial_map","volume_map","volume_map_solve",
 /// "volume_map_field","volume_map_advect","volume_map_untangle","metrics"}, "initial_map": {...},

@@ -1,5 +1,5 @@
 #pragma once
-// Comparing subjects in the common ball (paper 6.2, DESIGN.md 5 "Overlap"): labelled regions
+// Comparing subjects in the common ball (paper 6.2, docs/design.md 5 "Overlap"): labelled regions
 // located by their centroids (landmarks for registration) and compared by Dice overlap of the
 // tets' label field sampled at common points of the ball.
 #include <Eigen/Core>

@@ -1,5 +1,5 @@
 #pragma once
-// The initial (fold-free) map of a tet mesh to the closed unit ball (paper 4.1; DESIGN.md 4.1
+// The initial (fold-free) map of a tet mesh to the closed unit ball (paper 4.1; docs/design.md 4.1
 // steps 1-4):
 //
 //  1. split: every interior edge whose two ends are boundary vertices is split at its midpoint
@@ -24,7 +24,7 @@
 //
 // A map that is still folded after step 4 is never returned: NumericalError (exit 3) with the
 // number of folded tets, where they are, and the smallest dihedral angle of the input (meshes
-// with slivers of 0.01-0.05 degrees are known to defeat this pipeline, DESIGN.md 4.2).
+// with slivers of 0.01-0.05 degrees are known to defeat this pipeline, docs/design.md 4.2).
 #include <array>
 #include <optional>
 #include <string>
@@ -58,7 +58,7 @@ struct InitialMapOptions {
   // ---- step 4: untangling
   enum class Untangle { Never, IfFolded, Always };
   /// IfFolded: only when the harmonic map folded a tet. Always: also improve a fold-free map
-  /// (lower distortion, DESIGN.md 4.1 table: 0.363 -> 0.318 on Colin27).
+  /// (lower distortion, docs/design.md 4.1 table: 0.363 -> 0.318 on Colin27).
   Untangle untangle = Untangle::IfFolded;
   UntangleOptions untangle_options{};   ///< theta = 1/128 by default
   /// IfFolded: first untangle locally (the folded tets and this many rings of neighbours free,

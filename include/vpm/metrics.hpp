@@ -1,5 +1,5 @@
 #pragma once
-// Distortion metrics of DESIGN.md section 5, with the names the report JSON uses.
+// Distortion metrics of docs/design.md 5, with the names the report JSON uses.
 #include <Eigen/Core>
 
 #include "vpm/json.hpp"

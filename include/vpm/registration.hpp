@@ -124,7 +124,7 @@ RegistrationResult register_landmarks(Device& device, Points& ball, const Tets& 
                                       const Points& landmarks, const Points& targets,
                                       const RegistrationOptions& options = {});
 
-/// The registration metrics of DESIGN.md 5 as report members: {"landmark_rms_error",
+/// The registration metrics of docs/design.md 5 as report members: {"landmark_rms_error",
 /// "landmark_max_error", "max_normal_velocity", "inverted_tets", "vertex_volume_ratio",
 /// "tet_volume_ratio", "boundary_max_radius_error"}; `against_before` = map_metrics of the
 /// registered mesh against the pre-registration map.

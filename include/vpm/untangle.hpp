@@ -1,6 +1,6 @@
 #pragma once
 // Fold removal for tet maps: Garanzha, Kaporin, Kudryavtseva, Protais, Ray & Sokolov,
-// "Foldover-free maps in 50 lines of code", ACM TOG 40(4), 2021 (DESIGN.md 4.1 steps 4 and 6).
+// "Foldover-free maps in 50 lines of code", ACM TOG 40(4), 2021 (docs/design.md 4.1 steps 4 and 6).
 //
 // A map is given by new positions `x` of the vertices of a reference mesh (`reference`,
 // `tets`). For each tet t, J_t is the Jacobian of the affine map reference tet -> mapped tet
@@ -50,7 +50,7 @@ struct UntangleOptions {
   /// outer iteration is below this (the paper's 1e-5).
   double outer_energy_tolerance = 1e-5;
   /// Stop as soon as no tet is inverted (minimum quality work), instead of also converging the
-  /// energy. Off by default: the further descent improves the map (DESIGN.md 4.1 table).
+  /// energy. Off by default: the further descent improves the map (docs/design.md 4.1 table).
   bool stop_when_untangled = false;
   /// Wall-clock budget in seconds (0: none). Checked between L-BFGS iterations; when it runs
   /// out the current positions are returned (folds are still reported, never hidden).
@@ -89,7 +89,7 @@ UntangleResult untangle(const Points& reference, const Tets& tets, Points& x,
 /// Options of the local untangle between Moser rounds: theta = 0.5.
 UntangleOptions untangle_local_options();
 
-/// Local variant (DESIGN.md 4.1 step 6): frees only the vertices of `folded` (tet indices)
+/// Local variant (docs/design.md 4.1 step 6): frees only the vertices of `folded` (tet indices)
 /// and `rings` rings of neighbours around them (vertices sharing a tet), except those with
 /// fixed[v] != 0, and minimises the energy over the tets touching a free vertex.
 /// Use with options.theta = 0.5 (see untangle_local_options()). `folded` empty: nothing to do.

@@ -1,5 +1,5 @@
 #pragma once
-// The volume-preserving map inside the unit ball (paper sections 3, 4.2, 4.3; DESIGN.md 4.1
+// The volume-preserving map inside the unit ball (paper sections 3, 4.2, 4.3; docs/design.md 4.1
 // steps 5-6 and 4.2): starting from a fold-free map of a tet mesh to the ball, move the
 // vertices until every vertex's dual volume is its input dual volume (both normalised to the
 // total volume).
@@ -23,7 +23,7 @@
 //    vertex-based rounds leave (Colin27: tet mean |r-1| 5.3 % -> 2.75 %).
 //  * paper: the paper's discrete loop (4.3): at each of `paper_steps` steps recompute
 //    rho = m / V from the current geometry, re-solve, step x += dt grad psi / rho (dt = 1/K).
-//    A step that folds is retried with dt halved. Kept for comparison (it stalls, DESIGN.md 4.2).
+//    A step that folds is retried with dt halved. Kept for comparison (it stalls, docs/design.md 4.2).
 //  * vsem: each tet's stiffness (on the input geometry) multiplied by its accumulated volume
 //    ratio, boundary frozen, harmonic (Dirichlet) re-solve per iteration (Yueh et al. 2019 style
 //    fixed point). For comparison.
