@@ -36,6 +36,65 @@ std::string lower(std::string_view s) {
   return r;
 }
 
+// Vertices: "n", then n lines "x y z reference" (the reference is dropped).
+void read_vertices(Scanner& s, TetMesh& mesh) {
+  const int n = s.need_count("the number of Vertices");
+  s.check_fits(n, 4, "vertices");
+  mesh.vertices.resize(n, 3);
+  for (int i = 0; i < n; ++i) {
+    auto what = [&] { return "vertex " + std::to_string(i + 1) + " of " + std::to_string(n); };
+    for (int k = 0; k < 3; ++k) mesh.vertices(i, k) = s.to_real(s.need_lazy(what), "a vertex coordinate");
+    s.to_int(s.need_lazy(what), "a vertex reference");
+  }
+}
+
+// Tetrahedra: "m", then m lines "v1 v2 v3 v4 reference" (1-based); indices are range-checked
+// here when the Vertices came first.
+void read_tetrahedra(Scanner& s, TetMesh& mesh, bool have_vertices, FieldValues& refs) {
+  const int m = s.need_count("the number of Tetrahedra");
+  s.check_fits(m, 5, "tetrahedra");
+  refs.resize(m, 1);
+  mesh.tets.resize(m, 4);
+  for (int i = 0; i < m; ++i) {
+    for (int k = 0; k < 4; ++k) {
+      const long long v = s.to_int(s.need_lazy([&] {
+        return "tetrahedron " + std::to_string(i + 1) + " of " + std::to_string(m);
+      }), "a vertex index");
+      if (v < 1 || (have_vertices && v > mesh.vertices.rows())) {
+        std::string why = "tetrahedron " + std::to_string(i + 1) + ": vertex index " +
+                          std::to_string(v) + " out of range 1.." +
+                          (have_vertices ? std::to_string(mesh.vertices.rows()) : "n");
+        if (v == 0) why += " (Medit indices are 1-based; the file looks 0-based)";
+        s.fail(why);
+      }
+      mesh.tets(i, k) = static_cast<int>(v - 1);
+    }
+    refs(i, 0) = static_cast<double>(s.to_int(
+        s.need_lazy([&] { return "the reference of tetrahedron " + std::to_string(i + 1); }),
+        "a tetrahedron reference"));
+  }
+}
+
+// A section of other entities: "k", then k entries of `per` numbers, checked and dropped.
+void skip_entries(Scanner& s, std::string_view keyword, int per) {
+  const std::string name(keyword);
+  const int k = s.need_count("the number of " + name);
+  s.check_fits(static_cast<long long>(k) * per, 1, "values in " + name);
+  const std::string what = name + " entries";
+  for (long long i = 0; i < static_cast<long long>(k) * per; ++i)
+    s.to_real(s.need_lazy([&] { return "entry " + std::to_string(i / per + 1) + " of " + name; }), what);
+}
+
+// Tetrahedra read before Vertices: their indices are range-checked now, at the Tetrahedra line.
+void check_late_indices(const Scanner& s, const TetMesh& mesh, size_t tets_line) {
+  for (Eigen::Index i = 0; i < mesh.tets.rows(); ++i)
+    for (int k = 0; k < 4; ++k)
+      if (mesh.tets(i, k) >= mesh.vertices.rows())
+        s.fail_at(tets_line, "tetrahedron " + std::to_string(i + 1) + ": vertex index " +
+                                 std::to_string(mesh.tets(i, k) + 1) + " out of range 1.." +
+                                 std::to_string(mesh.vertices.rows()));
+}
+
 }  // namespace
 
 TetMesh read_medit(const std::string& path) {
@@ -59,50 +118,16 @@ TetMesh read_medit(const std::string& path) {
       ended = true;
     } else if (kw == "vertices") {
       if (have_vertices) s.fail("second Vertices section");
-      const int n = s.need_count("the number of Vertices");
-      s.check_fits(n, 4, "vertices");
-      mesh.vertices.resize(n, 3);
-      for (int i = 0; i < n; ++i) {
-        auto what = [&] { return "vertex " + std::to_string(i + 1) + " of " + std::to_string(n); };
-        for (int k = 0; k < 3; ++k) mesh.vertices(i, k) = s.to_real(s.need_lazy(what), "a vertex coordinate");
-        s.to_int(s.need_lazy(what), "a vertex reference");
-      }
+      read_vertices(s, mesh);
       have_vertices = true;
     } else if (kw == "tetrahedra") {
       if (have_tets) s.fail("second Tetrahedra section");
       tets_line = s.line();
-      const int m = s.need_count("the number of Tetrahedra");
-      s.check_fits(m, 5, "tetrahedra");
-      refs.resize(m, 1);
-      mesh.tets.resize(m, 4);
-      for (int i = 0; i < m; ++i) {
-        for (int k = 0; k < 4; ++k) {
-          const long long v = s.to_int(s.need_lazy([&] {
-            return "tetrahedron " + std::to_string(i + 1) + " of " + std::to_string(m);
-          }), "a vertex index");
-          if (v < 1 || (have_vertices && v > mesh.vertices.rows())) {
-            std::string why = "tetrahedron " + std::to_string(i + 1) + ": vertex index " +
-                              std::to_string(v) + " out of range 1.." +
-                              (have_vertices ? std::to_string(mesh.vertices.rows()) : "n");
-            if (v == 0) why += " (Medit indices are 1-based; the file looks 0-based)";
-            s.fail(why);
-          }
-          mesh.tets(i, k) = static_cast<int>(v - 1);
-        }
-        refs(i, 0) = static_cast<double>(s.to_int(
-            s.need_lazy([&] { return "the reference of tetrahedron " + std::to_string(i + 1); }),
-            "a tetrahedron reference"));
-      }
+      read_tetrahedra(s, mesh, have_vertices, refs);
       have_tets = true;
     } else if (skipped_sections().count(kw)) {
       const int per = skipped_sections().at(kw);
-      if (per == 0) continue;
-      const std::string name(tok);
-      const int k = s.need_count("the number of " + name);
-      s.check_fits(static_cast<long long>(k) * per, 1, "values in " + name);
-      const std::string what = name + " entries";
-      for (long long i = 0; i < static_cast<long long>(k) * per; ++i)
-        s.to_real(s.need_lazy([&] { return "entry " + std::to_string(i / per + 1) + " of " + name; }), what);
+      if (per != 0) skip_entries(s, tok, per);
     } else {
       s.fail("unknown keyword " + show(tok) + " (expected Vertices, Tetrahedra, End, ...)");
     }
@@ -110,13 +135,7 @@ TetMesh read_medit(const std::string& path) {
   if (!seen_version && !have_vertices) s.fail_at(1, "not a Medit .mesh file (no MeshVersionFormatted)");
   if (!have_vertices) s.fail("no Vertices section (truncated file?)");
   if (!have_tets) s.fail("no Tetrahedra section (truncated file?)");
-  // Tetrahedra before Vertices: range check now.
-  for (Eigen::Index i = 0; i < mesh.tets.rows(); ++i)
-    for (int k = 0; k < 4; ++k)
-      if (mesh.tets(i, k) >= mesh.vertices.rows())
-        s.fail_at(tets_line, "tetrahedron " + std::to_string(i + 1) + ": vertex index " +
-                                 std::to_string(mesh.tets(i, k) + 1) + " out of range 1.." +
-                                 std::to_string(mesh.vertices.rows()));
+  check_late_indices(s, mesh, tets_line);
   if (mesh.tets.rows() > 0 && (refs.array() != 0).any()) mesh.set_cell_field("label", std::move(refs), true);
   return mesh;
 }

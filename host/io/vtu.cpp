@@ -46,6 +46,13 @@ long long attr_count(const XmlWalker& w, const Tag& tag, const std::string& key,
   return x;
 }
 
+// Position of the "</DataArray" closing `tag`; `label` names the array in the message if absent.
+size_t array_close(const XmlWalker& w, const Tag& tag, const std::string& label) {
+  const size_t close = w.data().find("</DataArray", tag.end);
+  if (close == std::string_view::npos) w.fail(tag.line, label + " is not closed (truncated file?)");
+  return close;
+}
+
 // Reads a DataArray's ASCII content: exactly `rows` tuples of its components.
 Array read_array(const std::string& path, XmlWalker& w, const Tag& tag, long long rows,
                  const char* unnamed = "(unnamed)") {
@@ -67,11 +74,8 @@ Array read_array(const std::string& path, XmlWalker& w, const Tag& tag, long lon
     if (rows != 0) w.fail(tag.line, "DataArray '" + shown + "' is empty, expected " + std::to_string(rows) + " tuples");
     return a;
   }
-  const std::string_view d = w.data();
-  const size_t close = d.find("</DataArray", tag.end);
-  if (close == std::string_view::npos)
-    w.fail(tag.line, "DataArray '" + shown + "' is not closed (truncated file?)");
-  Scanner s(path, d.substr(tag.end, close - tag.end), '\0', w.line_at(tag.end));
+  const size_t close = array_close(w, tag, "DataArray '" + shown + "'");
+  Scanner s(path, w.data().substr(tag.end, close - tag.end), '\0', w.line_at(tag.end));
   const long long count = rows * a.comps;
   s.check_fits(count, 1, "values in DataArray '" + shown + "'");
   a.values.resize(static_cast<size_t>(count));
@@ -91,159 +95,214 @@ Array read_array(const std::string& path, XmlWalker& w, const Tag& tag, long lon
   return a;
 }
 
-}  // namespace
+// The state of one read: the tags seen so far and the arrays they hold.
+class VtuReader {
+ public:
+  VtuReader(const std::string& path, const std::string& data) : path_(path), data_(data), w_(path, data) {}
+  void read_tags();
+  void check_complete();
+  TetMesh build_mesh();
 
-TetMesh read_vtu(const std::string& path) {
-  const std::string data = read_whole_file(path);
-  XmlWalker w(path, data);
+ private:
+  void on_vtkfile(const Tag& tag);
+  void on_piece(const Tag& tag);
+  void on_data_array(const Tag& tag);
+  void read_connectivity(const Tag& tag);
+  std::vector<int> tet_cells() const;
+  void set_fields(TetMesh& mesh, const std::vector<int>& keep) const;
+
+  const std::string& path_;
+  const std::string& data_;
+  XmlWalker w_;
+  bool seen_file_ = false, seen_piece_ = false, closed_ = false;
+  long long n_ = -1, m_ = -1;
+  size_t piece_line_ = 1;
+  std::string section_;  // PointData, CellData, Points, Cells
+  std::vector<Array> point_fields_, cell_fields_;
+  Array points_, conn_, offsets_, types_;
+  bool have_points_ = false, have_conn_ = false, have_offsets_ = false, have_types_ = false;
+};
+
+void VtuReader::read_tags() {
   Tag tag;
-  bool seen_file = false, seen_piece = false;
-  long long n = -1, m = -1;
-  size_t piece_line = 1;
-  std::string section;  // PointData, CellData, Points, Cells
-  std::vector<Array> point_fields, cell_fields;
-  Array points, conn, offsets, types;
-  bool have_points = false, have_conn = false, have_offsets = false, have_types = false;
-  bool closed = false;
-  while (w.next(tag)) {
+  while (w_.next(tag)) {
     if (tag.closing) {
-      if (tag.name == section) section.clear();
-      if (tag.name == "VTKFile") closed = true;
+      if (tag.name == section_) section_.clear();
+      if (tag.name == "VTKFile") closed_ = true;
       continue;
     }
     if (tag.name == "VTKFile") {
-      seen_file = true;
-      auto it = tag.attrs.find("type");
-      if (it == tag.attrs.end() || it->second != "UnstructuredGrid")
-        w.fail(tag.line, "not a VTK UnstructuredGrid file (type=\"" +
-                             (it == tag.attrs.end() ? std::string() : it->second) + "\")");
-      if (tag.attrs.count("compressor"))
-        w.fail(tag.line, "compressed .vtu is not supported: only ASCII data");
+      on_vtkfile(tag);
     } else if (tag.name == "AppendedData") {
-      w.fail(tag.line, "appended (binary) data is not supported: only ASCII .vtu");
+      w_.fail(tag.line, "appended (binary) data is not supported: only ASCII .vtu");
     } else if (tag.name == "Piece") {
-      if (!seen_file) w.fail(tag.line, "<Piece> outside <VTKFile type=\"UnstructuredGrid\">");
-      if (seen_piece) w.fail(tag.line, "more than one <Piece>: only single-piece .vtu is supported");
-      seen_piece = true;
-      piece_line = tag.line;
-      n = attr_count(w, tag, "NumberOfPoints", true, 0);
-      m = attr_count(w, tag, "NumberOfCells", true, 0);
-      // A point takes >= 3 values of >= 2 bytes, a cell >= 3 values (offset, type, index): 2x margin.
-      if (n * 3 + m * 3 > static_cast<long long>(data.size()))
-        w.fail(tag.line, "declares " + std::to_string(n) + " points and " + std::to_string(m) +
-                             " cells, more than the file's " + std::to_string(data.size()) +
-                             " bytes could hold (truncated or wrong count)");
+      on_piece(tag);
     } else if (tag.name == "PointData" || tag.name == "CellData" || tag.name == "Points" ||
                tag.name == "Cells") {
-      if (!seen_piece) w.fail(tag.line, "<" + tag.name + "> outside <Piece>");
-      if (!tag.self_closing) section = tag.name;
+      if (!seen_piece_) w_.fail(tag.line, "<" + tag.name + "> outside <Piece>");
+      if (!tag.self_closing) section_ = tag.name;
     } else if (tag.name == "DataArray") {
-      if (section.empty()) {
-        if (!tag.self_closing) {  // e.g. FieldData: skip its content
-          const size_t close = w.data().find("</DataArray", tag.end);
-          if (close == std::string_view::npos) w.fail(tag.line, "DataArray is not closed (truncated file?)");
-          w.set_pos(close);
-        }
-        continue;
-      }
-      const std::string name = tag.attrs.count("Name") ? tag.attrs.at("Name") : "";
-      if (section == "Points") {
-        points = read_array(path, w, tag, n, "Points");
-        if (points.comps != 3) w.fail(tag.line, "Points must have 3 components, found " + std::to_string(points.comps));
-        have_points = true;
-      } else if (section == "PointData") {
-        point_fields.push_back(read_array(path, w, tag, n));
-      } else if (section == "CellData") {
-        cell_fields.push_back(read_array(path, w, tag, m));
-      } else if (name == "offsets") {
-        offsets = read_array(path, w, tag, m);
-        have_offsets = true;
-      } else if (name == "types") {
-        types = read_array(path, w, tag, m);
-        have_types = true;
-      } else if (name == "connectivity") {
-        if (!have_offsets) {
-          // Length is known only from offsets; VTK writes connectivity first, so count tokens.
-          const size_t close = w.data().find("</DataArray", tag.end);
-          if (close == std::string_view::npos) w.fail(tag.line, "DataArray 'connectivity' is not closed (truncated file?)");
-          Scanner c(path, w.data().substr(tag.end, close - tag.end), '\0');
-          std::string_view tok;
-          long long k = 0;
-          while (c.next(tok)) ++k;
-          conn = read_array(path, w, tag, k);
-        } else {
-          const double last = m > 0 ? offsets.values.back() : 0.0;
-          if (!(last >= 0 && last < 4.0e9))
-            w.fail(offsets.line, "last offset in 'offsets' is negative or too large");
-          const long long len = static_cast<long long>(last);
-          conn = read_array(path, w, tag, len);
-        }
-        have_conn = true;
-      }
+      on_data_array(tag);
     }
   }
-  if (!seen_file) throw InputError(path + ":1: not a VTK XML file (no <VTKFile> element)");
-  const size_t last = w.line_at(data.size());
-  if (!seen_piece) throw InputError(path + ":" + std::to_string(last) + ": no <Piece> element (truncated file?)");
-  if (!closed) throw InputError(path + ":" + std::to_string(last) + ": no </VTKFile> (truncated file?)");
-  if (!have_points) w.fail(piece_line, "Piece has no <Points> array");
-  for (const Array* a : {&conn, &offsets, &types})
-    if (!a->type.empty() && !is_integer_type(a->type))
-      w.fail(a->line, "Cells array '" + a->name + "' has type " + a->type + ", expected an integer type");
-  if (m > 0 && (!have_conn || !have_offsets || !have_types))
-    w.fail(piece_line, "Piece lacks a Cells array (connectivity, offsets, types)");
+}
 
-  TetMesh mesh;
-  mesh.vertices.resize(n, 3);
-  std::copy(points.values.begin(), points.values.end(), mesh.vertices.data());
+void VtuReader::on_vtkfile(const Tag& tag) {
+  seen_file_ = true;
+  auto it = tag.attrs.find("type");
+  if (it == tag.attrs.end() || it->second != "UnstructuredGrid")
+    w_.fail(tag.line, "not a VTK UnstructuredGrid file (type=\"" +
+                          (it == tag.attrs.end() ? std::string() : it->second) + "\")");
+  if (tag.attrs.count("compressor"))
+    w_.fail(tag.line, "compressed .vtu is not supported: only ASCII data");
+}
+
+void VtuReader::on_piece(const Tag& tag) {
+  if (!seen_file_) w_.fail(tag.line, "<Piece> outside <VTKFile type=\"UnstructuredGrid\">");
+  if (seen_piece_) w_.fail(tag.line, "more than one <Piece>: only single-piece .vtu is supported");
+  seen_piece_ = true;
+  piece_line_ = tag.line;
+  n_ = attr_count(w_, tag, "NumberOfPoints", true, 0);
+  m_ = attr_count(w_, tag, "NumberOfCells", true, 0);
+  // A point takes >= 3 values of >= 2 bytes, a cell >= 3 values (offset, type, index): 2x margin.
+  if (n_ * 3 + m_ * 3 > static_cast<long long>(data_.size()))
+    w_.fail(tag.line, "declares " + std::to_string(n_) + " points and " + std::to_string(m_) +
+                          " cells, more than the file's " + std::to_string(data_.size()) +
+                          " bytes could hold (truncated or wrong count)");
+}
+
+void VtuReader::on_data_array(const Tag& tag) {
+  if (section_.empty()) {
+    if (!tag.self_closing) w_.set_pos(array_close(w_, tag, "DataArray"));  // e.g. FieldData: skip it
+    return;
+  }
+  const std::string name = tag.attrs.count("Name") ? tag.attrs.at("Name") : "";
+  if (section_ == "Points") {
+    points_ = read_array(path_, w_, tag, n_, "Points");
+    if (points_.comps != 3) w_.fail(tag.line, "Points must have 3 components, found " + std::to_string(points_.comps));
+    have_points_ = true;
+  } else if (section_ == "PointData") {
+    point_fields_.push_back(read_array(path_, w_, tag, n_));
+  } else if (section_ == "CellData") {
+    cell_fields_.push_back(read_array(path_, w_, tag, m_));
+  } else if (name == "offsets") {
+    offsets_ = read_array(path_, w_, tag, m_);
+    have_offsets_ = true;
+  } else if (name == "types") {
+    types_ = read_array(path_, w_, tag, m_);
+    have_types_ = true;
+  } else if (name == "connectivity") {
+    read_connectivity(tag);
+  }
+}
+
+// The connectivity's length is the last offset; VTK writes connectivity first, so without
+// offsets yet its tokens are counted.
+void VtuReader::read_connectivity(const Tag& tag) {
+  if (!have_offsets_) {
+    const size_t close = array_close(w_, tag, "DataArray 'connectivity'");
+    Scanner c(path_, w_.data().substr(tag.end, close - tag.end), '\0');
+    std::string_view tok;
+    long long k = 0;
+    while (c.next(tok)) ++k;
+    conn_ = read_array(path_, w_, tag, k);
+  } else {
+    const double last = m_ > 0 ? offsets_.values.back() : 0.0;
+    if (!(last >= 0 && last < 4.0e9))
+      w_.fail(offsets_.line, "last offset in 'offsets' is negative or too large");
+    const long long len = static_cast<long long>(last);
+    conn_ = read_array(path_, w_, tag, len);
+  }
+  have_conn_ = true;
+}
+
+void VtuReader::check_complete() {
+  if (!seen_file_) throw InputError(path_ + ":1: not a VTK XML file (no <VTKFile> element)");
+  const size_t last = w_.line_at(data_.size());
+  if (!seen_piece_) throw InputError(path_ + ":" + std::to_string(last) + ": no <Piece> element (truncated file?)");
+  if (!closed_) throw InputError(path_ + ":" + std::to_string(last) + ": no </VTKFile> (truncated file?)");
+  if (!have_points_) w_.fail(piece_line_, "Piece has no <Points> array");
+  for (const Array* a : {&conn_, &offsets_, &types_})
+    if (!a->type.empty() && !is_integer_type(a->type))
+      w_.fail(a->line, "Cells array '" + a->name + "' has type " + a->type + ", expected an integer type");
+  if (m_ > 0 && (!have_conn_ || !have_offsets_ || !have_types_))
+    w_.fail(piece_line_, "Piece lacks a Cells array (connectivity, offsets, types)");
+}
+
+// The cells that are tetrahedra (VTK type 10), after checking every cell's offsets and the
+// tetrahedra's point indices.
+std::vector<int> VtuReader::tet_cells() const {
   std::vector<int> keep;
   long long prev = 0;
-  for (long long c = 0; c < m; ++c) {
-    const double off = offsets.values[static_cast<size_t>(c)];
-    if (!(off >= prev) || off > static_cast<double>(conn.values.size()))
-      w.fail(offsets.line, "cell " + std::to_string(c) + ": offset " + std::to_string(static_cast<long long>(off)) +
-                               " is decreasing or beyond the " + std::to_string(conn.values.size()) +
-                               " connectivity entries (wrong count)");
+  for (long long c = 0; c < m_; ++c) {
+    const double off = offsets_.values[static_cast<size_t>(c)];
+    if (!(off >= prev) || off > static_cast<double>(conn_.values.size()))
+      w_.fail(offsets_.line, "cell " + std::to_string(c) + ": offset " + std::to_string(static_cast<long long>(off)) +
+                                 " is decreasing or beyond the " + std::to_string(conn_.values.size()) +
+                                 " connectivity entries (wrong count)");
     const long long end = static_cast<long long>(off);
-    const double type = types.values[static_cast<size_t>(c)];
+    const double type = types_.values[static_cast<size_t>(c)];
     if (type == 10) {
       if (end - prev != 4)
-        w.fail(offsets.line, "cell " + std::to_string(c) + ": tetrahedron (type 10) with " +
-                                 std::to_string(end - prev) + " points");
+        w_.fail(offsets_.line, "cell " + std::to_string(c) + ": tetrahedron (type 10) with " +
+                                   std::to_string(end - prev) + " points");
       for (long long k = prev; k < end; ++k) {
-        const double v = conn.values[static_cast<size_t>(k)];
-        if (v < 0 || v >= static_cast<double>(n))
-          w.fail(conn.line, "cell " + std::to_string(c) + ": point index " +
-                                std::to_string(static_cast<long long>(v)) + " out of range 0.." +
-                                std::to_string(n - 1) + (v == n ? " (indices look 1-based; VTK is 0-based)" : ""));
+        const double v = conn_.values[static_cast<size_t>(k)];
+        if (v < 0 || v >= static_cast<double>(n_))
+          w_.fail(conn_.line, "cell " + std::to_string(c) + ": point index " +
+                                  std::to_string(static_cast<long long>(v)) + " out of range 0.." +
+                                  std::to_string(n_ - 1) + (v == n_ ? " (indices look 1-based; VTK is 0-based)" : ""));
       }
       keep.push_back(static_cast<int>(c));
     }
     prev = end;
   }
-  if (m > 0 && keep.empty())
-    w.fail(piece_line, "none of the " + std::to_string(m) + " cells is a tetrahedron (VTK type 10)");
-  mesh.tets.resize(static_cast<Eigen::Index>(keep.size()), 4);
-  for (size_t t = 0; t < keep.size(); ++t) {
-    const size_t start = keep[t] == 0 ? 0 : static_cast<size_t>(offsets.values[static_cast<size_t>(keep[t] - 1)]);
-    for (int k = 0; k < 4; ++k)
-      mesh.tets(static_cast<Eigen::Index>(t), k) = static_cast<int>(conn.values[start + static_cast<size_t>(k)]);
-  }
-  for (auto& a : point_fields) {
-    if (a.name.empty()) w.fail(a.line, "point DataArray without a Name");
-    FieldValues v(n, a.comps);
+  if (m_ > 0 && keep.empty())
+    w_.fail(piece_line_, "none of the " + std::to_string(m_) + " cells is a tetrahedron (VTK type 10)");
+  return keep;
+}
+
+// Point fields as read, cell fields restricted to the kept cells.
+void VtuReader::set_fields(TetMesh& mesh, const std::vector<int>& keep) const {
+  for (auto& a : point_fields_) {
+    if (a.name.empty()) w_.fail(a.line, "point DataArray without a Name");
+    FieldValues v(n_, a.comps);
     std::copy(a.values.begin(), a.values.end(), v.data());
     mesh.set_point_field(a.name, std::move(v), is_integer_type(a.type));
   }
-  for (auto& a : cell_fields) {
-    if (a.name.empty()) w.fail(a.line, "cell DataArray without a Name");
+  for (auto& a : cell_fields_) {
+    if (a.name.empty()) w_.fail(a.line, "cell DataArray without a Name");
     FieldValues v(static_cast<Eigen::Index>(keep.size()), a.comps);
     for (size_t t = 0; t < keep.size(); ++t)
       for (int k = 0; k < a.comps; ++k)
         v(static_cast<Eigen::Index>(t), k) = a.values[static_cast<size_t>(keep[t]) * a.comps + k];
     mesh.set_cell_field(a.name, std::move(v), is_integer_type(a.type));
   }
+}
+
+TetMesh VtuReader::build_mesh() {
+  TetMesh mesh;
+  mesh.vertices.resize(n_, 3);
+  std::copy(points_.values.begin(), points_.values.end(), mesh.vertices.data());
+  const std::vector<int> keep = tet_cells();
+  mesh.tets.resize(static_cast<Eigen::Index>(keep.size()), 4);
+  for (size_t t = 0; t < keep.size(); ++t) {
+    const size_t start = keep[t] == 0 ? 0 : static_cast<size_t>(offsets_.values[static_cast<size_t>(keep[t] - 1)]);
+    for (int k = 0; k < 4; ++k)
+      mesh.tets(static_cast<Eigen::Index>(t), k) = static_cast<int>(conn_.values[start + static_cast<size_t>(k)]);
+  }
+  set_fields(mesh, keep);
   return mesh;
+}
+
+}  // namespace
+
+TetMesh read_vtu(const std::string& path) {
+  const std::string data = read_whole_file(path);
+  VtuReader reader(path, data);
+  reader.read_tags();
+  reader.check_complete();
+  return reader.build_mesh();
 }
 
 void write_vtu(const std::string& path, const TetMesh& mesh) {

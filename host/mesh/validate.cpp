@@ -20,10 +20,9 @@ std::string tet_text(const Tets& t, int i) {
   s << "tet " << i << " (" << t(i, 0) << " " << t(i, 1) << " " << t(i, 2) << " " << t(i, 3) << ")";
   return s.str();
 }
-}  // namespace
 
-ValidationReport validate_mesh(TetMesh& mesh, const std::string& source, const ValidateOptions& opt) {
-  ValidationReport rep;
+// Finite coordinates; tet indices in range, no vertex repeated in a tet, no isolated vertex.
+void check_indices(const TetMesh& mesh, const std::string& source) {
   const int n = mesh.num_vertices(), m = mesh.num_tets();
   if (n == 0) fail(source, "mesh", "has no vertices");
   if (m == 0) fail(source, "mesh", "has no tets");
@@ -47,23 +46,28 @@ ValidationReport validate_mesh(TetMesh& mesh, const std::string& source, const V
   }
   for (int v = 0; v < n; ++v)
     if (!used[static_cast<size_t>(v)]) fail(source, "vertex " + std::to_string(v), "isolated (in no tet)");
+}
 
-  // duplicates
-  {
-    std::vector<std::pair<std::array<int, 4>, int>> keys(static_cast<size_t>(m));
-    for (int t = 0; t < m; ++t) {
-      std::array<int, 4> k = {mesh.tets(t, 0), mesh.tets(t, 1), mesh.tets(t, 2), mesh.tets(t, 3)};
-      std::sort(k.begin(), k.end());
-      keys[static_cast<size_t>(t)] = {k, t};
-    }
-    std::sort(keys.begin(), keys.end());
-    for (size_t i = 1; i < keys.size(); ++i)
-      if (keys[i].first == keys[i - 1].first)
-        fail(source, tet_text(mesh.tets, keys[i].second),
-             "duplicate of tet " + std::to_string(keys[i - 1].second));
+// No two tets on the same four vertices.
+void check_duplicates(const Tets& tets, const std::string& source) {
+  const int m = static_cast<int>(tets.rows());
+  std::vector<std::pair<std::array<int, 4>, int>> keys(static_cast<size_t>(m));
+  for (int t = 0; t < m; ++t) {
+    std::array<int, 4> k = {tets(t, 0), tets(t, 1), tets(t, 2), tets(t, 3)};
+    std::sort(k.begin(), k.end());
+    keys[static_cast<size_t>(t)] = {k, t};
   }
+  std::sort(keys.begin(), keys.end());
+  for (size_t i = 1; i < keys.size(); ++i)
+    if (keys[i].first == keys[i - 1].first)
+      fail(source, tet_text(tets, keys[i].second), "duplicate of tet " + std::to_string(keys[i - 1].second));
+}
 
-  // volumes: degenerate and orientation
+// Rejects zero-volume tets and makes every tet positively oriented (swapping its last two
+// vertices), counting and noting the swaps in `rep`.
+void check_volumes_and_orient(TetMesh& mesh, const std::string& source, const ValidateOptions& opt,
+                              ValidationReport& rep) {
+  const int m = mesh.num_tets();
   Eigen::VectorXd vol = tet_volumes(mesh.vertices, mesh.tets);
   const double mean_abs = vol.cwiseAbs().mean();
   for (int t = 0; t < m; ++t)
@@ -77,17 +81,22 @@ ValidationReport validate_mesh(TetMesh& mesh, const std::string& source, const V
   if (rep.reoriented_tets)
     rep.notes.push_back("reoriented " + std::to_string(rep.reoriented_tets) +
                         " negatively oriented tets (swapped their last two vertices)");
+}
 
-  // manifold tet complex
+// Manifold tet complex, one connected component.
+void check_manifold(const TetMesh& mesh, const std::string& source) {
   if (int bad = nonmanifold_faces(mesh.tets))
     fail(source, "mesh", std::to_string(bad) + " triangles are shared by more than two tets (non-manifold)");
-
   int comps = 0;
-  vertex_components(n, mesh.tets, &comps);
+  vertex_components(mesh.num_vertices(), mesh.tets, &comps);
   if (comps != 1) fail(source, "mesh", "has " + std::to_string(comps) + " connected components, expected 1");
+}
 
+// Manifold boundary surface (and, if asked, one genus-0 surface); its counts go to `rep`.
+void check_boundary(const TetMesh& mesh, const std::string& source, const ValidateOptions& opt,
+                    ValidationReport& rep) {
   const Triangles bf = boundary_faces(mesh.tets);
-  const SurfaceTopology st = surface_topology(n, bf);
+  const SurfaceTopology st = surface_topology(mesh.num_vertices(), bf);
   rep.boundary_faces = st.faces;
   rep.boundary_vertices = st.vertices;
   rep.boundary_euler = st.euler;
@@ -107,11 +116,26 @@ ValidationReport validate_mesh(TetMesh& mesh, const std::string& source, const V
       fail(source, "boundary", "Euler characteristic " + std::to_string(st.euler) + " (genus " +
                                    std::to_string(st.genus()) + "); the ball map needs a genus-0 surface (2)");
   }
+}
 
+// The smallest dihedral angle and its tet.
+void measure_quality(const TetMesh& mesh, ValidationReport& rep) {
   const auto dih = dihedral_angles_deg(mesh.vertices, mesh.tets);
   Eigen::Index r = 0, c = 0;
   rep.min_dihedral_deg = dih.minCoeff(&r, &c);
   rep.min_dihedral_tet = static_cast<int>(r);
+}
+
+}  // namespace
+
+ValidationReport validate_mesh(TetMesh& mesh, const std::string& source, const ValidateOptions& opt) {
+  ValidationReport rep;
+  check_indices(mesh, source);
+  check_duplicates(mesh.tets, source);
+  check_volumes_and_orient(mesh, source, opt, rep);
+  check_manifold(mesh, source);
+  check_boundary(mesh, source, opt, rep);
+  measure_quality(mesh, rep);
   return rep;
 }
 
