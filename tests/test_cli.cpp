@@ -13,7 +13,7 @@ using vpm::test::slurp;
 
 namespace {
 const std::string kVpm = VPM_BINARY;
-const char* kCommands[] = {"map", "register", "mesh-image", "initial-map", "stats", "convert", "devices", "demo", "elements", "sample"};
+const char* kCommands[] = {"map", "register", "mesh-image", "initial-map", "stats", "convert", "devices", "demo", "elements", "sample", "compare"};
 std::string tmp(const std::string& name) { return std::string(VPM_TEST_TMP) + "/cli_" + name; }
 }  // namespace
 

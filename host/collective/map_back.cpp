@@ -10,7 +10,7 @@ namespace vpm {
 
 namespace {
 
-const Points& native_positions(const TetMesh& registered) {
+Points native_positions(const TetMesh& registered) {
   const Field* f = registered.find_point_field("original_position");
   if (!f || f->values.cols() != 3)
     throw InputError("map back: the registered mesh has no point field original_position (3 components)");
@@ -45,7 +45,7 @@ TetMesh native_mesh_with_values(const TetMesh& registered, const CanonicalElemen
 
 Image native_volume(const TetMesh& registered, const CanonicalElements& el, const std::vector<double>& values,
                     const Image& grid, float outside) {
-  const Points& native = native_positions(registered);
+  const Points native = native_positions(registered);
   const TetLocator locator(native, registered.tets);
   Image out = grid;
   out.data.assign(grid.size(), outside);

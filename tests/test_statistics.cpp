@@ -1,0 +1,207 @@
+// Cohort statistics (vpm/statistics.hpp): subject tables round-trip, the reference, z-scores,
+// planted foci found as clusters, definitions never mixed, the result mapped back, `vpm compare`.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <fstream>
+#include <random>
+#include <set>
+#include <string>
+
+#include "support/fixtures.hpp"
+#include "support/process.hpp"
+#include "vpm/error.hpp"
+#include "vpm/image.hpp"
+#include "vpm/io.hpp"
+#include "vpm/map_back.hpp"
+#include "vpm/statistics.hpp"
+
+using namespace vpm;
+
+namespace {
+
+ElementDefinition def() {
+  ElementDefinition d;
+  d.level = 2;
+  d.shells = 3;
+  d.samples = 8;
+  return d;
+}
+
+// A subject: feature "pet" ~ N(100, 5) * global factor, plus `bump` on the elements of `focus`.
+ElementTable subject(unsigned seed, double factor, const std::set<int>& focus = {}, double bump = 0) {
+  const CanonicalElements el(def());
+  ElementTable t;
+  t.definition = def();
+  t.subject = "sub-" + std::to_string(seed);
+  ElementFeature f;
+  f.name = "pet";
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(100, 5);
+  for (int e = 0; e < el.size(); ++e) {
+    f.mean.push_back(factor * (g(rng) + (focus.count(e) ? bump : 0)));
+    f.std.push_back(1);
+    f.count.push_back(8);
+  }
+  t.features.push_back(f);
+  return t;
+}
+
+// The element e0 and its neighbours in its shell: a planted focus of 4 adjacent elements.
+std::set<int> planted(const CanonicalElements& el, int e0) {
+  std::set<int> s{e0};
+  for (int n : el.neighbours(e0))
+    if (el.shell_of(n) == el.shell_of(e0)) s.insert(n);
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("statistics: planted foci are found as one cluster, proportional scaling removes global factors") {
+  const CanonicalElements el(def());
+  std::vector<ElementTable> normals;
+  std::vector<std::string> names;
+  for (unsigned i = 0; i < 30; ++i) {
+    normals.push_back(subject(i + 1, 0.8 + 0.02 * i));  // global uptake differs by subject
+    names.push_back("n" + std::to_string(i));
+  }
+  const Reference ref = build_reference(normals, names, "pet", Normalisation::proportional);
+  CHECK(ref.subjects == 30);
+  const std::set<int> focus = planted(el, el.id(1, 17));
+  REQUIRE(focus.size() == 4);
+  const ElementTable patient = subject(999, 1.3, focus, 60);  // +60 % in the focus, another global factor
+  const Comparison c = compare_to_reference(el, ref, patient);
+  REQUIRE(c.clusters.size() >= 1);
+  const FocusCluster& f = c.clusters[0];
+  CHECK(f.sign == 1);
+  CHECK(std::set<int>(f.elements.begin(), f.elements.end()) == focus);
+  CHECK(focus.count(f.peak_element) == 1);
+  double vol = 0;
+  for (int e : focus) vol += el.volume(e);
+  CHECK(f.volume == Approx(vol));
+  for (int e = 0; e < el.size(); ++e) CHECK((c.cluster[e] == 1) == (focus.count(e) == 1));
+  // without normalisation the subjects' global factors (0.8-1.38) inflate the reference spread
+  const Reference raw = build_reference(normals, names, "pet", Normalisation::none);
+  double cv_raw = 0, cv_prop = 0;
+  for (int e = 0; e < el.size(); ++e) {
+    cv_raw += raw.std[e] / raw.mean[e] / el.size();
+    cv_prop += ref.std[e] / ref.mean[e] / el.size();
+  }
+  CHECK(cv_raw > 2.5 * cv_prop);
+  // a single outlier is no focus with clusters of >= 3; it is with >= 1
+  ElementTable lone = subject(998, 1.0, {el.id(0, 3)}, 80);
+  CompareOptions o;
+  const Comparison c3 = compare_to_reference(el, ref, lone, o);
+  CHECK(c3.cluster[el.id(0, 3)] == 0);
+  o.min_cluster = 1;
+  const Comparison c1 = compare_to_reference(el, ref, lone, o);
+  REQUIRE(!c1.clusters.empty());
+  CHECK(c1.cluster[el.id(0, 3)] != 0);
+  // FDR: the threshold adapts, the planted focus is still found
+  o = {};
+  o.fdr_q = 0.05;
+  const Comparison cf = compare_to_reference(el, ref, patient, o);
+  CHECK(cf.threshold_used > 2);
+  REQUIRE(!cf.clusters.empty());
+  CHECK(std::set<int>(cf.clusters[0].elements.begin(), cf.clusters[0].elements.end()) == focus);
+}
+
+TEST_CASE("statistics: tables with another element definition are refused, subject tables round-trip") {
+  std::vector<ElementTable> normals = {subject(1, 1), subject(2, 1), subject(3, 1)};
+  normals[2].definition.samples = 16;
+  CHECK_THROWS_WITH(build_reference(normals, {"a.tsv", "b.tsv", "c.tsv"}, "pet", Normalisation::none),
+                    Catch::Contains("c.tsv") && Catch::Contains("definition differs"));
+  CHECK_THROWS_AS(build_reference({subject(1, 1), subject(2, 1)}, {"a", "b"}, "pet", Normalisation::none), InputError);
+  CHECK_THROWS_WITH(normalised_feature(subject(1, 1), "fdg", Normalisation::none), Catch::Contains("no feature 'fdg'"));
+  const std::string path = std::string(VPM_TEST_TMP) + "/stats_sub.tsv";
+  const ElementTable t = subject(5, 1.1);
+  write_subject_table(path, t);
+  const ElementTable r = read_subject_table(path);
+  CHECK(r.definition == t.definition);
+  REQUIRE(r.features.size() == 1);
+  for (size_t e = 0; e < t.features[0].mean.size(); ++e) CHECK(r.features[0].mean[e] == Approx(t.features[0].mean[e]).epsilon(1e-9));
+  // a truncated table is refused with its file and line
+  const std::string text = test::slurp(path);
+  const std::string cut = std::string(VPM_TEST_TMP) + "/stats_cut.tsv";
+  { std::ofstream(cut) << text.substr(0, text.size() / 2); }
+  { std::ofstream(std::string(VPM_TEST_TMP) + "/stats_cut.json") << test::slurp(std::string(VPM_TEST_TMP) + "/stats_sub.json"); }
+  CHECK_THROWS_WITH(read_subject_table(cut), Catch::Contains("stats_cut.tsv"));
+}
+
+TEST_CASE("statistics: the result mapped back onto the native mesh and image grid") {
+  TetMesh reg = test::ball_mesh(6);
+  FieldValues native = reg.vertices * 50.0;  // native space: the ball scaled to 50 mm
+  reg.set_point_field("original_position", native);
+  const CanonicalElements el(def());
+  std::vector<double> values(el.size());
+  for (int e = 0; e < el.size(); ++e) values[e] = el.shell_of(e);  // the shell index
+  const TetMesh m = native_mesh_with_values(reg, el, {values}, {"shell"});
+  CHECK(m.vertices.isApprox(native));
+  const Field* cf = m.find_cell_field("shell");
+  REQUIRE(cf);
+  for (int t = 0; t < m.num_tets(); ++t) {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 4; ++k) c += 0.25 * reg.vertices.row(reg.tets(t, k)).transpose();
+    CHECK(cf->values(t, 0) == el.shell_of(el.element_of(c)));
+  }
+  Image grid;
+  grid.dims = {21, 21, 21};
+  grid.spacing = {5, 5, 5};
+  grid.affine.setIdentity();
+  grid.affine.topLeftCorner<3, 3>() *= 5;
+  grid.affine.topRightCorner<3, 1>() = Eigen::Vector3d(-50, -50, -50);
+  grid.data.assign(grid.size(), 0);
+  const Image z = native_volume(reg, el, values, grid, -1.0f);
+  CHECK(z.at(10, 10, 10) == 0.0f);   // the centre: shell 0
+  CHECK(z.at(0, 0, 0) == -1.0f);     // a corner outside the ball
+  CHECK(z.at(19, 10, 10) == 2.0f);   // 45 mm out: the outer shell (r^3 = 0.73 > 2/3)
+}
+
+TEST_CASE("vpm compare writes z, foci and the patient's native maps, refuses mixed definitions") {
+  const std::string dir = std::string(VPM_TEST_TMP) + "/cmp_";
+  const CanonicalElements el(def());
+  std::string normals;
+  for (unsigned i = 0; i < 5; ++i) {
+    write_subject_table(dir + "n" + std::to_string(i) + ".tsv", subject(10 + i, 1.0));
+    normals += (i ? "," : "") + dir + "n" + std::to_string(i) + ".tsv";
+  }
+  const std::set<int> focus = planted(el, el.id(2, 40));
+  write_subject_table(dir + "p.tsv", subject(77, 1.0, focus, 80));
+  TetMesh reg = test::ball_mesh(6);
+  reg.set_point_field("original_position", FieldValues(reg.vertices * 50.0));
+  write_mesh(dir + "reg.vtu", reg);
+  Image grid;
+  grid.dims = {11, 11, 11};
+  grid.spacing = {10, 10, 10};
+  grid.affine.setIdentity();
+  grid.affine.topLeftCorner<3, 3>() *= 10;
+  grid.affine.topRightCorner<3, 1>() = Eigen::Vector3d(-50, -50, -50);
+  grid.data.assign(grid.size(), 1.0f);
+  write_nifti(dir + "grid.nii.gz", grid);
+  const std::string vpm = VPM_BINARY;
+  REQUIRE(test::run_status(vpm + " compare --normals " + normals + " --patient " + dir + "p.tsv --feature pet -o " +
+                           dir + "out.tsv --mesh " + dir + "reg.vtu --image " + dir + "grid.nii.gz --quiet") == 0);
+  const std::string text = test::slurp(dir + "out.tsv");
+  CHECK_THAT(text, Catch::StartsWith("element\tshell\ttriangle\tpatient\treference_mean\treference_std\tz\tcluster\n"));
+  const Json side = Json::parse(test::slurp(dir + "out.json"));
+  CHECK(side.find("reference")->find("subjects")->number() == 5);
+  REQUIRE(side.find("result")->find("clusters")->size() >= 1);
+  CHECK(side.find("result")->find("clusters")->at(0).find("elements")->number() >= 4);  // 5 normals: noisy stds
+  const TetMesh native = read_mesh(dir + "out_native.vtu");
+  CHECK(native.find_point_field("z"));
+  CHECK(native.find_cell_field("focus"));
+  const Image z = read_nifti(dir + "out_z.nii.gz");
+  CHECK(z.dims == grid.dims);
+  CHECK(read_nifti(dir + "out_foci.nii.gz").dims == grid.dims);
+  // another element definition among the normals: exit 2, nothing written
+  ElementTable other = subject(3, 1.0);
+  write_subject_table(dir + "other.tsv", other);
+  ElementDefinition d2 = def();
+  d2.samples = 16;
+  other.definition = d2;
+  write_subject_table(dir + "other.tsv", other);
+  const std::string err = dir + "err.txt";
+  CHECK(test::run_status(vpm + " compare --normals " + normals + "," + dir + "other.tsv --patient " + dir +
+                         "p.tsv --feature pet -o " + dir + "bad.tsv 2> " + err) == 2);
+  CHECK_THAT(test::slurp(err), Catch::Contains("other.tsv") && Catch::Contains("definition differs"));
+  CHECK(test::run_status("test -e " + dir + "bad.tsv") == 1);
+}
