@@ -85,8 +85,7 @@ vpm::BallMap mesh_and_map(vpm::Device& dev, const vpm::Image& image, const vpm::
                           const vpm::MeshImageOptions& mo, const std::string& name, const fs::path& out,
                           vpm::Json& report) {
   auto t0 = Clock::now();
-  vpm::Json mesh_report;
-  vpm::TetMesh mesh = vpm::mesh_image(image, mo, &mesh_report, &atlas);
+  vpm::TetMesh mesh = vpm::mesh_image(image, mo, nullptr, &atlas);
   const double t_mesh = seconds_since(t0);
   vpm::write_mesh((out / (name + ".vtu")).string(), mesh);
   const vpm::ValidationReport vr = vpm::validate_mesh(mesh, name);

@@ -10,6 +10,19 @@
 #include "vpm/mesh_image.hpp"
 
 namespace {
+// The library's message with the remedy in this command's flags.
+std::string cli_message(const vpm::MeshImageError& e) {
+  using P = vpm::MeshImageError::Problem;
+  switch (e.problem()) {
+    case P::kTooFewTargetVertices: return "--target-vertices " + e.context() + ": need at least 10";
+    case P::kAtlasWithSurface: return "--labels needs an image input, not a surface (" + e.context() + ")";
+    case P::kMaskTouchesBorder:
+      return e.context() + " (pad the image, raise --threshold, or pass --close-at-border to close it with a flat cap there)";
+    case P::kMaskVanishes: return e.context() + "; lower --smooth or raise --target-vertices";
+  }
+  return e.what();
+}
+
 int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   const std::string kUsage = vpm::cli::synopsis(self);
   vpm::cli::Args args(argv, self);
@@ -43,19 +56,21 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   o.max_closing_radius = args.get_int("--max-closing-radius", o.max_closing_radius);
   o.close_at_border = args.has("--close-at-border");
   o.progress = [](const std::string& s) { vpm::cli::progress("mesh-image: " + s); };
-  vpm::Json report;
-  const vpm::TetMesh mesh = vpm::mesh_image_file(args.positional()[0], o, &report, args.get("--labels", ""));
+  vpm::MeshImageReport report;
+  vpm::TetMesh mesh;
+  try {
+    mesh = vpm::mesh_image_file(args.positional()[0], o, &report, args.get("--labels", ""));
+  } catch (const vpm::MeshImageError& e) {
+    throw vpm::InputError(cli_message(e));
+  }
   vpm::write_mesh(*out, mesh);
-  if (auto r = args.get("--report")) vpm::write_json_file(*r, report);
-  const vpm::Json& m = report["mesh"];
-  std::string line = "mesh-image: " + std::to_string(int(m.find("vertices")->number())) + " vertices, " +
-                     std::to_string(int(m.find("tets")->number())) + " tets, smallest dihedral " +
-                     std::to_string(m.find("min_dihedral_deg")->number()) + " deg";
-  if (const vpm::Json* in = report.find("input"); in && in->find("affine_source"))
-    line += ", coordinates from the " + in->find("affine_source")->string();
-  if (const vpm::Json* t = report.find("topology"); t && t->find("closing_radius_cells") &&
-                                                     t->find("closing_radius_cells")->number() > 0)
-    line += ", handles removed by closing (radius " + std::to_string(int(t->find("closing_radius_cells")->number())) + " cells)";
+  if (auto r = args.get("--report")) vpm::write_json_file(*r, vpm::to_json(report));
+  const vpm::MeshImageReport::Mesh& m = report.mesh;
+  std::string line = "mesh-image: " + std::to_string(m.vertices) + " vertices, " + std::to_string(m.tets) +
+                     " tets, smallest dihedral " + std::to_string(m.min_dihedral_deg) + " deg";
+  if (report.image_input) line += ", coordinates from the " + report.input.affine_source;
+  if (report.topology.closing_radius_cells > 0)
+    line += ", handles removed by closing (radius " + std::to_string(report.topology.closing_radius_cells) + " cells)";
   line += " -> " + *out;
   vpm::cli::info(line);
   return 0;

@@ -27,47 +27,53 @@ double median(std::vector<double> v) {
   return v.empty() ? 0 : v[v.size() / 2];
 }
 
+// The stage's time in `rep`, or null when it did not run.
+const vpm::StageTime* stage(const vpm::MeshImageReport& rep, const std::string& name) {
+  for (const vpm::StageTime& t : rep.timings)
+    if (t.stage == name) return &t;
+  return nullptr;
+}
+
 vpm::Json run_case(const std::string& name, const vpm::Image& img, const vpm::Image* atlas,
                    const vpm::MeshImageOptions& o, int runs) {
   std::vector<double> totals, cpus;
-  vpm::Json last, times = vpm::Json::array();
+  vpm::MeshImageReport last;
+  vpm::Json times = vpm::Json::array();
   for (int r = 0; r < runs; ++r) {
-    vpm::Json rep;
+    vpm::MeshImageReport rep;
     vpm::mesh_image(img, o, &rep, atlas);
-    totals.push_back(rep["timings_s"]["total"].number());
-    cpus.push_back(rep["cpu_s"]["total"].number());
-    times.push_back(rep["timings_s"]);
+    totals.push_back(stage(rep, "total")->wall_s);
+    cpus.push_back(stage(rep, "total")->cpu_s);
+    vpm::Json wall = vpm::Json::object();
+    for (const vpm::StageTime& t : rep.timings) wall[t.stage] = t.wall_s;
+    times.push_back(wall);
     last = rep;
   }
-  vpm::Json& m = last["mesh"];
+  const vpm::MeshImageReport::Mesh& m = last.mesh;
   std::printf("\n== %s (%d run%s) ==\n", name.c_str(), runs, runs > 1 ? "s" : "");
   std::printf("vertices %d, tets %d, boundary vertices %d, smallest dihedral %.2f deg, largest %.2f deg\n",
-              int(m["vertices"].number()), int(m["tets"].number()), int(m["boundary_vertices"].number()),
-              m["min_dihedral_deg"].number(), m["max_dihedral_deg"].number());
+              m.vertices, m.tets, m.boundary_vertices, m.min_dihedral_deg, m.max_dihedral_deg);
   std::printf("boundary Euler %d, four-boundary-vertex tets %d (interior points added %d)\n",
-              int(m["boundary_euler"].number()), int(m["four_boundary_vertex_tets"].number()),
-              int(m["interior_points_added"].number()));
+              m.boundary_euler, m.four_boundary_vertex_tets, m.interior_points_added);
   std::printf("surface: %d triangles, angles %.2f .. %.2f deg, mean edge %.2f mm; topology: genus before %d, closing radius %d\n",
-              int(last["surface"]["triangles"].number()), last["surface"]["min_angle_deg"].number(),
-              last["surface"]["max_angle_deg"].number(), last["surface"]["mean_edge_mm"].number(),
-              int(last["topology"]["genus_before"].number()), int(last["topology"]["closing_radius_cells"].number()));
+              last.surface.triangles, last.surface.min_angle_deg, last.surface.max_angle_deg,
+              last.surface.mean_edge_mm, last.topology.genus_before, last.topology.closing_radius_cells);
   std::printf("times (last run, wall/cpu s):");
   for (const char* k : {"mask", "grid", "topology", "extract", "remesh", "tetgen", "labels", "total"})
-    if (last["timings_s"].find(k))
-      std::printf(" %s %.2f/%.2f", k, last["timings_s"][k].number(), last["cpu_s"][k].number());
+    if (const vpm::StageTime* t = stage(last, k)) std::printf(" %s %.2f/%.2f", k, t->wall_s, t->cpu_s);
   std::printf("\nmedian total %.2f s wall, %.2f s cpu over %d run(s)\n", median(totals), median(cpus), runs);
   vpm::Json out = vpm::Json::object();
   out["runs"] = runs;
   out["median_total_s"] = median(totals);
   out["median_total_cpu_s"] = median(cpus);
   out["timings_per_run"] = times;
-  out["report"] = last;
+  out["report"] = vpm::to_json(last);
   if (atlas) {
     vpm::Json lab = vpm::Json::object();
     for (int i = 0; i < 4; ++i) {
-      const vpm::Json* e = last["labels"].find(std::to_string(kLabels[i]));
-      if (!e) continue;
-      const double vol = e->find("volume_mm3")->number(), vox = e->find("voxel_volume_mm3")->number();
+      const auto e = last.labels.find(kLabels[i]);
+      if (e == last.labels.end()) continue;
+      const double vol = e->second.volume_mm3, vox = e->second.voxel_volume_mm3;
       std::printf("%-11s label %d: mesh %.0f mm^3, voxels %.0f mm^3, %+.1f %%\n", kNames[i], kLabels[i], vol, vox,
                   100 * (vol / vox - 1));
       vpm::Json& l = lab[kNames[i]];

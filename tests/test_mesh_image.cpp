@@ -164,9 +164,9 @@ TEST_CASE("bad masks: empty, touching the border, atlas on another grid") {
   {  // with close_at_border the cut is capped and the mesh is a genus-0 solid
     MeshImageOptions oc = o;
     oc.close_at_border = true;
-    Json rep;
+    MeshImageReport rep;
     const TetMesh m = mesh_image(touch, oc, &rep);
-    CHECK(rep["input"]["border_voxels"].number() > 0);
+    CHECK(rep.input.border_voxels > 0);
     CHECK(euler_of_boundary(m) == 2);
   }
   const Image other = ball_image(31, 9);
@@ -188,12 +188,12 @@ TEST_CASE("a ball mask gives a genus-0 mesh with quality bounds") {
   }, a);
   MeshImageOptions o;
   o.target_vertices = 1500;
-  Json rep;
+  MeshImageReport rep;
   const TetMesh m = mesh_image(img, o, &rep);
-  CHECK(rep["topology"]["euler_before"].number() == 2);
-  CHECK(rep["topology"]["closing_radius_cells"].number() == 0);
-  CHECK(rep["surface"]["euler"].number() == 2);
-  CHECK(rep["surface"]["min_angle_deg"].number() >= 20.0);   // remeshed, not marching cubes
+  CHECK(rep.topology.euler_before == 2);
+  CHECK(rep.topology.closing_radius_cells == 0);
+  CHECK(rep.surface.euler == 2);
+  CHECK(rep.surface.min_angle_deg >= 20.0);   // remeshed, not marching cubes
   CHECK(euler_of_boundary(m) == 2);
   CHECK(count_four_boundary_vertex_tets(m) == 0);
   const auto dih = dihedral_angles_deg(m.vertices, m.tets);
@@ -202,7 +202,7 @@ TEST_CASE("a ball mask gives a genus-0 mesh with quality bounds") {
   CHECK(vol.minCoeff() > 0);
   const double sphere = 4.0 / 3.0 * M_PI * 13 * 13 * 13;
   CHECK(vol.sum() == Approx(sphere).epsilon(0.08));
-  CHECK(rep["mesh"]["surface_volume_mm3"].number() > 0);
+  CHECK(rep.mesh.surface_volume_mm3 > 0);
   // world coordinates: centre at the affine image of the voxel centre
   const Eigen::Vector3d centre = m.vertices.colwise().mean().transpose();
   CHECK((centre - img.to_world(Eigen::Vector3d(c, c, c))).norm() < 1.0);
@@ -227,11 +227,11 @@ TEST_CASE("a mask with a handle is repaired by closing, or refused") {
   CHECK(e.find("closing") != std::string::npos);
 
   o.max_closing_radius = 6;
-  Json rep;
+  MeshImageReport rep;
   const TetMesh m = mesh_image(img, o, &rep);
-  CHECK(rep["topology"]["genus_before"].number() == 1);
-  CHECK(rep["topology"]["closing_radius_cells"].number() >= 1);
-  CHECK(rep["topology"]["repairs"].size() >= 1);
+  CHECK(rep.topology.genus_before == 1);
+  CHECK(rep.topology.closing_radius_cells >= 1);
+  CHECK(rep.topology.repairs.size() >= 1);
   CHECK(euler_of_boundary(m) == 2);
   CHECK(count_four_boundary_vertex_tets(m) == 0);
 }
@@ -250,7 +250,7 @@ TEST_CASE("atlas labels: labelled volumes match the voxel counts") {
   });
   MeshImageOptions o;
   o.max_volume = 1.0;
-  Json rep;
+  MeshImageReport rep;
   const TetMesh m = mesh_image(img, o, &rep, &atlas);
   const Field* cf = m.find_cell_field("label");
   const Field* pf = m.find_point_field("label");
@@ -263,8 +263,8 @@ TEST_CASE("atlas labels: labelled volumes match the voxel counts") {
   std::map<int, double> by;
   for (int t = 0; t < m.num_tets(); ++t) by[int(cf->values(t, 0))] += vol[t];
   CHECK(by[3] == Approx(12 * 12 * 12).epsilon(0.10));
-  CHECK(by[5] == Approx(rep["labels"]["5"]["voxels"].number()).epsilon(0.10));
-  CHECK(rep["labels"]["3"]["volume_mm3"].number() == Approx(by[3]));
+  CHECK(by[5] == Approx(rep.labels.at(5).voxels).epsilon(0.10));
+  CHECK(rep.labels.at(3).volume_mm3 == Approx(by[3]));
   // vertices deep inside the cube carry its label
   int inside = 0, agree = 0;
   for (int v = 0; v < m.num_vertices(); ++v) {
@@ -309,7 +309,7 @@ TEST_CASE("a closed surface file is meshed, an open one is refused") {
   }
   MeshImageOptions o;
   o.target_vertices = 600;
-  Json rep;
+  MeshImageReport rep;
   const TetMesh m = mesh_image_file(path, o, &rep);
   CHECK(euler_of_boundary(m) == 2);
   CHECK(count_four_boundary_vertex_tets(m) == 0);
@@ -330,20 +330,20 @@ TEST_CASE("Colin27 at the paper's size with AAL labels") {
     WARN("mricron-data is not installed: Colin27 run skipped");
     return;
   }
-  Json rep;
+  MeshImageReport rep;
   const TetMesh m = mesh_image_file(kMricron + "ch2bet.nii.gz", MeshImageOptions{}, &rep, kMricron + "aal.nii.gz");
-  CHECK(rep["input"]["affine_source"].string() == "sform");
+  CHECK(rep.input.affine_source == "sform");
   CHECK(m.num_vertices() > 4000);
   CHECK(m.num_vertices() < 6500);
   CHECK(euler_of_boundary(m) == 2);
   CHECK(count_four_boundary_vertex_tets(m) == 0);
   CHECK(dihedral_angles_deg(m.vertices, m.tets).minCoeff() >= 8.0);
-  CHECK(rep["surface"]["min_angle_deg"].number() >= 20.0);
+  CHECK(rep.surface.min_angle_deg >= 20.0);
   const std::map<int, double> voxels = {{71, 7682}, {72, 7941}, {77, 8700}, {78, 8399}};
   for (auto [l, n] : voxels) {
     INFO("label " << l);
-    CHECK(rep["labels"][std::to_string(l)]["voxels"].number() == n);
-    CHECK(rep["labels"][std::to_string(l)]["volume_mm3"].number() == Approx(n).epsilon(0.10));
+    CHECK(rep.labels.at(l).voxels == n);
+    CHECK(rep.labels.at(l).volume_mm3 == Approx(n).epsilon(0.10));
   }
 }
 
@@ -356,17 +356,17 @@ TEST_CASE("mesh-image --label meshes one structure of a label image: AAL thalamu
   MeshImageOptions o;
   o.select_labels = {77};  // Thalamus_L, 8,700 voxels of 1 mm^3
   o.target_vertices = 1500;
-  Json rep;
+  MeshImageReport rep;
   const TetMesh m = mesh_image_file(kMricron + "aal.nii.gz", o, &rep);
   CHECK(euler_of_boundary(m) == 2);
-  CHECK(rep["input"]["mask_voxels"].number() == 8700);
+  CHECK(rep.input.mask_voxels == 8700);
   CHECK(tet_volumes(m.vertices, m.tets).sum() == Approx(8700).epsilon(0.10));
   // its centroid is where the left thalamus is (x < 0 in MNI space), not the whole brain's
   Eigen::RowVector3d c = m.vertices.colwise().mean();
   CHECK(c(0) < -5);
   // two labels (left and right thalamus) form two components: the largest is kept
   o.select_labels = {77, 78};
-  Json rep2;
+  MeshImageReport rep2;
   const TetMesh both = mesh_image_file(kMricron + "aal.nii.gz", o, &rep2);
   CHECK(euler_of_boundary(both) == 2);
   // a label the image does not have is a clear error

@@ -237,7 +237,7 @@ int split_four_boundary_vertex_tets(TetMesh& mesh, int* centroid_splits) {
 
 }  // namespace
 
-TetMesh tetrahedralize_surface(const TriSurface& surface, const TetgenOptions& options, Json* info) {
+TetMesh tetrahedralize_surface(const TriSurface& surface, const TetgenOptions& options, TetgenInfo* info) {
   char num[64];
   std::string sw = "pq";
   std::snprintf(num, sizeof num, "%g/%g", options.radius_edge, options.min_dihedral_deg);
@@ -289,11 +289,11 @@ TetMesh tetrahedralize_surface(const TriSurface& surface, const TetgenOptions& o
     std::fprintf(stderr, "after %d splits (%d centroid): min dihedral %.3f, %d left\n", splits, centroids, dih.minCoeff(), bad);
   }
   if (info) {
-    (*info)["edge_splits"] = splits;
-    (*info)["switches"] = sw;
-    (*info)["fix_rounds"] = rounds;
-    (*info)["interior_points_added"] = int(extra.size());
-    (*info)["four_boundary_vertex_tets"] = bad;
+    info->edge_splits = splits;
+    info->switches = sw;
+    info->fix_rounds = rounds;
+    info->interior_points_added = int(extra.size());
+    info->four_boundary_vertex_tets = bad;
   }
   return mesh;
 }

@@ -16,12 +16,14 @@
 // Coordinates are world millimetres (NIfTI sform/qform). Report keys are listed at
 // mesh_image().
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
+#include "vpm/error.hpp"
 #include "vpm/image.hpp"
-#include "vpm/json.hpp"
 #include "vpm/mesh.hpp"
+#include "vpm/mesh_image_report.hpp"
 
 namespace vpm {
 
@@ -56,42 +58,61 @@ struct MeshImageOptions {
   std::function<void(const std::string&)> progress;
 };
 
+/// An input that the mesh-image settings cannot mesh, with the setting that would help.
+/// what() is the full message in library terms (field names of MeshImageOptions); context()
+/// is the fact alone, so that a caller can name its own controls for the remedy.
+class MeshImageError : public InputError {
+ public:
+  enum class Problem {
+    kTooFewTargetVertices,  ///< target_vertices < 10; context: the value
+    kAtlasWithSurface,      ///< an atlas given with a surface input; context: the surface path
+    kMaskTouchesBorder,     ///< mask on the image border without close_at_border; context: the
+                            ///< message up to the remedy (image, voxel, world position)
+    kMaskVanishes,          ///< smoothing removed the whole mask; context: the message up to the
+                            ///< remedy (image, sigma)
+  };
+  MeshImageError(Problem problem, std::string context, const std::string& message);
+  Problem problem() const { return problem_; }
+  const std::string& context() const { return context_; }
+
+ private:
+  Problem problem_;
+  std::string context_;
+};
+
 /// Meshes the mask of `image` (voxels > options.threshold). When `atlas` is given, it must be
 /// on the same grid (dims and affine within 1e-3 mm; else InputError) and labels are attached:
 /// cell field "label" = atlas label at each tet's centroid (nearest voxel, through the atlas's
 /// own affine; 0 outside), point field "label" = majority label of the vertex's tets.
 ///
-/// `report` (if given) receives: "input" {path, dims, spacing_mm, affine_source, threshold,
-/// mask_voxels, mask_volume_mm3}, "parameters" {target_edge_mm, grid_mm, smooth_sigma_mm,
-/// max_volume_mm3, tetgen_switches}, "topology" {euler_before, genus_before, closing_radius,
-/// repairs: [...], euler}, "surface" {vertices, triangles, min_angle_deg, max_angle_deg,
-/// euler}, "mesh" {vertices, tets, boundary_vertices, boundary_faces, min_dihedral_deg,
-/// max_dihedral_deg, four_boundary_vertex_tets, volume_mm3, interior_points_added},
-/// "labels" {label: {tets, volume_mm3, voxels, voxel_volume_mm3}} (with an atlas),
-/// "timings_s" {read, mask, grid, topology, extract, remesh, tetgen, labels, total}.
+/// `report` (if given) receives the input, the parameters chosen, the topology repairs, the
+/// extracted and remeshed surfaces, the mesh quality, the label volumes (with an atlas) and
+/// the stage times mask, grid, topology, extract, remesh, tetgen, labels, total
+/// (vpm/mesh_image_report.hpp; to_json() gives the report file).
 ///
-/// Throws InputError for an empty mask, a mask touching the image border, an atlas on another
-/// grid, or a mask whose handles cannot be closed (genus > 0 after the largest closing radius);
+/// Throws InputError for an empty mask, an atlas on another grid, MeshImageError for a mask
+/// touching the image border (without close_at_border) or vanishing after smoothing, or a mask whose handles cannot be closed (genus > 0 after the largest closing radius);
 /// NumericalError when TetGen fails on the remeshed surface.
-TetMesh mesh_image(const Image& image, const MeshImageOptions& options, Json* report = nullptr,
+TetMesh mesh_image(const Image& image, const MeshImageOptions& options, MeshImageReport* report = nullptr,
                    const Image* atlas = nullptr);
 
 /// Reads `image_path` (NIfTI) or a closed surface (.off/.obj/.stl) and meshes it; with
-/// `labels_path` non-empty reads that atlas and labels the mesh. Same report as above.
+/// `labels_path` non-empty reads that atlas and labels the mesh (MeshImageError
+/// kAtlasWithSurface for a surface input). Same report as above, plus timings_s.read.
 TetMesh mesh_image_file(const std::string& image_path, const MeshImageOptions& options,
-                        Json* report = nullptr, const std::string& labels_path = "");
+                        MeshImageReport* report = nullptr, const std::string& labels_path = "");
 
 /// Meshes the solid bounded by a closed, oriented, genus-0 triangle surface (world mm):
 /// isotropic remeshing, then TetGen, as above. InputError if the surface is open,
-/// non-manifold, disconnected or of higher genus.
+/// non-manifold, disconnected or of higher genus. `report` as above, with image_input false.
 TetMesh mesh_surface(const TriSurface& surface, const MeshImageOptions& options,
-                     Json* report = nullptr, const std::string& source = "surface");
+                     MeshImageReport* report = nullptr, const std::string& source = "surface");
 
 // ---- building blocks (exposed for tests and benchmarks) --------------------------------
 
-/// Attaches "label" cell and point fields from `atlas` (see mesh_image). Returns, per label,
-/// {tets, volume_mm3} (labels are the JSON keys as decimal strings).
-Json label_mesh(TetMesh& mesh, const Image& atlas);
+/// Attaches "label" cell and point fields from `atlas` (see mesh_image). Returns, per label
+/// found (0 included), tets and volume_mm3 (voxels fields left 0).
+std::map<int, LabelVolume> label_mesh(TetMesh& mesh, const Image& atlas);
 
 /// Isotropic remeshing of a closed manifold surface to `edge_length` (CGAL
 /// Polygon_mesh_processing::isotropic_remeshing, then angle-and-area smoothing), keeping its
@@ -110,14 +131,22 @@ struct TetgenOptions {
   int fix_rounds = 0;           ///< rounds of interior point insertion against four-boundary-vertex tets
 };
 
+/// What tetrahedralize_surface() did.
+struct TetgenInfo {
+  std::string switches;               ///< TetGen command-line switches used, e.g. "pq1.5/12a2.1YzQ"
+  int fix_rounds = 0;                 ///< rounds of interior point insertion run
+  int edge_splits = 0;                ///< interior edges split afterwards
+  int interior_points_added = 0;      ///< points inserted over all rounds
+  int four_boundary_vertex_tets = 0;  ///< such tets left at the end
+};
+
 /// Tetrahedralises the solid bounded by a closed surface with TetGen (linked as a library);
 /// then, for up to `fix_rounds`, inserts the centroids of tets whose four vertices all lie on
 /// the boundary and re-meshes, then splits the longest interior edge of any such tet left
-/// (midpoint). `info` (if given) receives {switches, fix_rounds, edge_splits,
-/// interior_points_added, four_boundary_vertex_tets}. Throws NumericalError if TetGen fails
+/// (midpoint). `info` (if given) receives what was done. Throws NumericalError if TetGen fails
 /// (e.g. a self-intersecting surface) and InputError when vpm was built without TetGen.
 TetMesh tetrahedralize_surface(const TriSurface& surface, const TetgenOptions& options,
-                               Json* info = nullptr);
+                               TetgenInfo* info = nullptr);
 
 /// Number of tets whose four vertices are all boundary vertices.
 int count_four_boundary_vertex_tets(const TetMesh& mesh);
