@@ -15,7 +15,7 @@ PUBLIC = {
     "mesh": ["mesh", "topology", "geometry", "validate", "metrics", "locate", "icosphere", "mesh_stats"],
     "io": ["io", "landmarks"],
     "linalg": ["sparse", "laplacian", "solver"],
-    "image": ["image", "mesh_image"],
+    "image": ["image", "mesh_image", "mesh_image_report"],
     "map": ["initial_map", "untangle", "volume_map", "ball_map"],
     "register": ["rbf", "registration"],
     "collective": ["collective", "elements", "sampling", "statistics", "map_back"],
