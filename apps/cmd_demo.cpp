@@ -202,9 +202,9 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   report["device"] = dev.name();
   report["data"] = data.string();
   report["subjects"] = subjects;
-  Json jr = registration_summary(reg, rm);
+  Json jr = to_json(registration_summary(reg, rm));
   jr["landmarks"] = static_cast<long>(landmark_labels.size());
-  jr["rotation_deg"] = *reg.report.find("rotation_deg");
+  jr["rotation_deg"] = reg.report.rotation_deg;
   report["registration"] = jr;
   Json jd = Json::array();
   for (size_t i = 0; i < kEvaluated.size(); ++i) {

@@ -1,7 +1,6 @@
 // vpm register MAPPED -o OUT --landmarks SRC.csv --targets DST.csv: volume-preserving
 // landmark registration of a mesh already mapped to the unit ball (paper section 5).
 #include <chrono>
-#include <regex>
 #include <sstream>
 
 #include "cli.hpp"
@@ -49,8 +48,12 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   opt.width_factor = args.get_double("--width-factor", opt.width_factor);
   if (!(opt.width_factor > 0)) throw InputError("--width-factor: must be positive");
   opt.width_loo = args.has("--width-loo");
-  opt.boundary = parse_registration_boundary(args.get("--boundary", "tangent"));
-  opt.field = parse_registration_field(args.get("--field", "per-step"));
+  try {
+    opt.boundary = parse_registration_boundary(args.get("--boundary", "tangent"));
+    opt.field = parse_registration_field(args.get("--field", "per-step"));
+  } catch (const RegistrationInputError& e) {
+    throw InputError("--" + e.option + ": " + e.problem);
+  }
   opt.boundary_samples = args.get_int("--boundary-samples", opt.boundary_samples);
   if (opt.boundary_samples < 1) throw InputError("--boundary-samples: must be positive");
   opt.rigid = !args.has("--no-rigid");
@@ -81,19 +84,15 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   t0 = Clock::now();
   try {
     res = register_landmarks(dev, ball, mesh.tets, lm.points, tg.points, opt);
-  } catch (const InputError& e) {
-    std::string msg = e.what();
-    if (msg.rfind("mesh", 0) == 0) throw InputError(in + ": " + msg);
-    std::smatch m;
-    if (std::regex_search(msg, m, std::regex("^landmark ([0-9]+)"))) {
-      const size_t i = std::stoul(m[1]) - 1;
-      if (i < lm.lines.size())
-        msg = *src + ":" + std::to_string(lm.lines[i]) + " / " + *dst + ":" +
-              std::to_string(tg.lines[i]) + ": " + msg;
-    } else {
-      msg = *src + ", " + *dst + ": " + msg;
-    }
-    throw InputError(msg);
+  } catch (const RegistrationInputError& e) {
+    using Subject = RegistrationInputError::Subject;
+    const size_t i = static_cast<size_t>(e.landmark);
+    if (e.subject == Subject::Mesh) throw InputError(in + ": " + e.what() + " (run `vpm map` first)");
+    if (e.subject == Subject::Landmark && e.landmark >= 0 && i < lm.lines.size())
+      throw InputError(*src + ":" + std::to_string(lm.lines[i]) + " / " + *dst + ":" + std::to_string(tg.lines[i]) +
+                       ": " + e.what());
+    if (e.subject == Subject::Option) throw InputError("--" + e.option + ": " + e.problem);
+    throw InputError(*src + ", " + *dst + ": " + e.what());
   }
   const double t_register = seconds_since(t0);
 
@@ -125,11 +124,11 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
     input["tets"] = mesh.num_tets();
     input["landmarks"] = static_cast<long>(lm.points.rows());
     r["input"] = input;
-    const Json summary = registration_summary(res, mm);
+    const Json summary = to_json(registration_summary(res, mm));
     for (const char* k : {"landmark_rms_error", "landmark_max_error", "max_normal_velocity", "inverted_tets",
                           "vertex_volume_ratio", "tet_volume_ratio", "boundary_max_radius_error"})
       r[k] = *summary.find(k);
-    r["registration"] = res.report;
+    r["registration"] = to_json(res);
     Json timings = Json::object();
     timings["read"] = t_read;
     timings["register"] = t_register;

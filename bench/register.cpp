@@ -107,10 +107,9 @@ Json run_case(const Case& c, const TetMesh& m) {
       std::printf("%-22s %8d  FAILED: %s\n", c.name.c_str(), m.num_tets(), e.what());
       return j;
     }
-    const Json& tm = *res.report.find("timings_s");
-    total.push_back(tm.find("total")->number());
-    advect.push_back(tm.find("advect")->number());
-    fit.push_back(tm.find("fit")->number());
+    total.push_back(res.report.timings.total);
+    advect.push_back(res.report.timings.advect);
+    fit.push_back(res.report.timings.fit);
   }
   const MapMetrics mm = map_metrics(*dev, m.vertices, x, m.tets);
   // how many inverted tets are flat outer-layer tets with all four vertices on the sphere
@@ -124,8 +123,7 @@ Json run_case(const Case& c, const TetMesh& m) {
       inverted_flat += all;
     }
   }
-  const double centres = static_cast<double>(res.report.find("fit")->find("samples_per_field")->number() +
-                                             res.report.find("fit")->find("boundary_constraints")->number());
+  const double centres = static_cast<double>(res.report.fit.samples_per_field + res.report.fit.boundary_constraints);
   const double evals = static_cast<double>(x.rows() + p.rows()) * centres * 4.0 * c.opt.steps;
   j["runs"] = c.runs;
   j["time_s_median"] = median(total);
@@ -139,19 +137,19 @@ Json run_case(const Case& c, const TetMesh& m) {
   j["landmark_rms_error"] = res.landmark_rms_error;
   j["landmark_max_error"] = res.landmark_max_error;
   j["max_normal_velocity"] = res.max_normal_velocity;
-  j["width"] = res.report.find("width")->number();
-  j["folded_by_flow"] = res.report.find("folded_by_flow")->number();
-  if (const Json* u = res.report.find("untangle")) j["untangle"] = *u;
+  j["width"] = res.report.width;
+  j["folded_by_flow"] = res.report.folded_by_flow;
+  if (res.report.untangle) j["untangle"] = to_json(*res.report.untangle);
   j["inverted_tets"] = mm.inverted_tets;
   j["inverted_tets_all_vertices_on_sphere"] = inverted_flat;
   j["vertex_volume_ratio"] = to_json(mm.vertex_volume_ratio);
   j["tet_volume_ratio"] = to_json(mm.tet_volume_ratio);
   j["boundary_max_radius_error"] = mm.boundary_max_radius_error;
-  j["report"] = res.report;
+  j["report"] = to_json(res);
   std::printf("%-22s %8d %9.2e %9.2e %8.3f%% %8.3f%% %4d %4d/%-3d %9.1e %8.3f %8.3f %9.2e\n", c.name.c_str(),
               m.num_tets(), res.landmark_rms_error, res.landmark_max_error,
               100 * mm.vertex_volume_ratio.mean_abs_dev, 100 * mm.tet_volume_ratio.mean_abs_dev,
-              static_cast<int>(res.report.find("folded_by_flow")->number()), mm.inverted_tets, inverted_flat, res.max_normal_velocity, median(total), median(advect),
+              res.report.folded_by_flow, mm.inverted_tets, inverted_flat, res.max_normal_velocity, median(total), median(advect),
               evals / median(advect));
   std::fflush(stdout);
   return j;

@@ -108,31 +108,24 @@ Points evaluate(Device& dev, const DivFreeField& field, const Points& points) {
   bc::vector<double> da(a.data(), a.data() + a.size(), q);
   bc::vector<double> du(static_cast<size_t>(points.size()), dev.context());
   auto k = dev.kernel("register", "eval_field");
-  k.set_arg(0, static_cast<int>(points.rows()));
-  k.set_arg(1, dx);
-  k.set_arg(2, static_cast<int>(nc));
-  k.set_arg(3, dc);
-  k.set_arg(4, da);
-  k.set_arg(5, field.lambda);
-  k.set_arg(6, field.kernel == RbfKernel::Tangent ? 1 : 0);
-  k.set_arg(7, du);
+  k.set_args(static_cast<int>(points.rows()), dx, static_cast<int>(nc), dc, da, field.lambda,
+             field.kernel == RbfKernel::Tangent ? 1 : 0, du);
   dev.launch(k, static_cast<size_t>(points.rows()));
   Points out(points.rows(), 3);
   bc::copy(du.begin(), du.end(), out.data(), q);
   return out;
 }
 
-DivFreeField fit_divfree(const Points& points_in, const Points& velocities_in,
-                         const RbfFitOptions& opt, RbfFitInfo* info) {
-  if (points_in.rows() != velocities_in.rows())
-    throw InputError("fit_divfree: " + std::to_string(points_in.rows()) + " points but " +
-                     std::to_string(velocities_in.rows()) + " velocities");
-  if (!(opt.lambda > 0)) throw InputError("fit_divfree: lambda must be positive");
-  // Merge near-duplicate samples (greedy clusters around the first unassigned sample).
+namespace {
+
+/// Merges near-duplicate samples (greedy clusters around the first unassigned sample) into
+/// `p`, `v`: each cluster's mean point and mean velocity.
+void merge_samples(const Points& points_in, const Points& velocities_in, double merge_distance, Points& p,
+                   Points& v) {
   const Eigen::Index n0 = points_in.rows();
   std::vector<int> cluster(static_cast<size_t>(n0), -1);
-  std::vector<int> count;
-  Points p(n0, 3), v(n0, 3);
+  p.resize(n0, 3);
+  v.resize(n0, 3);
   int nc = 0;
   for (Eigen::Index i = 0; i < n0; ++i) {
     if (cluster[static_cast<size_t>(i)] >= 0) continue;
@@ -141,7 +134,7 @@ DivFreeField fit_divfree(const Points& points_in, const Points& velocities_in,
     int members = 0;
     for (Eigen::Index j = i; j < n0; ++j) {
       if (cluster[static_cast<size_t>(j)] >= 0) continue;
-      if (j != i && (points_in.row(j) - points_in.row(i)).norm() > opt.merge_distance) continue;
+      if (j != i && (points_in.row(j) - points_in.row(i)).norm() > merge_distance) continue;
       cluster[static_cast<size_t>(j)] = nc;
       p.row(nc) += points_in.row(j);
       v.row(nc) += velocities_in.row(j);
@@ -153,7 +146,61 @@ DivFreeField fit_divfree(const Points& points_in, const Points& velocities_in,
   }
   p.conservativeResize(nc, 3);
   v.conservativeResize(nc, 3);
+}
 
+/// The blocks of the normal-cancelling constraints at sphere points `s` (eq. 29) in the
+/// system matrix `a`, whose first 3 x p.rows() rows and columns hold the sample Gram matrix.
+void add_boundary_constraints(Eigen::MatrixXd& a, const Points& p, const Points& s, double lambda) {
+  const Eigen::Index nc = p.rows();
+  for (Eigen::Index j = 0; j < s.rows(); ++j) {
+    const Eigen::Vector3d sj = s.row(j).transpose(), nj = sj.normalized();
+    for (Eigen::Index i = 0; i < nc; ++i) {
+      const Eigen::Vector3d col = divfree_kernel(p.row(i).transpose() - sj, lambda) * nj;
+      a.block<3, 1>(3 * i, 3 * nc + j) = col;
+      a.block<1, 3>(3 * nc + j, 3 * i) = col.transpose();
+    }
+    for (Eigen::Index k = 0; k <= j; ++k) {
+      const Eigen::Vector3d sk = s.row(k).transpose(), nk = sk.normalized();
+      const double e = nj.dot(divfree_kernel(sj - sk, lambda) * nk);
+      a(3 * nc + j, 3 * nc + k) = e;
+      a(3 * nc + k, 3 * nc + j) = e;
+    }
+  }
+}
+
+/// Solves the symmetric positive definite system a x = rhs by Cholesky, with a small ridge
+/// when that fails (then `regularised`); NumericalError when even that fails.
+Eigen::VectorXd solve_gram(Eigen::MatrixXd& a, const Eigen::VectorXd& rhs, double lambda, Eigen::Index samples,
+                           bool& regularised) {
+  const Eigen::Index dim = a.rows();
+  Eigen::LLT<Eigen::MatrixXd> llt(a);
+  if (llt.info() != Eigen::Success) {
+    const double ridge = 1e-12 * a.diagonal().mean();
+    a.diagonal().array() += ridge;
+    llt.compute(a);
+    regularised = true;
+    if (llt.info() != Eigen::Success) {
+      std::ostringstream msg;
+      msg << "divergence-free interpolation: the " << dim << " x " << dim
+          << " Gram matrix is not positive definite even with a ridge (lambda " << lambda << ", " << samples
+          << " samples): samples too close for this width";
+      throw NumericalError(msg.str());
+    }
+  }
+  return llt.solve(rhs);
+}
+
+}  // namespace
+
+DivFreeField fit_divfree(const Points& points_in, const Points& velocities_in,
+                         const RbfFitOptions& opt, RbfFitInfo* info) {
+  if (points_in.rows() != velocities_in.rows())
+    throw InputError("fit_divfree: " + std::to_string(points_in.rows()) + " points but " +
+                     std::to_string(velocities_in.rows()) + " velocities");
+  if (!(opt.lambda > 0)) throw InputError("fit_divfree: lambda must be positive");
+  Points p, v;
+  merge_samples(points_in, velocities_in, opt.merge_distance, p, v);
+  const int nc = static_cast<int>(p.rows());
   const bool with_boundary = opt.kernel == RbfKernel::Free && opt.boundary_samples.rows() > 0;
   const Eigen::Index nb = with_boundary ? opt.boundary_samples.rows() : 0;
   const Eigen::Index dim = 3 * nc + nb;
@@ -161,24 +208,11 @@ DivFreeField fit_divfree(const Points& points_in, const Points& velocities_in,
   a.topLeftCorner(3 * nc, 3 * nc) = gram(p, opt.kernel, opt.lambda);
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(dim);
   for (int i = 0; i < nc; ++i) rhs.segment<3>(3 * i) = v.row(i).transpose();
-  const Points& s = opt.boundary_samples;
-  for (Eigen::Index j = 0; j < nb; ++j) {
-    const Eigen::Vector3d sj = s.row(j).transpose(), nj = sj.normalized();
-    for (int i = 0; i < nc; ++i) {
-      const Eigen::Vector3d col = divfree_kernel(p.row(i).transpose() - sj, opt.lambda) * nj;
-      a.block<3, 1>(3 * i, 3 * nc + j) = col;
-      a.block<1, 3>(3 * nc + j, 3 * i) = col.transpose();
-    }
-    for (Eigen::Index k = 0; k <= j; ++k) {
-      const Eigen::Vector3d sk = s.row(k).transpose(), nk = sk.normalized();
-      const double e = nj.dot(divfree_kernel(sj - sk, opt.lambda) * nk);
-      a(3 * nc + j, 3 * nc + k) = e;
-      a(3 * nc + k, 3 * nc + j) = e;
-    }
-  }
+  const Points s = opt.boundary_samples.topRows(nb);
+  add_boundary_constraints(a, p, s, opt.lambda);
   RbfFitInfo local;
   local.samples = nc;
-  local.merged = static_cast<int>(n0 - nc);
+  local.merged = static_cast<int>(points_in.rows() - nc);
   local.boundary_constraints = static_cast<int>(nb);
   if (opt.estimate_condition && dim > 0) {
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(a, Eigen::EigenvaluesOnly);
@@ -186,23 +220,7 @@ DivFreeField fit_divfree(const Points& points_in, const Points& velocities_in,
     local.condition = lo > 0 ? hi / lo : std::numeric_limits<double>::infinity();
   }
   Eigen::VectorXd sol;
-  if (dim > 0) {
-    Eigen::LLT<Eigen::MatrixXd> llt(a);
-    if (llt.info() != Eigen::Success) {
-      const double ridge = 1e-12 * a.diagonal().mean();
-      a.diagonal().array() += ridge;
-      llt.compute(a);
-      local.regularised = true;
-      if (llt.info() != Eigen::Success) {
-        std::ostringstream msg;
-        msg << "divergence-free interpolation: the " << dim << " x " << dim
-            << " Gram matrix is not positive definite even with a ridge (lambda " << opt.lambda
-            << ", " << nc << " samples): samples too close for this width";
-        throw NumericalError(msg.str());
-      }
-    }
-    sol = llt.solve(rhs);
-  }
+  if (dim > 0) sol = solve_gram(a, rhs, opt.lambda, nc, local.regularised);
   DivFreeField f;
   f.kernel = opt.kernel;
   f.lambda = opt.lambda;
