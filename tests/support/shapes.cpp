@@ -1,7 +1,12 @@
 #include "support/shapes.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <random>
+#include <vector>
+
+#include <Eigen/Geometry>
 
 #include "support/fixtures.hpp"
 #include "vpm/geometry.hpp"
@@ -84,6 +89,66 @@ TetMesh dumbbell_mesh(int n) {
     m.vertices.row(i) << x, rad * y, rad * z;
   }
   fix_orientation(m);
+  return m;
+}
+
+TetMesh voxel_ellipsoid_mesh(long target_tets, unsigned seed) {
+  const double a = 1.8, b = 1.0, c = 0.6;
+  const double h = std::cbrt(6.0 * (4.0 * M_PI / 3.0) * a * b * c / double(target_tets));
+  const int nx = int(std::ceil(2 * a / h)) + 1, ny = int(std::ceil(2 * b / h)) + 1,
+            nz = int(std::ceil(2 * c / h)) + 1;
+  auto inside = [&](double x, double y, double z) {
+    return (x / a) * (x / a) + (y / b) * (y / b) + (z / c) * (z / c) <= 1.0;
+  };
+  // grid of (nx+1)(ny+1)(nz+1) points centred on the origin
+  const double ox = -0.5 * nx * h, oy = -0.5 * ny * h, oz = -0.5 * nz * h;
+  const long sx = nx + 1, sy = ny + 1, sz = nz + 1;
+  std::vector<int> id(size_t(sx * sy * sz), -1);
+  auto gid = [&](long i, long j, long k) { return i + sx * (j + sy * k); };
+  static constexpr int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  std::vector<std::array<int, 4>> tets;
+  std::vector<std::array<double, 3>> pts;
+  for (long k = 0; k < nz; ++k)
+    for (long j = 0; j < ny; ++j)
+      for (long i = 0; i < nx; ++i) {
+        if (!inside(ox + (i + 0.5) * h, oy + (j + 0.5) * h, oz + (k + 0.5) * h)) continue;
+        for (const auto& p : perms) {
+          long cc[3] = {i, j, k};
+          std::array<int, 4> t;
+          for (int q = 0; q < 4; ++q) {
+            if (q > 0) ++cc[p[q - 1]];
+            const long g = gid(cc[0], cc[1], cc[2]);
+            if (id[g] < 0) {
+              id[g] = int(pts.size());
+              pts.push_back({ox + cc[0] * h, oy + cc[1] * h, oz + cc[2] * h});
+            }
+            t[q] = id[g];
+          }
+          tets.push_back(t);
+        }
+      }
+  TetMesh m;
+  m.vertices.resize(long(pts.size()), 3);
+  for (size_t i = 0; i < pts.size(); ++i) m.vertices.row(long(i)) << pts[i][0], pts[i][1], pts[i][2];
+  m.tets.resize(long(tets.size()), 4);
+  for (size_t t = 0; t < tets.size(); ++t) {
+    const auto& v = tets[t];
+    const Eigen::Vector3d p0 = m.vertices.row(v[0]);
+    const Eigen::Vector3d e1 = m.vertices.row(v[1]).transpose() - p0;
+    const Eigen::Vector3d e2 = m.vertices.row(v[2]).transpose() - p0;
+    const Eigen::Vector3d e3 = m.vertices.row(v[3]).transpose() - p0;
+    if (e1.dot(e2.cross(e3)) < 0) m.tets.row(long(t)) << v[0], v[1], v[3], v[2];
+    else m.tets.row(long(t)) << v[0], v[1], v[2], v[3];
+  }
+  // jitter the interior vertices: those with all 24 incident tets of a Kuhn grid
+  std::vector<int> count(pts.size(), 0);
+  for (const auto& t : tets)
+    for (int v : t) ++count[v];
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-0.15 * h, 0.15 * h);
+  for (size_t i = 0; i < pts.size(); ++i)
+    if (count[i] == 24)
+      m.vertices.row(long(i)) += Eigen::RowVector3d(u(rng), u(rng), u(rng));
   return m;
 }
 

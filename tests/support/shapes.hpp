@@ -20,4 +20,11 @@ TetMesh bent_mesh(int n);
 /// goes 0.6 -> 0.25 (neck in the middle) -> 0.6.
 TetMesh dumbbell_mesh(int n);
 
+/// Convex, irregular (the solver benchmark's problems): the cells of a grid of spacing h whose
+/// centre lies inside the ellipsoid (x/1.8)^2 + y^2 + (z/0.6)^2 <= 1, each Kuhn-subdivided into
+/// 6 positively oriented tets, with h chosen so that about `target_tets` tets result; interior
+/// vertices (24 incident tets) jittered by up to 0.15 h in each coordinate, drawn from
+/// std::mt19937(seed). Vertices are numbered in order of first use, cells in x-fastest order.
+TetMesh voxel_ellipsoid_mesh(long target_tets, unsigned seed = 1);
+
 }  // namespace vpm::test
