@@ -165,7 +165,7 @@ int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boun
 }
 
 Json untangle_json(const InitialUntangle& u) {
-  Json j = u.result.to_json();
+  Json j = to_json(u.result);
   j["scope"] = u.local ? "local" : "global";
   if (u.local) j["rings"] = u.rings;
   return j;

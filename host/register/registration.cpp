@@ -53,7 +53,7 @@ Json to_json(const RegistrationSummary& s) {
 }
 
 Json to_json(const RegistrationUntangle& u) {
-  Json j = u.result.to_json();
+  Json j = to_json(u.result);
   j["folded_by_flow"] = u.folded_by_flow;
   j["seconds"] = u.seconds;
   return j;

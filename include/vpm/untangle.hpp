@@ -75,8 +75,9 @@ struct UntangleResult {
   double seconds = 0;
   bool out_of_time = false;  ///< stopped by options.max_seconds
   std::vector<int> inverted_tets;  ///< indices (into `tets`) of all tets still inverted after
-  Json to_json() const;            ///< the scalar fields above, plus the first inverted tets
 };
+/// The scalar fields above (same names), plus "inverted_tets_first": the first 20 inverted tets.
+Json to_json(const UntangleResult& result);
 
 /// Untangles the map `x` (n x 3, updated in place) of the mesh (`reference`, n x 3;
 /// `tets`, m x 4 positively oriented on `reference`), moving only vertices with
