@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include "vpm/error.hpp"
+#include "vpm/io.hpp"
 
 namespace vpm::cli {
 
@@ -83,6 +84,19 @@ std::string help_text(const Command& c) {
   }
   s += "every command also takes --quiet (no messages) and --verbose (progress lines)\n";
   return s;
+}
+
+MeshInOut mesh_in_out(const Args& args, const Command& command) {
+  const std::string usage = synopsis(command);
+  args.expect_positional(1, usage);
+  MeshInOut io;
+  io.in = args.positional()[0];
+  const auto out = args.get("-o");
+  if (!out) throw InputError("missing -o OUT; usage: " + usage);
+  io.out = *out;
+  if (!is_mesh_path(io.in)) throw InputError(io.in + ": unknown mesh file extension");
+  if (!is_mesh_path(io.out)) throw InputError(io.out + ": unknown mesh file extension for the output");
+  return io;
 }
 
 std::optional<std::string> Args::get(const std::string& opt) const {

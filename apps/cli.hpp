@@ -34,6 +34,13 @@ class Args {
   std::map<std::string, std::string> values_;
 };
 
+/// The MESH operand and -o OUT of a mesh-to-mesh command, both checked to be mesh files by
+/// extension (InputError naming the file, or the usage when either is missing).
+struct MeshInOut {
+  std::string in, out;
+};
+MeshInOut mesh_in_out(const Args& args, const Command& command);
+
 /// Runs `parse` (a library parser of an option's value, e.g. parse_volume_map_method) and
 /// prefixes an InputError it throws with "option FLAG: ", so the message names the flag.
 template <class F>

@@ -32,6 +32,7 @@ namespace fs = std::filesystem;
 using vpm::Clock;
 using vpm::seconds_since;
 using vpm::strprintf;
+using vpm::Points;
 
 
 // Regions whose overlap is measured; they are never used as landmarks (held out).
@@ -80,188 +81,252 @@ std::map<int, std::string> aal_names(const std::string& path) {
 }
 
 
-// Meshes, maps and writes one subject; returns the map and fills `report`.
-vpm::BallMap mesh_and_map(vpm::Device& dev, const vpm::Image& image, const vpm::Image& atlas,
-                          const vpm::MeshImageOptions& mo, const std::string& name, const fs::path& out,
-                          vpm::Json& report) {
+// One subject meshed and mapped.
+struct Subject {
+  vpm::BallMap map;
+  int vertices = 0, tets = 0;
+  double min_dihedral_deg = 0, mesh_seconds = 0, map_seconds = 0;
+};
+
+vpm::Json to_json(const Subject& s) {
+  vpm::Json j = vpm::Json::object();
+  j["vertices"] = s.vertices;
+  j["tets"] = s.tets;
+  j["min_dihedral_deg"] = s.min_dihedral_deg;
+  j["mesh_seconds"] = s.mesh_seconds;
+  j["map_seconds"] = s.map_seconds;
+  j["initial"] = vpm::to_json(s.map.initial);
+  j["final"] = vpm::to_json(s.map.final);
+  return j;
+}
+
+// Meshes, maps and writes one subject (NAME.vtu, NAME_ball.vtu, NAME_map.json).
+Subject mesh_and_map(vpm::Device& dev, const vpm::Image& image, const vpm::Image& atlas,
+                     const vpm::MeshImageOptions& mo, const std::string& name, const fs::path& out) {
+  Subject s;
   auto t0 = Clock::now();
   vpm::TetMesh mesh = vpm::mesh_image(image, mo, nullptr, &atlas);
-  const double t_mesh = seconds_since(t0);
+  s.mesh_seconds = seconds_since(t0);
   vpm::write_mesh((out / (name + ".vtu")).string(), mesh);
   const vpm::ValidationReport vr = vpm::validate_mesh(mesh, name);
   vpm::cli::info("demo: " + name + ": " + std::to_string(mesh.num_vertices()) + " vertices, " +
                  std::to_string(mesh.num_tets()) + " tets, smallest dihedral " +
-                 strprintf("%.1f", vr.min_dihedral_deg) + " deg (" + strprintf("%.1f", t_mesh) + " s); mapping");
+                 strprintf("%.1f", vr.min_dihedral_deg) + " deg (" + strprintf("%.1f", s.mesh_seconds) + " s); mapping");
   t0 = Clock::now();
   vpm::BallMapOptions bo;
-  bo.volume.progress = [&](const std::string& s) { vpm::cli::progress("demo: " + name + ": " + s); };
-  vpm::BallMap bm = vpm::map_to_ball(dev, mesh, vr, name, bo);
-  const double t_map = seconds_since(t0);
-  vpm::write_mesh((out / (name + "_ball.vtu")).string(), bm.mesh);
-  vpm::write_json_file((out / (name + "_map.json")).string(), vpm::to_json(bm));
-  report = vpm::Json::object();
-  report["vertices"] = mesh.num_vertices();
-  report["tets"] = mesh.num_tets();
-  report["min_dihedral_deg"] = vr.min_dihedral_deg;
-  report["mesh_seconds"] = t_mesh;
-  report["map_seconds"] = t_map;
-  report["initial"] = vpm::to_json(bm.initial);
-  report["final"] = vpm::to_json(bm.final);
-  return bm;
+  bo.volume.progress = [&](const std::string& line) { vpm::cli::progress("demo: " + name + ": " + line); };
+  s.map = vpm::map_to_ball(dev, mesh, vr, name, bo);
+  s.map_seconds = seconds_since(t0);
+  vpm::write_mesh((out / (name + "_ball.vtu")).string(), s.map.mesh);
+  vpm::write_json_file((out / (name + "_map.json")).string(), vpm::to_json(s.map));
+  s.vertices = mesh.num_vertices();
+  s.tets = mesh.num_tets();
+  s.min_dihedral_deg = vr.min_dihedral_deg;
+  return s;
+}
+
+struct Settings {
+  fs::path out, data;
+  int grid = 96;
+  vpm::RegistrationOptions registration;
+  vpm::MeshImageOptions meshing;
+};
+
+Settings parse_settings(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
+  vpm::cli::Args args(argv, self);
+  args.expect_positional(0, "usage: " + vpm::cli::synopsis(self));
+  Settings s;
+  s.out = args.get("--out", "out/demo");
+  s.data = args.get("--data", "/usr/share/mricron/templates");
+  s.grid = args.get_int("--grid", 96);
+  if (s.grid < 8 || s.grid > 512) throw vpm::InputError("--grid: expected 8 to 512 cells a side");
+  s.registration.width_factor = args.get_double("--width-factor", s.registration.width_factor);
+  if (!(s.registration.width_factor > 0)) throw vpm::InputError("--width-factor: must be positive");
+  s.meshing.target_vertices = args.get_int("--target-vertices", s.meshing.target_vertices);
+  if (s.meshing.target_vertices < 100) throw vpm::InputError("--target-vertices: expected at least 100");
+  s.meshing.progress = [](const std::string& line) { vpm::cli::progress("demo: mesh-image: " + line); };
+  for (const fs::path& p : {s.data / "ch2bet.nii.gz", s.data / "aal.nii.gz"})
+    if (!fs::exists(p))
+      throw vpm::InputError(p.string() + ": not found (Debian's mricron-data ships it: run scripts/setup.sh)");
+  std::error_code ec;
+  fs::create_directories(s.out, ec);
+  if (ec) throw vpm::InputError(s.out.string() + ": cannot create the output folder: " + ec.message());
+  return s;
+}
+
+// Landmarks: the AAL regions both maps carry, held-out regions excluded.
+std::vector<int> landmark_labels(const std::vector<int>& lab_t, const std::vector<int>& lab_s) {
+  const std::set<int> present_t(lab_t.begin(), lab_t.end()), present_s(lab_s.begin(), lab_s.end());
+  std::vector<int> out;
+  for (int l : present_t)
+    if (l > 0 && present_s.count(l) && std::find(kEvaluated.begin(), kEvaluated.end(), l) == kEvaluated.end())
+      out.push_back(l);
+  return out;
+}
+
+struct Registration {
+  vpm::RegistrationResult result;
+  vpm::MapMetrics metrics;  // against the subject's map before registration
+  Points registered;
+  int landmarks = 0;
+  double seconds = 0;
+};
+
+// Registers the subject's ball to the template's by region centroids; writes the landmark
+// files and subject_registered.vtu.
+Registration register_subject(vpm::Device& dev, const Subject& tmpl, const Subject& subj, const Settings& st) {
+  const std::vector<int> lab_t = vpm::cell_labels(tmpl.map.mesh), lab_s = vpm::cell_labels(subj.map.mesh);
+  const std::vector<int> labels = landmark_labels(lab_t, lab_s);
+  const vpm::TetMesh& sm = subj.map.mesh;
+  const Points src = vpm::label_centroids(sm.vertices, sm.tets, lab_s, labels);
+  const Points dst = vpm::label_centroids(tmpl.map.mesh.vertices, tmpl.map.mesh.tets, lab_t, labels);
+  vpm::write_landmarks_csv((st.out / "landmarks.csv").string(), src);
+  vpm::write_landmarks_csv((st.out / "targets.csv").string(), dst);
+  vpm::cli::info("demo: registering subject to colin27 by " + std::to_string(labels.size()) + " region centroids");
+  Registration r;
+  r.landmarks = static_cast<int>(labels.size());
+  const auto t0 = Clock::now();
+  r.registered = sm.vertices;
+  r.result = vpm::register_landmarks(dev, r.registered, sm.tets, src, dst, st.registration);
+  r.seconds = seconds_since(t0);
+  r.metrics = vpm::map_metrics(dev, sm.vertices, r.registered, sm.tets);
+  vpm::TetMesh reg_mesh = sm;
+  reg_mesh.vertices = r.registered;
+  reg_mesh.set_point_field("registration_vertex_volume_ratio", r.metrics.vertex_ratio);
+  reg_mesh.set_cell_field("registration_tet_volume_ratio", r.metrics.tet_ratio);
+  vpm::write_mesh((st.out / "subject_registered.vtu").string(), reg_mesh);
+  return r;
+}
+
+// Dice of the held-out regions and the mean Dice of the landmark regions, before and after.
+struct Overlap {
+  long points = 0;
+  std::vector<vpm::LabelOverlap> before, after;  // per kEvaluated region
+  double landmark_before = 0, landmark_after = 0;
+  double seconds = 0;
+};
+
+double mean_dice(const std::vector<vpm::LabelOverlap>& v) {
+  double s = 0;
+  for (const auto& o : v) s += o.dice;
+  return v.empty() ? 0.0 : s / v.size();
+}
+
+Overlap measure_overlap(const Subject& tmpl, const Subject& subj, const Registration& reg, int grid) {
+  const auto t0 = Clock::now();
+  const std::vector<int> lab_t = vpm::cell_labels(tmpl.map.mesh), lab_s = vpm::cell_labels(subj.map.mesh);
+  const std::vector<int> labels = landmark_labels(lab_t, lab_s);
+  const Points samples = vpm::ball_grid_points(grid);
+  const auto& tm = tmpl.map.mesh;
+  const auto& sm = subj.map.mesh;
+  const std::vector<int> s_t = vpm::sample_labels(tm.vertices, tm.tets, lab_t, samples);
+  const std::vector<int> s_before = vpm::sample_labels(sm.vertices, sm.tets, lab_s, samples);
+  const std::vector<int> s_after = vpm::sample_labels(reg.registered, sm.tets, lab_s, samples);
+  Overlap o;
+  o.points = static_cast<long>(samples.rows());
+  o.before = vpm::dice_overlap(s_t, s_before, kEvaluated);
+  o.after = vpm::dice_overlap(s_t, s_after, kEvaluated);
+  o.landmark_before = mean_dice(vpm::dice_overlap(s_t, s_before, labels));
+  o.landmark_after = mean_dice(vpm::dice_overlap(s_t, s_after, labels));
+  o.seconds = seconds_since(t0);
+  return o;
+}
+
+using Names = std::map<int, std::string>;
+std::string name_of(const Names& names, int l) { return names.count(l) ? names.at(l) : "label " + std::to_string(l); }
+
+vpm::Json demo_json(const std::string& device, const Settings& st, const Subject& tmpl, const Subject& subj,
+                    const Registration& reg, const Overlap& ov, const Names& names, vpm::Json timings) {
+  vpm::Json report = vpm::Json::object();
+  report["device"] = device;
+  report["data"] = st.data.string();
+  report["subjects"]["colin27"] = to_json(tmpl);
+  report["subjects"]["subject"] = to_json(subj);
+  vpm::Json jr = vpm::to_json(vpm::registration_summary(reg.result, reg.metrics));
+  jr["landmarks"] = static_cast<long>(reg.landmarks);
+  jr["rotation_deg"] = reg.result.report.rotation_deg;
+  report["registration"] = jr;
+  vpm::Json jd = vpm::Json::array();
+  for (size_t i = 0; i < kEvaluated.size(); ++i) {
+    vpm::Json o = vpm::Json::object();
+    o["label"] = kEvaluated[i];
+    o["name"] = name_of(names, kEvaluated[i]);
+    o["dice_before"] = ov.before[i].dice;
+    o["dice_after"] = ov.after[i].dice;
+    jd.push_back(o);
+  }
+  vpm::Json jo = vpm::Json::object();
+  jo["grid_cells_per_axis"] = st.grid;
+  jo["sample_points"] = ov.points;
+  jo["held_out"] = jd;
+  jo["landmark_regions_mean_dice_before"] = ov.landmark_before;
+  jo["landmark_regions_mean_dice_after"] = ov.landmark_after;
+  report["overlap"] = jo;
+  report["timings_s"] = timings;
+  return report;
+}
+
+std::string two_pcts(const char* f, const vpm::MapMetrics& m) {
+  return strprintf(f, 100 * m.vertex_volume_ratio.mean_abs_dev) + " / " + strprintf(f, 100 * m.tet_volume_ratio.mean_abs_dev);
+}
+
+// The summary table (stdout).
+void print_summary(const std::string& device, const Settings& st, const Subject& t, const Subject& s,
+                   const Registration& reg, const Overlap& ov, const Names& names, double total) {
+  std::ostringstream out;
+  auto row = [&](const std::string& what, const std::string& a, const std::string& b) {
+    out << strprintf("  %-34s %14s %14s\n", what.c_str(), a.c_str(), b.c_str());
+  };
+  out << "vpm demo on " << device << " (Colin27 + AAL from " << st.data.string() << ")\n";
+  row("", "colin27", "subject");
+  row("mesh vertices / tets", std::to_string(t.vertices) + "/" + std::to_string(t.tets),
+      std::to_string(s.vertices) + "/" + std::to_string(s.tets));
+  row("smallest dihedral angle (deg)", strprintf("%.1f", t.min_dihedral_deg), strprintf("%.1f", s.min_dihedral_deg));
+  row("initial map: vertex / tet |r-1|", two_pcts("%.1f%%", t.map.initial), two_pcts("%.1f%%", s.map.initial));
+  row("volume map: vertex / tet |r-1|", two_pcts("%.2f%%", t.map.final), two_pcts("%.2f%%", s.map.final));
+  row("inverted tets", std::to_string(t.map.final.inverted_tets), std::to_string(s.map.final.inverted_tets));
+  row("mesh + map seconds", strprintf("%.1f", t.mesh_seconds) + " + " + strprintf("%.1f", t.map_seconds),
+      strprintf("%.1f", s.mesh_seconds) + " + " + strprintf("%.1f", s.map_seconds));
+  out << "registration of subject to colin27: " << reg.landmarks << " region centroids, landmark rms "
+      << strprintf("%.1e", reg.result.landmark_rms_error) << ", max |u.n| " << strprintf("%.1e", reg.result.max_normal_velocity)
+      << ", vertex / tet |r-1| " << two_pcts("%.2f%%", reg.metrics) << ", " << reg.metrics.inverted_tets << " inverted, "
+      << strprintf("%.1f", reg.seconds) << " s\n";
+  out << "Dice with colin27 in the ball (" << ov.points << " points; held-out regions):\n";
+  row("", "before", "after");
+  for (size_t i = 0; i < kEvaluated.size(); ++i)
+    row(name_of(names, kEvaluated[i]), strprintf("%.3f", ov.before[i].dice), strprintf("%.3f", ov.after[i].dice));
+  row("mean of the landmark regions", strprintf("%.3f", ov.landmark_before), strprintf("%.3f", ov.landmark_after));
+  out << "total " << strprintf("%.1f", total) << " s; wrote " << (st.out / "demo.json").string()
+      << " and the meshes (.vtu, open in ParaView) in " << st.out.string() << "\n";
+  std::cout << out.str();
 }
 
 int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
-  const std::string kUsage = vpm::cli::synopsis(self);
-  using namespace vpm;
-  cli::Args args(argv, self);
-  args.expect_positional(0, std::string("usage: ") + kUsage);
-  const fs::path out = args.get("--out", "out/demo");
-  const fs::path data = args.get("--data", "/usr/share/mricron/templates");
-  const int grid = args.get_int("--grid", 96);
-  if (grid < 8 || grid > 512) throw InputError("--grid: expected 8 to 512 cells a side");
-  RegistrationOptions ro;
-  ro.width_factor = args.get_double("--width-factor", ro.width_factor);
-  if (!(ro.width_factor > 0)) throw InputError("--width-factor: must be positive");
-  MeshImageOptions mo;
-  mo.target_vertices = args.get_int("--target-vertices", mo.target_vertices);
-  if (mo.target_vertices < 100) throw InputError("--target-vertices: expected at least 100");
-  mo.progress = [](const std::string& s) { cli::progress("demo: mesh-image: " + s); };
-  const fs::path image_path = data / "ch2bet.nii.gz", atlas_path = data / "aal.nii.gz";
-  for (const fs::path& p : {image_path, atlas_path})
-    if (!fs::exists(p))
-      throw InputError(p.string() + ": not found (Debian's mricron-data ships it: run scripts/setup.sh)");
-  std::error_code ec;
-  fs::create_directories(out, ec);
-  if (ec) throw InputError(out.string() + ": cannot create the output folder: " + ec.message());
-
+  const Settings st = parse_settings(self, argv);
   const auto t_start = Clock::now();
-  Device& dev = Device::current();
-  Json timings = Json::object();
+  vpm::Device& dev = vpm::Device::current();
+  vpm::Json timings = vpm::Json::object();
   auto t0 = Clock::now();
-  const Image image = read_nifti(image_path.string());
-  const Image atlas = read_nifti(atlas_path.string());
+  const vpm::Image image = vpm::read_nifti((st.data / "ch2bet.nii.gz").string());
+  const vpm::Image atlas = vpm::read_nifti((st.data / "aal.nii.gz").string());
   const Eigen::Vector3d centre = mask_centroid(image);
   const auto pull = [&](const Eigen::Vector3d& x) { return deformation(centre, x); };
-  const Image image_b = resample_image(image, pull, Interpolation::linear);
-  const Image atlas_b = resample_image(atlas, pull, Interpolation::nearest);
+  const vpm::Image image_b = vpm::resample_image(image, pull, vpm::Interpolation::linear);
+  const vpm::Image atlas_b = vpm::resample_image(atlas, pull, vpm::Interpolation::nearest);
   timings["read_and_deform"] = seconds_since(t0);
 
-  // 1-3. Mesh and map both subjects.
-  Json subjects = Json::object();
-  const BallMap tmpl = mesh_and_map(dev, image, atlas, mo, "colin27", out, subjects["colin27"]);
-  const BallMap subj = mesh_and_map(dev, image_b, atlas_b, mo, "subject", out, subjects["subject"]);
+  const Subject tmpl = mesh_and_map(dev, image, atlas, st.meshing, "colin27", st.out);
+  const Subject subj = mesh_and_map(dev, image_b, atlas_b, st.meshing, "subject", st.out);
+  const Registration reg = register_subject(dev, tmpl, subj, st);
+  timings["register"] = reg.seconds;
+  const Overlap ov = measure_overlap(tmpl, subj, reg, st.grid);
+  timings["overlap"] = ov.seconds;
+  const double total = seconds_since(t_start);
+  timings["total"] = total;
 
-  // 4. Landmarks: centroids of the AAL regions both maps carry (evaluated regions held out).
-  const std::vector<int> lab_t = cell_labels(tmpl.mesh), lab_s = cell_labels(subj.mesh);
-  std::set<int> present_t(lab_t.begin(), lab_t.end()), present_s(lab_s.begin(), lab_s.end());
-  std::vector<int> landmark_labels;
-  for (int l : present_t)
-    if (l > 0 && present_s.count(l) && std::find(kEvaluated.begin(), kEvaluated.end(), l) == kEvaluated.end())
-      landmark_labels.push_back(l);
-  const Points src = label_centroids(subj.mesh.vertices, subj.mesh.tets, lab_s, landmark_labels);
-  const Points dst = label_centroids(tmpl.mesh.vertices, tmpl.mesh.tets, lab_t, landmark_labels);
-  write_landmarks_csv((out / "landmarks.csv").string(), src);
-  write_landmarks_csv((out / "targets.csv").string(), dst);
-
-  // 5. Register the subject's ball to the template's.
-  cli::info("demo: registering subject to colin27 by " + std::to_string(landmark_labels.size()) +
-            " region centroids");
-  t0 = Clock::now();
-  Points registered = subj.mesh.vertices;
-  const RegistrationResult reg = register_landmarks(dev, registered, subj.mesh.tets, src, dst, ro);
-  timings["register"] = seconds_since(t0);
-  const MapMetrics rm = map_metrics(dev, subj.mesh.vertices, registered, subj.mesh.tets);
-  TetMesh reg_mesh = subj.mesh;
-  reg_mesh.vertices = registered;
-  reg_mesh.set_point_field("registration_vertex_volume_ratio", rm.vertex_ratio);
-  reg_mesh.set_cell_field("registration_tet_volume_ratio", rm.tet_ratio);
-  write_mesh((out / "subject_registered.vtu").string(), reg_mesh);
-
-  // 6. Overlap in the common ball, before and after registration.
-  t0 = Clock::now();
-  const Points samples = ball_grid_points(grid);
-  const std::vector<int> s_t = sample_labels(tmpl.mesh.vertices, tmpl.mesh.tets, lab_t, samples);
-  const std::vector<int> s_before = sample_labels(subj.mesh.vertices, subj.mesh.tets, lab_s, samples);
-  const std::vector<int> s_after = sample_labels(registered, subj.mesh.tets, lab_s, samples);
-  const auto d_before = dice_overlap(s_t, s_before, kEvaluated);
-  const auto d_after = dice_overlap(s_t, s_after, kEvaluated);
-  const auto l_before = dice_overlap(s_t, s_before, landmark_labels);
-  const auto l_after = dice_overlap(s_t, s_after, landmark_labels);
-  timings["overlap"] = seconds_since(t0);
-  timings["total"] = seconds_since(t_start);
-
-  const std::map<int, std::string> names = aal_names((data / "aal.nii.txt").string());
-  auto name_of = [&](int l) { return names.count(l) ? names.at(l) : "label " + std::to_string(l); };
-  auto mean_dice = [](const std::vector<LabelOverlap>& v) {
-    double s = 0;
-    for (const auto& o : v) s += o.dice;
-    return v.empty() ? 0.0 : s / v.size();
-  };
-
-  Json report = Json::object();
-  report["device"] = dev.name();
-  report["data"] = data.string();
-  report["subjects"] = subjects;
-  Json jr = to_json(registration_summary(reg, rm));
-  jr["landmarks"] = static_cast<long>(landmark_labels.size());
-  jr["rotation_deg"] = reg.report.rotation_deg;
-  report["registration"] = jr;
-  Json jd = Json::array();
-  for (size_t i = 0; i < kEvaluated.size(); ++i) {
-    Json o = Json::object();
-    o["label"] = kEvaluated[i];
-    o["name"] = name_of(kEvaluated[i]);
-    o["dice_before"] = d_before[i].dice;
-    o["dice_after"] = d_after[i].dice;
-    jd.push_back(o);
-  }
-  Json jo = Json::object();
-  jo["grid_cells_per_axis"] = grid;
-  jo["sample_points"] = static_cast<long>(samples.rows());
-  jo["held_out"] = jd;
-  jo["landmark_regions_mean_dice_before"] = mean_dice(l_before);
-  jo["landmark_regions_mean_dice_after"] = mean_dice(l_after);
-  report["overlap"] = jo;
-  report["timings_s"] = timings;
-  write_json_file((out / "demo.json").string(), report);
-
-  // The summary table (stdout).
-  std::ostringstream t;
-  auto row = [&](const std::string& what, const std::string& a, const std::string& b) {
-    char line[160];
-    std::snprintf(line, sizeof line, "  %-34s %14s %14s\n", what.c_str(), a.c_str(), b.c_str());
-    t << line;
-  };
-  const Json& js_t = *subjects.find("colin27");
-  const Json& js_s = *subjects.find("subject");
-  auto num = [](const Json& j, const char* k) { return j.find(k)->number(); };
-  t << "vpm demo on " << dev.name() << " (Colin27 + AAL from " << data.string() << ")\n";
-  row("", "colin27", "subject");
-  row("mesh vertices / tets", std::to_string(int(num(js_t, "vertices"))) + "/" + std::to_string(int(num(js_t, "tets"))),
-      std::to_string(int(num(js_s, "vertices"))) + "/" + std::to_string(int(num(js_s, "tets"))));
-  row("smallest dihedral angle (deg)", strprintf("%.1f", num(js_t, "min_dihedral_deg")), strprintf("%.1f", num(js_s, "min_dihedral_deg")));
-  row("initial map: vertex / tet |r-1|",
-      strprintf("%.1f%%", 100 * tmpl.initial.vertex_volume_ratio.mean_abs_dev) + " / " + strprintf("%.1f%%", 100 * tmpl.initial.tet_volume_ratio.mean_abs_dev),
-      strprintf("%.1f%%", 100 * subj.initial.vertex_volume_ratio.mean_abs_dev) + " / " + strprintf("%.1f%%", 100 * subj.initial.tet_volume_ratio.mean_abs_dev));
-  row("volume map: vertex / tet |r-1|",
-      strprintf("%.2f%%", 100 * tmpl.final.vertex_volume_ratio.mean_abs_dev) + " / " + strprintf("%.2f%%", 100 * tmpl.final.tet_volume_ratio.mean_abs_dev),
-      strprintf("%.2f%%", 100 * subj.final.vertex_volume_ratio.mean_abs_dev) + " / " + strprintf("%.2f%%", 100 * subj.final.tet_volume_ratio.mean_abs_dev));
-  row("inverted tets", std::to_string(tmpl.final.inverted_tets), std::to_string(subj.final.inverted_tets));
-  row("mesh + map seconds", strprintf("%.1f", num(js_t, "mesh_seconds")) + " + " + strprintf("%.1f", num(js_t, "map_seconds")),
-      strprintf("%.1f", num(js_s, "mesh_seconds")) + " + " + strprintf("%.1f", num(js_s, "map_seconds")));
-  t << "registration of subject to colin27: " << landmark_labels.size() << " region centroids, landmark rms "
-    << strprintf("%.1e", reg.landmark_rms_error) << ", max |u.n| " << strprintf("%.1e", reg.max_normal_velocity)
-    << ", vertex / tet |r-1| " << strprintf("%.2f%%", 100 * rm.vertex_volume_ratio.mean_abs_dev) << " / "
-    << strprintf("%.2f%%", 100 * rm.tet_volume_ratio.mean_abs_dev) << ", " << rm.inverted_tets << " inverted, "
-    << strprintf("%.1f", num(timings, "register")) << " s\n";
-  t << "Dice with colin27 in the ball (" << samples.rows() << " points; held-out regions):\n";
-  row("", "before", "after");
-  for (size_t i = 0; i < kEvaluated.size(); ++i)
-    row(name_of(kEvaluated[i]), strprintf("%.3f", d_before[i].dice), strprintf("%.3f", d_after[i].dice));
-  row("mean of the landmark regions", strprintf("%.3f", mean_dice(l_before)), strprintf("%.3f", mean_dice(l_after)));
-  t << "total " << strprintf("%.1f", num(timings, "total")) << " s; wrote " << (out / "demo.json").string()
-    << " and the meshes (.vtu, open in ParaView) in " << out.string() << "\n";
-  std::cout << t.str();
+  const Names names = aal_names((st.data / "aal.nii.txt").string());
+  vpm::write_json_file((st.out / "demo.json").string(), demo_json(dev.name(), st, tmpl, subj, reg, ov, names, timings));
+  print_summary(dev.name(), st, tmpl, subj, reg, ov, names, total);
   return 0;
 }
 

@@ -15,14 +15,9 @@
 namespace {
 
 int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
-  const std::string kUsage = vpm::cli::synopsis(self);
   vpm::cli::Args args(argv, self);
-  args.expect_positional(1, kUsage);
-  const std::string in = args.positional()[0];
-  const auto out = args.get("-o");
-  if (!out) throw vpm::InputError(std::string("missing -o OUT; usage: ") + kUsage);
-  if (!vpm::is_mesh_path(in)) throw vpm::InputError(in + ": unknown mesh file extension");
-  if (!vpm::is_mesh_path(*out)) throw vpm::InputError(*out + ": unknown mesh file extension for the output");
+  const vpm::cli::MeshInOut io = vpm::cli::mesh_in_out(args, self);
+  const std::string& in = io.in;
   vpm::InitialMapOptions opt;
   const std::string u = args.get("--untangle", "if-folded");
   if (u == "never") opt.untangle = vpm::InitialMapOptions::Untangle::Never;
@@ -49,8 +44,8 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   outm.cell_data = im.mesh.cell_data;
   outm.set_point_field("vertex_volume_ratio", mm.vertex_ratio);
   outm.set_cell_field("tet_volume_ratio", mm.tet_ratio);
-  vpm::write_mesh(*out, outm);
-  vpm::cli::info("wrote " + *out + ": " + std::to_string(outm.num_vertices()) + " vertices, " +
+  vpm::write_mesh(io.out, outm);
+  vpm::cli::info("wrote " + io.out + ": " + std::to_string(outm.num_vertices()) + " vertices, " +
                  std::to_string(outm.num_tets()) + " tets; vertex mean |r-1| " +
                  vpm::pct(mm.vertex_volume_ratio.mean_abs_dev) + ", tet " + vpm::pct(mm.tet_volume_ratio.mean_abs_dev) +
                  ", harmonic folds " + std::to_string(im.report.folds_before_untangle) + " -> 0");

@@ -19,14 +19,9 @@ using vpm::seconds_since;
 
 
 int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
-  const std::string kUsage = vpm::cli::synopsis(self);
   vpm::cli::Args args(argv, self);
-  args.expect_positional(1, kUsage);
-  const std::string in = args.positional()[0];
-  const auto out = args.get("-o");
-  if (!out) throw vpm::InputError(std::string("missing -o OUT; usage: ") + kUsage);
-  if (!vpm::is_mesh_path(in)) throw vpm::InputError(in + ": unknown mesh file extension");
-  if (!vpm::is_mesh_path(*out)) throw vpm::InputError(*out + ": unknown mesh file extension for the output");
+  const vpm::cli::MeshInOut io = vpm::cli::mesh_in_out(args, self);
+  const std::string& in = io.in;
 
   vpm::VolumeMapOptions vo;
   vo.rounds = args.get_int("--rounds", -1);
@@ -57,14 +52,14 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   vpm::BallMap bm = vpm::map_to_ball(dev, mesh, vr, in, bo);
 
   t0 = Clock::now();
-  vpm::write_mesh(*out, bm.mesh);
+  vpm::write_mesh(io.out, bm.mesh);
   vpm::Json report = vpm::to_json(bm);
   vpm::Json& timings = report["timings_s"];
   timings["read"] = t_read;
   timings["write"] = seconds_since(t0);
   timings["total"] = seconds_since(t_start);
 
-  vpm::cli::info("wrote " + *out + ": " + std::to_string(bm.mesh.num_vertices()) + " vertices, " +
+  vpm::cli::info("wrote " + io.out + ": " + std::to_string(bm.mesh.num_vertices()) + " vertices, " +
                  std::to_string(bm.mesh.num_tets()) + " tets; vertex mean |r-1| " +
                  vpm::pct(bm.initial.vertex_volume_ratio.mean_abs_dev) + " -> " +
                  vpm::pct(bm.final.vertex_volume_ratio.mean_abs_dev) + ", tet " +
