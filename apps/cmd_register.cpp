@@ -14,28 +14,13 @@
 
 namespace {
 
+using namespace vpm;
 
-
-int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
-  const std::string kUsage = vpm::cli::synopsis(self);
-  using namespace vpm;
-  const auto t_start = Clock::now();
-  cli::Args args(argv, self);
-  args.expect_positional(1, kUsage);
-  const std::string in = args.positional()[0];
-  const auto out = args.get("-o");
-  const auto src = args.get("--landmarks");
-  const auto dst = args.get("--targets");
-  if (!out || !src || !dst)
-    throw InputError(std::string("missing ") + (!out ? "-o OUT" : !src ? "--landmarks SRC.csv" : "--targets DST.csv") +
-                     "; usage: " + kUsage);
-  if (!is_mesh_path(*out)) throw InputError(*out + ": unknown file extension for a tet mesh");
-
+RegistrationOptions parse_options(const cli::Args& args) {
   RegistrationOptions opt;
   opt.steps = args.get_int("--steps", opt.steps);
   if (opt.steps < 1 || opt.steps > 100000) throw InputError("--steps: expected 1 to 100000");
-  if (args.has("--width") && args.has("--lambda"))
-    throw InputError("--width and --lambda both given; use one");
+  if (args.has("--width") && args.has("--lambda")) throw InputError("--width and --lambda both given; use one");
   if (args.has("--width")) {
     const double w = args.get_double("--width", 0);
     if (!(w > 0)) throw InputError("--width: must be positive (ball units)");
@@ -59,84 +44,121 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   opt.rigid = !args.has("--no-rigid");
   opt.untangle = !args.has("--no-untangle");
   opt.restore_volumes = !args.has("--no-restore");
+  return opt;
+}
 
-  auto t0 = Clock::now();
-  TetMesh mesh = read_mesh(in);
-  for (int t = 0; t < mesh.num_tets(); ++t)
+// The mapped mesh and its landmark files, checked against each other.
+struct Inputs {
+  std::string in, out, src, dst;
+  TetMesh mesh;
+  LandmarkFile landmarks, targets;
+};
+
+Inputs read_inputs(const cli::Args& args, const cli::Command& self) {
+  const std::string usage = cli::synopsis(self);
+  args.expect_positional(1, usage);
+  Inputs io;
+  io.in = args.positional()[0];
+  const auto out = args.get("-o");
+  const auto src = args.get("--landmarks");
+  const auto dst = args.get("--targets");
+  if (!out || !src || !dst)
+    throw InputError(std::string("missing ") + (!out ? "-o OUT" : !src ? "--landmarks SRC.csv" : "--targets DST.csv") +
+                     "; usage: " + usage);
+  io.out = *out;
+  io.src = *src;
+  io.dst = *dst;
+  if (!is_mesh_path(io.out)) throw InputError(io.out + ": unknown file extension for a tet mesh");
+  return io;
+}
+
+void read_files(Inputs& io) {
+  io.mesh = read_mesh(io.in);
+  for (int t = 0; t < io.mesh.num_tets(); ++t)
     for (int c = 0; c < 4; ++c)
-      if (mesh.tets(t, c) < 0 || mesh.tets(t, c) >= mesh.num_vertices())
-        throw InputError(in + ": tet " + std::to_string(t) + ": vertex index " +
-                         std::to_string(mesh.tets(t, c)) + " out of range");
-  const LandmarkFile lm = read_landmarks_csv(*src, mesh.vertices);
-  const LandmarkFile tg = read_landmarks_csv(*dst, mesh.vertices);
-  if (lm.points.rows() != tg.points.rows())
-    throw InputError(*src + " has " + std::to_string(lm.points.rows()) + " landmarks but " + *dst +
-                     " has " + std::to_string(tg.points.rows()) + " targets");
-  const double t_read = seconds_since(t0);
-  cli::info("register: " + std::to_string(mesh.num_vertices()) + " vertices, " +
-            std::to_string(mesh.num_tets()) + " tets, " + std::to_string(lm.points.rows()) +
-            " landmarks, " + std::to_string(opt.steps) + " steps");
+      if (io.mesh.tets(t, c) < 0 || io.mesh.tets(t, c) >= io.mesh.num_vertices())
+        throw InputError(io.in + ": tet " + std::to_string(t) + ": vertex index " + std::to_string(io.mesh.tets(t, c)) +
+                         " out of range");
+  io.landmarks = read_landmarks_csv(io.src, io.mesh.vertices);
+  io.targets = read_landmarks_csv(io.dst, io.mesh.vertices);
+  if (io.landmarks.points.rows() != io.targets.points.rows())
+    throw InputError(io.src + " has " + std::to_string(io.landmarks.points.rows()) + " landmarks but " + io.dst +
+                     " has " + std::to_string(io.targets.points.rows()) + " targets");
+}
 
-  Device& dev = Device::current();
-  const Points before = mesh.vertices;
-  Points ball = mesh.vertices;
-  RegistrationResult res;
-  t0 = Clock::now();
+// register_landmarks with its structured errors turned into file:line and flag messages.
+RegistrationResult register_mapped(Device& dev, const Inputs& io, Points& ball, const RegistrationOptions& opt) {
   try {
-    res = register_landmarks(dev, ball, mesh.tets, lm.points, tg.points, opt);
+    return register_landmarks(dev, ball, io.mesh.tets, io.landmarks.points, io.targets.points, opt);
   } catch (const RegistrationInputError& e) {
     using Subject = RegistrationInputError::Subject;
     const size_t i = static_cast<size_t>(e.landmark);
-    if (e.subject == Subject::Mesh) throw InputError(in + ": " + e.what() + " (run `vpm map` first)");
-    if (e.subject == Subject::Landmark && e.landmark >= 0 && i < lm.lines.size())
-      throw InputError(*src + ":" + std::to_string(lm.lines[i]) + " / " + *dst + ":" + std::to_string(tg.lines[i]) +
-                       ": " + e.what());
+    if (e.subject == Subject::Mesh) throw InputError(io.in + ": " + e.what() + " (run `vpm map` first)");
+    if (e.subject == Subject::Landmark && e.landmark >= 0 && i < io.landmarks.lines.size())
+      throw InputError(io.src + ":" + std::to_string(io.landmarks.lines[i]) + " / " + io.dst + ":" +
+                       std::to_string(io.targets.lines[i]) + ": " + e.what());
     if (e.subject == Subject::Option) throw InputError("--" + e.option + ": " + e.problem);
-    throw InputError(*src + ", " + *dst + ": " + e.what());
+    throw InputError(io.src + ", " + io.dst + ": " + e.what());
   }
-  const double t_register = seconds_since(t0);
+}
 
+Json report_json(const std::string& device, const Inputs& io, const RegistrationResult& res, const MapMetrics& mm,
+                 Json timings) {
+  Json r = Json::object();
+  r["device"] = device;
+  Json input = Json::object();
+  input["mesh"] = io.in;
+  input["vertices"] = io.mesh.num_vertices();
+  input["tets"] = io.mesh.num_tets();
+  input["landmarks"] = static_cast<long>(io.landmarks.points.rows());
+  r["input"] = input;
+  const Json summary = to_json(registration_summary(res, mm));
+  for (const char* k : {"landmark_rms_error", "landmark_max_error", "max_normal_velocity", "inverted_tets",
+                        "vertex_volume_ratio", "tet_volume_ratio", "boundary_max_radius_error"})
+    r[k] = *summary.find(k);
+  r["registration"] = to_json(res);
+  r["timings_s"] = timings;
+  return r;
+}
+
+int run(const cli::Command& self, const std::vector<std::string>& argv) {
+  const auto t_start = Clock::now();
+  const cli::Args args(argv, self);
+  Inputs io = read_inputs(args, self);
+  const RegistrationOptions opt = parse_options(args);
+  Json timings = Json::object();
+  auto t0 = Clock::now();
+  read_files(io);
+  timings["read"] = seconds_since(t0);
+  cli::info("register: " + std::to_string(io.mesh.num_vertices()) + " vertices, " + std::to_string(io.mesh.num_tets()) +
+            " tets, " + std::to_string(io.landmarks.points.rows()) + " landmarks, " + std::to_string(opt.steps) + " steps");
+
+  Device& dev = Device::current();
+  Points ball = io.mesh.vertices;
   t0 = Clock::now();
-  const MapMetrics mm = map_metrics(dev, before, ball, mesh.tets);
-  const double t_metrics = seconds_since(t0);
+  const RegistrationResult res = register_mapped(dev, io, ball, opt);
+  timings["register"] = seconds_since(t0);
+  t0 = Clock::now();
+  const MapMetrics mm = map_metrics(dev, io.mesh.vertices, ball, io.mesh.tets);
+  timings["metrics"] = seconds_since(t0);
+  TetMesh mesh = io.mesh;
   mesh.vertices = ball;
   mesh.set_point_field("vertex_volume_ratio", mm.vertex_ratio);
   mesh.set_cell_field("tet_volume_ratio", mm.tet_ratio);
   t0 = Clock::now();
-  write_mesh(*out, mesh);
-  const double t_write = seconds_since(t0);
+  write_mesh(io.out, mesh);
+  timings["write"] = seconds_since(t0);
 
   std::ostringstream line;
   line.precision(3);
-  line << "registered: landmark rms error " << res.landmark_rms_error << " (max "
-       << res.landmark_max_error << "), tet volume mean |r-1| "
-       << mm.tet_volume_ratio.mean_abs_dev << ", vertex " << mm.vertex_volume_ratio.mean_abs_dev
-       << ", max |u.n| " << res.max_normal_velocity << ", " << mm.inverted_tets
-       << " inverted tets; wrote " << *out;
+  line << "registered: landmark rms error " << res.landmark_rms_error << " (max " << res.landmark_max_error
+       << "), tet volume mean |r-1| " << mm.tet_volume_ratio.mean_abs_dev << ", vertex "
+       << mm.vertex_volume_ratio.mean_abs_dev << ", max |u.n| " << res.max_normal_velocity << ", " << mm.inverted_tets
+       << " inverted tets; wrote " << io.out;
   cli::info(line.str());
-
-  if (auto report_path = args.get("--report")) {
-    Json r = Json::object();
-    r["device"] = dev.name();
-    Json input = Json::object();
-    input["mesh"] = in;
-    input["vertices"] = mesh.num_vertices();
-    input["tets"] = mesh.num_tets();
-    input["landmarks"] = static_cast<long>(lm.points.rows());
-    r["input"] = input;
-    const Json summary = to_json(registration_summary(res, mm));
-    for (const char* k : {"landmark_rms_error", "landmark_max_error", "max_normal_velocity", "inverted_tets",
-                          "vertex_volume_ratio", "tet_volume_ratio", "boundary_max_radius_error"})
-      r[k] = *summary.find(k);
-    r["registration"] = to_json(res);
-    Json timings = Json::object();
-    timings["read"] = t_read;
-    timings["register"] = t_register;
-    timings["metrics"] = t_metrics;
-    timings["write"] = t_write;
+  if (const auto report_path = args.get("--report")) {
     timings["total"] = seconds_since(t_start);
-    r["timings_s"] = timings;
-    write_json_file(*report_path, r);
+    write_json_file(*report_path, report_json(dev.name(), io, res, mm, timings));
   }
   return 0;
 }
