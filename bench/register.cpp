@@ -155,6 +155,48 @@ Json run_case(const Case& c, const TetMesh& m) {
   return j;
 }
 
+// The benchmark's cases: paper size with and without restoration; unless quick, the host run,
+// smaller moves, kernel widths, boundary and field variants, and 50k / 200k / ~1M tets.
+std::vector<Case> make_cases(bool quick, int runs, int large) {
+  std::vector<Case> cases;
+  RegistrationOptions def;
+  def.refuse_folds = false;  // measure folds instead of stopping
+  cases.push_back({"paper-size", 16, runs, def});
+  RegistrationOptions no_restore = def;
+  no_restore.restore_volumes = false;
+  cases.push_back({"no volume restore", 16, runs, no_restore});
+  if (!quick) {
+    Case h{"paper-size host", 16, 1, def, true};
+    cases.push_back(h);
+    for (double mv : {0.05, 0.1}) {
+      Case c{"move<=" + std::to_string(mv).substr(0, 4), 16, 1, def};
+      c.move = mv;
+      cases.push_back(c);
+    }
+    for (double f : {1.0, 2.0}) {
+      RegistrationOptions o = def;
+      o.width_factor = f;
+      cases.push_back({"width x" + std::to_string(f).substr(0, 3), 16, 1, o});
+    }
+    RegistrationOptions loo = def;
+    loo.width_loo = true;
+    cases.push_back({"width loo", 16, 1, loo});
+    RegistrationOptions samples = def;
+    samples.boundary = RegistrationBoundary::Samples;
+    cases.push_back({"boundary samples", 16, 1, samples});
+    RegistrationOptions none = def;
+    none.boundary = RegistrationBoundary::None;
+    cases.push_back({"boundary none", 16, 1, none});
+    RegistrationOptions steady = def;
+    steady.field = RegistrationField::Steady;
+    cases.push_back({"steady field (paper)", 16, 1, steady});
+    cases.push_back({"50k tets", 20, 1, def});
+    cases.push_back({"200k tets", 32, 1, def});
+    cases.push_back({"~1M tets", large, std::max(1, runs / 2), def});
+  }
+  return cases;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -179,42 +221,7 @@ int main(int argc, char** argv) {
     }
   }
   try {
-    std::vector<Case> cases;
-    RegistrationOptions def;
-    def.refuse_folds = false;  // measure folds instead of stopping
-    cases.push_back({"paper-size", 16, runs, def});
-    RegistrationOptions no_restore = def;
-    no_restore.restore_volumes = false;
-    cases.push_back({"no volume restore", 16, runs, no_restore});
-    if (!quick) {
-      Case h{"paper-size host", 16, 1, def, true};
-      cases.push_back(h);
-      for (double mv : {0.05, 0.1}) {
-        Case c{"move<=" + std::to_string(mv).substr(0, 4), 16, 1, def};
-        c.move = mv;
-        cases.push_back(c);
-      }
-      for (double f : {1.0, 2.0}) {
-        RegistrationOptions o = def;
-        o.width_factor = f;
-        cases.push_back({"width x" + std::to_string(f).substr(0, 3), 16, 1, o});
-      }
-      RegistrationOptions loo = def;
-      loo.width_loo = true;
-      cases.push_back({"width loo", 16, 1, loo});
-      RegistrationOptions samples = def;
-      samples.boundary = RegistrationBoundary::Samples;
-      cases.push_back({"boundary samples", 16, 1, samples});
-      RegistrationOptions none = def;
-      none.boundary = RegistrationBoundary::None;
-      cases.push_back({"boundary none", 16, 1, none});
-      RegistrationOptions steady = def;
-      steady.field = RegistrationField::Steady;
-      cases.push_back({"steady field (paper)", 16, 1, steady});
-      cases.push_back({"50k tets", 20, 1, def});
-      cases.push_back({"200k tets", 32, 1, def});
-      cases.push_back({"~1M tets", large, std::max(1, runs / 2), def});
-    }
+    const std::vector<Case> cases = make_cases(quick, runs, large);
     std::printf("%-22s %8s %9s %9s %9s %9s %4s %8s %9s %8s %8s %9s\n", "case", "tets", "lm_rms", "lm_max",
                 "vert|r-1|", "tet|r-1|", "fold", "inv/flat", "max|u.n|", "total_s", "advect_s", "evals/s");
     Json results = Json::array();

@@ -42,129 +42,172 @@ int count_four_boundary_tets(const Tets& tets, const std::vector<char>& boundary
   return c;
 }
 
-SplitResult split_boundary_edges(const TetMesh& input, int max_rounds) {
-  SplitResult r;
-  const int n0 = input.num_vertices();
-  const Triangles bf = boundary_faces(input.tets);
-  std::vector<char> bnd = boundary_vertex_mask(n0, bf);
-  const auto bedges = surface_edges(bf);
-  r.four_boundary_tets_before = count_four_boundary_tets(input.tets, bnd);
+namespace {
 
-  std::vector<Eigen::Vector3d> X(n0);
-  for (int i = 0; i < n0; ++i) X[i] = input.vertices.row(i).transpose();
-  // sources[v]: vertices whose average v is (1, 2 or 4 of them)
-  std::vector<std::vector<int>> sources(n0);
-  for (int i = 0; i < n0; ++i) sources[i] = {i};
-  std::vector<std::array<int, 4>> T(input.tets.rows());
-  for (Eigen::Index i = 0; i < input.tets.rows(); ++i)
-    for (int c = 0; c < 4; ++c) T[i][c] = input.tets(i, c);
-  r.parent_tet.resize(T.size());
-  std::iota(r.parent_tet.begin(), r.parent_tet.end(), 0);
-
-  auto add_vertex = [&](const Eigen::Vector3d& p, std::vector<int> src) {
+// The mesh being refined: positions, for each vertex the vertices it averages, tets, the input
+// tet each tet lies in, and the boundary mask (inserted vertices are interior).
+struct Refinement {
+  std::vector<Eigen::Vector3d> X;
+  std::vector<std::vector<int>> sources;  // 1, 2 or 4 vertices whose average the vertex is
+  std::vector<std::array<int, 4>> T;
+  std::vector<int> parent_tet;
+  std::vector<char> bnd;
+  int add_vertex(const Eigen::Vector3d& p, std::vector<int> src) {
     X.push_back(p);
     sources.push_back(std::move(src));
     bnd.push_back(0);
     return static_cast<int>(X.size()) - 1;
-  };
+  }
+};
 
-  for (int round = 0; round < max_rounds; ++round) {
-    std::vector<std::pair<int, int>> cand;
-    for (const auto& t : T)
-      for (const auto& e : kEdges) {
-        int a = t[e[0]], b = t[e[1]];
-        if (!bnd[a] || !bnd[b]) continue;
-        if (a > b) std::swap(a, b);
-        if (!bedges.count({a, b})) cand.push_back({a, b});
+Refinement start(const TetMesh& input, std::vector<char> bnd) {
+  Refinement f;
+  const int n0 = input.num_vertices();
+  f.X.resize(n0);
+  f.sources.resize(n0);
+  for (int i = 0; i < n0; ++i) {
+    f.X[i] = input.vertices.row(i).transpose();
+    f.sources[i] = {i};
+  }
+  f.T.resize(input.tets.rows());
+  for (Eigen::Index i = 0; i < input.tets.rows(); ++i)
+    for (int c = 0; c < 4; ++c) f.T[i][c] = input.tets(i, c);
+  f.parent_tet.resize(f.T.size());
+  std::iota(f.parent_tet.begin(), f.parent_tet.end(), 0);
+  f.bnd = std::move(bnd);
+  return f;
+}
+
+// Interior edges whose two ends are boundary vertices, sorted and unique.
+std::vector<std::pair<int, int>> candidate_edges(const Refinement& f, const std::set<std::pair<int, int>>& bedges) {
+  std::vector<std::pair<int, int>> cand;
+  for (const auto& t : f.T)
+    for (const auto& e : kEdges) {
+      int a = t[e[0]], b = t[e[1]];
+      if (!f.bnd[a] || !f.bnd[b]) continue;
+      if (a > b) std::swap(a, b);
+      if (!bedges.count({a, b})) cand.push_back({a, b});
+    }
+  std::sort(cand.begin(), cand.end());
+  cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+  return cand;
+}
+
+// Splits every candidate edge at its midpoint: each tet around it becomes two.
+void split_edges(Refinement& f, const std::vector<std::pair<int, int>>& cand) {
+  auto& T = f.T;
+  std::vector<std::vector<int>> inc(f.X.size());
+  for (size_t i = 0; i < T.size(); ++i)
+    for (int c = 0; c < 4; ++c) inc[T[i][c]].push_back(static_cast<int>(i));
+  for (const auto& [a, b] : cand) {
+    std::vector<int> around;
+    for (int t : inc[a])
+      if (T[t][0] == b || T[t][1] == b || T[t][2] == b || T[t][3] == b) around.push_back(t);
+    if (around.empty()) continue;
+    const int m = f.add_vertex(0.5 * (f.X[a] + f.X[b]), {a, b});
+    inc.emplace_back();
+    for (int t : around) {
+      std::array<int, 4> child = T[t];
+      for (int c = 0; c < 4; ++c) {
+        if (T[t][c] == b) T[t][c] = m;    // (a, m, ...) stays in slot t
+        if (child[c] == a) child[c] = m;  // (m, b, ...) is new
       }
-    std::sort(cand.begin(), cand.end());
-    cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
-    if (cand.empty()) break;
-    ++r.rounds;
-    std::vector<std::vector<int>> inc(X.size());
-    for (size_t i = 0; i < T.size(); ++i)
-      for (int c = 0; c < 4; ++c) inc[T[i][c]].push_back(static_cast<int>(i));
-    for (const auto& [a, b] : cand) {
-      std::vector<int> around;
-      for (int t : inc[a])
-        if (T[t][0] == b || T[t][1] == b || T[t][2] == b || T[t][3] == b) around.push_back(t);
-      if (around.empty()) continue;
-      const int m = add_vertex(0.5 * (X[a] + X[b]), {a, b});
-      inc.emplace_back();
-      for (int t : around) {
-        std::array<int, 4> child = T[t];
-        for (int c = 0; c < 4; ++c) {
-          if (T[t][c] == b) T[t][c] = m;   // (a, m, ...) stays in slot t
-          if (child[c] == a) child[c] = m; // (m, b, ...) is new
-        }
-        const int tn = static_cast<int>(T.size());
-        T.push_back(child);
-        r.parent_tet.push_back(r.parent_tet[t]);
-        auto& ib = inc[b];
-        ib.erase(std::find(ib.begin(), ib.end(), t));
-        for (int c = 0; c < 4; ++c)
-          if (child[c] != m) inc[child[c]].push_back(tn);
-        inc[m].push_back(t);
-        inc[m].push_back(tn);
-      }
+      const int tn = static_cast<int>(T.size());
+      T.push_back(child);
+      f.parent_tet.push_back(f.parent_tet[t]);
+      auto& ib = inc[b];
+      ib.erase(std::find(ib.begin(), ib.end(), t));
+      for (int c = 0; c < 4; ++c)
+        if (child[c] != m) inc[child[c]].push_back(tn);
+      inc[m].push_back(t);
+      inc[m].push_back(tn);
     }
   }
-  // Tets still with four boundary vertices have only boundary-surface edges: split 1 -> 4.
-  const size_t nt = T.size();
+}
+
+// Tets still with four boundary vertices have only boundary-surface edges: split 1 -> 4 at the
+// centroid. Returns the splits.
+int split_centroids(Refinement& f) {
+  int splits = 0;
+  const size_t nt = f.T.size();
   for (size_t t = 0; t < nt; ++t) {
-    const auto q = T[t];
-    if (!(bnd[q[0]] && bnd[q[1]] && bnd[q[2]] && bnd[q[3]])) continue;
-    const int m = add_vertex(0.25 * (X[q[0]] + X[q[1]] + X[q[2]] + X[q[3]]), {q[0], q[1], q[2], q[3]});
-    ++r.centroid_splits;
+    const auto q = f.T[t];
+    if (!(f.bnd[q[0]] && f.bnd[q[1]] && f.bnd[q[2]] && f.bnd[q[3]])) continue;
+    const int m = f.add_vertex(0.25 * (f.X[q[0]] + f.X[q[1]] + f.X[q[2]] + f.X[q[3]]), {q[0], q[1], q[2], q[3]});
+    ++splits;
     for (int k = 0; k < 4; ++k) {
       std::array<int, 4> child = q;
       child[k] = m;
       if (k == 0) {
-        T[t] = child;
+        f.T[t] = child;
       } else {
-        T.push_back(child);
-        r.parent_tet.push_back(r.parent_tet[t]);
+        f.T.push_back(child);
+        f.parent_tet.push_back(f.parent_tet[t]);
       }
     }
   }
+  return splits;
+}
 
-  const int n = static_cast<int>(X.size());
-  r.inserted_vertices = n - n0;
+// The refined mesh with the input's fields carried (point fields averaged over the sources,
+// integer ones from the first; cell fields from the parent tet) and original_position.
+void build_mesh(const Refinement& f, const TetMesh& input, SplitResult& r) {
+  const int n0 = input.num_vertices(), n = static_cast<int>(f.X.size());
   TetMesh& m = r.mesh;
   m.vertices.resize(n, 3);
-  for (int i = 0; i < n; ++i) m.vertices.row(i) = X[i].transpose();
-  m.tets.resize(static_cast<Eigen::Index>(T.size()), 4);
-  for (size_t i = 0; i < T.size(); ++i)
-    for (int c = 0; c < 4; ++c) m.tets(static_cast<Eigen::Index>(i), c) = T[i][c];
+  for (int i = 0; i < n; ++i) m.vertices.row(i) = f.X[i].transpose();
+  m.tets.resize(static_cast<Eigen::Index>(f.T.size()), 4);
+  for (size_t i = 0; i < f.T.size(); ++i)
+    for (int c = 0; c < 4; ++c) m.tets(static_cast<Eigen::Index>(i), c) = f.T[i][c];
   r.parents.resize(n);
   for (int i = 0; i < n; ++i) {
-    if (sources[i].size() == 1) r.parents[i] = {i, i};
-    else if (sources[i].size() == 2) r.parents[i] = {sources[i][0], sources[i][1]};
-    else r.parents[i] = {-1, -1};
+    const auto& s = f.sources[i];
+    r.parents[i] = s.size() == 1 ? std::array<int, 2>{i, i} : s.size() == 2 ? std::array<int, 2>{s[0], s[1]}
+                                                                          : std::array<int, 2>{-1, -1};
   }
-  // Carry fields.
-  for (const Field& f : input.point_data) {
-    if (f.name == "original_position") continue;
-    FieldValues v(n, f.values.cols());
-    v.topRows(n0) = f.values;
+  for (const Field& fd : input.point_data) {
+    if (fd.name == "original_position") continue;
+    FieldValues v(n, fd.values.cols());
+    v.topRows(n0) = fd.values;
     for (int i = n0; i < n; ++i) {
-      if (f.integer) {
-        v.row(i) = v.row(sources[i][0]);
+      if (fd.integer) {
+        v.row(i) = v.row(f.sources[i][0]);
       } else {
         v.row(i).setZero();
-        for (int s : sources[i]) v.row(i) += v.row(s);
-        v.row(i) /= static_cast<double>(sources[i].size());
+        for (int s : f.sources[i]) v.row(i) += v.row(s);
+        v.row(i) /= static_cast<double>(f.sources[i].size());
       }
     }
-    m.set_point_field(f.name, std::move(v), f.integer);
+    m.set_point_field(fd.name, std::move(v), fd.integer);
   }
-  for (const Field& f : input.cell_data) {
-    FieldValues v(m.tets.rows(), f.values.cols());
-    for (Eigen::Index i = 0; i < m.tets.rows(); ++i) v.row(i) = f.values.row(r.parent_tet[i]);
-    m.set_cell_field(f.name, std::move(v), f.integer);
+  for (const Field& fd : input.cell_data) {
+    FieldValues v(m.tets.rows(), fd.values.cols());
+    for (Eigen::Index i = 0; i < m.tets.rows(); ++i) v.row(i) = fd.values.row(f.parent_tet[i]);
+    m.set_cell_field(fd.name, std::move(v), fd.integer);
   }
   m.set_point_field("original_position", FieldValues(m.vertices));
-  r.four_boundary_tets_after = count_four_boundary_tets(m.tets, bnd);
+}
+
+}  // namespace
+
+SplitResult split_boundary_edges(const TetMesh& input, int max_rounds) {
+  SplitResult r;
+  const Triangles bf = boundary_faces(input.tets);
+  std::vector<char> bnd = boundary_vertex_mask(input.num_vertices(), bf);
+  const auto bedges = surface_edges(bf);
+  r.four_boundary_tets_before = count_four_boundary_tets(input.tets, bnd);
+  Refinement f = start(input, std::move(bnd));
+  for (int round = 0; round < max_rounds; ++round) {
+    const auto cand = candidate_edges(f, bedges);
+    if (cand.empty()) break;
+    ++r.rounds;
+    split_edges(f, cand);
+  }
+  r.centroid_splits = split_centroids(f);
+  r.inserted_vertices = static_cast<int>(f.X.size()) - input.num_vertices();
+  r.parent_tet = f.parent_tet;
+  build_mesh(f, input, r);
+  r.four_boundary_tets_after = count_four_boundary_tets(r.mesh.tets, f.bnd);
   return r;
 }
 
