@@ -34,6 +34,71 @@ double median(std::vector<double> v) {
   const size_t n = v.size();
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
+// The synthetic shapes at `scale`, then the given mesh files (skipped with a message if bad).
+std::vector<std::pair<std::string, TetMesh>> load_shapes(double scale, const std::vector<std::string>& paths) {
+  std::vector<std::pair<std::string, TetMesh>> shapes;
+  const int nb = std::max(2, static_cast<int>(16 * scale));
+  const int nc = std::max(2, static_cast<int>(11 * scale));
+  shapes.push_back({"ball_mesh(" + std::to_string(nb) + ")", test::ball_mesh(nb)});
+  shapes.push_back({"ellipsoid 1.8:1:0.6 (" + std::to_string(nb) + ")", test::ellipsoid_mesh(nb)});
+  shapes.push_back({"bent C (" + std::to_string(nc) + ")", test::bent_mesh(nc)});
+  shapes.push_back({"dumbbell (" + std::to_string(nc) + ")", test::dumbbell_mesh(nc)});
+  for (const auto& p : paths) {
+    try {
+      TetMesh m = read_mesh(p);
+      validate_mesh(m, p);
+      shapes.push_back({std::filesystem::path(p).filename().string(), std::move(m)});
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "skipping %s: %s\n", p.c_str(), e.what());
+    }
+  }
+
+  return shapes;
+}
+
+// `runs` initial maps of one shape: a table row (printed) and its JSON (medians, last report).
+Json bench_shape(Device& dev, const std::string& name, const TetMesh& mesh, const InitialMapOptions& opt, int runs) {
+  std::vector<double> ts, tb, th, tu, tt;
+  InitialMapReport last;
+  std::string error;
+  for (int r = 0; r < runs; ++r) {
+    try {
+      const InitialMapResult res = initial_map(dev, mesh, opt);
+      last = res.report;
+      ts.push_back(last.timings.split);
+      tb.push_back(last.timings.boundary);
+      th.push_back(last.timings.harmonic);
+      tu.push_back(last.timings.untangle);
+      tt.push_back(last.timings.total);
+    } catch (const NumericalError& e) {
+      error = e.what();
+      break;
+    }
+  }
+  Json row = Json::object();
+  row["shape"] = name;
+  row["vertices"] = mesh.num_vertices();
+  row["tets"] = mesh.num_tets();
+  if (!error.empty()) {
+    row["error"] = error;
+    std::printf("%-28s %7d %7d | refused: %s\n", name.c_str(), mesh.num_vertices(), mesh.num_tets(), error.c_str());
+    return row;
+  }
+  Json& t = row["median_s"];
+  t["split"] = median(ts);
+  t["boundary"] = median(tb);
+  t["harmonic"] = median(th);
+  t["untangle"] = median(tu);
+  t["total"] = median(tt);
+  row["report"] = to_json(last);
+  std::printf("%-28s %7d %7d | %7.3f %7.3f %7.3f %7.3f %7.3f | %5d %5d | %7.4f %7.4f | %6.3f %6.2f\n",
+              name.c_str(), mesh.num_vertices(), mesh.num_tets(), median(ts), median(tb), median(th),
+              median(tu), median(tt), last.folds_before_untangle, last.folds_after_untangle,
+              last.metrics.vertex_volume_ratio.mean_abs_dev, last.metrics.tet_volume_ratio.mean_abs_dev,
+              last.boundary.area_distortion_final, last.min_dihedral_deg);
+  return row;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -70,22 +135,7 @@ int main(int argc, char** argv) {
     } else paths.push_back(a);
   }
   Device& dev = Device::current();
-  std::vector<std::pair<std::string, TetMesh>> shapes;
-  const int nb = std::max(2, static_cast<int>(16 * scale));
-  const int nc = std::max(2, static_cast<int>(11 * scale));
-  shapes.push_back({"ball_mesh(" + std::to_string(nb) + ")", test::ball_mesh(nb)});
-  shapes.push_back({"ellipsoid 1.8:1:0.6 (" + std::to_string(nb) + ")", test::ellipsoid_mesh(nb)});
-  shapes.push_back({"bent C (" + std::to_string(nc) + ")", test::bent_mesh(nc)});
-  shapes.push_back({"dumbbell (" + std::to_string(nc) + ")", test::dumbbell_mesh(nc)});
-  for (const auto& p : paths) {
-    try {
-      TetMesh m = read_mesh(p);
-      validate_mesh(m, p);
-      shapes.push_back({std::filesystem::path(p).filename().string(), std::move(m)});
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "skipping %s: %s\n", p.c_str(), e.what());
-    }
-  }
+  const auto shapes = load_shapes(scale, paths);
 
   Json root = Json::object();
   root["benchmark"] = "initial_map";
@@ -100,46 +150,7 @@ int main(int argc, char** argv) {
               "mindih");
   for (const auto& [name, mesh] : shapes) {
     if (!only.empty() && name.find(only) == std::string::npos) continue;
-    std::vector<double> ts, tb, th, tu, tt;
-    InitialMapReport last;
-    std::string error;
-    for (int r = 0; r < runs; ++r) {
-      try {
-        const InitialMapResult res = initial_map(dev, mesh, opt);
-        last = res.report;
-        ts.push_back(last.timings.split);
-        tb.push_back(last.timings.boundary);
-        th.push_back(last.timings.harmonic);
-        tu.push_back(last.timings.untangle);
-        tt.push_back(last.timings.total);
-      } catch (const NumericalError& e) {
-        error = e.what();
-        break;
-      }
-    }
-    Json row = Json::object();
-    row["shape"] = name;
-    row["vertices"] = mesh.num_vertices();
-    row["tets"] = mesh.num_tets();
-    if (!error.empty()) {
-      row["error"] = error;
-      std::printf("%-28s %7d %7d | refused: %s\n", name.c_str(), mesh.num_vertices(), mesh.num_tets(), error.c_str());
-      rows.push_back(row);
-      continue;
-    }
-    Json& t = row["median_s"];
-    t["split"] = median(ts);
-    t["boundary"] = median(tb);
-    t["harmonic"] = median(th);
-    t["untangle"] = median(tu);
-    t["total"] = median(tt);
-    row["report"] = to_json(last);
-    rows.push_back(row);
-    std::printf("%-28s %7d %7d | %7.3f %7.3f %7.3f %7.3f %7.3f | %5d %5d | %7.4f %7.4f | %6.3f %6.2f\n",
-                name.c_str(), mesh.num_vertices(), mesh.num_tets(), median(ts), median(tb), median(th),
-                median(tu), median(tt), last.folds_before_untangle, last.folds_after_untangle,
-                last.metrics.vertex_volume_ratio.mean_abs_dev, last.metrics.tet_volume_ratio.mean_abs_dev,
-                last.boundary.area_distortion_final, last.min_dihedral_deg);
+    rows.push_back(bench_shape(dev, name, mesh, opt, runs));
   }
   root["results"] = rows;
   std::filesystem::create_directories(std::filesystem::path(out).parent_path().empty()

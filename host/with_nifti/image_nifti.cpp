@@ -44,6 +44,87 @@ bool gzip_magic(const std::string& path) {
 
 }  // namespace
 
+namespace {
+
+// Dimensions (one 3-D volume), data type (real scalars) and size checks of a read header.
+void check_header(const std::string& path, const nifti_image& nim) {
+  if (nim.ndim < 1 || nim.ndim > 7 || nim.nx < 1)
+    throw InputError(path + ": header: invalid dimensions (dim[0] = " + std::to_string(nim.ndim) + ")");
+  for (int d = 4; d <= nim.ndim; ++d)
+    if (nim.dim[d] > 1)
+      throw InputError(path + ": header: a " + std::to_string(nim.ndim) + "-D image (dim[" + std::to_string(d) +
+                       "] = " + std::to_string(nim.dim[d]) + "); mesh-image needs one 3-D volume: extract it first");
+  switch (nim.datatype) {
+    case DT_UINT8: case DT_INT8: case DT_INT16: case DT_UINT16: case DT_INT32: case DT_UINT32:
+    case DT_INT64: case DT_UINT64: case DT_FLOAT32: case DT_FLOAT64: break;
+    default:
+      throw InputError(path + ": header: unsupported data type " + std::to_string(nim.datatype) + " (" +
+                       nifti_datatype_string(nim.datatype) + "); need a real scalar type");
+  }
+}
+
+// Loads the voxels after comparing the declared data size with the file (uncompressed files).
+void load_voxels(const std::string& path, nifti_image* nim) {
+  std::error_code ec;
+  if (!gzip_magic(path) && nim->nifti_type != NIFTI_FTYPE_NIFTI1_2 && nim->nifti_type != NIFTI_FTYPE_NIFTI2_2) {
+    const auto size = std::filesystem::file_size(path, ec);
+    const int64_t need = int64_t(nim->iname_offset) + int64_t(nim->nvox) * nim->nbyper;
+    if (!ec && int64_t(size) < need)
+      throw InputError(path + ": data: truncated: the header declares " + std::to_string(need) +
+                       " bytes, the file has " + std::to_string(size));
+  }
+  if (nifti_image_load(nim) < 0 || !nim->data)
+    throw InputError(path + ": data: cannot read " + std::to_string(int64_t(nim->nvox) * nim->nbyper) +
+                     " bytes of voxel data (truncated file or broken gzip stream)");
+}
+
+// The voxel values as floats, scaled by scl_slope / scl_inter when the file sets them.
+std::vector<float> voxel_values(const nifti_image& nim, size_t n) {
+  std::vector<float> data(n);
+  switch (nim.datatype) {
+    case DT_UINT8: convert<uint8_t>(nim.data, n, data); break;
+    case DT_INT8: convert<int8_t>(nim.data, n, data); break;
+    case DT_INT16: convert<int16_t>(nim.data, n, data); break;
+    case DT_UINT16: convert<uint16_t>(nim.data, n, data); break;
+    case DT_INT32: convert<int32_t>(nim.data, n, data); break;
+    case DT_UINT32: convert<uint32_t>(nim.data, n, data); break;
+    case DT_INT64: convert<int64_t>(nim.data, n, data); break;
+    case DT_UINT64: convert<uint64_t>(nim.data, n, data); break;
+    case DT_FLOAT32: convert<float>(nim.data, n, data); break;
+    case DT_FLOAT64: convert<double>(nim.data, n, data); break;
+  }
+  const double slope = nim.scl_slope, inter = nim.scl_inter;
+  if (std::isfinite(slope) && slope != 0 && !(slope == 1 && inter == 0))
+    for (auto& v : data) v = float(slope * v + inter);
+  return data;
+}
+
+// The voxel-to-world affine: sform, else qform, else the pixdim scaling; spacing checked.
+void set_affine(const std::string& path, const nifti_image& nim, Image& img) {
+  if (nim.sform_code > 0) {
+    img.affine = to_eigen(nim.sto_xyz);
+    img.affine_source = "sform";
+  } else if (nim.qform_code > 0) {
+    img.affine = to_eigen(nim.qto_xyz);
+    img.affine_source = "qform";
+  } else {
+    img.affine = Eigen::Matrix4d::Identity();
+    for (int d = 0; d < 3; ++d) img.affine(d, d) = nim.pixdim[d + 1] > 0 ? nim.pixdim[d + 1] : 1.0;
+    img.affine_source = "pixdim";
+  }
+  img.affine.row(3) << 0, 0, 0, 1;
+  for (int d = 0; d < 3; ++d) {
+    img.spacing[d] = img.affine.col(d).head<3>().norm();
+    if (!(img.spacing[d] > 0) || !std::isfinite(img.spacing[d]))
+      throw InputError(path + ": header: degenerate " + img.affine_source + " (axis " + std::to_string(d) +
+                       " has zero length)");
+  }
+  if (std::abs(img.affine.topLeftCorner<3, 3>().determinant()) < 1e-12)
+    throw InputError(path + ": header: singular " + img.affine_source + " matrix");
+}
+
+}  // namespace
+
 Image read_nifti(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
@@ -57,77 +138,17 @@ Image read_nifti(const std::string& path) {
                      "; file too short or not an image)");
   NimPtr nim(nifti_image_read(path.c_str(), 0));
   if (!nim) throw InputError(path + ": header: nifti_clib cannot read the NIfTI header");
-  if (nim->ndim < 1 || nim->ndim > 7 || nim->nx < 1)
-    throw InputError(path + ": header: invalid dimensions (dim[0] = " + std::to_string(nim->ndim) + ")");
-  for (int d = 4; d <= nim->ndim; ++d)
-    if (nim->dim[d] > 1)
-      throw InputError(path + ": header: a " + std::to_string(nim->ndim) + "-D image (dim[" +
-                       std::to_string(d) + "] = " + std::to_string(nim->dim[d]) +
-                       "); mesh-image needs one 3-D volume: extract it first");
-  switch (nim->datatype) {
-    case DT_UINT8: case DT_INT8: case DT_INT16: case DT_UINT16: case DT_INT32: case DT_UINT32:
-    case DT_INT64: case DT_UINT64: case DT_FLOAT32: case DT_FLOAT64: break;
-    default:
-      throw InputError(path + ": header: unsupported data type " + std::to_string(nim->datatype) +
-                       " (" + nifti_datatype_string(nim->datatype) + "); need a real scalar type");
-  }
+  check_header(path, *nim);
   const int64_t nx = nim->nx, ny = nim->ndim >= 2 ? nim->ny : 1, nz = nim->ndim >= 3 ? nim->nz : 1;
   if (nx > 100000 || ny > 100000 || nz > 100000 || nx * ny * nz > (int64_t(1) << 31))
-    throw InputError(path + ": header: image too large (" + std::to_string(nx) + "x" +
-                     std::to_string(ny) + "x" + std::to_string(nz) + ")");
-  // Compare the declared data size with the file before reading (uncompressed files).
-  if (!gzip_magic(path) && nim->nifti_type != NIFTI_FTYPE_NIFTI1_2 && nim->nifti_type != NIFTI_FTYPE_NIFTI2_2) {
-    const auto size = fs::file_size(path, ec);
-    const int64_t need = int64_t(nim->iname_offset) + int64_t(nim->nvox) * nim->nbyper;
-    if (!ec && int64_t(size) < need)
-      throw InputError(path + ": data: truncated: the header declares " + std::to_string(need) +
-                       " bytes, the file has " + std::to_string(size));
-  }
-  if (nifti_image_load(nim.get()) < 0 || !nim->data)
-    throw InputError(path + ": data: cannot read " + std::to_string(int64_t(nim->nvox) * nim->nbyper) +
-                     " bytes of voxel data (truncated file or broken gzip stream)");
-
+    throw InputError(path + ": header: image too large (" + std::to_string(nx) + "x" + std::to_string(ny) + "x" +
+                     std::to_string(nz) + ")");
+  load_voxels(path, nim.get());
   Image img;
   img.path = path;
   img.dims = {int(nx), int(ny), int(nz)};
-  const size_t n = size_t(nx * ny * nz);
-  img.data.resize(n);
-  switch (nim->datatype) {
-    case DT_UINT8: convert<uint8_t>(nim->data, n, img.data); break;
-    case DT_INT8: convert<int8_t>(nim->data, n, img.data); break;
-    case DT_INT16: convert<int16_t>(nim->data, n, img.data); break;
-    case DT_UINT16: convert<uint16_t>(nim->data, n, img.data); break;
-    case DT_INT32: convert<int32_t>(nim->data, n, img.data); break;
-    case DT_UINT32: convert<uint32_t>(nim->data, n, img.data); break;
-    case DT_INT64: convert<int64_t>(nim->data, n, img.data); break;
-    case DT_UINT64: convert<uint64_t>(nim->data, n, img.data); break;
-    case DT_FLOAT32: convert<float>(nim->data, n, img.data); break;
-    case DT_FLOAT64: convert<double>(nim->data, n, img.data); break;
-  }
-  const double slope = nim->scl_slope, inter = nim->scl_inter;
-  if (std::isfinite(slope) && slope != 0 && !(slope == 1 && inter == 0))
-    for (auto& v : img.data) v = float(slope * v + inter);
-
-  if (nim->sform_code > 0) {
-    img.affine = to_eigen(nim->sto_xyz);
-    img.affine_source = "sform";
-  } else if (nim->qform_code > 0) {
-    img.affine = to_eigen(nim->qto_xyz);
-    img.affine_source = "qform";
-  } else {
-    img.affine = Eigen::Matrix4d::Identity();
-    for (int d = 0; d < 3; ++d) img.affine(d, d) = nim->pixdim[d + 1] > 0 ? nim->pixdim[d + 1] : 1.0;
-    img.affine_source = "pixdim";
-  }
-  img.affine.row(3) << 0, 0, 0, 1;
-  for (int d = 0; d < 3; ++d) {
-    img.spacing[d] = img.affine.col(d).head<3>().norm();
-    if (!(img.spacing[d] > 0) || !std::isfinite(img.spacing[d]))
-      throw InputError(path + ": header: degenerate " + img.affine_source + " (axis " +
-                       std::to_string(d) + " has zero length)");
-  }
-  if (std::abs(img.affine.topLeftCorner<3, 3>().determinant()) < 1e-12)
-    throw InputError(path + ": header: singular " + img.affine_source + " matrix");
+  img.data = voxel_values(*nim, size_t(nx * ny * nz));
+  set_affine(path, *nim, img);
   return img;
 }
 
