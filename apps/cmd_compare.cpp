@@ -79,8 +79,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   patient.subject = *patient_path;
   const vpm::CanonicalElements el(ref.definition);
   const vpm::Comparison c = vpm::compare_to_reference(el, ref, patient, opt);
-  const std::vector<double> x = vpm::normalised_feature(patient, *feature, norm);
-  vpm::write_comparison(*out, el, ref, normal_paths, *patient_path, x, opt, c);
+  vpm::write_comparison(*out, el, ref, normal_paths, *patient_path, opt, c);
   map_back(args, *out, el, c);
   vpm::cli::info("wrote " + *out + ": " + std::to_string(c.clusters.size()) + " foci (|z| >= " +
                  std::to_string(c.threshold_used) + ", clusters of >= " + std::to_string(opt.min_cluster) +

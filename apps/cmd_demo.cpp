@@ -154,37 +154,29 @@ Settings parse_settings(const vpm::cli::Command& self, const std::vector<std::st
   return s;
 }
 
-// Landmarks: the AAL regions both maps carry, held-out regions excluded.
-std::vector<int> landmark_labels(const std::vector<int>& lab_t, const std::vector<int>& lab_s) {
-  const std::set<int> present_t(lab_t.begin(), lab_t.end()), present_s(lab_s.begin(), lab_s.end());
-  std::vector<int> out;
-  for (int l : present_t)
-    if (l > 0 && present_s.count(l) && std::find(kEvaluated.begin(), kEvaluated.end(), l) == kEvaluated.end())
-      out.push_back(l);
-  return out;
-}
-
 struct Registration {
   vpm::RegistrationResult result;
   vpm::MapMetrics metrics;  // against the subject's map before registration
   Points registered;
-  int landmarks = 0;
+  std::vector<int> tmpl_labels, subj_labels;  // AAL label of each tet of the two maps
+  std::vector<int> landmark_labels;           // the regions whose centroids were matched
   double seconds = 0;
 };
 
 // Registers the subject's ball to the template's by region centroids; writes the landmark
 // files and subject_registered.vtu.
 Registration register_subject(vpm::Device& dev, const Subject& tmpl, const Subject& subj, const Settings& st) {
-  const std::vector<int> lab_t = vpm::cell_labels(tmpl.map.mesh), lab_s = vpm::cell_labels(subj.map.mesh);
-  const std::vector<int> labels = landmark_labels(lab_t, lab_s);
+  Registration r;
+  r.tmpl_labels = vpm::cell_labels(tmpl.map.mesh);
+  r.subj_labels = vpm::cell_labels(subj.map.mesh);
   const vpm::TetMesh& sm = subj.map.mesh;
-  const Points src = vpm::label_centroids(sm.vertices, sm.tets, lab_s, labels);
-  const Points dst = vpm::label_centroids(tmpl.map.mesh.vertices, tmpl.map.mesh.tets, lab_t, labels);
+  const vpm::RegionLandmarks lm = vpm::region_landmarks(sm, tmpl.map.mesh, kEvaluated);
+  r.landmark_labels = lm.labels;
+  const std::vector<int>& labels = r.landmark_labels;
+  const Points &src = lm.source, &dst = lm.target;
   vpm::write_landmarks_csv((st.out / "landmarks.csv").string(), src);
   vpm::write_landmarks_csv((st.out / "targets.csv").string(), dst);
   vpm::cli::info("demo: registering subject to colin27 by " + std::to_string(labels.size()) + " region centroids");
-  Registration r;
-  r.landmarks = static_cast<int>(labels.size());
   const auto t0 = Clock::now();
   r.registered = sm.vertices;
   r.result = vpm::register_landmarks(dev, r.registered, sm.tets, src, dst, st.registration);
@@ -214,8 +206,7 @@ double mean_dice(const std::vector<vpm::LabelOverlap>& v) {
 
 Overlap measure_overlap(const Subject& tmpl, const Subject& subj, const Registration& reg, int grid) {
   const auto t0 = Clock::now();
-  const std::vector<int> lab_t = vpm::cell_labels(tmpl.map.mesh), lab_s = vpm::cell_labels(subj.map.mesh);
-  const std::vector<int> labels = landmark_labels(lab_t, lab_s);
+  const std::vector<int>&lab_t = reg.tmpl_labels, &lab_s = reg.subj_labels, &labels = reg.landmark_labels;
   const Points samples = vpm::ball_grid_points(grid);
   const auto& tm = tmpl.map.mesh;
   const auto& sm = subj.map.mesh;
@@ -243,7 +234,7 @@ vpm::Json demo_json(const std::string& device, const Settings& st, const Subject
   report["subjects"]["colin27"] = to_json(tmpl);
   report["subjects"]["subject"] = to_json(subj);
   vpm::Json jr = vpm::to_json(vpm::registration_summary(reg.result, reg.metrics));
-  jr["landmarks"] = static_cast<long>(reg.landmarks);
+  jr["landmarks"] = static_cast<long>(reg.landmark_labels.size());
   jr["rotation_deg"] = reg.result.report.rotation_deg;
   report["registration"] = jr;
   vpm::Json jd = vpm::Json::array();
@@ -287,7 +278,7 @@ void print_summary(const std::string& device, const Settings& st, const Subject&
   row("inverted tets", std::to_string(t.map.final.inverted_tets), std::to_string(s.map.final.inverted_tets));
   row("mesh + map seconds", strprintf("%.1f", t.mesh_seconds) + " + " + strprintf("%.1f", t.map_seconds),
       strprintf("%.1f", s.mesh_seconds) + " + " + strprintf("%.1f", s.map_seconds));
-  out << "registration of subject to colin27: " << reg.landmarks << " region centroids, landmark rms "
+  out << "registration of subject to colin27: " << reg.landmark_labels.size() << " region centroids, landmark rms "
       << strprintf("%.1e", reg.result.landmark_rms_error) << ", max |u.n| " << strprintf("%.1e", reg.result.max_normal_velocity)
       << ", vertex / tet |r-1| " << two_pcts("%.2f%%", reg.metrics) << ", " << reg.metrics.inverted_tets << " inverted, "
       << strprintf("%.1f", reg.seconds) << " s\n";

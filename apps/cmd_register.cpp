@@ -9,6 +9,7 @@
 #include "vpm/io.hpp"
 #include "vpm/json.hpp"
 #include "vpm/metrics.hpp"
+#include "vpm/collective.hpp"
 #include "vpm/registration.hpp"
 #include "vpm/timing.hpp"
 
@@ -47,12 +48,30 @@ RegistrationOptions parse_options(const cli::Args& args) {
   return opt;
 }
 
-// The mapped mesh and its landmark files, checked against each other.
+// The mapped mesh and its landmarks: two files checked against each other, or the centroids of
+// the atlas regions it shares with a template's registered or mapped mesh (--template).
 struct Inputs {
-  std::string in, out, src, dst;
+  std::string in, out, src, dst, templ;
+  std::vector<int> exclude;  // --exclude-labels: regions never used as landmarks
   TetMesh mesh;
   LandmarkFile landmarks, targets;
 };
+
+std::vector<int> label_list(const std::string& option, const std::string& text) {
+  std::vector<int> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    try {
+      size_t used = 0;
+      out.push_back(std::stoi(item, &used));
+      if (used != item.size()) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw InputError(option + ": expected integer labels separated by commas, got '" + item + "'");
+    }
+  }
+  return out;
+}
 
 Inputs read_inputs(const cli::Args& args, const cli::Command& self) {
   const std::string usage = cli::synopsis(self);
@@ -62,12 +81,18 @@ Inputs read_inputs(const cli::Args& args, const cli::Command& self) {
   const auto out = args.get("-o");
   const auto src = args.get("--landmarks");
   const auto dst = args.get("--targets");
-  if (!out || !src || !dst)
-    throw InputError(std::string("missing ") + (!out ? "-o OUT" : !src ? "--landmarks SRC.csv" : "--targets DST.csv") +
+  const auto templ = args.get("--template");
+  if (templ && (src || dst)) throw InputError("--template and --landmarks/--targets both given; use one");
+  if (!out || (!templ && (!src || !dst)))
+    throw InputError(std::string("missing ") +
+                     (!out ? "-o OUT" : !src ? "--landmarks SRC.csv (or --template)" : "--targets DST.csv") +
                      "; usage: " + usage);
+  if (!templ && args.has("--exclude-labels")) throw InputError("--exclude-labels needs --template");
   io.out = *out;
-  io.src = *src;
-  io.dst = *dst;
+  io.src = src.value_or("");
+  io.dst = dst.value_or("");
+  io.templ = templ.value_or("");
+  if (const auto ex = args.get("--exclude-labels")) io.exclude = label_list("--exclude-labels", *ex);
   if (!is_mesh_path(io.out)) throw InputError(io.out + ": unknown file extension for a tet mesh");
   return io;
 }
@@ -79,6 +104,16 @@ void read_files(Inputs& io) {
       if (io.mesh.tets(t, c) < 0 || io.mesh.tets(t, c) >= io.mesh.num_vertices())
         throw InputError(io.in + ": tet " + std::to_string(t) + ": vertex index " + std::to_string(io.mesh.tets(t, c)) +
                          " out of range");
+  if (!io.templ.empty()) {
+    const RegionLandmarks lm = region_landmarks(io.mesh, read_mesh(io.templ), io.exclude);
+    if (lm.labels.size() < 4)
+      throw InputError(io.in + ", " + io.templ + ": " + std::to_string(lm.labels.size()) +
+                       " atlas regions in common (cell field 'label'); need at least 4 for --template");
+    io.landmarks.points = lm.source;
+    io.targets.points = lm.target;
+    io.src = io.dst = io.templ + " (region centroids)";
+    return;
+  }
   io.landmarks = read_landmarks_csv(io.src, io.mesh.vertices);
   io.targets = read_landmarks_csv(io.dst, io.mesh.vertices);
   if (io.landmarks.points.rows() != io.targets.points.rows())
@@ -164,9 +199,11 @@ int run(const cli::Command& self, const std::vector<std::string>& argv) {
 }
 
 vpm::cli::Registrar reg(
-    {"register", "MAPPED -o OUT", "register a mapped mesh: move landmarks to targets by a divergence-free flow",
-     {{"--landmarks", "SRC.csv", "landmarks in MAPPED's ball (x,y,z or vertex_id a line)", true},
-      {"--targets", "DST.csv", "their targets, paired line by line", true},
+    {"register", "MAPPED -o OUT (--landmarks SRC.csv --targets DST.csv | --template TEMPLATE.vtu)", "register a mapped mesh: move landmarks to targets by a divergence-free flow",
+     {{"--landmarks", "SRC.csv", "landmarks in MAPPED's ball (x,y,z or vertex_id a line)", false, 0, true},
+      {"--targets", "DST.csv", "their targets, paired line by line", false, 0, true},
+      {"--template", "TEMPLATE.vtu", "instead of the two files: the centroids of the atlas regions (cell field label) MAPPED shares with this mapped template", false, 0, true},
+      {"--exclude-labels", "L[,L...]", "with --template: regions never used as landmarks (held out)"},
       {"--steps", "K", "pathline samples and RK4 steps (default 50)"},
       {"--report", "R.json", "write the report (landmark errors, metrics, timings)"},
       {"--width", "W", "Gaussian width of the RBF kernel in ball units", false, 1},

@@ -3,7 +3,7 @@
 wrapped at 100 columns between options; with --check README.md, exits 1 when README's block
 differs (tests/test_cli.cpp runs it that way).
 
-Usage: readme_synopsis.py [BINARY] [--check README.md]
+Usage: readme_synopsis.py [BINARY] [--check README.md | --check --write]  (--write: rewrite README.md's block)
 """
 import subprocess
 import sys
@@ -13,8 +13,8 @@ def items(synopsis):
     """Splits a synopsis at spaces outside brackets, keeping "A | B" groups whole."""
     out, depth, cur = [], 0, ""
     for ch in synopsis:
-        depth += ch == "["
-        depth -= ch == "]"
+        depth += ch in "[("
+        depth -= ch in "])"
         if ch == " " and depth == 0:
             out.append(cur)
             cur = ""
@@ -30,7 +30,7 @@ def block(binary):
     for syn in (l.strip() for l in text.splitlines() if l.startswith("  vpm ")):
         cur = ""
         for tok in items(syn):
-            if cur and tok.startswith("[") and len(cur) + 1 + len(tok) > 100:
+            if cur and tok[:1] in "[(" and len(cur) + 1 + len(tok) > 100:
                 lines.append(cur)
                 cur = "    " + tok
             else:
@@ -55,6 +55,10 @@ def main():
     want = block(args[0] if args else "build/vpm")
     if check is None:
         sys.stdout.write(want)
+        return 0
+    if check == "--write":
+        text, start, end = readme_block("README.md")
+        open("README.md", "w").write(text[:start] + want + text[end:])
         return 0
     text, start, end = readme_block(check)
     if text[start:end] == want:

@@ -8,6 +8,7 @@ PKGS=(
   libtet1.5-dev tetgen libnifti2-dev zlib1g-dev mricron-data
   libcgal-dev libgmp-dev libmpfr-dev
   libviennacl-dev python3-vtk9 python3-numpy
+  snakemake python3-nibabel python3-scipy
 )
 missing=()
 for p in "${PKGS[@]}"; do

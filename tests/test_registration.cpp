@@ -10,6 +10,7 @@
 
 #include "support/devices.hpp"
 #include "support/fixtures.hpp"
+#include "vpm/collective.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/geometry.hpp"
@@ -357,6 +358,69 @@ TEST_CASE("vpm register: registers a mapped mesh, writes fields and the report")
     CHECK(j.find(key) != nullptr);
   CHECK(j.find("landmark_rms_error")->number() < 1e-6);
   CHECK(j.find("inverted_tets")->number() == 0);
+}
+
+TEST_CASE("vpm register --template: atlas-region centroids as landmarks, held-out regions excluded") {
+  // template: smooth_ball(6) labelled by octant; moving: the same mesh turned 6 degrees about z
+  // and squeezed a little in z, so its region centroids sit away from the template's.
+  TetMesh fixed = smooth_ball(6);
+  FieldValues label(fixed.num_tets(), 1);
+  for (int t = 0; t < fixed.num_tets(); ++t) {
+    Eigen::RowVector3d c = Eigen::RowVector3d::Zero();
+    for (int k = 0; k < 4; ++k) c += fixed.vertices.row(fixed.tets(t, k)) / 4;
+    label(t, 0) = 1 + (c(0) > 0) + 2 * (c(1) > 0) + 4 * (c(2) > 0);
+  }
+  fixed.set_cell_field("label", label, true);
+  TetMesh moving = fixed;
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(6 * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  for (int i = 0; i < moving.num_vertices(); ++i) {
+    Eigen::Vector3d p = turn * moving.vertices.row(i).transpose();
+    p(2) *= 1 - 0.03 * (1 - p.squaredNorm());  // a squeeze that keeps the sphere
+    moving.vertices.row(i) = p.transpose();
+  }
+  moving.set_point_field("original_position", FieldValues(fixed.vertices));
+  write_mesh(tmp("tmpl_fixed.vtu"), fixed);
+  write_mesh(tmp("tmpl_moving.vtu"), moving);
+  const std::string out = tmp("tmpl_out.vtu"), report = tmp("tmpl_report.json");
+  for (const std::string& exclude : {std::string(), std::string(" --exclude-labels 1,8")}) {
+    INFO(exclude);
+    std::filesystem::remove(out);
+    const int rc = vpm_register(tmp("tmpl_moving.vtu") + " -o " + out + " --template " + tmp("tmpl_fixed.vtu") +
+                                    exclude + " --steps 10 --quiet --report " + report,
+                                tmp("tmpl_err.txt"));
+    INFO(slurp(tmp("tmpl_err.txt")));
+    REQUIRE(rc == 0);
+    const Json j = Json::parse(slurp(report));
+    CHECK(j.find("input")->find("landmarks")->number() == (exclude.empty() ? 8 : 6));
+    CHECK(j.find("landmark_rms_error")->number() < 1e-6);
+    // the registered regions' centroids are the template's
+    const TetMesh r = read_mesh(out);
+    const RegionLandmarks after = region_landmarks(r, fixed);
+    REQUIRE(after.labels.size() == 8);
+    for (size_t i = 0; i < after.labels.size(); ++i) {
+      const double err = (after.source.row(i) - after.target.row(i)).norm();
+      const bool held_out = !exclude.empty() && (after.labels[i] == 1 || after.labels[i] == 8);
+      if (!held_out) CHECK(err < 1e-3);  // the centroid of a moved region, not just its landmark
+    }
+  }
+  // refused: both ways at once; a template without labels; a bad label list
+  TetMesh plain = fixed;
+  plain.cell_data.clear();
+  write_mesh(tmp("tmpl_plain.vtu"), plain);
+  write_text(tmp("tmpl_src.csv"), "0.1,0.2,0.3\n");
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {" --template " + tmp("tmpl_fixed.vtu") + " --landmarks " + tmp("tmpl_src.csv"), "both given"},
+      {" --template " + tmp("tmpl_plain.vtu"), "label"},
+      {" --template " + tmp("tmpl_fixed.vtu") + " --exclude-labels 1,x", "--exclude-labels: expected integer"},
+      {" --exclude-labels 1", "missing --landmarks"},
+  };
+  for (const auto& [args, expect] : bad) {
+    INFO(args);
+    std::filesystem::remove(out);
+    CHECK(vpm_register(tmp("tmpl_moving.vtu") + " -o " + out + args, tmp("tmpl_err.txt")) == 2);
+    CHECK(slurp(tmp("tmpl_err.txt")).find(expect) != std::string::npos);
+    CHECK(!std::filesystem::exists(out));
+  }
 }
 
 TEST_CASE("vpm register: bad input exits 2 naming the file and line") {

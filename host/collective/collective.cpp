@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <limits>
+#include <algorithm>
+#include <set>
 #include <unordered_map>
 
 #include "vpm/error.hpp"
@@ -38,6 +40,17 @@ Points label_centroids(const Points& vertices, const Tets& tets, const std::vect
     out.row(i) = vol(i) > 0 ? Eigen::RowVector3d(sum.row(i) / vol(i))
                             : Eigen::RowVector3d::Constant(std::numeric_limits<double>::quiet_NaN());
   return out;
+}
+
+RegionLandmarks region_landmarks(const TetMesh& moving, const TetMesh& fixed, const std::vector<int>& exclude) {
+  const std::vector<int> lab_m = cell_labels(moving), lab_f = cell_labels(fixed);
+  const std::set<int> in_m(lab_m.begin(), lab_m.end()), in_f(lab_f.begin(), lab_f.end());
+  RegionLandmarks r;
+  for (int l : in_m)
+    if (l > 0 && in_f.count(l) && std::find(exclude.begin(), exclude.end(), l) == exclude.end()) r.labels.push_back(l);
+  r.source = label_centroids(moving.vertices, moving.tets, lab_m, r.labels);
+  r.target = label_centroids(fixed.vertices, fixed.tets, lab_f, r.labels);
+  return r;
 }
 
 Points ball_grid_points(int per_axis) {

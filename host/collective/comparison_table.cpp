@@ -8,12 +8,12 @@ namespace vpm {
 
 void write_comparison(const std::string& tsv_path, const CanonicalElements& el, const Reference& ref,
                       const std::vector<std::string>& normal_tables, const std::string& patient_table,
-                      const std::vector<double>& x, const CompareOptions& opt, const Comparison& c) {
+                      const CompareOptions& opt, const Comparison& c) {
   detail::AtomicFile file(tsv_path);
   std::ostream& out = file.stream();
   out << "element\tshell\ttriangle\tpatient\treference_mean\treference_std\tz\tcluster\n" << std::setprecision(10);
   for (int e = 0; e < el.size(); ++e)
-    out << e << '\t' << el.shell_of(e) << '\t' << el.triangle_of(e) << '\t' << x[e] << '\t' << ref.mean[e] << '\t'
+    out << e << '\t' << el.shell_of(e) << '\t' << el.triangle_of(e) << '\t' << c.patient[e] << '\t' << ref.mean[e] << '\t'
         << ref.std[e] << '\t' << c.z[e] << '\t' << c.cluster[e] << '\n';
   Json j = Json::object();
   j["definition"] = to_json(ref.definition);

@@ -87,10 +87,10 @@ ElementLabels sample_label_fractions(const CanonicalElements& el, const Points& 
 
 namespace {
 
-Json table_sidecar(const ElementTable& t, const CanonicalElements& el) {
+Json table_sidecar(const ElementTable& t) {
   Json j = Json::object();
   j["definition"] = to_json(t.definition);
-  j["elements"] = el.size();
+  j["elements"] = t.definition.elements();
   j["subject"] = t.subject;
   j["mesh"] = t.mesh;
   Json feats = Json::array();
@@ -123,11 +123,11 @@ Json table_sidecar(const ElementTable& t, const CanonicalElements& el) {
 }  // namespace
 
 void write_subject_table(const std::string& tsv_path, const ElementTable& t) {
-  const CanonicalElements el(t.definition);
+  const int n = t.definition.elements(), triangles = t.definition.triangles();
   for (const ElementFeature& f : t.features)
-    if (f.mean.size() != static_cast<size_t>(el.size()))
+    if (f.mean.size() != static_cast<size_t>(n))
       throw InputError(tsv_path + ": feature " + f.name + " has " + std::to_string(f.mean.size()) +
-                       " elements, the definition " + std::to_string(el.size()));
+                       " elements, the definition " + std::to_string(n));
   detail::AtomicFile file(tsv_path);
   std::ostream& out = file.stream();
   out << "element\tshell\ttriangle\tsamples";
@@ -135,14 +135,14 @@ void write_subject_table(const std::string& tsv_path, const ElementTable& t) {
   for (const ElementLabels& l : t.label_images)
     for (int id : l.labels) out << "\tlabel_" << id;
   out << '\n' << std::setprecision(10);
-  for (int e = 0; e < el.size(); ++e) {
-    out << e << '\t' << el.shell_of(e) << '\t' << el.triangle_of(e) << '\t' << t.definition.samples;
+  for (int e = 0; e < n; ++e) {
+    out << e << '\t' << e / triangles << '\t' << e % triangles << '\t' << t.definition.samples;
     for (const ElementFeature& f : t.features) out << '\t' << f.mean[e] << '\t' << f.std[e] << '\t' << f.count[e];
     for (const ElementLabels& l : t.label_images)
       for (const auto& col : l.fraction) out << '\t' << col[e];
     out << '\n';
   }
-  write_json_file(sidecar_path(tsv_path), table_sidecar(t, el));
+  write_json_file(sidecar_path(tsv_path), table_sidecar(t));
   file.commit();
 }
 

@@ -140,8 +140,9 @@ Comparison compare_to_reference(const CanonicalElements& el, const Reference& re
                                 const CompareOptions& opt) {
   if (patient.definition != ref.definition || el.definition() != ref.definition)
     throw InputError(patient.subject + ": element definition differs from the reference's");
-  const std::vector<double> x = normalised_feature(patient, ref.feature, ref.normalisation);
   Comparison c;
+  c.patient = normalised_feature(patient, ref.feature, ref.normalisation);
+  const std::vector<double>& x = c.patient;
   c.z.assign(x.size(), kNaN);
   for (size_t e = 0; e < x.size(); ++e)
     if (!std::isnan(x[e]) && !std::isnan(ref.mean[e]) && ref.std[e] > 0) c.z[e] = (x[e] - ref.mean[e]) / ref.std[e];

@@ -83,7 +83,7 @@ ElementTable read_subject_table(const std::string& path) {
   std::vector<int> labels;
   read_header(path, split_tabs(line), t, labels);
   read_sidecar(path, t);
-  const int n = CanonicalElements(t.definition).triangles() * t.definition.shells;
+  const int n = t.definition.elements();
   for (ElementFeature& f : t.features) {
     f.mean.assign(n, 0);
     f.std.assign(n, 0);

@@ -18,6 +18,17 @@ std::vector<int> cell_labels(const TetMesh& mesh);
 Points label_centroids(const Points& vertices, const Tets& tets, const std::vector<int>& tet_labels,
                        const std::vector<int>& labels);
 
+/// Landmarks that pair two labelled meshes region by region (paper 5: the registration's
+/// feature points): the centroids of the regions both meshes carry.
+struct RegionLandmarks {
+  std::vector<int> labels;  ///< ascending, > 0, carried by both meshes, none of `exclude`
+  Points source, target;    ///< row i: centroid of labels[i] in the moving / the fixed mesh
+};
+
+/// Region-centroid landmarks from the `label` cell fields of `moving` and `fixed` (cell_labels;
+/// InputError when either has none), leaving out the labels in `exclude` (held-out regions).
+RegionLandmarks region_landmarks(const TetMesh& moving, const TetMesh& fixed, const std::vector<int>& exclude = {});
+
 /// The centres of the cells of a regular grid of `per_axis`^3 cells over [-1, 1]^3 that lie
 /// inside the unit ball (k x 3, k about 0.52 per_axis^3), i fastest.
 Points ball_grid_points(int per_axis);

@@ -24,6 +24,10 @@ struct ElementDefinition {
   int samples = 64;  ///< sample points S per element (1..4096)
   /// Version of the sample generator; bumped whenever the sample points would change.
   static constexpr int kGeneratorVersion = 1;
+  /// Spherical triangles T = 20 * 4^level (no elements are built).
+  int triangles() const { return 20 << (2 * level); }
+  /// Elements T * shells; element id = shell * T + triangle.
+  int elements() const { return triangles() * shells; }
   bool operator==(const ElementDefinition& o) const {
     return level == o.level && shells == o.shells && samples == o.samples;
   }

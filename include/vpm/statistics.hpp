@@ -57,6 +57,7 @@ struct FocusCluster {
 };
 
 struct Comparison {
+  std::vector<double> patient; ///< the patient's normalised feature per element (NaN: no data)
   std::vector<double> z;       ///< per element (NaN where the reference or the patient has no data)
   std::vector<int> cluster;    ///< per element: FocusCluster::id, 0 when not a focus
   std::vector<FocusCluster> clusters;
@@ -76,7 +77,6 @@ Json to_json(const Comparison& comparison);
 /// Atomic; InputError naming the path when it cannot be written.
 void write_comparison(const std::string& tsv_path, const CanonicalElements& elements, const Reference& reference,
                       const std::vector<std::string>& normal_tables, const std::string& patient_table,
-                      const std::vector<double>& patient_values, const CompareOptions& options,
-                      const Comparison& comparison);
+                      const CompareOptions& options, const Comparison& comparison);
 
 }  // namespace vpm
