@@ -1,5 +1,6 @@
 // vpm compare: a patient's subject table against the normals' (vpm/statistics.hpp), optionally
 // mapped back to the patient's native space (vpm/map_back.hpp).
+#include <optional>
 #include <sstream>
 
 #include "cli.hpp"
@@ -45,17 +46,19 @@ vpm::CompareOptions compare_options(const vpm::cli::Args& args) {
 void map_back(const vpm::cli::Args& args, const std::string& out, const vpm::CanonicalElements& el,
               const vpm::Comparison& c) {
   const auto mesh_path = args.get("--mesh");
-  if (!mesh_path) {
-    if (args.has("--image")) throw vpm::InputError("option --image needs --mesh (the patient's registered mesh)");
-    return;
-  }
+  if (!mesh_path) return;
+
   const vpm::TetMesh reg = vpm::read_mesh(*mesh_path);
   std::vector<double> focus(c.cluster.begin(), c.cluster.end());
   vpm::write_mesh(beside(out, "_native.vtu"), vpm::native_mesh_with_values(reg, el, {c.z, focus}, {"z", "focus"}));
   if (const auto image_path = args.get("--image")) {
     const vpm::Image grid = vpm::read_nifti(*image_path);
     vpm::write_nifti(beside(out, "_z.nii.gz"), vpm::native_volume(reg, el, c.z, grid));
-    vpm::write_nifti(beside(out, "_foci.nii.gz"), vpm::native_volume(reg, el, focus, grid));
+    const vpm::Image foci = vpm::native_volume(reg, el, focus, grid);
+    vpm::write_nifti(beside(out, "_foci.nii.gz"), foci);
+    std::optional<vpm::Image> labels;
+    if (const auto labels_path = args.get("--labels")) labels = vpm::read_nifti(*labels_path);
+    vpm::write_native_foci(beside(out, "_foci.tsv"), vpm::native_foci(foci, c, labels ? &*labels : nullptr));
   }
 }
 
@@ -71,6 +74,9 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   const vpm::Normalisation norm = vpm::cli::parse_option(
       "--normalisation", [&] { return vpm::parse_normalisation(args.get("--normalisation", "proportional")); });
   const vpm::CompareOptions opt = compare_options(args);
+  if (args.has("--image") && !args.has("--mesh"))
+    throw vpm::InputError("option --image needs --mesh (the patient's registered mesh)");
+  if (args.has("--labels") && !args.has("--image")) throw vpm::InputError("option --labels needs --image");
   const std::vector<std::string> normal_paths = comma_list(*normals_arg);
   std::vector<vpm::ElementTable> normals;
   for (const std::string& p : normal_paths) normals.push_back(vpm::read_subject_table(p));
@@ -79,8 +85,8 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   patient.subject = *patient_path;
   const vpm::CanonicalElements el(ref.definition);
   const vpm::Comparison c = vpm::compare_to_reference(el, ref, patient, opt);
+  map_back(args, *out, el, c);  // first: OUT.tsv, written last, marks a complete run
   vpm::write_comparison(*out, el, ref, normal_paths, *patient_path, opt, c);
-  map_back(args, *out, el, c);
   vpm::cli::info("wrote " + *out + ": " + std::to_string(c.clusters.size()) + " foci (|z| >= " +
                  std::to_string(c.threshold_used) + ", clusters of >= " + std::to_string(opt.min_cluster) +
                  " elements) against " + std::to_string(ref.subjects) + " normals");
@@ -96,7 +102,8 @@ vpm::cli::Registrar reg(
       {"--min-cluster", "C", "foci are clusters of at least C adjacent elements (default 3)"},
       {"--sign", "both|hyper|hypo", "increases, decreases or both (default both)"},
       {"--mesh", "REGISTERED.vtu", "the patient's registered mesh: writes OUT_native.vtu with fields z, focus"},
-      {"--image", "IMAGE.nii[.gz]", "with --mesh: OUT_z.nii.gz and OUT_foci.nii.gz on this image's grid"},
+      {"--image", "IMAGE.nii[.gz]", "with --mesh: OUT_z.nii.gz, OUT_foci.nii.gz on this image's grid and the foci table OUT_foci.tsv (mm^3, centroid)"},
+      {"--labels", "ATLAS.nii[.gz]", "with --image: the patient's atlas labels; OUT_foci.tsv names each focus's main region"},
       {"--normals", "A.tsv,B.tsv,...", "the normals' subject tables (vpm sample), at least 3", true, 0, true},
       {"--patient", "P.tsv", "the patient's subject table", true, 0, true},
       {"--feature", "NAME", "the feature compared (a NAME of vpm sample --images)", true, 0, true}},

@@ -156,6 +156,51 @@ TEST_CASE("statistics: the result mapped back onto the native mesh and image gri
   CHECK(z.at(19, 10, 10) == 2.0f);   // 45 mm out: the outer shell (r^3 = 0.73 > 2/3)
 }
 
+TEST_CASE("statistics: native foci table: voxel volume, centroid, peak and main atlas region") {
+  // a 2 mm grid with two clusters: a 3x3x3 block of id 1 and a 2-voxel bar of id 2
+  Image foci;
+  foci.dims = {10, 10, 10};
+  foci.affine.setIdentity();
+  foci.affine.topLeftCorner<3, 3>() *= 2;
+  foci.affine.topRightCorner<3, 1>() = Eigen::Vector3d(-10, -10, -10);
+  foci.data.assign(foci.size(), 0);
+  for (int k = 2; k < 5; ++k)
+    for (int j = 2; j < 5; ++j)
+      for (int i = 2; i < 5; ++i) foci.data[foci.index(i, j, k)] = 1;
+  foci.data[foci.index(7, 7, 7)] = foci.data[foci.index(8, 7, 7)] = 2;
+  Comparison c;
+  c.clusters.resize(3);
+  c.clusters[0].id = 1;
+  c.clusters[0].peak_z = -5;
+  c.clusters[1].id = 2;
+  c.clusters[1].peak_z = -4;
+  c.clusters[2].id = 3;  // a cluster with no voxel on this grid
+  // labels on a 1 mm grid over the same space: 7 on x < -3 mm, 9 elsewhere
+  Image labels;
+  labels.dims = {20, 20, 20};
+  labels.affine.setIdentity();
+  labels.affine.topRightCorner<3, 1>() = Eigen::Vector3d(-10, -10, -10);
+  labels.data.assign(labels.size(), 9);
+  for (int k = 0; k < 20; ++k)
+    for (int j = 0; j < 20; ++j)
+      for (int i = 0; i < 7; ++i) labels.data[labels.index(i, j, k)] = 7;
+  const std::vector<NativeFocus> f = native_foci(foci, c, &labels);
+  REQUIRE(f.size() == 3);
+  CHECK(f[0].voxels == 27);
+  CHECK(f[0].volume_mm3 == Approx(27 * 8));
+  CHECK((f[0].centroid - Eigen::Vector3d(-4, -4, -4)).norm() < 1e-12);  // voxel 3 -> -10 + 6 mm
+  CHECK(f[0].peak_z == -5);
+  CHECK(f[0].label == 7);  // x = -6, -4 (label 7) and -2 (label 9): 18 of 27
+  CHECK(f[0].label_fraction == Approx(18.0 / 27));
+  CHECK(f[1].voxels == 2);
+  CHECK((f[1].centroid - Eigen::Vector3d(5, 4, 4)).norm() < 1e-12);
+  CHECK(f[1].label == 9);
+  CHECK(f[1].label_fraction == 1.0);
+  CHECK(f[2].voxels == 0);
+  CHECK(std::isnan(f[2].centroid(0)));
+  CHECK(native_foci(foci, c)[0].label == 0);  // no label image
+}
+
 TEST_CASE("vpm compare writes z, foci and the patient's native maps, refuses mixed definitions") {
   const std::string dir = std::string(VPM_TEST_TMP) + "/cmp_";
   const CanonicalElements el(def());
@@ -192,6 +237,9 @@ TEST_CASE("vpm compare writes z, foci and the patient's native maps, refuses mix
   const Image z = read_nifti(dir + "out_z.nii.gz");
   CHECK(z.dims == grid.dims);
   CHECK(read_nifti(dir + "out_foci.nii.gz").dims == grid.dims);
+  CHECK_THAT(test::slurp(dir + "out_foci.tsv"), Catch::StartsWith("focus\tvoxels\tvolume_mm3\tcentroid_x"));
+  CHECK(test::run_status(vpm + " compare --normals " + normals + " --patient " + dir + "p.tsv --feature pet -o " +
+                         dir + "lab.tsv --labels " + dir + "grid.nii.gz --quiet 2> /dev/null") == 2);
   // another element definition among the normals: exit 2, nothing written
   ElementTable other = subject(3, 1.0);
   write_subject_table(dir + "other.tsv", other);

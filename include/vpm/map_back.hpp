@@ -7,6 +7,7 @@
 #include "vpm/elements.hpp"
 #include "vpm/image.hpp"
 #include "vpm/mesh.hpp"
+#include "vpm/statistics.hpp"
 
 namespace vpm {
 
@@ -23,5 +24,25 @@ TetMesh native_mesh_with_values(const TetMesh& registered, const CanonicalElemen
 /// the native mesh get `outside`. Runs on the host threads.
 Image native_volume(const TetMesh& registered, const CanonicalElements& elements, const std::vector<double>& values,
                     const Image& grid, float outside = 0.0f);
+
+/// A focus cluster measured in the patient's native space.
+struct NativeFocus {
+  int id = 0;                ///< FocusCluster::id
+  long voxels = 0;           ///< voxels of the cluster's map-back volume
+  double volume_mm3 = 0;     ///< voxels x voxel volume
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();  ///< world mm (NaN when no voxel)
+  double peak_z = 0;         ///< FocusCluster::peak_z
+  int label = 0;             ///< most frequent label under the cluster (0: no label image or none)
+  double label_fraction = 0; ///< share of the cluster's voxels carrying `label`
+};
+
+/// Per cluster of `comparison` (foci_volume = native_volume of its cluster ids, on the patient's
+/// image grid): voxel count, volume in mm^3, world centroid, peak z, and with `labels` (an atlas
+/// image in the same native space; read at each voxel centre, nearest voxel) its main region.
+std::vector<NativeFocus> native_foci(const Image& foci_volume, const Comparison& comparison, const Image* labels = nullptr);
+
+/// Writes `foci` as TSV: focus voxels volume_mm3 centroid_x centroid_y centroid_z peak_z label
+/// label_fraction. Atomic; InputError naming the path when it cannot be written.
+void write_native_foci(const std::string& tsv_path, const std::vector<NativeFocus>& foci);
 
 }  // namespace vpm

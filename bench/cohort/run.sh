@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# The planted-foci benchmark (docs/cohort.md): synthesise a cohort, run the whole workflow on it
+# with CORES cores, score the foci against the truth and summarise time and memory per rule.
+# Usage: bench/cohort/run.sh OUT_DIR [NORMALS=50] [PATIENTS=10] [SEED=1]; env CORES (2),
+# BUILD_DIR (build). Writes OUT_DIR/summary.json and OUT_DIR/summary.md (and prints the latter).
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+out=$1
+normals=${2:-50}
+patients=${3:-10}
+seed=${4:-1}
+cores=${CORES:-2}
+build=${BUILD_DIR:-build}
+mkdir -p "$out"
+out=$(cd "$out" && pwd)
+export POCL_CACHE_DIR="${POCL_CACHE_DIR:-$PWD/$build/pocl-cache}"
+SECONDS=0
+if [[ ! -f $out/bids/participants.tsv ]]; then
+  /usr/bin/python3 scripts/synth_cohort.py --out "$out/bids" --normals "$normals" --patients "$patients" \
+    --seed "$seed" --jobs "$cores"
+fi
+synth_s=$SECONDS
+snakemake -s workflow/Snakefile --cores "$cores" --directory "$out" --quiet rules \
+  --config bids="$out/bids" out="$out/results" vpm="$PWD/$build/vpm"
+workflow_s=$((SECONDS - synth_s))
+/usr/bin/python3 bench/cohort/summary.py --results "$out/results" --synth-seconds "$synth_s" \
+  --workflow-seconds "$workflow_s" --cores "$cores" --out-json "$out/summary.json" --out-md "$out/summary.md"
+cat "$out/summary.md"
