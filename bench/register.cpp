@@ -46,23 +46,10 @@ TetMesh ball_mesh(int n) {
   return m;
 }
 
-// 20 landmarks in the ball of radius 0.8, each moved by a random vector of length <= 0.2,
-// targets inside radius 0.9 (fixed seed).
+// 20 landmarks in the ball of radius 0.8, each moved by a random vector of length <= move
+// (drawn so that a move of 0.2 stays inside radius 0.9; fixed seed).
 void landmarks(int n, unsigned seed, double move, Points& p, Points& q) {
-  std::mt19937 gen(seed);
-  std::uniform_real_distribution<double> u(-1, 1);
-  p.resize(n, 3);
-  q.resize(n, 3);
-  for (int i = 0; i < n; ++i) {
-    Eigen::Vector3d a, d;
-    do a << u(gen), u(gen), u(gen);
-    while (a.norm() > 1);
-    a *= 0.8;
-    do d << u(gen), u(gen), u(gen);
-    while (d.norm() > 1 || (a + 0.2 * d).norm() > 0.9);
-    p.row(i) = a.transpose();
-    q.row(i) = (a + move * d).transpose();
-  }
+  test::random_landmarks(n, seed, 0.8, 0.2, 0.9, move, p, q);
 }
 
 double median(std::vector<double> v) {

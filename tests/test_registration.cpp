@@ -27,20 +27,7 @@ namespace {
 // n landmarks at random in the ball of radius 0.75 and targets moved by up to `shift` (fixed
 // seed), targets kept inside radius 0.85.
 void random_landmarks(int n, double shift, unsigned seed, Points& p, Points& q) {
-  std::mt19937 gen(seed);
-  std::uniform_real_distribution<double> u(-1, 1);
-  p.resize(n, 3);
-  q.resize(n, 3);
-  for (int i = 0; i < n; ++i) {
-    Eigen::Vector3d a, d;
-    do a << u(gen), u(gen), u(gen);
-    while (a.norm() > 1);
-    a *= 0.75;
-    do d << u(gen), u(gen), u(gen);
-    while (d.norm() > 1 || (a + shift * d).norm() > 0.85);
-    p.row(i) = a.transpose();
-    q.row(i) = (a + shift * d).transpose();
-  }
+  test::random_landmarks(n, seed, 0.75, shift, 0.85, shift, p, q);
 }
 
 // A smoother ball mesh than test::ball_mesh (whose shell-by-shell projection flattens tets at

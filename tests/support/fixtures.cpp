@@ -57,4 +57,22 @@ TetMesh tunnel_cube() {
   return m;
 }
 
+void random_landmarks(int n, unsigned seed, double radius, double reach, double max_radius, double move, Points& p,
+                      Points& q) {
+  std::mt19937 gen(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  p.resize(n, 3);
+  q.resize(n, 3);
+  for (int i = 0; i < n; ++i) {
+    Eigen::Vector3d a, d;
+    do a << u(gen), u(gen), u(gen);
+    while (a.norm() > 1);
+    a *= radius;
+    do d << u(gen), u(gen), u(gen);
+    while (d.norm() > 1 || (a + reach * d).norm() > max_radius);
+    p.row(i) = a.transpose();
+    q.row(i) = (a + move * d).transpose();
+  }
+}
+
 }  // namespace vpm::test

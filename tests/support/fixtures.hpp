@@ -20,6 +20,12 @@ TetMesh ball_mesh(int n);
 /// irregular and some negative while small amounts keep every tet positive.
 TetMesh jitter_interior(TetMesh m, int n, double amount, unsigned seed);
 
+/// Landmark pairs for registration tests and benchmarks (std::mt19937 seeded with `seed`): n
+/// sources uniform in the ball of radius `radius`; each moved by move x d, d uniform in the unit
+/// ball and redrawn until source + reach x d lies within `max_radius`. Rows of p (sources), q.
+void random_landmarks(int n, unsigned seed, double radius, double reach, double max_radius, double move, Points& p,
+                      Points& q);
+
 /// cube_mesh(3) without its centre column of cells: a solid torus (boundary genus 1).
 TetMesh tunnel_cube();
 
