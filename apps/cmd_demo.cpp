@@ -23,6 +23,7 @@
 #include "vpm/json.hpp"
 #include "vpm/mesh_image.hpp"
 #include "vpm/registration.hpp"
+#include "vpm/sampling.hpp"
 #include "vpm/timing.hpp"
 #include "vpm/format.hpp"
 
@@ -193,10 +194,26 @@ Registration register_subject(vpm::Device& dev, const Subject& tmpl, const Subje
 // Dice of the held-out regions and the mean Dice of the landmark regions, before and after.
 struct Overlap {
   long points = 0;
-  std::vector<vpm::LabelOverlap> before, after;  // per kEvaluated region
-  double landmark_before = 0, landmark_after = 0;
+  // labels of the tets (capped by the mesh resolution) and, the honest measure, labels read from
+  // each subject's own atlas image through its map (ball point -> native position -> voxel)
+  std::vector<vpm::LabelOverlap> before, after, image_before, image_after;  // per kEvaluated region
+  double landmark_before = 0, landmark_after = 0, image_landmark_before = 0, image_landmark_after = 0;
   double seconds = 0;
 };
+
+// Labels of ball `points` read from a subject's atlas image through its ball mesh at `ball`.
+std::vector<int> image_labels(const Points& points, const Points& ball, const vpm::TetMesh& mesh,
+                              const vpm::Image& atlas) {
+  const vpm::Field* f = mesh.find_point_field("original_position");
+  if (!f || f->values.cols() != 3) throw vpm::InputError("demo: the ball map has no original_position field");
+  const Points native = f->values;
+  const Points x = vpm::pull_back_points(points, ball, mesh.tets, native);
+  std::vector<int> out(static_cast<size_t>(x.rows()));
+  for (Eigen::Index i = 0; i < x.rows(); ++i)
+    out[static_cast<size_t>(i)] =
+        static_cast<int>(std::lround(vpm::sample_image(atlas, x.row(i).transpose(), vpm::Interpolation::nearest)));
+  return out;
+}
 
 double mean_dice(const std::vector<vpm::LabelOverlap>& v) {
   double s = 0;
@@ -204,7 +221,8 @@ double mean_dice(const std::vector<vpm::LabelOverlap>& v) {
   return v.empty() ? 0.0 : s / v.size();
 }
 
-Overlap measure_overlap(const Subject& tmpl, const Subject& subj, const Registration& reg, int grid) {
+Overlap measure_overlap(const Subject& tmpl, const Subject& subj, const Registration& reg, int grid,
+                        const vpm::Image& tmpl_atlas, const vpm::Image& subj_atlas) {
   const auto t0 = Clock::now();
   const std::vector<int>&lab_t = reg.tmpl_labels, &lab_s = reg.subj_labels, &labels = reg.landmark_labels;
   const Points samples = vpm::ball_grid_points(grid);
@@ -219,6 +237,13 @@ Overlap measure_overlap(const Subject& tmpl, const Subject& subj, const Registra
   o.after = vpm::dice_overlap(s_t, s_after, kEvaluated);
   o.landmark_before = mean_dice(vpm::dice_overlap(s_t, s_before, labels));
   o.landmark_after = mean_dice(vpm::dice_overlap(s_t, s_after, labels));
+  const std::vector<int> i_t = image_labels(samples, tm.vertices, tm, tmpl_atlas);
+  const std::vector<int> i_before = image_labels(samples, sm.vertices, sm, subj_atlas);
+  const std::vector<int> i_after = image_labels(samples, reg.registered, sm, subj_atlas);
+  o.image_before = vpm::dice_overlap(i_t, i_before, kEvaluated);
+  o.image_after = vpm::dice_overlap(i_t, i_after, kEvaluated);
+  o.image_landmark_before = mean_dice(vpm::dice_overlap(i_t, i_before, labels));
+  o.image_landmark_after = mean_dice(vpm::dice_overlap(i_t, i_after, labels));
   o.seconds = seconds_since(t0);
   return o;
 }
@@ -244,6 +269,8 @@ vpm::Json demo_json(const std::string& device, const Settings& st, const Subject
     o["name"] = name_of(names, kEvaluated[i]);
     o["dice_before"] = ov.before[i].dice;
     o["dice_after"] = ov.after[i].dice;
+    o["dice_image_before"] = ov.image_before[i].dice;
+    o["dice_image_after"] = ov.image_after[i].dice;
     jd.push_back(o);
   }
   vpm::Json jo = vpm::Json::object();
@@ -252,6 +279,8 @@ vpm::Json demo_json(const std::string& device, const Settings& st, const Subject
   jo["held_out"] = jd;
   jo["landmark_regions_mean_dice_before"] = ov.landmark_before;
   jo["landmark_regions_mean_dice_after"] = ov.landmark_after;
+  jo["landmark_regions_mean_dice_image_before"] = ov.image_landmark_before;
+  jo["landmark_regions_mean_dice_image_after"] = ov.image_landmark_after;
   report["overlap"] = jo;
   report["timings_s"] = timings;
   return report;
@@ -282,11 +311,17 @@ void print_summary(const std::string& device, const Settings& st, const Subject&
       << strprintf("%.1e", reg.result.landmark_rms_error) << ", max |u.n| " << strprintf("%.1e", reg.result.max_normal_velocity)
       << ", vertex / tet |r-1| " << two_pcts("%.2f%%", reg.metrics) << ", " << reg.metrics.inverted_tets << " inverted, "
       << strprintf("%.1f", reg.seconds) << " s\n";
-  out << "Dice with colin27 in the ball (" << ov.points << " points; held-out regions):\n";
+  out << "Dice with colin27 in the ball (" << ov.points << " points; held-out regions), labels read from each\n"
+      << "subject's atlas image through its map (tet labels, capped by the mesh resolution, in brackets):\n";
+  auto pair = [](const vpm::LabelOverlap& image, const vpm::LabelOverlap& tet) {
+    return strprintf("%.3f", image.dice) + " (" + strprintf("%.3f", tet.dice) + ")";
+  };
   row("", "before", "after");
   for (size_t i = 0; i < kEvaluated.size(); ++i)
-    row(name_of(names, kEvaluated[i]), strprintf("%.3f", ov.before[i].dice), strprintf("%.3f", ov.after[i].dice));
-  row("mean of the landmark regions", strprintf("%.3f", ov.landmark_before), strprintf("%.3f", ov.landmark_after));
+    row(name_of(names, kEvaluated[i]), pair(ov.image_before[i], ov.before[i]), pair(ov.image_after[i], ov.after[i]));
+  row("mean of the landmark regions",
+      strprintf("%.3f", ov.image_landmark_before) + " (" + strprintf("%.3f", ov.landmark_before) + ")",
+      strprintf("%.3f", ov.image_landmark_after) + " (" + strprintf("%.3f", ov.landmark_after) + ")");
   out << "total " << strprintf("%.1f", total) << " s; wrote " << (st.out / "demo.json").string()
       << " and the meshes (.vtu, open in ParaView) in " << st.out.string() << "\n";
   std::cout << out.str();
@@ -310,7 +345,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   const Subject subj = mesh_and_map(dev, image_b, atlas_b, st.meshing, "subject", st.out);
   const Registration reg = register_subject(dev, tmpl, subj, st);
   timings["register"] = reg.seconds;
-  const Overlap ov = measure_overlap(tmpl, subj, reg, st.grid);
+  const Overlap ov = measure_overlap(tmpl, subj, reg, st.grid, atlas, atlas_b);
   timings["overlap"] = ov.seconds;
   const double total = seconds_since(t_start);
   timings["total"] = total;

@@ -21,8 +21,17 @@ if [[ ! -f $out/bids/participants.tsv || $(cat "$out/bids/.settings" 2>/dev/null
     --seed "${SEED:-1}" --jobs "${CORES:-2}"
   echo "$want" > "$out/bids/.settings"
 fi
-snakemake -s workflow/Snakefile --cores "${CORES:-2}" --directory "$out" --quiet rules \
-  --config bids="$out/bids" out="$out/results" vpm="$PWD/$build/vpm"
+# Snakemake's whole log goes to snakemake.log; its progress lines show here
+if ! snakemake -s workflow/Snakefile --cores "${CORES:-2}" --directory "$out" \
+    --config bids="$out/bids" out="$out/results" vpm="$PWD/$build/vpm" 2>&1 |
+    tee "$out/snakemake.log" | grep --line-buffered -E "steps \(|^Nothing to be done"; then
+  echo "cohort: no progress from the workflow" >&2
+fi
+if [[ ! -s $out/results/evaluation.md ]] || grep -q "^Error in rule\|Exiting because a job execution failed" "$out/snakemake.log"; then
+  grep -A12 "^Error in rule" "$out/snakemake.log" >&2 || tail -20 "$out/snakemake.log" >&2
+  echo "cohort: the workflow failed; see $out/snakemake.log and $out/results/logs/" >&2
+  exit 3
+fi
 echo
 echo "Cohort analysis ($want): per-element tables in $out/results/tables, each patient's z-map"
 echo "and foci on its own PET grid in $out/results/compare (sub-*_pet_z.nii.gz, _foci.nii.gz,"

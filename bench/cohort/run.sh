@@ -20,7 +20,7 @@ if [[ ! -f $out/bids/participants.tsv ]]; then
     --seed "$seed" --jobs "$cores"
 fi
 synth_s=$SECONDS
-snakemake -s workflow/Snakefile --cores "$cores" --directory "$out" --quiet rules \
+snakemake -s workflow/Snakefile --cores "$cores" --directory "$out" \
   --config bids="$out/bids" out="$out/results" vpm="$PWD/$build/vpm"
 workflow_s=$((SECONDS - synth_s))
 /usr/bin/python3 bench/cohort/summary.py --results "$out/results" --synth-seconds "$synth_s" \

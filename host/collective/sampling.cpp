@@ -13,11 +13,14 @@
 namespace vpm {
 
 Points pull_back_samples(const CanonicalElements& el, const Points& ball, const Tets& tets, const Points& native) {
+  return pull_back_points(el.samples(), ball, tets, native);
+}
+
+Points pull_back_points(const Points& s, const Points& ball, const Tets& tets, const Points& native) {
   if (ball.rows() != native.rows())
-    throw InputError("pull_back_samples: the ball mesh has " + std::to_string(ball.rows()) +
+    throw InputError("pull_back: the ball mesh has " + std::to_string(ball.rows()) +
                      " vertices but its native positions " + std::to_string(native.rows()));
   const TetLocator locator(ball, tets);
-  const Points& s = el.samples();
   const std::vector<Location> loc = locator.locate_all(s);
   Points out(s.rows(), 3);
   detail::parallel_for(static_cast<int>(s.rows()), 4096, [&](int begin, int end) {

@@ -21,6 +21,10 @@ namespace vpm {
 /// barycentric coordinates. Runs on the host threads.
 Points pull_back_samples(const CanonicalElements& elements, const Points& ball, const Tets& tets, const Points& native);
 
+/// Native positions of any ball points (k x 3) through a ball mesh, by the same rules as
+/// pull_back_samples (which calls it with the element samples).
+Points pull_back_points(const Points& points, const Points& ball, const Tets& tets, const Points& native);
+
 /// One feature's per-element statistics over the element's samples inside the image grid.
 struct ElementFeature {
   std::string name;          ///< column prefix, e.g. "pet"

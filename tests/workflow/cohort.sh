@@ -48,6 +48,13 @@ touch "$work/bids/sub-N02/pet/sub-N02_pet.nii.gz"
 smk -n > "$work/run3.log" 2>&1
 jobs=$(awk '/^Job stats:/{s=1;next} s&&/^total/{exit} s&&NF==4&&$2~/^[0-9]+$/{print $1}' "$work/run3.log" | sort | tr '\n' ' ')
 [[ $jobs == "compare evaluate group sample " ]] || { cat "$work/run3.log"; fail "stale rerun plans: $jobs"; }
+# on Slurm (dry run: the plan only): the 4 subjects' participant-level chains are one group job
+rm -rf "$work/results/subjects/sub-N03"
+(cd "$work" && snakemake -s "$src/workflow/Snakefile" --profile "$src/workflow/profiles/slurm" -n \
+   --config bids="$work/bids" out="$work/results" vpm="$build/vpm") > "$work/slurm.log" 2>&1 ||
+  { tail -30 "$work/slurm.log"; fail "the Slurm profile's plan failed"; }
+[[ $(grep -c "^group job participant" "$work/slurm.log") -eq 1 ]] || { cat "$work/slurm.log"; fail "not one group job"; }
+grep -q "slurm_account=" "$work/slurm.log" || fail "the Slurm resources are not in the plan"
 # a participants.tsv without a group column is refused naming the file
 cp -r "$work/bids" "$work/bad"
 printf 'participant_id\tage\nsub-N01\t30\n' > "$work/bad/participants.tsv"
