@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include "vpm/error.hpp"
+#include "vpm/format.hpp"
 #include "vpm/io.hpp"
 
 namespace vpm::cli {
@@ -97,6 +98,22 @@ MeshInOut mesh_in_out(const Args& args, const Command& command) {
   if (!is_mesh_path(io.in)) throw InputError(io.in + ": unknown mesh file extension");
   if (!is_mesh_path(io.out)) throw InputError(io.out + ": unknown mesh file extension for the output");
   return io;
+}
+
+int convergence_status(const std::string& command, const std::string& what, double reached, double tolerance,
+                       const std::string& reason, bool allow_partial, std::string (*format)(double)) {
+  if (reached <= tolerance) return kExitOk;
+  const bool fail = reached > 2 * tolerance && !allow_partial;
+  std::fprintf(stderr, "vpm %s: warning: not converged: %s %s > tolerance %s (%s); the output was written%s\n",
+               command.c_str(), what.c_str(), format(reached).c_str(), format(tolerance).c_str(), reason.c_str(),
+               fail ? "; exit status 4 (--allow-partial: 0)" : "");
+  return fail ? kExitNotConverged : kExitOk;
+}
+
+int convergence_status(const std::string& command, const MapConvergence& c, bool allow_partial) {
+  if (!c.checked) return kExitOk;
+  return convergence_status(command, "vertex mean |r-1|", c.reached, c.tolerance, "rounds stopped: " + c.reason,
+                            allow_partial, [](double v) { return pct(v); });
 }
 
 std::optional<std::string> Args::get(const std::string& opt) const {

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "vpm/ball_map.hpp"
 #include "vpm/error.hpp"
 
 namespace vpm::cli {
@@ -40,6 +41,15 @@ struct MeshInOut {
   std::string in, out;
 };
 MeshInOut mesh_in_out(const Args& args, const Command& command);
+
+/// After an output was written: a warning line on stderr when `reached` missed `tolerance`
+/// ("vpm CMD: warning: not converged: WHAT REACHED > tolerance TOL (REASON); ..."), and the exit
+/// status: kExitNotConverged when it missed by more than 2x and !allow_partial, else 0.
+/// `format` prints a value (e.g. vpm::pct).
+int convergence_status(const std::string& command, const std::string& what, double reached, double tolerance,
+                       const std::string& reason, bool allow_partial, std::string (*format)(double));
+/// The same for a ball map (vpm/ball_map.hpp MapConvergence; 0 when it was not checked).
+int convergence_status(const std::string& command, const MapConvergence& convergence, bool allow_partial);
 
 /// Runs `parse` (a library parser of an option's value, e.g. parse_volume_map_method) and
 /// prefixes an InputError it throws with "option FLAG: ", so the message names the flag.

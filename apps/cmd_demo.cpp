@@ -118,6 +118,8 @@ Subject mesh_and_map(vpm::Device& dev, const vpm::Image& image, const vpm::Image
   bo.volume.progress = [&](const std::string& line) { vpm::cli::progress("demo: " + name + ": " + line); };
   s.map = vpm::map_to_ball(dev, mesh, vr, name, bo);
   s.map_seconds = seconds_since(t0);
+  if (!s.map.convergence.converged)
+    vpm::cli::convergence_status("demo: " + name, s.map.convergence, true);  // a warning line, no exit
   vpm::write_mesh((out / (name + "_ball.vtu")).string(), s.map.mesh);
   vpm::write_json_file((out / (name + "_map.json")).string(), vpm::to_json(s.map));
   s.vertices = mesh.num_vertices();

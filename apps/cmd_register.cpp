@@ -6,6 +6,7 @@
 #include "cli.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
+#include "vpm/format.hpp"
 #include "vpm/io.hpp"
 #include "vpm/json.hpp"
 #include "vpm/metrics.hpp"
@@ -16,6 +17,9 @@
 namespace {
 
 using namespace vpm;
+
+// Landmark error (ball units, about 0.07 mm in a brain) above which the registration warns.
+constexpr double kLandmarkTolerance = 5e-4;
 
 RegistrationOptions parse_options(const cli::Args& args) {
   RegistrationOptions opt;
@@ -151,6 +155,7 @@ Json report_json(const std::string& device, const Inputs& io, const Registration
   for (const char* k : {"landmark_rms_error", "landmark_max_error", "max_normal_velocity", "inverted_tets",
                         "vertex_volume_ratio", "tet_volume_ratio", "boundary_max_radius_error"})
     r[k] = *summary.find(k);
+  r["converged"] = res.landmark_max_error <= kLandmarkTolerance;
   r["registration"] = to_json(res);
   r["timings_s"] = timings;
   return r;
@@ -195,7 +200,10 @@ int run(const cli::Command& self, const std::vector<std::string>& argv) {
     timings["total"] = seconds_since(t_start);
     write_json_file(*report_path, report_json(dev.name(), io, res, mm, timings));
   }
-  return 0;
+  // the flow's landmarks are exact up to the RK4 error (about 1e-10); far from it something is off
+  return cli::convergence_status("register", "landmark max error", res.landmark_max_error, kLandmarkTolerance,
+                                 "after the flow and volume restoration", args.has("--allow-partial"),
+                                 [](double v) { return strprintf("%.2e", v); });
 }
 
 vpm::cli::Registrar reg(
@@ -215,6 +223,7 @@ vpm::cli::Registrar reg(
       {"--field", "per-step|steady", "a field per RK4 stage (default) or the paper's steady field"},
       {"--no-rigid", "", "skip the rotation step"},
       {"--no-untangle", "", "skip local untangling (folded results exit 3)"},
-      {"--no-restore", "", "skip the volume restoration after the flow"}},
+      {"--no-restore", "", "skip the volume restoration after the flow"},
+      {"--allow-partial", "", "exit 0 even when a landmark misses its target by over 1e-3 (the warning stays)"}},
      run});
 }  // namespace

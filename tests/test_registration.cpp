@@ -410,6 +410,27 @@ TEST_CASE("vpm register --template: atlas-region centroids as landmarks, held-ou
   }
 }
 
+TEST_CASE("vpm register: landmarks far from their targets after the flow warn and exit 4") {
+  // one RK4 step for moves of up to 0.3: the flow misses the targets by about 2e-3
+  TetMesh m = smooth_ball(6);
+  m.set_point_field("original_position", FieldValues(m.vertices));
+  write_mesh(tmp("few_steps.vtu"), m);
+  write_text(tmp("few_src.csv"), "0.3,0.2,0.1\n-0.4,0.1,0.2\n0.1,-0.5,0.3\n0.0,0.2,-0.6\n");
+  write_text(tmp("few_dst.csv"), "0.6,0.1,0.2\n-0.2,0.4,0.1\n0.3,-0.25,0.45\n0.2,0.1,-0.35\n");
+  const std::string args = tmp("few_steps.vtu") + " -o " + tmp("few_out.vtu") + " --landmarks " + tmp("few_src.csv") +
+                           " --targets " + tmp("few_dst.csv") + " --no-rigid --report " + tmp("few.json");
+  CHECK(vpm_register(args + " --steps 1", tmp("few_err.txt")) == kExitNotConverged);
+  CHECK(slurp(tmp("few_err.txt")).find("warning: not converged: landmark max error") != std::string::npos);
+  CHECK(std::filesystem::exists(tmp("few_out.vtu")));
+  const Json j = Json::parse(slurp(tmp("few.json")));
+  CHECK_FALSE(j.find("converged")->boolean());
+  CHECK(j.find("landmark_max_error")->number() > 1e-3);
+  CHECK(vpm_register(args + " --steps 1 --allow-partial", tmp("few_err.txt")) == 0);
+  // enough steps: converged
+  CHECK(vpm_register(args + " --steps 20", tmp("few_err.txt")) == 0);
+  CHECK(Json::parse(slurp(tmp("few.json"))).find("converged")->boolean());
+}
+
 TEST_CASE("vpm register: bad input exits 2 naming the file and line") {
   const TetMesh m = smooth_ball(4);
   const std::string mesh = tmp("ball4.vtu"), out = tmp("bad_out.vtu"), err = tmp("bad_err.txt");

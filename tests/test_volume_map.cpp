@@ -269,6 +269,47 @@ TEST_CASE("volume map: a folded start that cannot be untangled is refused with N
   CHECK_THROWS_AS(parse_map_boundary("free"), InputError);
 }
 
+TEST_CASE("vpm map: a map that misses --tolerance warns, says converged false, exits 4 past 2x") {
+  const std::string vpm = VPM_BINARY;
+  write_mesh(tmp("conv_in.vtu"), test::ellipsoid_mesh(4));
+  const std::string err = tmp("conv_err.txt"), report = tmp("conv_report.json");
+  auto json = [&] {
+    std::ifstream in(report);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return Json::parse(ss.str());
+  };
+  auto text = [&] {
+    std::ifstream in(err);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  };
+  // the default tolerance is met: converged, exit 0, no warning
+  REQUIRE(run_status(vpm + " map " + tmp("conv_in.vtu") + " -o " + tmp("conv_ok.vtu") + " --report " + report +
+                     " --quiet 2> " + err) == 0);
+  CHECK(json().find("converged")->boolean());
+  CHECK(text().find("warning") == std::string::npos);
+  // an unreachable tolerance: the map is written, the report says why, exit 4
+  fs::remove(tmp("conv_out.vtu"));
+  CHECK(run_status(vpm + " map " + tmp("conv_in.vtu") + " -o " + tmp("conv_out.vtu") + " --tolerance 1e-9 --report " +
+                   report + " --quiet 2> " + err) == kExitNotConverged);
+  CHECK(fs::exists(tmp("conv_out.vtu")));
+  const Json j = json();
+  CHECK_FALSE(j.find("converged")->boolean());
+  CHECK(j.find("convergence")->find("reached")->number() > 1e-9);
+  CHECK(!j.find("convergence")->find("reason")->string().empty());
+  CHECK(text().find("vpm map: warning: not converged: vertex mean |r-1|") != std::string::npos);
+  // --allow-partial keeps 0 and the warning; fixed --rounds are not checked against the tolerance
+  CHECK(run_status(vpm + " map " + tmp("conv_in.vtu") + " -o " + tmp("conv_out.vtu") +
+                   " --tolerance 1e-9 --allow-partial --quiet 2> " + err) == 0);
+  CHECK(text().find("warning: not converged") != std::string::npos);
+  CHECK(run_status(vpm + " map " + tmp("conv_in.vtu") + " -o " + tmp("conv_out.vtu") + " --tolerance 1e-9 --rounds 1 --report " +
+                   report + " --quiet 2> " + err) == 0);
+  CHECK(json().find("converged") == nullptr);
+  CHECK_FALSE(json().find("convergence")->find("checked")->boolean());
+}
+
 TEST_CASE("vpm map: writes the ball mesh with fields and the report, refuses bad options") {
   const std::string vpm = VPM_BINARY;
   const TetMesh m = test::ellipsoid_mesh(4);

@@ -69,8 +69,23 @@ BallMap map_to_ball(Device& device, const TetMesh& input, const ValidationReport
   out.refined_vertices = im.mesh.num_vertices();
   out.refined_tets = im.mesh.num_tets();
   out.initial_map = std::move(im.report);
+  out.convergence.tolerance = options.volume.tolerance;
+  out.convergence.reached = out.final.vertex_volume_ratio.mean_abs_dev;
+  out.convergence.reason = out.volume_map ? out.volume_map->stop_reason : "initial map only";
+  out.convergence.checked = options.volume.rounds < 0;
+  out.convergence.converged = !out.convergence.checked || out.convergence.reached <= out.convergence.tolerance;
   out.timings.total = seconds_since(t_start);
   return out;
+}
+
+Json to_json(const MapConvergence& c) {
+  Json j = Json::object();
+  j["checked"] = c.checked;
+  j["converged"] = c.converged;
+  j["tolerance"] = c.tolerance;
+  j["reached"] = c.reached;
+  j["reason"] = c.reason;
+  return j;
 }
 
 Json to_json(const BallMap& b) {
@@ -105,6 +120,8 @@ Json to_json(const BallMap& b) {
   j["timings_s"] = t;
   j["initial_map"] = to_json(b.initial_map);
   if (b.volume_map) j["volume_map"] = to_json(*b.volume_map);
+  if (b.convergence.checked) j["converged"] = b.convergence.converged;
+  j["convergence"] = to_json(b.convergence);
   return j;
 }
 

@@ -27,6 +27,19 @@ struct BallMapTimings {
   double initial_map = 0, volume_map = 0, metrics = 0, total = 0;
 };
 
+/// Whether the map reached its tolerance. Checked only when the rounds ran "until tolerance"
+/// (VolumeMapOptions::rounds == -1); a fixed number of rounds is what the caller asked for.
+struct MapConvergence {
+  bool checked = false;
+  bool converged = true;   ///< final vertex mean |r-1| <= tolerance (true when not checked)
+  double tolerance = 0;
+  double reached = 0;      ///< final vertex mean |r-1|
+  std::string reason;      ///< why the rounds stopped (VolumeMapResult::stop_reason)
+};
+
+/// {"checked", "converged", "tolerance", "reached", "reason"}
+Json to_json(const MapConvergence& convergence);
+
 struct BallMap {
   /// The mapped mesh: input vertices first (input order), then the vertices inserted by the
   /// boundary-edge split; positions in the closed unit ball (boundary on the sphere), every tet
@@ -43,6 +56,7 @@ struct BallMap {
   int refined_vertices = 0, refined_tets = 0;  ///< after the boundary-edge split
   InitialMapReport initial_map;        ///< what the initial map did
   std::optional<VolumeMapResult> volume_map;  ///< absent when options.volume.rounds == 0
+  MapConvergence convergence;
   BallMapTimings timings;
 };
 
@@ -50,7 +64,8 @@ struct BallMap {
 /// "reoriented_tets"}, "refined": {"vertices","tets"}, "initial": METRICS, "final": METRICS,
 /// "rounds": [...], "timings_s": {"total","initial_map","volume_map","volume_map_solve",
 /// "volume_map_field","volume_map_advect","volume_map_untangle","metrics"}, "initial_map": {...},
-/// "volume_map": {...} (when it ran)}. `vpm map` adds "read"/"write" to "timings_s".
+/// "volume_map": {...} (when it ran), "converged": bool (when checked), "convergence": {...}}.
+/// `vpm map` adds "read"/"write" to "timings_s".
 Json to_json(const BallMap& map);
 
 /// Maps `input` (validated by validate_mesh, whose report is `validation`) to the unit ball so

@@ -20,6 +20,8 @@ class NumericalError : public std::runtime_error {
 };
 
 /// Exit status the command-line program uses for each error kind.
-enum ExitCode : int { kExitOk = 0, kExitInternal = 1, kExitInput = 2, kExitNumerical = 3 };
+/// 4: the output was written but missed its tolerance by a wide margin (vpm map, vpm register;
+/// `--allow-partial` turns it into 0; the warning and the report's "converged": false stay).
+enum ExitCode : int { kExitOk = 0, kExitInternal = 1, kExitInput = 2, kExitNumerical = 3, kExitNotConverged = 4 };
 
 }  // namespace vpm
