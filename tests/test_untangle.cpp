@@ -192,3 +192,32 @@ TEST_CASE("triangles flipped on the sphere are repaired along the sphere, then t
   if (!folded.empty()) untangle_local(m.vertices, m.tets, x, boundary, folded, 4);
   CHECK(inverted_tets(x, m.tets).empty());
 }
+
+TEST_CASE("untangle never returns more folds than it was given") {
+  // badly tangled maps (half the interior vertices thrown 0.3-1.2 away) and a budget of one
+  // outer iteration: the minimisation may stop in a worse place than it started; the result
+  // must then be the input
+  const TetMesh m = test::ball_mesh(5);
+  const auto fixed = boundary_of(m);
+  int reverted = 0;
+  for (unsigned seed = 1; seed <= 40; ++seed) {
+    std::srand(seed);
+    Points x = m.vertices;
+    for (int i = 0; i < m.num_vertices(); ++i)
+      if (!fixed[i] && std::rand() % 2 == 0)
+        x.row(i) += (0.3 + 0.1 * (seed % 10)) * Eigen::RowVector3d::Random();
+    const Points x0 = x;
+    UntangleOptions o = seed % 2 ? UntangleOptions() : untangle_local_options();
+    o.max_outer_iterations = 1;
+    o.max_lbfgs_iterations = 1 + static_cast<int>(seed % 3);
+    const UntangleResult r = untangle(m.vertices, m.tets, x, fixed, o);
+    INFO("seed " << seed << ": " << r.inverted_before << " -> " << r.inverted_after);
+    CHECK(r.inverted_after <= r.inverted_before);
+    CHECK(r.inverted_after == static_cast<int>(inverted_tets(x, m.tets).size()));
+    if (r.kept_input) {
+      ++reverted;
+      CHECK((x - x0).cwiseAbs().maxCoeff() == 0.0);
+    }
+  }
+  CHECK(reverted >= 1);  // seed 26 (local options, one L-BFGS step) ends worse: 207 -> 210 folds
+}

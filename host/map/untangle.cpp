@@ -235,10 +235,19 @@ UntangleResult run(Problem& p, const Points& reference, const Tets& tets, Points
     dev_eval = std::make_unique<UntangleDeviceEval>(*device, p, static_cast<int>(x.rows()));
     p.device = dev_eval.get();
   }
+  const Points given = x;
   minimise(p, x, o, t0, r);
   p.device = nullptr;
   r.inverted_tets = inverted_tets(x, tets);
   r.inverted_after = static_cast<int>(r.inverted_tets.size());
+  if (r.inverted_after > r.inverted_before) {  // never hand back more folds than were given
+    x = given;
+    r.kept_input = true;
+    r.inverted_tets = inverted_tets(x, tets);
+    r.inverted_after = static_cast<int>(r.inverted_tets.size());
+    r.min_det_after = r.min_det_before;
+    r.energy_after = r.energy_before;
+  }
   r.seconds = seconds_since(t0);
   return r;
 }
@@ -368,6 +377,7 @@ Json to_json(const UntangleResult& r) {
   j["final_eps"] = r.final_eps;
   j["seconds"] = r.seconds;
   j["out_of_time"] = r.out_of_time;
+  j["kept_input"] = r.kept_input;
   Json list = Json::array();
   for (size_t i = 0; i < r.inverted_tets.size() && i < 20; ++i) list.push_back(r.inverted_tets[i]);
   j["inverted_tets_first"] = list;

@@ -74,6 +74,9 @@ struct UntangleResult {
   double final_eps = 0;
   double seconds = 0;
   bool out_of_time = false;  ///< stopped by options.max_seconds
+  /// The minimisation ended with more inverted tets than it started with, so `x` was left as
+  /// given (inverted_after == inverted_before): the untangler never returns more folds.
+  bool kept_input = false;
   std::vector<int> inverted_tets;  ///< indices (into `tets`) of all tets still inverted after
 };
 /// The scalar fields above (same names), plus "inverted_tets_first": the first 20 inverted tets.
