@@ -322,6 +322,19 @@ TEST_CASE("a closed surface file is meshed, an open one is refused") {
   for (size_t i = 0; i + 1 < T.size(); ++i)
     for (int k = 0; k < 3; ++k) open.triangles(int(i), k) = T[i][k];
   CHECK(input_error_of([&] { mesh_surface(open, o); }).find("open edges") != std::string::npos);
+
+  // the same sphere with vertex 4 (the north pole) pulled through to below the south pole: its
+  // fan crosses the southern triangles; refused before TetGen sees it, naming a crossing pair
+  TriSurface crossed;
+  crossed.vertices.resize(int(P.size()), 3);
+  for (size_t i = 0; i < P.size(); ++i) crossed.vertices.row(int(i)) = 10 * P[i].transpose();
+  crossed.vertices.row(4) << 0, 0, -14;
+  crossed.triangles.resize(int(T.size()), 3);
+  for (size_t i = 0; i < T.size(); ++i)
+    for (int k = 0; k < 3; ++k) crossed.triangles(int(i), k) = T[i][k];
+  const std::string msg = input_error_of([&] { mesh_surface(crossed, o, nullptr, "crossed.off"); });
+  CHECK(msg.find("crossed.off: the surface self-intersects") != std::string::npos);
+  CHECK(msg.find("pairs of triangles cross (e.g. triangles") != std::string::npos);
 }
 
 TEST_CASE("Colin27 at the paper's size with AAL labels") {

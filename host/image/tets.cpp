@@ -70,7 +70,12 @@ TetMesh surface_to_tets(const TriSurface& raw, const Resolution& res, const Mesh
                         MeshImageReport& report, const std::string& source) {
   Stopwatch t0;
   if (o.progress) o.progress("remeshing the surface to edge " + format_sig(res.edge, 3) + " mm");
-  TriSurface s = remesh_surface(raw, res.edge, o.remesh_iterations);
+  TriSurface s;
+  try {
+    s = remesh_surface(raw, res.edge, o.remesh_iterations);
+  } catch (const InputError& e) {
+    throw InputError(source + ": " + e.what());
+  }
   record(report, "remesh", t0);
   check_closed_genus0(s, source, "the remeshed surface");
   report.surface = surface_stats(s);

@@ -3,6 +3,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/angle_and_area_smoothing.h>
 #include <CGAL/Polygon_mesh_processing/remesh.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
 
 #include <string>
@@ -17,6 +18,22 @@ namespace {
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Mesh = CGAL::Surface_mesh<K::Point_3>;
 namespace PMP = CGAL::Polygon_mesh_processing;
+
+// InputError when triangles of `mesh` cross each other: how many pairs, and the first pair with
+// a point of it (TetGen cannot mesh such a surface, and has crashed on one).
+void refuse_self_intersections(const Mesh& mesh, const std::string& what) {
+  if (!PMP::does_self_intersect(mesh)) return;
+  std::vector<std::pair<Mesh::Face_index, Mesh::Face_index>> pairs;
+  PMP::self_intersections(faces(mesh), mesh, std::back_inserter(pairs));
+  std::string where;
+  if (!pairs.empty()) {
+    const auto p = mesh.point(mesh.target(mesh.halfedge(pairs[0].first)));
+    where = " (e.g. triangles " + std::to_string(pairs[0].first.idx()) + " and " +
+            std::to_string(pairs[0].second.idx()) + ", near " + std::to_string(p.x()) + ", " + std::to_string(p.y()) +
+            ", " + std::to_string(p.z()) + ")";
+  }
+  throw InputError(what + " self-intersects: " + std::to_string(pairs.size()) + " pairs of triangles cross" + where);
+}
 }  // namespace
 
 TriSurface remesh_surface(const TriSurface& surface, double edge_length, int iterations) {
@@ -32,6 +49,7 @@ TriSurface remesh_surface(const TriSurface& surface, double edge_length, int ite
                        " cannot be added (non-manifold or inconsistently oriented surface)");
   }
   if (!CGAL::is_closed(mesh)) throw InputError("remesh: the surface is not closed");
+  refuse_self_intersections(mesh, "the surface");
 
   PMP::isotropic_remeshing(faces(mesh), edge_length, mesh,
                            PMP::parameters::number_of_iterations(iterations)
@@ -43,6 +61,8 @@ TriSurface remesh_surface(const TriSurface& surface, double edge_length, int ite
                                           .use_Delaunay_flips(true)
                                           .use_safety_constraints(true));
   mesh.collect_garbage();
+  refuse_self_intersections(mesh, "the remeshed surface (edge " + std::to_string(edge_length) +
+                                      "; thin parts need a smaller edge: more --target-vertices)");
 
   TriSurface out;
   out.vertices.resize(mesh.number_of_vertices(), 3);

@@ -116,7 +116,8 @@ std::map<int, LabelVolume> label_mesh(TetMesh& mesh, const Image& atlas);
 
 /// Isotropic remeshing of a closed manifold surface to `edge_length` (CGAL
 /// Polygon_mesh_processing::isotropic_remeshing, then angle-and-area smoothing), keeping its
-/// topology. Throws InputError when vpm was built without CGAL.
+/// topology. Throws InputError when vpm was built without CGAL, and when the surface, or the
+/// remeshed surface, self-intersects (how many triangle pairs cross, the first pair and where).
 TriSurface remesh_surface(const TriSurface& surface, double edge_length, int iterations);
 
 /// Smallest and largest triangle angles of a surface, degrees.
