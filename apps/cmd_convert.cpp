@@ -4,6 +4,7 @@
 #include "cli.hpp"
 #include "vpm/error.hpp"
 #include "vpm/io.hpp"
+#include "vpm/topology.hpp"
 
 namespace {
 int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
@@ -23,6 +24,13 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   if (!vpm::is_mesh_path(in))
     throw vpm::InputError(in + ": unknown file extension (meshes: .node .ele .mesh .vtu .msh; "
                           "surfaces: .off .obj .stl)");
+  if (vpm::is_surface_path(out)) {  // a tet mesh's boundary (e.g. to remesh it with vpm mesh-image)
+    const vpm::TriSurface s = vpm::boundary_surface(vpm::read_mesh(in));
+    vpm::write_surface(out, s);
+    vpm::cli::info("wrote the boundary of " + in + " to " + out + ": " + std::to_string(s.vertices.rows()) +
+                   " vertices, " + std::to_string(s.triangles.rows()) + " triangles");
+    return 0;
+  }
   if (!vpm::is_mesh_path(out))
     throw vpm::InputError(out + ": unknown file extension for a tet mesh (expected .node .ele "
                           ".mesh .vtu .msh)");
@@ -32,5 +40,5 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
                  std::to_string(m.num_tets()) + " tets");
   return 0;
 }
-vpm::cli::Registrar reg({"convert", "IN OUT", "convert between mesh (or surface) formats, chosen by extension", {}, run});
+vpm::cli::Registrar reg({"convert", "IN OUT", "convert between mesh (or surface) formats, chosen by extension; a tet mesh to .off/.obj/.stl writes its boundary", {}, run});
 }  // namespace

@@ -47,6 +47,12 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   vpm::cli::progress("read " + in + ": " + std::to_string(mesh.num_vertices()) + " vertices, " +
                      std::to_string(mesh.num_tets()) + " tets");
 
+  if (vr.sliver_tets > 0)
+    std::fprintf(stderr,
+                 "vpm map: warning: %s: %d tets with a dihedral angle below %g deg (smallest %.3g deg at tet %d): "
+                 "slivers can make the map fold or stall; remesh first: vpm convert %s boundary.off && "
+                 "vpm mesh-image boundary.off -o remeshed.vtu\n",
+                 in.c_str(), vr.sliver_tets, vpm::kSliverDihedralDeg, vr.min_dihedral_deg, vr.min_dihedral_tet, in.c_str());
   vpm::BallMapOptions bo;
   bo.volume = vo;
   vpm::BallMap bm = vpm::map_to_ball(dev, mesh, vr, in, bo);

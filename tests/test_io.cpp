@@ -1,6 +1,7 @@
 // Mesh and surface file formats: exact round trips, a corpus of broken files, the vpm binary's
 // exit codes, and VTK's own reader on our .vtu output.
 #include <catch2/catch.hpp>
+#include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cmath>
@@ -164,6 +165,16 @@ TEST_CASE("io: vpm convert and exit codes") {
   CHECK(std::count(msg.begin(), msg.end(), '\n') == 1);
   CHECK_THAT(msg, Catch::Contains(tmp("cvbad.node") + ":4:") && Catch::Contains("not a number"));
   CHECK(!fs::exists(tmp("cvbad.vtu")));
+  // a tet mesh to a surface format: its boundary, outward, only the boundary's vertices
+  write_mesh(tmp("cube2.vtu"), test::cube_mesh(2));
+  CHECK(run_status(vpm + " convert " + tmp("cube2.vtu") + " " + tmp("cube2.off") + " --quiet") == 0);
+  const TriSurface b = read_surface(tmp("cube2.off"));
+  CHECK(b.vertices.rows() == 26);   // 3^3 grid points less the centre
+  CHECK(b.triangles.rows() == 48);  // 6 faces x 4 squares x 2
+  double volume = 0;                // divergence theorem: outward faces enclose +1
+  for (Eigen::Index f = 0; f < b.triangles.rows(); ++f)
+    volume += b.vertices.row(b.triangles(f, 0)).dot(b.vertices.row(b.triangles(f, 1)).cross(b.vertices.row(b.triangles(f, 2)))) / 6;
+  CHECK(volume == Approx(1.0));
 }
 
 TEST_CASE("io: Medit .mesh round trip with tet references as labels") {

@@ -28,6 +28,17 @@ TEST_CASE("a good cube mesh validates and reports its boundary") {
   CHECK(r.boundary_euler == 2);
   CHECK(r.boundary_faces == 108);
   CHECK(r.min_dihedral_deg == Approx(45.0).margin(1e-9));
+  CHECK(r.sliver_tets == 0);
+}
+
+TEST_CASE("slivers are counted: tets with a dihedral angle below kSliverDihedralDeg") {
+  TetMesh m = test::single_tet();
+  m.vertices.row(3) << 0.3, 0.3, 0.005;  // the apex almost in the base plane
+  const ValidationReport r = validate_mesh(m, "sliver");
+  CHECK(r.min_dihedral_deg < kSliverDihedralDeg);
+  CHECK(r.sliver_tets == 1);
+  TetMesh fine = test::single_tet();
+  CHECK(validate_mesh(fine, "tet").sliver_tets == 0);
 }
 
 TEST_CASE("negatively oriented tets are fixed and counted") {

@@ -66,6 +66,7 @@ BallMap map_to_ball(Device& device, const TetMesh& input, const ValidationReport
   out.input_tets = input.num_tets();
   out.input_min_dihedral_deg = validation.min_dihedral_deg;
   out.input_reoriented_tets = validation.reoriented_tets;
+  out.input_sliver_tets = validation.sliver_tets;
   out.refined_vertices = im.mesh.num_vertices();
   out.refined_tets = im.mesh.num_tets();
   out.initial_map = std::move(im.report);
@@ -96,6 +97,7 @@ Json to_json(const BallMap& b) {
   jin["tets"] = b.input_tets;
   jin["min_dihedral_deg"] = b.input_min_dihedral_deg;
   jin["reoriented_tets"] = b.input_reoriented_tets;
+  jin["sliver_tets"] = b.input_sliver_tets;
   j["input"] = jin;
   Json jref = Json::object();
   jref["vertices"] = b.refined_vertices;

@@ -202,4 +202,21 @@ SurfaceTopology surface_topology(int num_vertices, const Triangles& faces) {
   return s;
 }
 
+TriSurface boundary_surface(const TetMesh& mesh) {
+  const Triangles faces = boundary_faces(mesh.tets);
+  const std::vector<char> used = boundary_vertex_mask(mesh.num_vertices(), faces);
+  std::vector<int> id(used.size(), -1);
+  int n = 0;
+  for (size_t v = 0; v < used.size(); ++v)
+    if (used[v]) id[v] = n++;
+  TriSurface s;
+  s.vertices.resize(n, 3);
+  for (size_t v = 0; v < used.size(); ++v)
+    if (used[v]) s.vertices.row(id[v]) = mesh.vertices.row(static_cast<Eigen::Index>(v));
+  s.triangles.resize(faces.rows(), 3);
+  for (Eigen::Index f = 0; f < faces.rows(); ++f)
+    for (int c = 0; c < 3; ++c) s.triangles(f, c) = id[faces(f, c)];
+  return s;
+}
+
 }  // namespace vpm

@@ -124,6 +124,7 @@ void measure_quality(const TetMesh& mesh, ValidationReport& rep) {
   Eigen::Index r = 0, c = 0;
   rep.min_dihedral_deg = dih.minCoeff(&r, &c);
   rep.min_dihedral_tet = static_cast<int>(r);
+  rep.sliver_tets = static_cast<int>((dih.array() < kSliverDihedralDeg).rowwise().any().count());
 }
 
 }  // namespace

@@ -53,6 +53,7 @@ struct BallMap {
   int input_vertices = 0, input_tets = 0;
   double input_min_dihedral_deg = 0;  ///< from the validation report
   int input_reoriented_tets = 0;      ///< from the validation report
+  int input_sliver_tets = 0;          ///< from the validation report
   int refined_vertices = 0, refined_tets = 0;  ///< after the boundary-edge split
   InitialMapReport initial_map;        ///< what the initial map did
   std::optional<VolumeMapResult> volume_map;  ///< absent when options.volume.rounds == 0
@@ -61,7 +62,7 @@ struct BallMap {
 };
 
 /// The report of docs/design.md 6: {"device", "input": {"vertices","tets","min_dihedral_deg",
-/// "reoriented_tets"}, "refined": {"vertices","tets"}, "initial": METRICS, "final": METRICS,
+/// "reoriented_tets","sliver_tets"}, "refined": {"vertices","tets"}, "initial": METRICS, "final": METRICS,
 /// "rounds": [...], "timings_s": {"total","initial_map","volume_map","volume_map_solve",
 /// "volume_map_field","volume_map_advect","volume_map_untangle","metrics"}, "initial_map": {...},
 /// "volume_map": {...} (when it ran), "converged": bool (when checked), "convergence": {...}}.

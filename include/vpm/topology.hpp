@@ -13,6 +13,10 @@ namespace vpm {
 /// Faces shared by three or more tets are not returned; count them with nonmanifold_faces().
 Triangles boundary_faces(const Tets& tets, std::vector<int>* face_tet = nullptr);
 
+/// The boundary of a tet mesh as a surface: boundary_faces over the vertices they use
+/// (renumbered in increasing order of the mesh's vertex ids), outward for positive tets.
+TriSurface boundary_surface(const TetMesh& mesh);
+
 /// Number of triangles shared by more than two tets (0 for a manifold tet mesh).
 int nonmanifold_faces(const Tets& tets);
 

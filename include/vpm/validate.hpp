@@ -8,6 +8,9 @@
 namespace vpm {
 
 /// What validation found and fixed.
+/// Dihedral angle (degrees) below which a tet counts as a sliver.
+constexpr double kSliverDihedralDeg = 2.0;
+
 struct ValidationReport {
   int reoriented_tets = 0;   ///< negatively oriented tets fixed by swapping two vertices
   int boundary_faces = 0;
@@ -15,6 +18,9 @@ struct ValidationReport {
   int boundary_euler = 0;    ///< Euler characteristic of the boundary surface (2 for a sphere)
   double min_dihedral_deg = 0;  ///< smallest dihedral angle over all tets
   int min_dihedral_tet = -1;    ///< tet where it occurs
+  /// Tets with a dihedral angle below kSliverDihedralDeg: slivers, which make the map fold or
+  /// stall (remesh such an input: docs/volume_map.md "Slivers").
+  int sliver_tets = 0;
   std::vector<std::string> notes;  ///< human-readable remarks (fixes made)
 };
 
