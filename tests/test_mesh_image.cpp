@@ -11,6 +11,7 @@
 #include <map>
 #include <string>
 
+#include "support/process.hpp"
 #include "vpm/config.hpp"
 #include "vpm/error.hpp"
 #include "vpm/geometry.hpp"
@@ -335,6 +336,15 @@ TEST_CASE("a closed surface file is meshed, an open one is refused") {
   const std::string msg = input_error_of([&] { mesh_surface(crossed, o, nullptr, "crossed.off"); });
   CHECK(msg.find("crossed.off: the surface self-intersects") != std::string::npos);
   CHECK(msg.find("pairs of triangles cross (e.g. triangles") != std::string::npos);
+
+  // TetGen runs in a child process: a crash there (forced by the test hook) is exit 2 with a
+  // message, not a crash of vpm, and nothing is written
+  const std::string out = kTmp + "/crashed.vtu", err = kTmp + "/crashed.txt";
+  std::filesystem::remove(out);
+  CHECK(test::run_status("VPM_TEST_TETGEN_CRASH=1 " + std::string(VPM_BINARY) + " mesh-image " + path + " -o " + out +
+                         " --target-vertices 600 2> " + err) == 2);
+  CHECK(test::slurp(err).find("crashed (signal 11) on this surface") != std::string::npos);
+  CHECK(!std::filesystem::exists(out));
 }
 
 TEST_CASE("Colin27 at the paper's size with AAL labels") {

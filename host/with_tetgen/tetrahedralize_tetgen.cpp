@@ -4,12 +4,15 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <csignal>
+#include <cstring>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 #include <set>
 #include <vector>
 
+#include "core/child_process.hpp"
 #include "vpm/error.hpp"
 #include "vpm/geometry.hpp"
 #include "vpm/mesh_image.hpp"
@@ -31,8 +34,8 @@ std::string tetgen_error(int code) {
   }
 }
 
-void run_tetgen(const std::string& switches, const TriSurface& s, const std::vector<Eigen::Vector3d>& extra,
-                TetMesh& mesh) {
+void run_tetgen_here(const std::string& switches, const TriSurface& s, const std::vector<Eigen::Vector3d>& extra,
+                     TetMesh& mesh) {
   tetgenio in, add, out;
   in.firstnumber = 0;
   in.numberofpoints = int(s.vertices.rows());
@@ -65,7 +68,9 @@ void run_tetgen(const std::string& switches, const TriSurface& s, const std::vec
   try {
     tetrahedralize(buf.data(), &in, &out, extra.empty() ? nullptr : &add, nullptr);
   } catch (int code) {
-    throw NumericalError("TetGen (-" + sw + ") failed: " + tetgen_error(code));
+    const std::string what = "TetGen (-" + sw + ") failed: " + tetgen_error(code);
+    if (code == 1 || code == 2) throw NumericalError(what);
+    throw InputError(what);  // the surface itself: self-intersecting, too-close features, invalid
   }
   if (out.numberoftetrahedra <= 0 || out.numberofcorners < 4)
     throw NumericalError("TetGen (-" + sw + ") produced no tetrahedra");
@@ -85,6 +90,36 @@ void run_tetgen(const std::string& switches, const TriSurface& s, const std::vec
     const Eigen::Vector3d d = mesh.vertices.row(mesh.tets(t, 3));
     if ((b - a).dot((c - a).cross(d - a)) < 0) std::swap(mesh.tets(t, 2), mesh.tets(t, 3));
   }
+}
+
+// TetGen runs in a child process (core/child_process.hpp): its error paths have crashed in its
+// own memory clean-up (tetgenmesh::freememory) after rejecting a surface, and a crash must not
+// take vpm down. VPM_TEST_TETGEN_CRASH=1 makes the child crash on purpose (tests of this path).
+void run_tetgen(const std::string& switches, const TriSurface& s, const std::vector<Eigen::Vector3d>& extra,
+                TetMesh& mesh) {
+  const std::string bytes = detail::run_in_child(
+      [&] {
+        if (const char* crash = std::getenv("VPM_TEST_TETGEN_CRASH"); crash && std::string(crash) == "1")
+          std::raise(SIGSEGV);
+        TetMesh m;
+        run_tetgen_here(switches, s, extra, m);
+        const int counts[2] = {m.num_vertices(), m.num_tets()};
+        std::string out(reinterpret_cast<const char*>(counts), sizeof counts);
+        out.append(reinterpret_cast<const char*>(m.vertices.data()), sizeof(double) * m.vertices.size());
+        out.append(reinterpret_cast<const char*>(m.tets.data()), sizeof(int) * m.tets.size());
+        return out;
+      },
+      "TetGen (-" + switches + ")", " on this surface: it usually means self-intersecting or nearly touching parts");
+  int counts[2] = {0, 0};
+  if (bytes.size() >= sizeof counts) std::memcpy(counts, bytes.data(), sizeof counts);
+  mesh = TetMesh();
+  mesh.vertices.resize(counts[0], 3);
+  mesh.tets.resize(counts[1], 4);
+  const size_t nv = sizeof(double) * mesh.vertices.size();
+  if (bytes.size() != sizeof counts + nv + sizeof(int) * mesh.tets.size())
+    throw NumericalError("TetGen (-" + switches + "): the mesh from the child process is truncated");
+  std::memcpy(mesh.vertices.data(), bytes.data() + sizeof counts, nv);
+  std::memcpy(mesh.tets.data(), bytes.data() + sizeof counts + nv, sizeof(int) * mesh.tets.size());
 }
 
 // Removes vertices no tet uses (TetGen keeps none normally, but -i may leave some).
