@@ -2,9 +2,12 @@
 
 #include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 #include "core/atomic_file.hpp"
+#include "vpm/error.hpp"
 
 namespace vpm {
 
@@ -217,6 +220,18 @@ void write_json_file(const std::string& path, const Json& json) {
   detail::AtomicFile f(path);
   f.stream() << json.dump(2) << '\n';
   f.commit();
+}
+
+Json read_json_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot be read");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  try {
+    return Json::parse(ss.str());
+  } catch (const std::exception& e) {
+    throw InputError(path + ": not JSON: " + e.what());
+  }
 }
 
 }  // namespace vpm

@@ -59,4 +59,8 @@ class Json {
 /// Throws InputError naming the path when it cannot be written.
 void write_json_file(const std::string& path, const Json& json);
 
+/// Reads and parses the JSON file at `path`. Throws InputError naming the path when it cannot be
+/// read or is not JSON (with the offset of the problem).
+Json read_json_file(const std::string& path);
+
 }  // namespace vpm

@@ -18,7 +18,7 @@ PUBLIC = {
     "image": ["image", "mesh_image", "mesh_image_report"],
     "map": ["initial_map", "untangle", "volume_map", "ball_map"],
     "register": ["rbf", "registration"],
-    "collective": ["collective", "elements", "sampling", "statistics", "map_back"],
+    "collective": ["collective", "elements", "sampling", "statistics", "map_back", "cohort_view", "view_page"],
 }
 WITH = {"with_tetgen": "image", "with_cgal": "image", "with_nifti": "image"}
 

@@ -1,0 +1,136 @@
+// The per-patient inputs of the collective view (vpm/cohort_view.hpp): the foci table and the
+// image with its z-map for slice views, the template's atlas labels per element and their names.
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "collective/cohort_view_detail.hpp"
+#include "vpm/collective.hpp"
+#include "vpm/error.hpp"
+#include "vpm/image.hpp"
+#include "vpm/io.hpp"
+
+namespace vpm::detail {
+
+std::vector<ViewFocus> read_view_foci(const std::string& path, const Comparison& c) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot be read (the foci table of vpm compare --image)");
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> head;
+  for (std::stringstream ss(line); std::getline(ss, line, '\t');) head.push_back(line);
+  const auto col = [&](const std::string& name) {
+    const auto it = std::find(head.begin(), head.end(), name);
+    if (it == head.end()) throw InputError(path + ":1: no column '" + name + "'");
+    return static_cast<size_t>(it - head.begin());
+  };
+  const size_t id = col("focus"), vol = col("volume_mm3"), cx = col("centroid_x"), pz = col("peak_z"), lab = col("label");
+  std::vector<ViewFocus> out;
+  for (int n = 2; std::getline(in, line); ++n) {
+    if (line.empty()) continue;
+    std::vector<std::string> cells;
+    for (std::stringstream ss(line); std::getline(ss, line, '\t');) cells.push_back(line);
+    if (cells.size() != head.size()) throw InputError(path + ":" + std::to_string(n) + ": expected " +
+                                                      std::to_string(head.size()) + " columns");
+    ViewFocus f;
+    try {
+      f.id = std::stoi(cells[id]);
+      f.volume_mm3 = std::stod(cells[vol]);
+      for (int a = 0; a < 3; ++a) f.centroid[a] = std::stod(cells[cx + a]);
+      f.peak_z = std::stod(cells[pz]);
+      f.label = std::stoi(cells[lab]);
+    } catch (const std::exception&) {
+      throw InputError(path + ":" + std::to_string(n) + ": not a number");
+    }
+    for (const FocusCluster& cl : c.clusters)
+      if (cl.id == f.id) f.peak_element = cl.peak_element;
+    out.push_back(f);
+  }
+  return out;
+}
+
+namespace {
+
+std::vector<std::uint8_t> scaled_bytes(const Image& image, const std::vector<size_t>& voxels) {
+  std::vector<float> positive;
+  for (size_t v : voxels)
+    if (image.data[v] > 0 && std::isfinite(image.data[v])) positive.push_back(image.data[v]);
+  float top = 1;
+  if (!positive.empty()) {
+    const size_t q = std::min(positive.size() - 1, static_cast<size_t>(0.995 * positive.size()));
+    std::nth_element(positive.begin(), positive.begin() + static_cast<long>(q), positive.end());
+    top = positive[q] > 0 ? positive[q] : 1;
+  }
+  std::vector<std::uint8_t> out(voxels.size());
+  for (size_t i = 0; i < voxels.size(); ++i) {
+    const float v = image.data[voxels[i]];
+    out[i] = static_cast<std::uint8_t>(std::isfinite(v) ? std::clamp(v / top * 255.0f, 0.0f, 255.0f) : 0.0f);
+  }
+  return out;
+}
+
+}  // namespace
+
+ViewSlices read_view_slices(const std::string& image_path, const std::map<std::string, std::string>& z_paths,
+                            long max_voxels) {
+  const Image image = read_nifti(image_path);
+  ViewSlices s;
+  s.source = image_path;
+  const double n = static_cast<double>(image.size());
+  s.step = std::max(1, static_cast<int>(std::ceil(std::cbrt(n / std::max(1L, max_voxels)) - 1e-9)));
+  for (int a = 0; a < 3; ++a) s.dims[a] = (image.dims[a] + s.step - 1) / s.step;
+  s.affine = image.affine;
+  s.affine.topLeftCorner<3, 3>() *= static_cast<double>(s.step);
+  std::vector<size_t> voxels;
+  voxels.reserve(static_cast<size_t>(s.dims[0]) * s.dims[1] * s.dims[2]);
+  for (int k = 0; k < s.dims[2]; ++k)
+    for (int j = 0; j < s.dims[1]; ++j)
+      for (int i = 0; i < s.dims[0]; ++i) voxels.push_back(image.index(i * s.step, j * s.step, k * s.step));
+  s.image = scaled_bytes(image, voxels);
+  for (const auto& [feature, path] : z_paths) {
+    const Image z = read_nifti(path);
+    if (z.dims != image.dims)
+      throw InputError(path + ": the z-map's grid differs from the image's (" + image_path + ")");
+    std::vector<std::int8_t> q(voxels.size());
+    for (size_t i = 0; i < voxels.size(); ++i) {
+      const float v = z.data[voxels[i]];
+      q[i] = static_cast<std::int8_t>(std::isfinite(v) ? std::clamp(std::lround(v * s.z_scale), -127L, 127L) : 0);
+    }
+    s.z[feature] = std::move(q);
+  }
+  return s;
+}
+
+std::vector<int> element_labels(const CanonicalElements& el, const std::string& template_mesh) {
+  const TetMesh t = read_mesh(template_mesh);
+  const std::vector<int> labels = cell_labels(t);
+  const std::vector<double> radii = shell_mid_radii(el);
+  Points centres(el.size(), 3);
+  for (int e = 0; e < el.size(); ++e) {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (int v = 0; v < 3; ++v) c += el.sphere().vertices.row(el.sphere().triangles(el.triangle_of(e), v)).transpose();
+    centres.row(e) = c.normalized().transpose() * radii[el.shell_of(e)];
+  }
+  return sample_labels(t.vertices, t.tets, labels, centres);
+}
+
+std::map<int, std::string> read_label_names(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot be read (atlas label names)");
+  std::map<int, std::string> names;
+  std::string line;
+  for (int n = 1; std::getline(in, line); ++n) {
+    while (!line.empty() && std::isspace(static_cast<unsigned char>(line.back()))) line.pop_back();
+    std::stringstream ss(line);
+    int id = 0;
+    std::string name;
+    if (line.find_first_not_of(" \t") == std::string::npos || line[0] == '#') continue;
+    if (!(ss >> id >> name)) throw InputError(path + ":" + std::to_string(n) + ": expected 'id name'");
+    names[id] = name;
+  }
+  return names;
+}
+
+}  // namespace vpm::detail

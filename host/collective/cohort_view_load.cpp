@@ -1,0 +1,189 @@
+// load_cohort_view (vpm/cohort_view.hpp): a cohort read back from the workflow's results folder.
+#include <algorithm>
+#include <filesystem>
+
+#include "collective/cohort_view_detail.hpp"
+#include "vpm/error.hpp"
+#include "vpm/icosphere.hpp"
+#include "vpm/io.hpp"
+#include "vpm/json.hpp"
+
+namespace vpm {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+/// One `vpm compare` result: its sidecar, the patient's and the normals' tables.
+struct ComparisonFile {
+  std::string tsv, feature, patient_table;
+  std::vector<std::string> normal_tables;
+  Normalisation normalisation = Normalisation::proportional;
+  CompareOptions options;
+  size_t clusters = 0;
+};
+
+/// `path` as written, or relative to the folder holding the results folder.
+std::string resolve(const std::string& path, const fs::path& results, const std::string& what) {
+  if (fs::exists(path)) return path;
+  const fs::path alt = results.parent_path() / path;
+  if (fs::exists(alt)) return alt.string();
+  throw InputError(path + ": " + what + " not found");
+}
+
+std::vector<ComparisonFile> read_comparisons(const fs::path& results, const std::string& only) {
+  const fs::path dir = results / "compare";
+  if (!fs::is_directory(dir)) throw InputError(dir.string() + ": no such folder; run the workflow's group level (vpm compare) first");
+  std::vector<ComparisonFile> out;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    if (entry.path().extension() != ".json") continue;
+    const std::string side = entry.path().string();
+    const Json j = read_json_file(side);
+    const Json *ref = j.find("reference"), *pat = j.find("patient"), *opt = j.find("options"), *res = j.find("result");
+    if (!ref || !pat || !opt || !res) continue;  // not a comparison's sidecar
+    ComparisonFile c;
+    c.tsv = (entry.path().parent_path() / entry.path().stem()).string() + ".tsv";
+    c.feature = ref->find("feature") ? ref->find("feature")->string() : "";
+    if (!only.empty() && c.feature != only) continue;
+    c.patient_table = resolve(pat->string(), results, "the patient's table named in " + side);
+    const Json* tables = ref->find("tables");
+    if (!tables || c.feature.empty()) throw InputError(side + ": no reference feature or tables");
+    for (size_t i = 0; i < tables->size(); ++i)
+      c.normal_tables.push_back(resolve(tables->at(i).string(), results, "a normal's table named in " + side));
+    c.normalisation = parse_normalisation(ref->find("normalisation")->string());
+    c.options.threshold = opt->find("threshold")->number();
+    c.options.fdr_q = opt->find("fdr_q")->number();
+    c.options.min_cluster = static_cast<int>(opt->find("min_cluster")->number());
+    c.options.sign = static_cast<int>(opt->find("sign")->number());
+    c.clusters = res->find("clusters") ? res->find("clusters")->size() : 0;
+    out.push_back(std::move(c));
+  }
+  if (out.empty())
+    throw InputError(dir.string() + ": no comparison" + (only.empty() ? "" : " of feature '" + only + "'") +
+                     " (sidecars of vpm compare); run the workflow's group level first");
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.tsv < b.tsv; });
+  return out;
+}
+
+/// Subject tables by path, read once.
+struct Tables {
+  std::map<std::string, ElementTable> by_path;
+  const ElementTable& get(const std::string& path) {
+    auto it = by_path.find(path);
+    if (it == by_path.end()) it = by_path.emplace(path, read_subject_table(path)).first;
+    return it->second;
+  }
+};
+
+std::string subject_id(const ElementTable& t, const std::string& path) {
+  return t.subject.empty() ? fs::path(path).stem().string() : t.subject;
+}
+
+ViewSubject& subject_for(CohortView& v, std::map<std::string, size_t>& index, const std::string& id, bool patient) {
+  auto it = index.find(id);
+  if (it == index.end()) {
+    it = index.emplace(id, v.subjects.size()).first;
+    v.subjects.push_back({});
+    v.subjects.back().id = id;
+  }
+  ViewSubject& s = v.subjects[it->second];
+  s.patient = s.patient || patient;
+  return s;
+}
+
+std::vector<float> to_float(const std::vector<double>& x) { return {x.begin(), x.end()}; }
+
+/// The reference of one feature and every subject's values and z-scores against it.
+void add_feature(CohortView& v, const CanonicalElements& el, const std::vector<const ComparisonFile*>& comps,
+                 Tables& tables, std::map<std::string, size_t>& index) {
+  const ComparisonFile& first = *comps.front();
+  std::vector<ElementTable> normals;
+  for (const std::string& p : first.normal_tables) normals.push_back(tables.get(p));
+  const Reference ref = build_reference(normals, first.normal_tables, first.feature, first.normalisation);
+  v.features.push_back({first.feature, first.normalisation, first.options, ref.subjects, to_float(ref.mean), to_float(ref.std)});
+  for (size_t i = 0; i < normals.size(); ++i) {
+    ViewSubject& s = subject_for(v, index, subject_id(normals[i], first.normal_tables[i]), false);
+    s.values[first.feature] = to_float(normalised_feature(normals[i], first.feature, first.normalisation));
+    s.z[first.feature] = to_float(compare_to_reference(el, ref, normals[i], first.options).z);
+  }
+  for (const ComparisonFile* c : comps) {
+    if (c->normal_tables != first.normal_tables || c->normalisation != first.normalisation)
+      throw InputError(c->tsv + ": compared against other normals than " + first.tsv + "; one reference per feature");
+    const ElementTable& t = tables.get(c->patient_table);
+    const Comparison cmp = compare_to_reference(el, ref, t, c->options);
+    if (cmp.clusters.size() != c->clusters)
+      throw InputError(c->tsv + ": its " + std::to_string(c->clusters) + " foci differ from the " +
+                       std::to_string(cmp.clusters.size()) + " its tables give now; rerun vpm compare");
+    ViewSubject& s = subject_for(v, index, subject_id(t, c->patient_table), true);
+    s.values[c->feature] = to_float(cmp.patient);
+    s.z[c->feature] = to_float(cmp.z);
+    s.foci_count[c->feature] = static_cast<int>(cmp.clusters.size());
+    const std::string base = c->tsv.substr(0, c->tsv.size() - 4);
+    if (fs::exists(base + "_foci.tsv")) s.foci[c->feature] = detail::read_view_foci(base + "_foci.tsv", cmp);
+  }
+}
+
+/// Shapes (every subject) and, for patients, element centres and slices.
+void add_geometry(CohortView& v, const CanonicalElements& el, Tables& tables, const std::vector<ComparisonFile>& comps,
+                  const fs::path& results, const CohortViewOptions& opt) {
+  std::map<std::string, std::string> mesh_of, image_of;
+  std::map<std::string, std::map<std::string, std::string>> z_of;
+  for (const auto& [path, t] : tables.by_path) mesh_of[subject_id(t, path)] = resolve(t.mesh, results, "the registered mesh named in " + path);
+  for (const ComparisonFile& c : comps) {
+    const ElementTable& t = tables.get(c.patient_table);
+    const std::string id = subject_id(t, c.patient_table), z = c.tsv.substr(0, c.tsv.size() - 4) + "_z.nii.gz";
+    for (const ElementFeature& f : t.features)
+      if (f.name == c.feature && fs::exists(f.source) && fs::exists(z)) {
+        image_of.emplace(id, f.source);
+        z_of[id][c.feature] = z;
+      }
+  }
+  for (ViewSubject& s : v.subjects) {
+    const TetMesh reg = read_mesh(mesh_of.at(s.id));
+    s.native = native_shell_surfaces(el, v.display, reg);
+    if (!s.patient) continue;
+    s.centres = native_element_centres(el, reg);
+    if (image_of.count(s.id)) {
+      s.slices = detail::read_view_slices(image_of[s.id], z_of[s.id], opt.max_slice_voxels);
+      s.has_slices = true;
+    }
+  }
+}
+
+}  // namespace
+
+CohortView load_cohort_view(const std::string& results_dir, const CohortViewOptions& opt) {
+  const fs::path results = fs::absolute(results_dir).lexically_normal();
+  const std::vector<ComparisonFile> comps = read_comparisons(results, opt.feature);
+  Tables tables;
+  CohortView v;
+  v.title = opt.title.empty() ? "vpm cohort: " + results.parent_path().filename().string() : opt.title;
+  v.definition = tables.get(comps.front().patient_table).definition;
+  const CanonicalElements el(v.definition);
+  v.mid_radii = shell_mid_radii(el);
+  v.display = icosphere(v.definition.level + 1);
+  v.display_triangle_element = display_triangle_elements(el, v.display);
+  std::map<std::string, size_t> index;
+  std::vector<std::string> order;
+  for (const ComparisonFile& c : comps)
+    if (std::find(order.begin(), order.end(), c.feature) == order.end()) order.push_back(c.feature);
+  for (const std::string& f : order) {
+    std::vector<const ComparisonFile*> of;
+    for (const ComparisonFile& c : comps)
+      if (c.feature == f) of.push_back(&c);
+    add_feature(v, el, of, tables, index);
+  }
+  for (const auto& [path, t] : tables.by_path)
+    if (t.definition != v.definition)
+      throw InputError(path + ": element definition differs from " + comps.front().patient_table + "'s");
+  add_geometry(v, el, tables, comps, results, opt);
+  std::stable_sort(v.subjects.begin(), v.subjects.end(), [](const ViewSubject& a, const ViewSubject& b) {
+    return a.patient != b.patient ? a.patient : a.id < b.id;
+  });
+  const std::string templ = !opt.template_mesh.empty() ? opt.template_mesh : (results / "template" / "template_ball.vtu").string();
+  if (!opt.template_mesh.empty() || fs::exists(templ)) v.element_label = detail::element_labels(el, templ);
+  if (!opt.label_names.empty()) v.label_names = detail::read_label_names(opt.label_names);
+  return v;
+}
+
+}  // namespace vpm

@@ -1,0 +1,109 @@
+#pragma once
+// What the collective view shows (paper 6.2, Figs. 8-10; docs/view.md): a cohort's subjects,
+// each with the same canonical surfaces (one per shell, the icosphere one level finer than the
+// elements, at the shell's middle radius) pulled back to its native space through its
+// registered map, its per-element feature values and z-scores against the normals, and for
+// each patient its foci in native space and its image with the z-map for slice views.
+// Typed data only: vpm/view_page.hpp turns it into a web page.
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "vpm/elements.hpp"
+#include "vpm/mesh.hpp"
+#include "vpm/statistics.hpp"
+
+namespace vpm {
+
+/// One focus cluster of a patient, as `vpm compare` measured it in native space.
+struct ViewFocus {
+  int id = 0;                 ///< FocusCluster::id (1 = largest)
+  double volume_mm3 = 0;
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();  ///< world mm
+  double peak_z = 0;
+  int peak_element = -1;
+  int label = 0;              ///< main atlas label under the focus (0: none)
+};
+
+/// A patient's image and z-map on (every `step`-th voxel of) its own grid, for slice views.
+struct ViewSlices {
+  std::array<int, 3> dims{0, 0, 0};
+  Eigen::Matrix4d affine = Eigen::Matrix4d::Identity();  ///< voxel (of the subsampled grid) -> world mm
+  int step = 1;
+  std::string source;                ///< the image file
+  std::vector<std::uint8_t> image;   ///< intensity scaled to 0..255 (0 and the 99.5th percentile)
+  std::map<std::string, std::vector<std::int8_t>> z;  ///< per feature: round(z * z_scale), clamped
+  double z_scale = 10;
+};
+
+struct ViewSubject {
+  std::string id;
+  bool patient = false;
+  /// shells x display vertices x 3 (mm): display vertex v of shell k at ball point
+  /// sphere(v) * mid_radius(k), pulled back through the registered mesh.
+  std::vector<float> native;
+  std::map<std::string, std::vector<float>> values;  ///< per feature: normalised value per element
+  std::map<std::string, std::vector<float>> z;       ///< per feature: z per element against the reference
+  std::map<std::string, int> foci_count;             ///< patients: clusters per feature
+  std::map<std::string, std::vector<ViewFocus>> foci;  ///< patients: per feature
+  std::vector<float> centres;  ///< patients: native position of each element's centre (elements x 3)
+  bool has_slices = false;
+  ViewSlices slices;
+};
+
+struct ViewFeature {
+  std::string name;
+  Normalisation normalisation = Normalisation::proportional;
+  CompareOptions compare;     ///< the options `vpm compare` used
+  int reference_subjects = 0;
+  std::vector<float> mean, std;  ///< the reference per element
+};
+
+struct CohortView {
+  std::string title;
+  ElementDefinition definition;
+  std::vector<double> mid_radii;          ///< per shell: the radius halving its volume
+  TriSurface display;                     ///< unit icosphere, one level finer than the elements
+  std::vector<int> display_triangle_element;  ///< per display triangle: its element triangle
+  std::vector<ViewFeature> features;
+  std::vector<int> element_label;         ///< per element: template atlas label at its centre (empty: none)
+  std::map<int, std::string> label_names; ///< atlas label -> region name (may be empty)
+  std::vector<ViewSubject> subjects;      ///< patients first, then normals, each by id
+};
+
+struct CohortViewOptions {
+  std::string feature;        ///< only this feature ("" = every feature compared)
+  std::string template_mesh;  ///< the template's ball mesh ("" = RESULTS/template/template_ball.vtu if present)
+  std::string label_names;    ///< atlas names: lines "id name [...]" (e.g. mricron's aal.nii.txt)
+  std::string title;
+  long max_slice_voxels = 400000;  ///< patients' images are subsampled to at most this many voxels
+};
+
+/// The radius of each shell that halves its volume: cbrt((r_k^3 + r_{k+1}^3) / 2).
+std::vector<double> shell_mid_radii(const CanonicalElements& elements);
+
+/// The element triangle of each triangle of `display` (a finer unit icosphere).
+std::vector<int> display_triangle_elements(const CanonicalElements& elements, const TriSurface& display);
+
+/// Native positions (shells x vertices x 3) of the display sphere's vertices at every shell's
+/// middle radius, pulled back through `registered` (a registered ball mesh with the point field
+/// original_position; InputError otherwise).
+std::vector<float> native_shell_surfaces(const CanonicalElements& elements, const TriSurface& display,
+                                         const TetMesh& registered);
+
+/// Native positions (elements x 3) of every element's centre (its triangle's centroid direction
+/// at the shell's middle radius) through `registered`.
+std::vector<float> native_element_centres(const CanonicalElements& elements, const TetMesh& registered);
+
+/// Reads a cohort from the workflow's results folder (docs/cohort.md): the comparisons
+/// compare/*.json (patients; their reference tables name the normals), each subject's table and
+/// registered mesh, the template's ball mesh for atlas regions, each patient's image (from its
+/// table) and z-map (compare/<name>_z.nii.gz) and foci table. InputError naming the file when
+/// something is missing, malformed, or inconsistent (tables of different element definitions;
+/// a comparison whose foci no longer match its tables).
+CohortView load_cohort_view(const std::string& results_dir, const CohortViewOptions& options = {});
+
+}  // namespace vpm

@@ -1,0 +1,35 @@
+// The page's data: a JSON manifest (ids, names, shapes, the table of buffers) and one binary
+// blob (base64 in a <script> tag) holding every array. vpm view writes both
+// (host/collective/view_page.cpp); the layout is documented in docs/view.md.
+
+const TYPES = {
+  f32: Float32Array, u32: Uint32Array, i32: Int32Array, i16: Int16Array,
+  u16: Uint16Array, u8: Uint8Array, i8: Int8Array,
+};
+
+function decodeBase64(text) {
+  const bin = atob(text.trim());
+  const bytes = new Uint8Array(bin.length);
+  for (let i = 0; i < bin.length; ++i) bytes[i] = bin.charCodeAt(i);
+  return bytes.buffer;
+}
+
+/** Reads the manifest and the blob from the page; returns {manifest, array(name)}. */
+export function loadPageData(doc = document) {
+  const manifest = JSON.parse(doc.getElementById('vpm-manifest').textContent);
+  if (manifest.format !== 'vpm-view-1') throw new Error(`unknown data format ${manifest.format}`);
+  const blob = decodeBase64(doc.getElementById('vpm-buffers').textContent);
+  const cache = new Map();
+  function array(name) {
+    if (cache.has(name)) return cache.get(name);
+    const b = manifest.buffers[name];
+    if (!b) throw new Error(`the page has no buffer '${name}'`);
+    const Type = TYPES[b.type];
+    if (!Type) throw new Error(`buffer '${name}': unknown type ${b.type}`);
+    if (b.offset % Type.BYTES_PER_ELEMENT) throw new Error(`buffer '${name}' is misaligned`);
+    const a = new Type(blob, b.offset, b.length);
+    cache.set(name, a);
+    return a;
+  }
+  return { manifest, array, bytes: blob.byteLength };
+}

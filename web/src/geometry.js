@@ -1,0 +1,107 @@
+// Surfaces of the table's cells. Every subject shares one triangulation: the icosphere one level
+// finer than the elements' (each element triangle split into four display triangles), at the
+// middle radius of a shell. In the ball it is that sphere; in native space the same vertices
+// pulled back through the subject's map (vpm view computes them), so every display triangle
+// belongs to the same canonical element in every cell and picking one element picks it everywhere.
+
+export class SurfaceModel {
+  constructor(manifest, array) {
+    const d = manifest.display;
+    this.V = d.vertices;
+    this.D = d.triangles;
+    this.K = manifest.shells;
+    this.T = manifest.triangles;
+    this.radii = manifest.radii;
+    this.index = array('display_index');
+    this.sphere = array('display_sphere');
+    this.faceTriangle = array('display_element_triangle');
+    // element triangle -> its display triangles
+    this.facesOf = Array.from({ length: this.T }, () => []);
+    for (let f = 0; f < this.D; ++f) this.facesOf[this.faceTriangle[f]].push(f);
+    this.native = manifest.subjects.map((s) => ({ q: array(s.native.buffer), scale: s.native.scale, offset: s.native.offset }));
+    this.centres = this.native.map((n) => this.centreOf(n));
+    let radius = 0;
+    this.native.forEach((n, i) => {
+      const p = this.vertices(n, this.K - 1, this.centres[i]);
+      for (let v = 0; v < this.V; ++v) radius = Math.max(radius, Math.hypot(p[3 * v], p[3 * v + 1], p[3 * v + 2]));
+    });
+    this.nativeRadius = radius || 1;
+  }
+
+  /** Dequantised native positions (mm) of shell k's surface, minus `centre`. */
+  vertices(n, k, centre = [0, 0, 0]) {
+    const out = new Float32Array(this.V * 3);
+    const base = k * this.V * 3;
+    for (let v = 0; v < this.V; ++v)
+      for (let c = 0; c < 3; ++c) out[3 * v + c] = n.offset[c] + n.q[base + 3 * v + c] * n.scale - centre[c];
+    return out;
+  }
+
+  centreOf(n) {
+    const p = this.vertices(n, this.K - 1);
+    const c = [0, 0, 0];
+    for (let v = 0; v < this.V; ++v) for (let a = 0; a < 3; ++a) c[a] += p[3 * v + a] / this.V;
+    return c;
+  }
+
+  /** Corners: each element triangle's display vertices, its own copies (6 for 4 display
+   *  triangles), so one element has one colour; `drawIndex` the display triangles over them,
+   *  element by element (triangle j belongs to element triangle elementOfDrawn[j]). */
+  buildCorners() {
+    const corners = [], draw = [], start = [0], owner = [];
+    for (let t = 0; t < this.T; ++t) {
+      const local = new Map();
+      for (const f of this.facesOf[t])
+        for (let c = 0; c < 3; ++c) {
+          const v = this.index[3 * f + c];
+          if (!local.has(v)) { local.set(v, corners.length); corners.push(v); }
+          draw.push(local.get(v));
+        }
+      for (let j = 0; j < this.facesOf[t].length; ++j) owner.push(t);
+      start.push(corners.length);
+    }
+    this.corners = Uint32Array.from(corners);
+    this.cornerStart = Uint32Array.from(start);
+    this.drawIndex = Uint32Array.from(draw);
+    this.elementOfDrawn = Uint32Array.from(owner);
+  }
+
+  /** Positions and smooth normals at the corners of subject i's shell k in native space
+   *  (scaled to the unit ball of the largest brain) or in the ball. */
+  surface(i, k, mode) {
+    if (!this.corners) this.buildCorners();
+    let p;
+    if (mode === 'ball') {
+      p = new Float32Array(this.V * 3);
+      for (let j = 0; j < p.length; ++j) p[j] = this.sphere[j] * this.radii[k];
+    } else {
+      p = this.vertices(this.native[i], k, this.centres[i]);
+      const s = 1 / this.nativeRadius;
+      for (let j = 0; j < p.length; ++j) p[j] *= s;
+    }
+    const vn = new Float32Array(this.V * 3);
+    const idx = this.index;
+    for (let f = 0; f < this.D; ++f) {
+      const a = 3 * idx[3 * f], b = 3 * idx[3 * f + 1], c = 3 * idx[3 * f + 2];
+      const ux = p[b] - p[a], uy = p[b + 1] - p[a + 1], uz = p[b + 2] - p[a + 2];
+      const wx = p[c] - p[a], wy = p[c + 1] - p[a + 1], wz = p[c + 2] - p[a + 2];
+      const nx = uy * wz - uz * wy, ny = uz * wx - ux * wz, nz = ux * wy - uy * wx;
+      for (const v of [a, b, c]) { vn[v] += nx; vn[v + 1] += ny; vn[v + 2] += nz; }
+    }
+    const n = this.corners.length;
+    const pos = new Float32Array(n * 3);
+    const nor = new Float32Array(n * 3);
+    for (let j = 0; j < n; ++j) {
+      const v = 3 * this.corners[j];
+      const l = Math.hypot(vn[v], vn[v + 1], vn[v + 2]) || 1;
+      for (let c = 0; c < 3; ++c) {
+        pos[3 * j + c] = p[v + c];
+        nor[3 * j + c] = vn[v + c] / l;
+      }
+    }
+    return { pos, nor };
+  }
+
+  /** Element id of drawn triangle j (a raycast's faceIndex) on shell k. */
+  element(k, j) { return k * this.T + this.elementOfDrawn[j]; }
+}

@@ -1,0 +1,308 @@
+// vpm's collective view (paper Figs. 8-10): subjects as rows, features as columns, each cell a
+// live 3-D view of the subject's brain (native shape) or of the common ball coloured by the
+// feature or its z-score against the normals. One canvas, one camera for all cells.
+import { loadPageData } from './data.js';
+import { SurfaceModel } from './geometry.js';
+import { TableScene, BufferAttribute } from './scene.js';
+import { Detail } from './detail.js';
+import { sequential, diverging, robustRange, sequentialCss, divergingCss, HIGHLIGHT } from './colour.js';
+import { fmt } from './plot.js';
+
+performance.mark('vpm:script');
+const { manifest, array, bytes } = loadPageData();
+performance.mark('vpm:decoded');
+
+const model = new SurfaceModel(manifest, array);
+const T = manifest.triangles;
+const K = manifest.shells;
+const features = manifest.features;
+const subjects = manifest.subjects.map((s, i) => ({ ...s, index: i }));
+const columns = features.flatMap((f) => [
+  { kind: 'value', feature: f.name, label: `${f.name} (${f.normalisation})` },
+  { kind: 'z', feature: f.name, label: `${f.name} z-score` },
+]);
+const regionOf = manifest.regions ? array(manifest.regions.buffer) : null;
+const ranges = Object.fromEntries(features.map((f) => [f.name,
+  robustRange(subjects.filter((s) => s.group !== 'patient').map((s) => array(s.values[f.name])))]));
+
+const state = {
+  mode: 'native', shell: K - 1, threshold: features[0]?.threshold ?? 3,
+  highlight: -1, detail: null, dirty: true,
+};
+
+// ---- page structure -------------------------------------------------------------------------
+const $ = (sel) => document.querySelector(sel);
+document.title = manifest.title;
+$('#title').textContent = manifest.title;
+const patients = subjects.filter((s) => s.group === 'patient');
+const normals = subjects.filter((s) => s.group !== 'patient');
+$('#summary').textContent = `${patients.length} patients, ${normals.length} normals; ` +
+  `${manifest.elements.toLocaleString()} canonical elements (level ${manifest.definition.level}, ` +
+  `${K} shells); reference from ${features.map((f) => `${f.reference_subjects} normals (${f.name})`).join(', ')}`;
+const shellInput = $('#shell');
+shellInput.max = String(K);
+shellInput.value = String(K);
+$('#threshold').value = String(state.threshold);
+
+const area = $('#table-area');
+const scene = new TableScene($('#gl'));
+
+function buildTable(title, rows, id) {
+  const h = document.createElement('h2');
+  h.textContent = `${title} (${rows.length})`;
+  area.appendChild(h);
+  const table = document.createElement('table');
+  table.id = id;
+  const head = table.createTHead().insertRow();
+  head.insertCell().textContent = 'subject';
+  for (const c of columns) {
+    const th = document.createElement('th');
+    th.innerHTML = `<div>${c.label}</div><div class="bar ${c.kind}"></div><div class="bar-labels"></div>`;
+    th.dataset.kind = c.kind;
+    th.dataset.feature = c.feature;
+    head.appendChild(th);
+  }
+  const body = table.createTBody();
+  for (const s of rows) {
+    const tr = body.insertRow();
+    tr.dataset.subject = s.id;
+    const th = document.createElement('th');
+    th.innerHTML = `<div class="sid">${s.id}</div><div class="group">${s.group}</div>`;
+    if (s.group === 'patient')
+      for (const f of features)
+        th.innerHTML += `<div class="foci" data-subject="${s.id}" data-feature="${f.name}" data-count="${s.foci[f.name]}">` +
+          `${s.foci[f.name]} foci (${f.name})</div>`;
+    tr.appendChild(th);
+    columns.forEach((c, ci) => {
+      const td = tr.insertCell();
+      const el = document.createElement('div');
+      el.className = 'cell';
+      td.appendChild(el);
+      cellsFor(s).push({ el, column: ci });
+    });
+  }
+  area.appendChild(table);
+}
+const pending = new Map();
+function cellsFor(s) {
+  if (!pending.has(s.index)) pending.set(s.index, []);
+  return pending.get(s.index);
+}
+buildTable('Patients', patients, 'patients');
+buildTable('Normals', normals, 'normals');
+
+// ---- geometry and colours -------------------------------------------------------------------
+const attrs = subjects.map(() => ({ position: null, normal: null }));
+let drawIndex = null;
+function setSurfaces() {
+  let ball = null;
+  subjects.forEach((s, i) => {
+    const surf = state.mode === 'ball' ? (ball ||= model.surface(0, state.shell, 'ball')) : model.surface(i, state.shell, 'native');
+    const a = attrs[i];
+    if (!a.position) {
+      a.position = new BufferAttribute(surf.pos, 3);
+      a.normal = new BufferAttribute(surf.nor, 3);
+    } else {
+      a.position.array.set(surf.pos);
+      a.normal.array.set(surf.nor);
+      a.position.needsUpdate = a.normal.needsUpdate = true;
+    }
+  });
+  for (const c of scene.cells) c.geometry.boundingSphere = null;
+}
+setSurfaces();
+drawIndex = new BufferAttribute(model.drawIndex, 1);
+const cornerCount = model.corners.length;
+for (const [i, list] of pending)
+  for (const { el, column } of list)
+    scene.addCell(el, area, drawIndex, attrs[i].position, attrs[i].normal, new Uint8Array(cornerCount * 3),
+      { subject: subjects[i], column: columns[column] });
+
+const tmp = [0, 0, 0];
+function colourOf(cell, e) {
+  if (e === state.highlight) return HIGHLIGHT;
+  const s = cell.subject, c = cell.column;
+  if (c.kind === 'value') {
+    const [lo, hi] = ranges[c.feature];
+    return sequential(array(s.values[c.feature])[e], lo, hi, tmp);
+  }
+  return diverging(array(s.z[c.feature])[e], state.threshold, state.threshold + 3, tmp);
+}
+/** Colours element triangle t of the shown shell in `cell` (all its corners). */
+function paintElement(cell, t) {
+  const col = colourOf(cell, state.shell * T + t);
+  const a = cell.geometry.attributes.color.array;
+  const r = Math.round(col[0] * 255), g = Math.round(col[1] * 255), b = Math.round(col[2] * 255);
+  for (let j = model.cornerStart[t]; j < model.cornerStart[t + 1]; ++j) {
+    a[3 * j] = r;
+    a[3 * j + 1] = g;
+    a[3 * j + 2] = b;
+  }
+}
+function recolour(cell) {
+  for (let t = 0; t < T; ++t) paintElement(cell, t);
+  cell.geometry.attributes.color.needsUpdate = true;
+}
+function recolourAll() { scene.cells.forEach(recolour); }
+recolourAll();
+
+function setHighlight(e) {
+  if (e === state.highlight) return;
+  const old = state.highlight;
+  state.highlight = e;
+  for (const id of [old, e]) {
+    if (id < 0 || Math.floor(id / T) !== state.shell) continue;
+    for (const cell of scene.cells) {
+      paintElement(cell, id % T);
+      cell.geometry.attributes.color.needsUpdate = true;
+    }
+  }
+  requestRender();
+}
+
+// ---- colour bars ----------------------------------------------------------------------------
+function updateBars() {
+  document.querySelectorAll('th[data-kind]').forEach((th) => {
+    const bar = th.querySelector('.bar');
+    const labels = th.querySelector('.bar-labels');
+    if (th.dataset.kind === 'value') {
+      const [lo, hi] = ranges[th.dataset.feature];
+      bar.style.background = sequentialCss();
+      labels.innerHTML = `<span>${fmt(lo)}</span><span>${fmt(hi)}</span>`;
+    } else {
+      bar.style.background = divergingCss();
+      labels.innerHTML = `<span>\u2264 -${fmt(state.threshold + 3)}</span><span>|z| < ${fmt(state.threshold)}</span>` +
+        `<span>\u2265 ${fmt(state.threshold + 3)}</span>`;
+    }
+  });
+  $('#threshold-value').textContent = fmt(state.threshold);
+  $('#shell-value').textContent = `${state.shell + 1} of ${K}` + (state.shell === K - 1 ? ' (outer)' : '');
+}
+updateBars();
+
+// ---- rendering ------------------------------------------------------------------------------
+let frameRequested = false;
+function requestRender() {
+  if (frameRequested) return;
+  frameRequested = true;
+  requestAnimationFrame(() => {
+    frameRequested = false;
+    scene.render();
+  });
+}
+window.addEventListener('resize', requestRender);
+area.addEventListener('scroll', requestRender, { passive: true });
+
+// ---- interaction ----------------------------------------------------------------------------
+const tooltip = $('#tooltip');
+const detail = new Detail({ manifest, array, model, scene, state, features, subjects, regionName, requestRender, area, drawIndex });
+function regionName(e) {
+  if (!regionOf) return '';
+  const id = regionOf[e];
+  if (!id) return 'outside the atlas';
+  return manifest.regions.names[String(id)] || `label ${id}`;
+}
+function cellAt(target) {
+  const el = target.closest && target.closest('.cell');
+  return el ? scene.cells.find((c) => c.el === el) : null;
+}
+function pickElement(cell, x, y) {
+  const f = scene.pick(cell, x, y);
+  return f < 0 ? -1 : model.element(state.shell, f);
+}
+let drag = null;
+document.addEventListener('pointerdown', (ev) => {
+  const cell = cellAt(ev.target);
+  if (!cell) return;
+  drag = { x: ev.clientX, y: ev.clientY, moved: 0, cell };
+  ev.preventDefault();
+});
+document.addEventListener('pointermove', (ev) => {
+  if (drag && ev.buttons) {
+    const dx = ev.clientX - drag.x, dy = ev.clientY - drag.y;
+    drag.moved += Math.abs(dx) + Math.abs(dy);
+    drag.x = ev.clientX;
+    drag.y = ev.clientY;
+    scene.rotate(dx, dy);
+    tooltip.hidden = true;
+    requestRender();
+    return;
+  }
+  const cell = cellAt(ev.target);
+  if (!cell) {
+    tooltip.hidden = true;
+    return setHighlight(-1);
+  }
+  const e = pickElement(cell, ev.clientX, ev.clientY);
+  setHighlight(e);
+  if (e < 0) {
+    tooltip.hidden = true;
+    return;
+  }
+  const s = cell.subject, fe = cell.column.feature;
+  tooltip.hidden = false;
+  tooltip.style.left = `${ev.clientX + 14}px`;
+  tooltip.style.top = `${ev.clientY + 10}px`;
+  tooltip.textContent = `${s.id} \u00b7 element ${e} (shell ${Math.floor(e / T) + 1}, triangle ${e % T})\n` +
+    `${fe} ${fmt(array(s.values[fe])[e])}, z ${fmt(array(s.z[fe])[e])}\n${regionName(e)}`;
+});
+document.addEventListener('pointerup', (ev) => {
+  if (drag && drag.moved < 4) {
+    const e = pickElement(drag.cell, ev.clientX, ev.clientY);
+    detail.open(drag.cell.subject, drag.cell.column.feature, e);
+  }
+  drag = null;
+});
+
+$('#mode-native').addEventListener('change', () => setMode('native'));
+$('#mode-ball').addEventListener('change', () => setMode('ball'));
+function setMode(mode) {
+  state.mode = mode;
+  scene.distance = mode === 'ball' ? 4.0 : 4.2;
+  scene.placeCamera();
+  setSurfaces();
+  requestRender();
+}
+shellInput.addEventListener('input', () => {
+  state.shell = Number(shellInput.value) - 1;
+  setSurfaces();
+  recolourAll();
+  detail.refresh();
+  updateBars();
+  requestRender();
+});
+$('#threshold').addEventListener('input', (ev) => {
+  state.threshold = Number(ev.target.value);
+  recolourAll();
+  detail.refresh();
+  updateBars();
+  requestRender();
+});
+
+// ---- first frame, measurements and test hooks -----------------------------------------------
+scene.render();
+performance.mark('vpm:first-frame');
+const marks = () => Object.fromEntries(performance.getEntriesByType('mark').map((m) => [m.name, m.startTime]));
+/** Rotates the camera by a small step each animation frame for `frames` frames; resolves to
+ *  the frame rate measured between the first and the last frame. */
+function benchRotate(frames = 60) {
+  return new Promise((resolve) => {
+    let n = 0, t0 = 0, drawn = 0;
+    function step(t) {
+      if (n === 1) t0 = t;
+      scene.rotate(3, 0);
+      drawn = scene.render();
+      if (++n <= frames) return requestAnimationFrame(step);
+      resolve({ frames: frames - 1, seconds: (t - t0) / 1000, fps: ((frames - 1) * 1000) / (t - t0), cells_drawn: drawn });
+    }
+    requestAnimationFrame(step);
+  });
+}
+window.vpmView = {
+  manifest, state, scene, model, detail, bytes, marks, benchRotate,
+  cells: () => scene.cells.map((c, i) => ({ i, subject: c.subject.id, column: c.column.label, rect: c.el.getBoundingClientRect().toJSON() })),
+  coveredPixels: (i) => scene.coveredPixels(scene.cells[i]),
+  camera: () => scene.cameraState(),
+  pick: (i, x, y) => pickElement(scene.cells[i], x, y),
+};
+document.body.dataset.ready = 'true';

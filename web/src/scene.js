@@ -1,0 +1,141 @@
+// One WebGL context for the whole page: every cell of the table (and the detail view) is a
+// rectangle of one fixed, full-window canvas, drawn with a scissored viewport and one shared
+// camera, so rotating in any cell rotates all of them (browsers allow only ~16 contexts).
+import {
+  BufferAttribute, BufferGeometry, Color, ColorManagement, LinearSRGBColorSpace, DirectionalLight, HemisphereLight, Mesh,
+  MeshLambertMaterial, PerspectiveCamera, Raycaster, Scene, Vector2, Vector3, WebGLRenderer,
+} from 'three';
+
+export const CELL_BACKGROUND = new Color(0.06, 0.07, 0.09);
+
+export class TableScene {
+  constructor(canvas) {
+    this.canvas = canvas;
+    this.renderer = new WebGLRenderer({ canvas, antialias: false, alpha: true });
+    this.renderer.setPixelRatio(1);
+    // colours are used as given (no sRGB conversion), so a pixel's value is predictable in tests
+    ColorManagement.enabled = false;
+    this.renderer.outputColorSpace = LinearSRGBColorSpace;
+    this.renderer.setClearColor(0x000000, 0);
+    this.scene = new Scene();
+    this.camera = new PerspectiveCamera(30, 1, 0.1, 100);
+    this.distance = 4.2;
+    this.scene.add(new HemisphereLight(0xffffff, 0x505050, 2.0));
+    this.light = new DirectionalLight(0xffffff, 1.6);
+    this.camera.add(this.light);
+    this.light.position.set(0.3, 0.5, 1);
+    this.scene.add(this.camera);
+    this.material = new MeshLambertMaterial({ vertexColors: true });
+    this.mesh = new Mesh(new BufferGeometry(), this.material);
+    this.mesh.frustumCulled = false;
+    this.scene.add(this.mesh);
+    this.cells = [];
+    this.raycaster = new Raycaster();
+    // brains in RAS millimetres: superior up, seen from the front left by default
+    this.yaw = 4.2;
+    this.pitch = 0.25;
+    this.placeCamera();
+  }
+
+  placeCamera() {
+    const cp = Math.cos(this.pitch), sp = Math.sin(this.pitch);
+    this.camera.position.set(Math.sin(this.yaw) * cp, -Math.cos(this.yaw) * cp, sp).multiplyScalar(this.distance);
+    this.camera.up.set(0, 0, 1);
+    this.camera.lookAt(0, 0, 0);
+    this.camera.updateMatrixWorld();
+  }
+
+  /** Rotates the shared camera by a drag of (dx, dy) pixels. */
+  rotate(dx, dy) {
+    this.yaw -= dx * 0.01;
+    this.pitch = Math.max(-1.5, Math.min(1.5, this.pitch + dy * 0.01));
+    this.placeCamera();
+  }
+
+  /** A cell: `el` (the DOM rectangle it draws into), its geometry (position and normal
+   *  attributes shared by a subject's cells, the index shared by all, colours (Uint8, one
+   *  per corner) of its own) and `clip`, the
+   *  element whose rectangle bounds it (the scrolling table or the detail panel). */
+  addCell(el, clip, index, position, normal, colours, info) {
+    const g = new BufferGeometry();
+    g.setIndex(index);
+    g.setAttribute('position', position);
+    g.setAttribute('normal', normal);
+    g.setAttribute('color', new BufferAttribute(colours, 3, true));
+    g.boundingSphere = null;
+    const cell = { el, clip, geometry: g, ...info };
+    this.cells.push(cell);
+    return cell;
+  }
+
+  resize() {
+    const w = window.innerWidth, h = window.innerHeight;
+    if (this.canvas.width !== w || this.canvas.height !== h) this.renderer.setSize(w, h, false);
+  }
+
+  /** Draws every cell whose rectangle is on screen; returns how many were drawn. */
+  render() {
+    this.resize();
+    const r = this.renderer;
+    const H = this.canvas.height;
+    r.setScissorTest(false);
+    r.clear();
+    r.setScissorTest(true);
+    let drawn = 0;
+    const clipRects = new Map();
+    for (const cell of this.cells) {
+      if (cell.hidden) continue;
+      const rect = cell.el.getBoundingClientRect();
+      if (!clipRects.has(cell.clip)) clipRects.set(cell.clip, cell.clip.getBoundingClientRect());
+      const c = clipRects.get(cell.clip);
+      const left = Math.max(rect.left, c.left), right = Math.min(rect.right, c.right);
+      const top = Math.max(rect.top, c.top), bottom = Math.min(rect.bottom, c.bottom);
+      if (right <= left || bottom <= top || rect.width < 2) continue;
+      r.setViewport(rect.left, H - rect.bottom, rect.width, rect.height);
+      r.setScissor(left, H - bottom, right - left, bottom - top);
+      r.setClearColor(CELL_BACKGROUND, 1);
+      r.clear();
+      this.camera.aspect = rect.width / rect.height;
+      this.camera.updateProjectionMatrix();
+      this.mesh.geometry = cell.geometry;
+      r.render(this.scene, this.camera);
+      ++drawn;
+    }
+    r.setClearColor(0x000000, 0);
+    return drawn;
+  }
+
+  /** The display triangle of `cell` under the client point (x, y), or -1. */
+  pick(cell, x, y) {
+    const rect = cell.el.getBoundingClientRect();
+    const ndc = new Vector2(((x - rect.left) / rect.width) * 2 - 1, -((y - rect.top) / rect.height) * 2 + 1);
+    this.camera.aspect = rect.width / rect.height;
+    this.camera.updateProjectionMatrix();
+    this.mesh.geometry = cell.geometry;
+    this.raycaster.setFromCamera(ndc, this.camera);
+    const hit = this.raycaster.intersectObject(this.mesh, false)[0];
+    return hit ? hit.faceIndex : -1;
+  }
+
+  /** Pixels of `cell` that differ from the cell background (drawn just now; for tests). */
+  coveredPixels(cell) {
+    this.render();
+    const rect = cell.el.getBoundingClientRect();
+    const gl = this.renderer.getContext();
+    const w = Math.floor(rect.width), h = Math.floor(rect.height);
+    const px = new Uint8Array(w * h * 4);
+    gl.readPixels(Math.ceil(rect.left), this.canvas.height - Math.floor(rect.bottom), w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
+    const bg = [CELL_BACKGROUND.r, CELL_BACKGROUND.g, CELL_BACKGROUND.b].map((v) => Math.round(v * 255));
+    let n = 0;
+    for (let i = 0; i < px.length; i += 4)
+      if (Math.abs(px[i] - bg[0]) + Math.abs(px[i + 1] - bg[1]) + Math.abs(px[i + 2] - bg[2]) > 12) ++n;
+    return { covered: n, total: w * h };
+  }
+
+  cameraState() {
+    const q = this.camera.quaternion;
+    return { yaw: this.yaw, pitch: this.pitch, quaternion: [q.x, q.y, q.z, q.w], position: this.camera.position.toArray() };
+  }
+}
+
+export { BufferAttribute, Vector3 };
