@@ -38,3 +38,9 @@ echo "and foci on its own PET grid in $out/results/compare (sub-*_pet_z.nii.gz, 
 echo "_foci.tsv, _native.vtu). Foci found against the planted truth:"
 echo
 cat "$out/results/evaluation.md"
+if [[ -s $out/results/view/cohort.html ]]; then
+  echo
+  echo "The cohort's coordinated table of brains (patients and normals, PET and z, the foci on each"
+  echo "patient's own brain and slices; open it in a browser, from disk):"
+  echo "  $out/results/view/cohort.html"
+fi

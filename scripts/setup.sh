@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs every Debian 12 package vpm needs. Idempotent, non-interactive.
+# Installs every Debian 12 package vpm needs, and the npm packages of the browser view (web/,
+# from its lockfile). Idempotent, non-interactive.
 set -euo pipefail
 PKGS=(
   cmake g++ make pkg-config git python3
@@ -9,6 +10,7 @@ PKGS=(
   libcgal-dev libgmp-dev libmpfr-dev
   libviennacl-dev python3-vtk9 python3-numpy
   snakemake python3-nibabel python3-scipy
+  chromium
 )
 missing=()
 for p in "${PKGS[@]}"; do
@@ -20,4 +22,16 @@ if ((${#missing[@]})); then
   $SUDO apt-get update -qq
   $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
-echo "setup: all ${#PKGS[@]} packages present"
+# Node.js and npm: Debian's, unless a node (>= 18) is on PATH already
+if ! command -v node >/dev/null || ! command -v npm >/dev/null; then
+  SUDO=""; [[ $(id -u) -ne 0 ]] && SUDO="sudo"
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends nodejs npm
+fi
+# web/: three.js, esbuild and playwright-core, exactly as the lockfile says; skipped when
+# node_modules already matches it
+web="$(dirname "$0")/../web"
+if ! cmp -s "$web/package-lock.json" "$web/node_modules/.package-lock.json.installed" 2>/dev/null; then
+  (cd "$web" && npm ci --no-audit --no-fund --loglevel=error)
+  cp "$web/package-lock.json" "$web/node_modules/.package-lock.json.installed"
+fi
+echo "setup: all ${#PKGS[@]} packages present, web/ npm packages installed"

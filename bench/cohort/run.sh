@@ -10,10 +10,10 @@ normals=${2:-50}
 patients=${3:-10}
 seed=${4:-1}
 cores=${CORES:-2}
-build=${BUILD_DIR:-build}
+build=$(cd "${BUILD_DIR:-build}" && pwd)
 mkdir -p "$out"
 out=$(cd "$out" && pwd)
-export POCL_CACHE_DIR="${POCL_CACHE_DIR:-$PWD/$build/pocl-cache}"
+export POCL_CACHE_DIR="${POCL_CACHE_DIR:-$build/pocl-cache}"
 SECONDS=0
 if [[ ! -f $out/bids/participants.tsv ]]; then
   /usr/bin/python3 scripts/synth_cohort.py --out "$out/bids" --normals "$normals" --patients "$patients" \
@@ -21,7 +21,7 @@ if [[ ! -f $out/bids/participants.tsv ]]; then
 fi
 synth_s=$SECONDS
 snakemake -s workflow/Snakefile --cores "$cores" --directory "$out" \
-  --config bids="$out/bids" out="$out/results" vpm="$PWD/$build/vpm"
+  --config bids="$out/bids" out="$out/results" vpm="$build/vpm"
 workflow_s=$((SECONDS - synth_s))
 /usr/bin/python3 bench/cohort/summary.py --results "$out/results" --synth-seconds "$synth_s" \
   --workflow-seconds "$workflow_s" --cores "$cores" --out-json "$out/summary.json" --out-md "$out/summary.md"

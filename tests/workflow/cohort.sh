@@ -20,7 +20,7 @@ smk() { (cd "$work" && snakemake -s "$src/workflow/Snakefile" --cores 2 \
 smk > "$work/run1.log" 2>&1 || { tail -40 "$work/run1.log"; fail "the workflow failed"; }
 r=$work/results
 for f in tables/sub-N01_pet.tsv tables/sub-N01_pet.json tables/sub-P01_pet.tsv compare/sub-P01_pet.tsv \
-         compare/sub-P01_pet.json compare/sub-P01_pet_z.nii.gz compare/sub-P01_pet_foci.nii.gz \
+         compare/sub-P01_pet.json compare/sub-P01_pet_z.nii.gz compare/sub-P01_pet_foci.nii.gz view/cohort.html \
          compare/sub-P01_pet_native.vtu evaluation.json evaluation.md subjects/sub-P01/sub-P01_registered.vtu; do
   [[ -s $r/$f ]] || fail "missing $r/$f"
 done
@@ -47,7 +47,7 @@ sleep 1
 touch "$work/bids/sub-N02/pet/sub-N02_pet.nii.gz"
 smk -n > "$work/run3.log" 2>&1
 jobs=$(awk '/^Job stats:/{s=1;next} s&&/^total/{exit} s&&NF==4&&$2~/^[0-9]+$/{print $1}' "$work/run3.log" | sort | tr '\n' ' ')
-[[ $jobs == "compare evaluate group sample " ]] || { cat "$work/run3.log"; fail "stale rerun plans: $jobs"; }
+[[ $jobs == "compare evaluate group sample view " ]] || { cat "$work/run3.log"; fail "stale rerun plans: $jobs"; }
 # on Slurm (dry run: the plan only): the 4 subjects' participant-level chains are one group job
 rm -rf "$work/results/subjects/sub-N03"
 (cd "$work" && snakemake -s "$src/workflow/Snakefile" --profile "$src/workflow/profiles/slurm" -n \

@@ -113,7 +113,7 @@ export class Detail {
       drawSlice(document.getElementById(`slice-${axis}`), sl, image, zmap, axis, at, this.state.threshold);
     document.getElementById('slices-note').textContent =
       `${sl.image_source} with the z-map (|z| \u2265 ${fmt(this.state.threshold)}) on the patient's own grid` +
-      (sl.step > 1 ? ` (every ${sl.step}th voxel)` : '');
+      (sl.step > 1 ? ` (voxels subsampled by ${sl.step})` : '');
   }
 
   drawFoci({ subject, feature }) {

@@ -301,7 +301,7 @@ function benchRotate(frames = 60) {
 window.vpmView = {
   manifest, state, scene, model, detail, bytes, marks, benchRotate,
   cells: () => scene.cells.map((c, i) => ({ i, subject: c.subject.id, column: c.column.label, rect: c.el.getBoundingClientRect().toJSON() })),
-  coveredPixels: (i) => scene.coveredPixels(scene.cells[i]),
+  pixels: (i) => scene.cellPixels(scene.cells[i]),
   camera: () => scene.cameraState(),
   pick: (i, x, y) => pickElement(scene.cells[i], x, y),
 };

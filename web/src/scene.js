@@ -117,8 +117,10 @@ export class TableScene {
     return hit ? hit.faceIndex : -1;
   }
 
-  /** Pixels of `cell` that differ from the cell background (drawn just now; for tests). */
-  coveredPixels(cell) {
+  /** What `cell` shows right now (drawn just now; for tests): pixels differing from the cell
+   *  background, green-dominated pixels (the highlight colour, shaded; the z scale has no
+   *  green) and a checksum. */
+  cellPixels(cell) {
     this.render();
     const rect = cell.el.getBoundingClientRect();
     const gl = this.renderer.getContext();
@@ -126,10 +128,13 @@ export class TableScene {
     const px = new Uint8Array(w * h * 4);
     gl.readPixels(Math.ceil(rect.left), this.canvas.height - Math.floor(rect.bottom), w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
     const bg = [CELL_BACKGROUND.r, CELL_BACKGROUND.g, CELL_BACKGROUND.b].map((v) => Math.round(v * 255));
-    let n = 0;
-    for (let i = 0; i < px.length; i += 4)
-      if (Math.abs(px[i] - bg[0]) + Math.abs(px[i + 1] - bg[1]) + Math.abs(px[i + 2] - bg[2]) > 12) ++n;
-    return { covered: n, total: w * h };
+    let covered = 0, matching = 0, checksum = 0;
+    for (let i = 0; i < px.length; i += 4) {
+      if (Math.abs(px[i] - bg[0]) + Math.abs(px[i + 1] - bg[1]) + Math.abs(px[i + 2] - bg[2]) > 12) ++covered;
+      if (px[i + 1] > 80 && px[i + 1] > 1.5 * Math.max(px[i], px[i + 2])) ++matching;
+      checksum = (checksum * 31 + px[i] + 7 * px[i + 1] + 13 * px[i + 2]) % 1000000007;
+    }
+    return { covered, green: matching, checksum, total: w * h };
   }
 
   cameraState() {
