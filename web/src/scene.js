@@ -2,11 +2,34 @@
 // rectangle of one fixed, full-window canvas, drawn with a scissored viewport and one shared
 // camera, so rotating in any cell rotates all of them (browsers allow only ~16 contexts).
 import {
-  BufferAttribute, BufferGeometry, Color, ColorManagement, LinearSRGBColorSpace, DirectionalLight, HemisphereLight, Mesh,
-  MeshLambertMaterial, PerspectiveCamera, Raycaster, Scene, Vector2, Vector3, WebGLRenderer,
+  BufferAttribute, BufferGeometry, Color, ColorManagement, LinearSRGBColorSpace, Mesh,
+  PerspectiveCamera, Raycaster, Scene, ShaderMaterial, Vector2, Vector3, WebGLRenderer,
 } from 'three';
 
 export const CELL_BACKGROUND = new Color(0.06, 0.07, 0.09);
+
+/** Per-vertex colours lit per vertex (a light from the viewer's upper left, a sky/ground
+ *  ambient): the fragment shader only passes the colour on, the least work per pixel for
+ *  software WebGL (frame rates equal to three's per-fragment Lambert within the noise of a
+ *  loaded 2-core machine, docs/view.md). */
+function shadedColours() {
+  return new ShaderMaterial({
+    vertexColors: true,
+    vertexShader: `
+      varying vec3 vShade;
+      void main() {
+        vec3 n = normalize(normalMatrix * normal);
+        vec3 l = normalize(vec3(-0.3, 0.5, 1.0));
+        float diffuse = max(dot(n, l), 0.0);
+        float sky = 0.5 + 0.5 * n.y;
+        vShade = color * (0.35 + 0.25 * sky + 0.6 * diffuse);
+        gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
+      }`,
+    fragmentShader: `
+      varying vec3 vShade;
+      void main() { gl_FragColor = vec4(vShade, 1.0); }`,
+  });
+}
 
 export class TableScene {
   constructor(canvas) {
@@ -20,12 +43,8 @@ export class TableScene {
     this.scene = new Scene();
     this.camera = new PerspectiveCamera(30, 1, 0.1, 100);
     this.distance = 4.2;
-    this.scene.add(new HemisphereLight(0xffffff, 0x505050, 2.0));
-    this.light = new DirectionalLight(0xffffff, 1.6);
-    this.camera.add(this.light);
-    this.light.position.set(0.3, 0.5, 1);
     this.scene.add(this.camera);
-    this.material = new MeshLambertMaterial({ vertexColors: true });
+    this.material = shadedColours();
     this.mesh = new Mesh(new BufferGeometry(), this.material);
     this.mesh.frustumCulled = false;
     this.scene.add(this.mesh);
