@@ -21,6 +21,8 @@ def rule_stats(results):
     per_rule = {}
     for path in sorted(glob.glob(os.path.join(results, "benchmarks", "*.tsv"))):
         rule = os.path.basename(path)[:-4].split("_", 1)[-1] if "sub-" in path else os.path.basename(path)[:-4]
+        if rule.endswith("_compare"):  # {sub}_{feature}_compare: one comparison per feature
+            rule = "compare"
         with open(path, newline="") as f:
             for row in csv.DictReader(f, delimiter="\t"):
                 rss = row.get("max_rss", "-")
@@ -55,7 +57,7 @@ def main():
     lines = [f"Workflow wall time {a.workflow_seconds:.0f} s on {a.cores} cores for {len(ev['patients'])} patients "
              f"and the normals (synthesis {a.synth_seconds:.0f} s, not included), {s['date']}.", "",
              "| rule | jobs | median s | max s | peak memory MB |", "|---|---|---|---|---|"]
-    for rule in ("template_mesh", "template_map", "mesh", "map", "register", "sample", "compare"):
+    for rule in ("template_mesh", "template_map", "mesh", "map", "register", "sample", "compare", "view"):
         if rule in rules:
             r = rules[rule]
             lines.append(f"| {rule} | {r['jobs']} | {r['median_s']:.2f} | {r['max_s']:.2f} | {r['max_rss_mb']:.0f} |")

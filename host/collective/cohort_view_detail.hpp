@@ -11,10 +11,9 @@ namespace vpm::detail {
 /// The foci table of `vpm compare` (OUT_foci.tsv), each focus's peak element from `c`.
 std::vector<ViewFocus> read_view_foci(const std::string& path, const Comparison& c);
 
-/// A patient's image and its z-maps (feature -> NIfTI on the same grid), every step-th voxel so
-/// that at most `max_voxels` remain.
-ViewSlices read_view_slices(const std::string& image_path, const std::map<std::string, std::string>& z_paths,
-                            long max_voxels);
+/// A patient's image and its z-map (NIfTI on the same grid), every step-th voxel so that at most
+/// `max_voxels` remain.
+ViewSlices read_view_slices(const std::string& image_path, const std::string& z_path, long max_voxels);
 
 /// The template's atlas label (cell field `label` of its ball mesh) at every element's centre.
 std::vector<int> element_labels(const CanonicalElements& elements, const std::string& template_mesh);

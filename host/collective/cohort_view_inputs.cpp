@@ -73,8 +73,7 @@ std::vector<std::uint8_t> scaled_bytes(const Image& image, const std::vector<siz
 
 }  // namespace
 
-ViewSlices read_view_slices(const std::string& image_path, const std::map<std::string, std::string>& z_paths,
-                            long max_voxels) {
+ViewSlices read_view_slices(const std::string& image_path, const std::string& z_path, long max_voxels) {
   const Image image = read_nifti(image_path);
   ViewSlices s;
   s.source = image_path;
@@ -89,16 +88,12 @@ ViewSlices read_view_slices(const std::string& image_path, const std::map<std::s
     for (int j = 0; j < s.dims[1]; ++j)
       for (int i = 0; i < s.dims[0]; ++i) voxels.push_back(image.index(i * s.step, j * s.step, k * s.step));
   s.image = scaled_bytes(image, voxels);
-  for (const auto& [feature, path] : z_paths) {
-    const Image z = read_nifti(path);
-    if (z.dims != image.dims)
-      throw InputError(path + ": the z-map's grid differs from the image's (" + image_path + ")");
-    std::vector<std::int8_t> q(voxels.size());
-    for (size_t i = 0; i < voxels.size(); ++i) {
-      const float v = z.data[voxels[i]];
-      q[i] = static_cast<std::int8_t>(std::isfinite(v) ? std::clamp(std::lround(v * s.z_scale), -127L, 127L) : 0);
-    }
-    s.z[feature] = std::move(q);
+  const Image z = read_nifti(z_path);
+  if (z.dims != image.dims) throw InputError(z_path + ": the z-map's grid differs from the image's (" + image_path + ")");
+  s.z.resize(voxels.size());
+  for (size_t i = 0; i < voxels.size(); ++i) {
+    const float v = z.data[voxels[i]];
+    s.z[i] = static_cast<std::int8_t>(std::isfinite(v) ? std::clamp(std::lround(v * s.z_scale), -127L, 127L) : 0);
   }
   return s;
 }

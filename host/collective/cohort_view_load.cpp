@@ -126,27 +126,22 @@ void add_feature(CohortView& v, const CanonicalElements& el, const std::vector<c
 /// Shapes (every subject) and, for patients, element centres and slices.
 void add_geometry(CohortView& v, const CanonicalElements& el, Tables& tables, const std::vector<ComparisonFile>& comps,
                   const fs::path& results, const CohortViewOptions& opt) {
-  std::map<std::string, std::string> mesh_of, image_of;
-  std::map<std::string, std::map<std::string, std::string>> z_of;
+  std::map<std::string, std::string> mesh_of;
+  std::map<std::string, std::map<std::string, std::pair<std::string, std::string>>> slices_of;  // id -> feature -> image, z
   for (const auto& [path, t] : tables.by_path) mesh_of[subject_id(t, path)] = resolve(t.mesh, results, "the registered mesh named in " + path);
   for (const ComparisonFile& c : comps) {
     const ElementTable& t = tables.get(c.patient_table);
     const std::string id = subject_id(t, c.patient_table), z = c.tsv.substr(0, c.tsv.size() - 4) + "_z.nii.gz";
     for (const ElementFeature& f : t.features)
-      if (f.name == c.feature && fs::exists(f.source) && fs::exists(z)) {
-        image_of.emplace(id, f.source);
-        z_of[id][c.feature] = z;
-      }
+      if (f.name == c.feature && fs::exists(f.source) && fs::exists(z)) slices_of[id][c.feature] = {f.source, z};
   }
   for (ViewSubject& s : v.subjects) {
     const TetMesh reg = read_mesh(mesh_of.at(s.id));
     s.native = native_shell_surfaces(el, v.display, reg);
     if (!s.patient) continue;
     s.centres = native_element_centres(el, reg);
-    if (image_of.count(s.id)) {
-      s.slices = detail::read_view_slices(image_of[s.id], z_of[s.id], opt.max_slice_voxels);
-      s.has_slices = true;
-    }
+    for (const auto& [feature, files] : slices_of[s.id])
+      s.slices[feature] = detail::read_view_slices(files.first, files.second, opt.max_slice_voxels);
   }
 }
 

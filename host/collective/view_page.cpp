@@ -96,7 +96,7 @@ Json native_entry(BufferPack& pack, const std::string& key, const std::vector<fl
 }
 
 Json slices_entry(BufferPack& pack, const std::string& key, const ViewSlices& s) {
-  Json j = Json::object(), dims = Json::array(), affine = Json::array(), z = Json::object();
+  Json j = Json::object(), dims = Json::array(), affine = Json::array();
   for (int a = 0; a < 3; ++a) dims.push_back(s.dims[a]);
   for (int r = 0; r < 4; ++r)
     for (int c = 0; c < 4; ++c) affine.push_back(s.affine(r, c));
@@ -105,8 +105,7 @@ Json slices_entry(BufferPack& pack, const std::string& key, const ViewSlices& s)
   j["step"] = s.step;
   j["image_source"] = s.source;
   j["image"] = pack.add(key + "_image", s.image, "u8");
-  for (const auto& [f, q] : s.z) z[f] = pack.add(key + "_zmap_" + f, q, "i8");
-  j["z"] = z;
+  j["z"] = pack.add(key + "_zmap", s.z, "i8");
   j["z_scale"] = s.z_scale;
   return j;
 }
@@ -147,7 +146,11 @@ Json subject_entry(BufferPack& pack, const ViewSubject& s, size_t i, const Cohor
     j["foci_table"] = table;
     j["centres"] = pack.add(key + "_centres", s.centres, "f32");
   }
-  if (s.has_slices) j["slices"] = slices_entry(pack, key, s.slices);
+  if (!s.slices.empty()) {
+    Json slices = Json::object();
+    for (const auto& [f, sl] : s.slices) slices[f] = slices_entry(pack, key + "_" + f, sl);
+    j["slices"] = slices;
+  }
   return j;
 }
 

@@ -28,14 +28,15 @@ struct ViewFocus {
   int label = 0;              ///< main atlas label under the focus (0: none)
 };
 
-/// A patient's image and z-map on (every `step`-th voxel of) its own grid, for slice views.
+/// A patient's image of one feature and its z-map on (every `step`-th voxel of) the image's own
+/// grid, for slice views.
 struct ViewSlices {
   std::array<int, 3> dims{0, 0, 0};
   Eigen::Matrix4d affine = Eigen::Matrix4d::Identity();  ///< voxel (of the subsampled grid) -> world mm
   int step = 1;
   std::string source;                ///< the image file
   std::vector<std::uint8_t> image;   ///< intensity scaled to 0..255 (0 and the 99.5th percentile)
-  std::map<std::string, std::vector<std::int8_t>> z;  ///< per feature: round(z * z_scale), clamped
+  std::vector<std::int8_t> z;        ///< round(z * z_scale), clamped to +-127
   double z_scale = 10;
 };
 
@@ -50,8 +51,7 @@ struct ViewSubject {
   std::map<std::string, int> foci_count;             ///< patients: clusters per feature
   std::map<std::string, std::vector<ViewFocus>> foci;  ///< patients: per feature
   std::vector<float> centres;  ///< patients: native position of each element's centre (elements x 3)
-  bool has_slices = false;
-  ViewSlices slices;
+  std::map<std::string, ViewSlices> slices;  ///< patients: per feature with an image and z-map
 };
 
 struct ViewFeature {

@@ -97,11 +97,11 @@ export class Detail {
 
   drawSlices({ subject, feature, element: e }) {
     const box = document.getElementById('slices');
-    const sl = subject.slices;
+    const sl = subject.slices?.[feature];
     box.hidden = !sl;
     if (!sl) return;
     const image = this.array(sl.image);
-    const zmap = this.array(sl.z[feature]);
+    const zmap = this.array(sl.z);
     let at;
     if (e >= 0) {
       const c = this.array(subject.centres);

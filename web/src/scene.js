@@ -1,5 +1,5 @@
 // One WebGL context for the whole page: every cell of the table (and the detail view) is a
-// rectangle of one fixed, full-window canvas, drawn with a scissored viewport and one shared
+// rectangle of one fixed canvas over the visible cells, drawn with a scissored viewport and one shared
 // camera, so rotating in any cell rotates all of them (browsers allow only ~16 contexts).
 import {
   BufferAttribute, BufferGeometry, Color, ColorManagement, LinearSRGBColorSpace, Mesh,
@@ -40,6 +40,8 @@ export class TableScene {
     ColorManagement.enabled = false;
     this.renderer.outputColorSpace = LinearSRGBColorSpace;
     this.renderer.setClearColor(0x000000, 0);
+    this.renderer.autoClear = false;  // each cell clears its own rectangle once
+    this.fullClear = true;
     this.scene = new Scene();
     this.camera = new PerspectiveCamera(30, 1, 0.1, 100);
     this.distance = 4.2;
@@ -87,20 +89,9 @@ export class TableScene {
     return cell;
   }
 
-  resize() {
-    const w = window.innerWidth, h = window.innerHeight;
-    if (this.canvas.width !== w || this.canvas.height !== h) this.renderer.setSize(w, h, false);
-  }
-
-  /** Draws every cell whose rectangle is on screen; returns how many were drawn. */
-  render() {
-    this.resize();
-    const r = this.renderer;
-    const H = this.canvas.height;
-    r.setScissorTest(false);
-    r.clear();
-    r.setScissorTest(true);
-    let drawn = 0;
+  /** The cells on screen now: each with its rectangle and the part of it inside its clip. */
+  visibleCells() {
+    const out = [];
     const clipRects = new Map();
     for (const cell of this.cells) {
       if (cell.hidden) continue;
@@ -110,18 +101,49 @@ export class TableScene {
       const left = Math.max(rect.left, c.left), right = Math.min(rect.right, c.right);
       const top = Math.max(rect.top, c.top), bottom = Math.min(rect.bottom, c.bottom);
       if (right <= left || bottom <= top || rect.width < 2) continue;
-      r.setViewport(rect.left, H - rect.bottom, rect.width, rect.height);
-      r.setScissor(left, H - bottom, right - left, bottom - top);
+      out.push({ cell, rect, left, right, top, bottom });
+    }
+    return out;
+  }
+
+  /** Places the canvas over the bounding box of the visible cells only: software WebGL pays per
+   *  canvas pixel for presenting each frame, so a canvas no larger than the cells is faster
+   *  (docs/view.md). Resized only when the box changes (scrolling, layout). */
+  placeCanvas(shown) {
+    let l = Infinity, t = Infinity, rr = -Infinity, b = -Infinity;
+    for (const v of shown) {
+      l = Math.min(l, v.left); t = Math.min(t, v.top); rr = Math.max(rr, v.right); b = Math.max(b, v.bottom);
+    }
+    if (!shown.length) l = t = rr = b = 0;
+    const box = [Math.floor(l), Math.floor(t), Math.max(1, Math.ceil(rr) - Math.floor(l)), Math.max(1, Math.ceil(b) - Math.floor(t))];
+    if (String(box) !== String(this.box)) {
+      this.box = box;
+      Object.assign(this.canvas.style, { left: `${box[0]}px`, top: `${box[1]}px`, width: `${box[2]}px`, height: `${box[3]}px` });
+      this.renderer.setSize(box[2], box[3], false);
+    }
+  }
+
+  /** Draws every cell whose rectangle is on screen; returns how many were drawn. */
+  render() {
+    const shown = this.visibleCells();
+    this.placeCanvas(shown);
+    const r = this.renderer;
+    const [X, Y, , H] = this.box;
+    r.setScissorTest(false);
+    if (this.fullClear) r.clear();
+    r.setScissorTest(true);
+    for (const { cell, rect, left, right, top, bottom } of shown) {
+      r.setViewport(rect.left - X, Y + H - rect.bottom, rect.width, rect.height);
+      r.setScissor(left - X, Y + H - bottom, right - left, bottom - top);
       r.setClearColor(CELL_BACKGROUND, 1);
       r.clear();
       this.camera.aspect = rect.width / rect.height;
       this.camera.updateProjectionMatrix();
       this.mesh.geometry = cell.geometry;
       r.render(this.scene, this.camera);
-      ++drawn;
     }
     r.setClearColor(0x000000, 0);
-    return drawn;
+    return shown.length;
   }
 
   /** The display triangle of `cell` under the client point (x, y), or -1. */
@@ -145,7 +167,8 @@ export class TableScene {
     const gl = this.renderer.getContext();
     const w = Math.floor(rect.width), h = Math.floor(rect.height);
     const px = new Uint8Array(w * h * 4);
-    gl.readPixels(Math.ceil(rect.left), this.canvas.height - Math.floor(rect.bottom), w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
+    const [X, Y, , H] = this.box;
+    gl.readPixels(Math.ceil(rect.left) - X, Y + H - Math.floor(rect.bottom), w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
     const bg = [CELL_BACKGROUND.r, CELL_BACKGROUND.g, CELL_BACKGROUND.b].map((v) => Math.round(v * 255));
     let covered = 0, matching = 0, checksum = 0;
     for (let i = 0; i < px.length; i += 4) {
