@@ -5,12 +5,14 @@
 # and compares each patient with the normals, and bench/cohort/evaluate.py scores the foci
 # found against the planted truth (with the voxel-wise baseline beside them).
 # Usage: cohort_demo.sh [OUT_DIR] (default out/cohort); env NORMALS (8), PATIENTS (2), SEED (1),
+# MORE_FEATURES (modalities beside PET, default "{t1w: anat/T1w}"; "{}" for none),
 # CORES (2), BUILD_DIR (build).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-out/cohort}
 build=${BUILD_DIR:-build}
 mkdir -p "$out"
+more_features=${MORE_FEATURES:-"{t1w: anat/T1w}"}
 out=$(cd "$out" && pwd)
 export POCL_CACHE_DIR="${POCL_CACHE_DIR:-$PWD/$build/pocl-cache}"
 want="normals=${NORMALS:-8} patients=${PATIENTS:-2} seed=${SEED:-1}"
@@ -23,7 +25,7 @@ if [[ ! -f $out/bids/participants.tsv || $(cat "$out/bids/.settings" 2>/dev/null
 fi
 # Snakemake's whole log goes to snakemake.log; its progress lines show here
 if ! snakemake -s workflow/Snakefile --cores "${CORES:-2}" --directory "$out" \
-    --config bids="$out/bids" out="$out/results" vpm="$PWD/$build/vpm" 2>&1 |
+    --config bids="$out/bids" out="$out/results" "more_features=$more_features" vpm="$PWD/$build/vpm" 2>&1 |
     tee "$out/snakemake.log" | grep --line-buffered -E "steps \(|^Nothing to be done"; then
   echo "cohort: no progress from the workflow" >&2
 fi

@@ -55,6 +55,8 @@ try {
   check(Math.abs(after[0].yaw - before[0].yaw) > 0.3, `drag turns the shared camera (yaw ${before[0].yaw.toFixed(2)} -> ${after[0].yaw.toFixed(2)})`);
   check(after[1].checksum !== before[1].checksum, `another subject's cell (${cells[other].subject}) turned too`);
   check(!(await page.evaluate(() => window.vpmView.state.detail)), 'a drag does not open the detail');
+  await page.waitForTimeout(300);
+  check(!(await page.evaluate(() => window.vpmView.scene.moving)), 'at rest again, cells are drawn in full detail');
 
   // hovering a z cell highlights its element in every visible cell of the table
   const zcell = cells.find((c) => c.column.includes('z-score')).i;

@@ -43,6 +43,7 @@ export class Detail {
     } else {
       this.cell.geometry.setAttribute('position', a.geometry.attributes.position);
       this.cell.geometry.setAttribute('normal', a.geometry.attributes.normal);
+      this.cell.coarse = this.scene.coarseOf(this.cell.geometry);
       this.cell.subject = subject;
     }
     this.cell.hidden = false;

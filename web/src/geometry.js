@@ -61,9 +61,30 @@ export class SurfaceModel {
       start.push(corners.length);
     }
     this.corners = Uint32Array.from(corners);
+    this.coarseIndex = this.coarse(corners, start);
     this.cornerStart = Uint32Array.from(start);
     this.drawIndex = Uint32Array.from(draw);
     this.elementOfDrawn = Uint32Array.from(owner);
+  }
+
+  /** The element-level surface over the same corners: per element triangle, its three corners
+   *  that are vertices of the coarser icosphere (the first 10 * 4^L + 2 display vertices),
+   *  oriented outwards. Drawn while the view turns (a quarter of the triangles). */
+  coarse(corners, start) {
+    const VL = (this.V - 2) / 4 + 2;
+    const out = new Uint32Array(this.T * 3);
+    const P = (j) => [0, 1, 2].map((c) => this.sphere[3 * corners[j] + c]);
+    for (let t = 0; t < this.T; ++t) {
+      const own = [];
+      for (let j = start[t]; j < start[t + 1]; ++j) if (corners[j] < VL) own.push(j);
+      if (own.length !== 3) throw new Error(`element triangle ${t}: ${own.length} coarse corners`);
+      const [a, b, c] = own.map(P);
+      const u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]], w = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+      const n = [u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]];
+      const outward = n[0] * (a[0] + b[0] + c[0]) + n[1] * (a[1] + b[1] + c[1]) + n[2] * (a[2] + b[2] + c[2]) > 0;
+      out.set(outward ? own : [own[0], own[2], own[1]], 3 * t);
+    }
+    return out;
   }
 
   /** Positions and smooth normals at the corners of subject i's shell k in native space

@@ -112,6 +112,7 @@ function setSurfaces() {
 }
 setSurfaces();
 drawIndex = new BufferAttribute(model.drawIndex, 1);
+scene.coarseIndex = new BufferAttribute(model.coarseIndex, 1);
 const cornerCount = model.corners.length;
 for (const [i, list] of pending)
   for (const { el, column } of list)
@@ -191,6 +192,7 @@ function requestRender() {
   });
 }
 window.addEventListener('resize', requestRender);
+scene.onRest = requestRender;
 area.addEventListener('scroll', requestRender, { passive: true });
 
 // ---- interaction ----------------------------------------------------------------------------
@@ -284,8 +286,10 @@ scene.render();
 performance.mark('vpm:first-frame');
 const marks = () => Object.fromEntries(performance.getEntriesByType('mark').map((m) => [m.name, m.startTime]));
 /** Rotates the camera by a small step each animation frame for `frames` frames; resolves to
- *  the frame rate measured between the first and the last frame. */
-function benchRotate(frames = 60) {
+ *  the frame rate measured between the first and the last frame. `lod` false: full surfaces
+ *  while turning too. */
+function benchRotate(frames = 60, lod = true) {
+  scene.lod = lod;
   return new Promise((resolve) => {
     let n = 0, t0 = 0, drawn = 0;
     function step(t) {
@@ -293,6 +297,7 @@ function benchRotate(frames = 60) {
       scene.rotate(3, 0);
       drawn = scene.render();
       if (++n <= frames) return requestAnimationFrame(step);
+      scene.lod = true;
       resolve({ frames: frames - 1, seconds: (t - t0) / 1000, fps: ((frames - 1) * 1000) / (t - t0), cells_drawn: drawn });
     }
     requestAnimationFrame(step);

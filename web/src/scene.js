@@ -41,6 +41,8 @@ export class TableScene {
     this.renderer.outputColorSpace = LinearSRGBColorSpace;
     this.renderer.setClearColor(0x000000, 0);
     this.renderer.autoClear = false;  // each cell clears its own rectangle once
+    this.lod = true;      // element-level surfaces while turning
+    this.moving = false;
     this.fullClear = true;
     this.scene = new Scene();
     this.camera = new PerspectiveCamera(30, 1, 0.1, 100);
@@ -66,11 +68,27 @@ export class TableScene {
     this.camera.updateMatrixWorld();
   }
 
-  /** Rotates the shared camera by a drag of (dx, dy) pixels. */
+  /** Rotates the shared camera by a drag of (dx, dy) pixels. While it turns, cells draw their
+   *  element-level surface (`lod`); 150 ms after the last turn they are drawn in full again. */
   rotate(dx, dy) {
     this.yaw -= dx * 0.01;
     this.pitch = Math.max(-1.5, Math.min(1.5, this.pitch + dy * 0.01));
     this.placeCamera();
+    this.moving = true;
+    clearTimeout(this.rest);
+    this.rest = setTimeout(() => {
+      this.moving = false;
+      if (this.onRest) this.onRest();
+    }, 150);
+  }
+
+  /** The element-level geometry of a cell's geometry: the same attributes, the coarse index. */
+  coarseOf(g) {
+    if (!this.coarseIndex) return g;
+    const c = new BufferGeometry();
+    c.setIndex(this.coarseIndex);
+    for (const name of ['position', 'normal', 'color']) c.setAttribute(name, g.attributes[name]);
+    return c;
   }
 
   /** A cell: `el` (the DOM rectangle it draws into), its geometry (position and normal
@@ -84,7 +102,7 @@ export class TableScene {
     g.setAttribute('normal', normal);
     g.setAttribute('color', new BufferAttribute(colours, 3, true));
     g.boundingSphere = null;
-    const cell = { el, clip, geometry: g, ...info };
+    const cell = { el, clip, geometry: g, coarse: this.coarseOf(g), ...info };
     this.cells.push(cell);
     return cell;
   }
@@ -139,7 +157,7 @@ export class TableScene {
       r.clear();
       this.camera.aspect = rect.width / rect.height;
       this.camera.updateProjectionMatrix();
-      this.mesh.geometry = cell.geometry;
+      this.mesh.geometry = this.moving && this.lod ? cell.coarse : cell.geometry;
       r.render(this.scene, this.camera);
     }
     r.setClearColor(0x000000, 0);
