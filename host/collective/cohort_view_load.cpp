@@ -118,6 +118,7 @@ void add_feature(CohortView& v, const CanonicalElements& el, const std::vector<c
     s.values[c->feature] = to_float(cmp.patient);
     s.z[c->feature] = to_float(cmp.z);
     s.foci_count[c->feature] = static_cast<int>(cmp.clusters.size());
+    s.cluster[c->feature].assign(cmp.cluster.begin(), cmp.cluster.end());
     const std::string base = c->tsv.substr(0, c->tsv.size() - 4);
     if (fs::exists(base + "_foci.tsv")) s.foci[c->feature] = detail::read_view_foci(base + "_foci.tsv", cmp);
   }

@@ -139,8 +139,10 @@ Json subject_entry(BufferPack& pack, const ViewSubject& s, size_t i, const Cohor
   j["values"] = values;
   j["z"] = z;
   if (s.patient) {
-    Json count = Json::object(), table = Json::object();
+    Json count = Json::object(), table = Json::object(), cluster = Json::object();
     for (const auto& [f, n] : s.foci_count) count[f] = n;
+    for (const auto& [f, ids] : s.cluster) cluster[f] = pack.add(key + "_cluster_" + f, ids, "i32");
+    j["cluster"] = cluster;
     for (const auto& [f, list] : s.foci) table[f] = foci_entry(list, v);
     j["foci"] = count;
     j["foci_table"] = table;

@@ -49,6 +49,7 @@ struct ViewSubject {
   std::map<std::string, std::vector<float>> values;  ///< per feature: normalised value per element
   std::map<std::string, std::vector<float>> z;       ///< per feature: z per element against the reference
   std::map<std::string, int> foci_count;             ///< patients: clusters per feature
+  std::map<std::string, std::vector<std::int32_t>> cluster;  ///< patients: per feature, focus id per element (0: none)
   std::map<std::string, std::vector<ViewFocus>> foci;  ///< patients: per feature
   std::vector<float> centres;  ///< patients: native position of each element's centre (elements x 3)
   std::map<std::string, ViewSlices> slices;  ///< patients: per feature with an image and z-map

@@ -82,6 +82,19 @@ try {
     check(side.result.clusters.length === n, `${sub}: ${n} foci shown, vpm compare found ${side.result.clusters.length}`);
   }
 
+  // the foci on the patient's brain are vpm compare's elements
+  const focusElements = await page.evaluate(() => {
+    const v = window.vpmView;
+    return v.manifest.subjects.filter((s) => s.group === 'patient').map((s) => [s.id, Object.fromEntries(
+      Object.entries(s.cluster).map(([f, b]) => [f, Array.from(v.array(b)).filter((id) => id > 0).length]))]);
+  });
+  for (const [sub, perFeature] of focusElements)
+    for (const [feature, n] of Object.entries(perFeature)) {
+      const side = JSON.parse(fs.readFileSync(path.join(results, 'compare', `${sub}_${feature}.json`), 'utf8'));
+      const want = side.result.clusters.reduce((k, c) => k + c.elements, 0);  // "elements": the count
+      check(n === want, `${sub} ${feature}: ${n} focus elements drawn saturated, vpm compare's clusters hold ${want}`);
+    }
+
   // a click on the first patient's z cell opens the detail: plot, slices, foci table, 3-D view
   await page.mouse.click(bz.x + bz.width / 2, bz.y + bz.height / 2);
   await page.waitForSelector('#detail:not([hidden])', { timeout: 5000 });
@@ -109,6 +122,23 @@ try {
   }
   check(detail.view.covered > 0.05 * detail.view.total, `the detail's 3-D view draws the brain (${detail.view.covered} px)`);
   await page.screenshot({ path: path.join(shots, 'detail.png') });
+
+  // a row of the foci table jumps to that focus: its peak element, on its shell, in every cell
+  if (detail.fociRows > 0) {
+    await page.click('#foci-table tr[data-focus]');
+    const jump = await page.evaluate(() => {
+      const v = window.vpmView, d = v.state.detail;
+      const row = d.subject.foci_table[d.feature][0];
+      const z = v.scene.cells.findIndex((c) => c.subject === d.subject && c.column.kind === 'z' && c.column.feature === d.feature);
+      v.scene.cells[z].el.scrollIntoView({ block: 'center' });
+      return { peak: row.peak_element, element: d.element, shell: v.state.shell, T: v.manifest.triangles,
+        info: document.getElementById('detail-info').textContent, blue: v.pixels(z).blue };
+    });
+    check(jump.element === jump.peak && jump.shell === Math.floor(jump.peak / jump.T),
+      `a foci row opens its peak element ${jump.peak} on shell ${jump.shell + 1}: ${jump.info}`);
+    check(jump.blue > 20, `the brains turn to the focus: ${jump.blue} deep-blue pixels in the patient's z cell`);
+    await page.screenshot({ path: path.join(shots, 'focus.png') });
+  }
 
   // ball mode and another shell: still every visible cell drawn
   for (const [what, act] of [['ball', () => document.getElementById('mode-ball').click()],

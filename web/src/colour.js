@@ -33,6 +33,13 @@ export function diverging(z, threshold, zmax, out = [0, 0, 0]) {
   return ramp(z < 0 ? NEG : POS, t, out);
 }
 
+/** `c` faded three fifths of the way to the neutral grey: |z| beyond the threshold outside any
+ *  focus (foci are clusters of at least min_cluster adjacent elements). */
+export function faded(c) {
+  for (let i = 0; i < 3; ++i) c[i] = 0.4 * c[i] + 0.6 * BELOW[i];
+  return c;
+}
+
 /** CSS gradient strings for the colour bars. */
 export function sequentialCss() {
   return `linear-gradient(to right, ${SEQ.map((c) => rgb(c)).join(', ')})`;

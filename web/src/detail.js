@@ -2,7 +2,7 @@
 // against the normals' distribution, the subject's z-map on its own brain (a 3-D view that turns
 // with the table) and, for patients, voxel slices of its image with the z-map over them and the
 // table of its foci in native space (paper Figs. 8 and 10).
-import { diverging, HIGHLIGHT } from './colour.js';
+import { HIGHLIGHT } from './colour.js';
 import { drawDistribution, drawSlice, worldToVoxel, fmt } from './plot.js';
 
 export class Detail {
@@ -16,14 +16,26 @@ export class Detail {
 
   /** Opens the detail of `subject` for `feature` at element `e` (-1: the subject's strongest
    *  focus, or no element). */
-  open(subject, feature, e) {
+  open(subject, feature, e, { turn = false } = {}) {
     const foci = subject.foci_table?.[feature];
-    if (e < 0 && foci?.length) e = foci[0].peak_element;
+    if (e < 0 && foci?.length) {
+      e = foci[0].peak_element;
+      turn = true;
+    }
+    this.keepCamera = !turn;
     this.state.detail = { subject, feature, element: e };
     this.panel.hidden = false;
     document.body.classList.add('with-detail');
     this.attach(subject);
-    this.refresh();
+    // turn every brain to face the element (patients: from its native centre)
+    if (e >= 0 && subject.centres) {
+      const c = this.array(subject.centres), m = this.model.centres[subject.index];
+      if (!this.keepCamera) this.scene.lookFrom([c[3 * e] - m[0], c[3 * e + 1] - m[1], c[3 * e + 2] - m[2]]);
+    }
+    // show the picked element's shell, so that a focus deep inside is seen on the brains
+    const k = Math.floor(e / this.manifest.triangles);
+    if (e >= 0 && k !== this.state.shell) this.setShell(k);
+    else this.refresh();
     this.requestRender();
   }
 
@@ -64,7 +76,7 @@ export class Detail {
     const m = this.model;
     for (let t = 0; t < T; ++t) {
       const el = this.state.shell * T + t;
-      const c = el === e ? HIGHLIGHT : diverging(z[el], this.state.threshold, this.state.threshold + 3, tmp);
+      const c = el === e ? HIGHLIGHT : this.zColour(subject, feature, el, this.state.threshold, tmp);
       for (let j = m.cornerStart[t]; j < m.cornerStart[t + 1]; ++j)
         for (let ch = 0; ch < 3; ++ch) col[3 * j + ch] = Math.round(c[ch] * 255);
     }
@@ -127,7 +139,7 @@ export class Detail {
         `<td>${r.centroid.map((v) => fmt(v)).join(', ')}</td><td>${r.region}</td></tr>`).join('');
     table.querySelectorAll('tr[data-focus]').forEach((tr, i) => tr.addEventListener('click', () => {
       const peak = rows[i].peak_element;
-      if (peak >= 0) this.open(subject, feature, peak);
+      if (peak >= 0) this.open(subject, feature, peak, { turn: true });
     }));
   }
 }

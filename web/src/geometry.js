@@ -20,12 +20,21 @@ export class SurfaceModel {
     for (let f = 0; f < this.D; ++f) this.facesOf[this.faceTriangle[f]].push(f);
     this.native = manifest.subjects.map((s) => ({ q: array(s.native.buffer), scale: s.native.scale, offset: s.native.offset }));
     this.centres = this.native.map((n) => this.centreOf(n));
-    let radius = 0;
-    this.native.forEach((n, i) => {
-      const p = this.vertices(n, this.K - 1, this.centres[i]);
-      for (let v = 0; v < this.V; ++v) radius = Math.max(radius, Math.hypot(p[3 * v], p[3 * v + 1], p[3 * v + 2]));
-    });
-    this.nativeRadius = radius || 1;
+    this.radius = new Map();
+  }
+
+  /** The largest distance of shell k's native surface from its subject's centre, over all
+   *  subjects: shell k is drawn at this scale, so inner shells fill the cells too. */
+  radiusOf(k) {
+    if (!this.radius.has(k)) {
+      let radius = 0;
+      this.native.forEach((n, i) => {
+        const p = this.vertices(n, k, this.centres[i]);
+        for (let v = 0; v < this.V; ++v) radius = Math.max(radius, Math.hypot(p[3 * v], p[3 * v + 1], p[3 * v + 2]));
+      });
+      this.radius.set(k, radius || 1);
+    }
+    return this.radius.get(k);
   }
 
   /** Dequantised native positions (mm) of shell k's surface, minus `centre`. */
@@ -88,16 +97,16 @@ export class SurfaceModel {
   }
 
   /** Positions and smooth normals at the corners of subject i's shell k in native space
-   *  (scaled to the unit ball of the largest brain) or in the ball. */
+   *  (scaled so that the largest subject's shell k fills the unit ball) or in the ball (the
+   *  unit sphere: every shell is a sphere there). */
   surface(i, k, mode) {
     if (!this.corners) this.buildCorners();
     let p;
     if (mode === 'ball') {
-      p = new Float32Array(this.V * 3);
-      for (let j = 0; j < p.length; ++j) p[j] = this.sphere[j] * this.radii[k];
+      p = Float32Array.from(this.sphere);
     } else {
       p = this.vertices(this.native[i], k, this.centres[i]);
-      const s = 1 / this.nativeRadius;
+      const s = 1 / this.radiusOf(k);
       for (let j = 0; j < p.length; ++j) p[j] *= s;
     }
     const vn = new Float32Array(this.V * 3);

@@ -5,7 +5,7 @@ import { loadPageData } from './data.js';
 import { SurfaceModel } from './geometry.js';
 import { TableScene, BufferAttribute } from './scene.js';
 import { Detail } from './detail.js';
-import { sequential, diverging, robustRange, sequentialCss, divergingCss, HIGHLIGHT } from './colour.js';
+import { sequential, diverging, faded, robustRange, sequentialCss, divergingCss, HIGHLIGHT } from './colour.js';
 import { fmt } from './plot.js';
 
 performance.mark('vpm:script');
@@ -57,7 +57,8 @@ function buildTable(title, rows, id) {
   head.insertCell().textContent = 'subject';
   for (const c of columns) {
     const th = document.createElement('th');
-    th.innerHTML = `<div>${c.label}</div><div class="bar ${c.kind}"></div><div class="bar-labels"></div>`;
+    th.innerHTML = `<div>${c.label}</div><div class="bar ${c.kind}"></div><div class="bar-labels"></div>` +
+      (c.kind === 'z' ? '<div class="bar-note">saturated: in a focus; faded: outside foci</div>' : '<div class="bar-note">&nbsp;</div>');
     th.dataset.kind = c.kind;
     th.dataset.feature = c.feature;
     head.appendChild(th);
@@ -127,7 +128,14 @@ function colourOf(cell, e) {
     const [lo, hi] = ranges[c.feature];
     return sequential(array(s.values[c.feature])[e], lo, hi, tmp);
   }
-  return diverging(array(s.z[c.feature])[e], state.threshold, state.threshold + 3, tmp);
+  return zColour(s, c.feature, e, state.threshold, tmp);
+}
+/** z colour of element e: saturated in a patient's foci, faded elsewhere beyond the threshold. */
+function zColour(s, feature, e, threshold, out) {
+  const z = array(s.z[feature])[e];
+  diverging(z, threshold, threshold + 3, out);
+  const inFocus = s.cluster?.[feature] && array(s.cluster[feature])[e] > 0;
+  return !inFocus && Math.abs(z) >= threshold ? faded(out) : out;
 }
 /** Colours element triangle t of the shown shell in `cell` (all its corners). */
 function paintElement(cell, t) {
@@ -174,6 +182,8 @@ function updateBars() {
       bar.style.background = divergingCss();
       labels.innerHTML = `<span>\u2264 -${fmt(state.threshold + 3)}</span><span>|z| < ${fmt(state.threshold)}</span>` +
         `<span>\u2265 ${fmt(state.threshold + 3)}</span>`;
+      th.title = 'saturated: elements in a focus (a cluster of adjacent elements beyond the threshold vpm compare used); ' +
+        'faded: beyond the threshold outside any focus';
     }
   });
   $('#threshold-value').textContent = fmt(state.threshold);
@@ -197,7 +207,7 @@ area.addEventListener('scroll', requestRender, { passive: true });
 
 // ---- interaction ----------------------------------------------------------------------------
 const tooltip = $('#tooltip');
-const detail = new Detail({ manifest, array, model, scene, state, features, subjects, regionName, requestRender, area, drawIndex });
+const detail = new Detail({ manifest, array, model, scene, state, features, subjects, regionName, requestRender, area, drawIndex, zColour, setShell: (k) => setShell(k) });
 function regionName(e) {
   if (!regionOf) return '';
   const id = regionOf[e];
@@ -245,8 +255,9 @@ document.addEventListener('pointermove', (ev) => {
   tooltip.hidden = false;
   tooltip.style.left = `${ev.clientX + 14}px`;
   tooltip.style.top = `${ev.clientY + 10}px`;
+  const focus = s.cluster?.[fe] ? array(s.cluster[fe])[e] : 0;
   tooltip.textContent = `${s.id} \u00b7 element ${e} (shell ${Math.floor(e / T) + 1}, triangle ${e % T})\n` +
-    `${fe} ${fmt(array(s.values[fe])[e])}, z ${fmt(array(s.z[fe])[e])}\n${regionName(e)}`;
+    `${fe} ${fmt(array(s.values[fe])[e])}, z ${fmt(array(s.z[fe])[e])}${focus ? `, focus ${focus}` : ''}\n${regionName(e)}`;
 });
 document.addEventListener('pointerup', (ev) => {
   if (drag && drag.moved < 4) {
@@ -265,14 +276,18 @@ function setMode(mode) {
   setSurfaces();
   requestRender();
 }
-shellInput.addEventListener('input', () => {
-  state.shell = Number(shellInput.value) - 1;
+shellInput.addEventListener('input', () => setShell(Number(shellInput.value) - 1));
+/** Shows shell k (0-based) in every cell. */
+function setShell(k) {
+  if (k === state.shell) return;
+  state.shell = k;
+  shellInput.value = String(k + 1);
   setSurfaces();
   recolourAll();
   detail.refresh();
   updateBars();
   requestRender();
-});
+}
 $('#threshold').addEventListener('input', (ev) => {
   state.threshold = Number(ev.target.value);
   recolourAll();
@@ -304,7 +319,7 @@ function benchRotate(frames = 60, lod = true) {
   });
 }
 window.vpmView = {
-  manifest, state, scene, model, detail, bytes, marks, benchRotate,
+  manifest, state, scene, model, detail, bytes, marks, benchRotate, array,
   cells: () => scene.cells.map((c, i) => ({ i, subject: c.subject.id, column: c.column.label, rect: c.el.getBoundingClientRect().toJSON() })),
   pixels: (i) => scene.cellPixels(scene.cells[i]),
   camera: () => scene.cameraState(),

@@ -68,6 +68,15 @@ export class TableScene {
     this.camera.updateMatrixWorld();
   }
 
+  /** Turns the shared camera to look at the origin from direction d (x, y, z). */
+  lookFrom(d) {
+    const l = Math.hypot(d[0], d[1], d[2]);
+    if (!(l > 0)) return;
+    this.yaw = Math.atan2(d[0], -d[1]);
+    this.pitch = Math.max(-1.5, Math.min(1.5, Math.asin(d[2] / l)));
+    this.placeCamera();
+  }
+
   /** Rotates the shared camera by a drag of (dx, dy) pixels. While it turns, cells draw their
    *  element-level surface (`lod`); 150 ms after the last turn they are drawn in full again. */
   rotate(dx, dy) {
@@ -178,7 +187,7 @@ export class TableScene {
 
   /** What `cell` shows right now (drawn just now; for tests): pixels differing from the cell
    *  background, green-dominated pixels (the highlight colour, shaded; the z scale has no
-   *  green) and a checksum. */
+   *  green), blue-dominated ones (z far below the normals) and a checksum. */
   cellPixels(cell) {
     this.render();
     const rect = cell.el.getBoundingClientRect();
@@ -188,13 +197,14 @@ export class TableScene {
     const [X, Y, , H] = this.box;
     gl.readPixels(Math.ceil(rect.left) - X, Y + H - Math.floor(rect.bottom), w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
     const bg = [CELL_BACKGROUND.r, CELL_BACKGROUND.g, CELL_BACKGROUND.b].map((v) => Math.round(v * 255));
-    let covered = 0, matching = 0, checksum = 0;
+    let covered = 0, matching = 0, blue = 0, checksum = 0;
     for (let i = 0; i < px.length; i += 4) {
       if (Math.abs(px[i] - bg[0]) + Math.abs(px[i + 1] - bg[1]) + Math.abs(px[i + 2] - bg[2]) > 12) ++covered;
       if (px[i + 1] > 80 && px[i + 1] > 1.5 * Math.max(px[i], px[i + 2])) ++matching;
+      if (px[i + 2] > 60 && px[i + 2] > 1.6 * Math.max(px[i], px[i + 1])) ++blue;
       checksum = (checksum * 31 + px[i] + 7 * px[i + 1] + 13 * px[i + 2]) % 1000000007;
     }
-    return { covered, green: matching, checksum, total: w * h };
+    return { covered, green: matching, blue, checksum, total: w * h };
   }
 
   cameraState() {
