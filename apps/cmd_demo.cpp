@@ -16,6 +16,7 @@
 #include "cli.hpp"
 #include "vpm/ball_map.hpp"
 #include "vpm/collective.hpp"
+#include "vpm/dense_registration.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/image.hpp"
@@ -133,6 +134,7 @@ struct Settings {
   int grid = 96;
   bool ceiling = false;  // --ceiling: the subject is Colin27 meshed at another size
   vpm::RegistrationOptions registration;
+  vpm::DenseRegistrationOptions dense;
   vpm::MeshImageOptions meshing;
 };
 
@@ -147,6 +149,8 @@ Settings parse_settings(const vpm::cli::Command& self, const std::vector<std::st
   s.registration.width_factor = args.get_double("--width-factor", s.registration.width_factor);
   if (!(s.registration.width_factor > 0)) throw vpm::InputError("--width-factor: must be positive");
   s.ceiling = args.has("--ceiling");
+  s.dense.iterations = args.get_int("--dense-iterations", s.dense.iterations);
+  if (s.dense.iterations < 0) throw vpm::InputError("--dense-iterations: expected 0 or more");
   s.meshing.target_vertices = args.get_int("--target-vertices", s.meshing.target_vertices);
   if (s.meshing.target_vertices < 100) throw vpm::InputError("--target-vertices: expected at least 100");
   s.meshing.progress = [](const std::string& line) { vpm::cli::progress("demo: mesh-image: " + line); };
@@ -160,7 +164,8 @@ Settings parse_settings(const vpm::cli::Command& self, const std::vector<std::st
 }
 
 struct Registration {
-  vpm::RegistrationResult result;
+  vpm::RegistrationResult result;   // the landmark stage, with the final landmark errors
+  vpm::DenseRegistrationResult dense;
   vpm::MapMetrics metrics;  // against the subject's map before registration
   Points registered;
   std::vector<int> tmpl_labels, subj_labels;  // AAL label of each tet of the two maps
@@ -184,7 +189,14 @@ Registration register_subject(vpm::Device& dev, const Subject& tmpl, const Subje
   vpm::cli::info("demo: registering subject to colin27 by " + std::to_string(labels.size()) + " region centroids");
   const auto t0 = Clock::now();
   r.registered = sm.vertices;
-  r.result = vpm::register_landmarks(dev, r.registered, sm.tets, src, dst, st.registration);
+  vpm::DenseRegistrationOptions dense = st.dense;
+  dense.exclude_labels = kEvaluated;  // the held-out regions stay invisible to the dense force
+  r.dense = vpm::register_dense(dev, r.registered, sm.tets, r.subj_labels, tmpl.map.mesh.vertices,
+                                tmpl.map.mesh.tets, r.tmpl_labels, src, dst, st.registration, dense);
+  r.result = r.dense.landmark;
+  r.result.landmark_rms_error = r.dense.landmark_rms_error;
+  r.result.landmark_max_error = r.dense.landmark_max_error;
+  r.result.max_normal_velocity = r.dense.max_normal_velocity;
   r.seconds = seconds_since(t0);
   r.metrics = vpm::map_metrics(dev, sm.vertices, r.registered, sm.tets);
   vpm::TetMesh reg_mesh = sm;
@@ -265,6 +277,7 @@ vpm::Json demo_json(const std::string& device, const Settings& st, const Subject
   vpm::Json jr = vpm::to_json(vpm::registration_summary(reg.result, reg.metrics));
   jr["landmarks"] = static_cast<long>(reg.landmark_labels.size());
   jr["rotation_deg"] = reg.result.report.rotation_deg;
+  jr["dense"] = vpm::to_json(reg.dense);
   report["registration"] = jr;
   vpm::Json jd = vpm::Json::array();
   for (size_t i = 0; i < kEvaluated.size(); ++i) {
@@ -371,6 +384,7 @@ vpm::cli::Registrar reg(
       {"--target-vertices", "N", "mesh density (default 5200, the paper's size)"},
       {"--grid", "N", "ball grid for the Dice overlap, N^3 points (default 96)"},
       {"--width-factor", "F", "registration kernel width factor (default 0.5)"},
+      {"--dense-iterations", "N", "dense registration iterations after the landmarks (default 0)"},
       {"--ceiling", "", "the subject is Colin27 itself meshed at 1.3x the vertices: the best overlap reachable"}},
      run});
 }  // namespace

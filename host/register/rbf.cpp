@@ -206,6 +206,8 @@ DivFreeField fit_divfree(const Points& points_in, const Points& velocities_in,
   const Eigen::Index dim = 3 * nc + nb;
   Eigen::MatrixXd a(dim, dim);
   a.topLeftCorner(3 * nc, 3 * nc) = gram(p, opt.kernel, opt.lambda);
+  if (opt.ridge > 0 && nc > 0)
+    a.diagonal().head(3 * nc).array() += opt.ridge * a.diagonal().head(3 * nc).mean();
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(dim);
   for (int i = 0; i < nc; ++i) rhs.segment<3>(3 * i) = v.row(i).transpose();
   const Points s = opt.boundary_samples.topRows(nb);
