@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "cli.hpp"
+#include "dense_options.hpp"
 #include "vpm/ball_map.hpp"
 #include "vpm/collective.hpp"
 #include "vpm/dense_registration.hpp"
@@ -149,8 +150,7 @@ Settings parse_settings(const vpm::cli::Command& self, const std::vector<std::st
   s.registration.width_factor = args.get_double("--width-factor", s.registration.width_factor);
   if (!(s.registration.width_factor > 0)) throw vpm::InputError("--width-factor: must be positive");
   s.ceiling = args.has("--ceiling");
-  s.dense.iterations = args.get_int("--dense-iterations", s.dense.iterations);
-  if (s.dense.iterations < 0) throw vpm::InputError("--dense-iterations: expected 0 or more");
+  s.dense = vpm::cli::dense_options(args, s.dense);
   s.meshing.target_vertices = args.get_int("--target-vertices", s.meshing.target_vertices);
   if (s.meshing.target_vertices < 100) throw vpm::InputError("--target-vertices: expected at least 100");
   s.meshing.progress = [](const std::string& line) { vpm::cli::progress("demo: mesh-image: " + line); };
@@ -377,14 +377,13 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   return 0;
 }
 
-vpm::cli::Registrar reg(
+vpm::cli::Registrar reg(vpm::cli::with_dense_options(
     {"demo", "", "the whole pipeline on Debian's Colin27 brain and a deformed copy",
      {{"--out", "DIR", "output folder (default out/demo)"},
       {"--data", "DIR", "mricron templates folder (default /usr/share/mricron/templates)"},
       {"--target-vertices", "N", "mesh density (default 5200, the paper's size)"},
       {"--grid", "N", "ball grid for the Dice overlap, N^3 points (default 96)"},
       {"--width-factor", "F", "registration kernel width factor (default 0.5)"},
-      {"--dense-iterations", "N", "dense registration iterations after the landmarks (default 0)"},
       {"--ceiling", "", "the subject is Colin27 itself meshed at 1.3x the vertices: the best overlap reachable"}},
-     run});
+     run}, "--width-factor", 0));
 }  // namespace

@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "cli.hpp"
+#include "dense_options.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/format.hpp"
@@ -60,7 +61,7 @@ struct Inputs {
   std::vector<int> exclude;  // --exclude-labels: regions never used as landmarks
   TetMesh mesh, templ_mesh;
   LandmarkFile landmarks, targets;
-  int dense_iterations = 0;  // --dense-iterations: dense registration after the landmarks
+  DenseRegistrationOptions dense;  // --dense-iterations etc.: dense registration after the landmarks
 };
 
 std::vector<int> label_list(const std::string& option, const std::string& text) {
@@ -94,9 +95,10 @@ Inputs read_inputs(const cli::Args& args, const cli::Command& self) {
                      (!out ? "-o OUT" : !src ? "--landmarks SRC.csv (or --template)" : "--targets DST.csv") +
                      "; usage: " + usage);
   if (!templ && args.has("--exclude-labels")) throw InputError("--exclude-labels needs --template");
-  if (!templ && args.has("--dense-iterations")) throw InputError("--dense-iterations needs --template");
-  io.dense_iterations = args.get_int("--dense-iterations", 0);
-  if (io.dense_iterations < 0 || io.dense_iterations > 1000) throw InputError("--dense-iterations: expected 0 to 1000");
+  for (const char* flag : {"--dense-iterations", "--dense-widths", "--dense-step"})
+    if (!templ && args.has(flag)) throw InputError(std::string(flag) + " needs --template");
+  io.dense = cli::dense_options(args);
+  io.dense.exclude_labels = io.exclude;
   io.out = *out;
   io.src = src.value_or("");
   io.dst = dst.value_or("");
@@ -135,11 +137,8 @@ void read_files(Inputs& io) {
 // of its force; the landmark stage's result carries the final landmark errors.
 RegistrationResult register_densely(Device& dev, const Inputs& io, Points& ball, const RegistrationOptions& opt,
                                     std::optional<DenseRegistrationResult>& dense) {
-  DenseRegistrationOptions dopt;
-  dopt.iterations = io.dense_iterations;
-  dopt.exclude_labels = io.exclude;
   dense = register_dense(dev, ball, io.mesh.tets, cell_labels(io.mesh), io.templ_mesh.vertices, io.templ_mesh.tets,
-                         cell_labels(io.templ_mesh), io.landmarks.points, io.targets.points, opt, dopt);
+                         cell_labels(io.templ_mesh), io.landmarks.points, io.targets.points, opt, io.dense);
   RegistrationResult res = dense->landmark;
   res.landmark_rms_error = dense->landmark_rms_error;
   res.landmark_max_error = dense->landmark_max_error;
@@ -153,7 +152,7 @@ RegistrationResult register_densely(Device& dev, const Inputs& io, Points& ball,
 RegistrationResult register_mapped(Device& dev, const Inputs& io, Points& ball, const RegistrationOptions& opt,
                                    std::optional<DenseRegistrationResult>& dense) {
   try {
-    if (io.dense_iterations > 0) return register_densely(dev, io, ball, opt, dense);
+    if (io.dense.iterations > 0) return register_densely(dev, io, ball, opt, dense);
     return register_landmarks(dev, ball, io.mesh.tets, io.landmarks.points, io.targets.points, opt);
   } catch (const RegistrationInputError& e) {
     using Subject = RegistrationInputError::Subject;
@@ -234,13 +233,12 @@ int run(const cli::Command& self, const std::vector<std::string>& argv) {
                                  [](double v) { return strprintf("%.2e", v); });
 }
 
-vpm::cli::Registrar reg(
+vpm::cli::Registrar reg(cli::with_dense_options(
     {"register", "MAPPED -o OUT (--landmarks SRC.csv --targets DST.csv | --template TEMPLATE.vtu)", "register a mapped mesh: move landmarks to targets by a divergence-free flow",
      {{"--landmarks", "SRC.csv", "landmarks in MAPPED's ball (x,y,z or vertex_id a line)", false, 0, true},
       {"--targets", "DST.csv", "their targets, paired line by line", false, 0, true},
       {"--template", "TEMPLATE.vtu", "instead of the two files: the centroids of the atlas regions (cell field label) MAPPED shares with this mapped template", false, 0, true},
       {"--exclude-labels", "L[,L...]", "with --template: regions never used as landmarks (held out)"},
-      {"--dense-iterations", "N", "with --template: N dense iterations after the landmarks, pulling region boundaries onto the template's (default 0)"},
       {"--steps", "K", "pathline samples and RK4 steps (default 50)"},
       {"--report", "R.json", "write the report (landmark errors, metrics, timings)"},
       {"--width", "W", "Gaussian width of the RBF kernel in ball units", false, 1},
@@ -254,5 +252,5 @@ vpm::cli::Registrar reg(
       {"--no-untangle", "", "skip local untangling (folded results exit 3)"},
       {"--no-restore", "", "skip the volume restoration after the flow"},
       {"--allow-partial", "", "exit 0 even when a landmark misses its target by over 1e-3 (the warning stays)"}},
-     run});
+     run}, "--exclude-labels", 0));
 }  // namespace
