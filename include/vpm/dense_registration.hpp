@@ -41,12 +41,12 @@ struct DenseRegistrationOptions {
   /// Dense iterations in all, split evenly over the widths (coarse first); 0 = landmark
   /// registration only (the result is then register_landmarks' alone).
   int iterations = 0;
-  std::vector<double> widths = {0.3, 0.2};  ///< Gaussian widths of the levels (ball units)
-  double step = 0.5;            ///< fraction of the smoothed displacement taken per iteration
+  std::vector<double> widths = {0.3, 0.2, 0.14};  ///< Gaussian widths of the levels (ball units)
+  double step = 0.8;            ///< fraction of the smoothed displacement taken per iteration
   double centre_spacing = 1.0;  ///< grid spacing of the field's centres, x the width
   double smoothing = 0.5;       ///< width of the Gaussian averaging the matches, x the width
-  double ridge = 0.1;           ///< smoothing ridge of the fit, x the mean Gram diagonal
-  int advect_steps = 8;         ///< RK4 steps per iteration
+  double ridge = 0.3;           ///< smoothing ridge of the fit, x the mean Gram diagonal
+  int advect_steps = 4;         ///< RK4 steps per iteration
   std::vector<int> exclude_labels;  ///< regions the force never sees (held out)
   int agreement_grid = 40;      ///< cells per axis of the ball grid for the label agreement
   /// Move the landmarks back exactly onto their targets after the dense iterations.
