@@ -3,6 +3,7 @@
 // standing in for a second subject) are meshed, mapped to the unit ball, and the second is
 // registered to the first by the centroids of AAL regions; the Dice overlap of held-out regions
 // (caudate, thalamus) is measured in the common ball before and after registration.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -335,7 +336,8 @@ void print_summary(const std::string& device, const Settings& st, const Subject&
   out << "registration of subject to colin27: " << reg.landmark_labels.size() << " region centroids, landmark rms "
       << strprintf("%.1e", reg.result.landmark_rms_error) << ", max |u.n| " << strprintf("%.1e", reg.result.max_normal_velocity)
       << ", vertex / tet |r-1| " << two_pcts("%.2f%%", reg.metrics) << ", " << reg.metrics.inverted_tets << " inverted, "
-      << strprintf("%.1f", reg.seconds) << " s\n";
+      << std::count_if(reg.dense.iterations.begin(), reg.dense.iterations.end(), [](const auto& i) { return i.accepted; })
+      << " of " << reg.dense.iterations.size() << " dense iterations kept, " << strprintf("%.1f", reg.seconds) << " s\n";
   out << "Dice with colin27 in the ball (" << ov.points << " points; held-out regions), labels read from each\n"
       << "subject's atlas image through its map (tet labels, capped by the mesh resolution, in brackets):\n";
   auto pair = [](const vpm::LabelOverlap& image, const vpm::LabelOverlap& tet) {

@@ -127,7 +127,7 @@ TEST_CASE("dense registration undoes a known incompressible flow that landmarks 
   if (results.size() == 2) CHECK((results[0] - results[1]).cwiseAbs().maxCoeff() < 1e-9);
 }
 
-TEST_CASE("dense registration: held-out regions stay out of the force; bad options are refused") {
+TEST_CASE("dense registration: held-out regions stay out of the force and bad options are refused") {
   const Case c = make_case();
   Device& dev = *Device::host();
   Points ball;
