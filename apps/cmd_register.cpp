@@ -98,12 +98,12 @@ Inputs read_inputs(const cli::Args& args, const cli::Command& self) {
   for (const char* flag : {"--dense-iterations", "--dense-widths", "--dense-step"})
     if (!templ && args.has(flag)) throw InputError(std::string(flag) + " needs --template");
   io.dense = cli::dense_options(args);
-  io.dense.exclude_labels = io.exclude;
   io.out = *out;
   io.src = src.value_or("");
   io.dst = dst.value_or("");
   io.templ = templ.value_or("");
   if (const auto ex = args.get("--exclude-labels")) io.exclude = label_list("--exclude-labels", *ex);
+  io.dense.exclude_labels = io.exclude;  // held-out regions stay out of the dense force too
   if (!is_mesh_path(io.out)) throw InputError(io.out + ": unknown file extension for a tet mesh");
   return io;
 }
