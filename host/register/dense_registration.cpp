@@ -123,6 +123,8 @@ DenseIteration dense_step(Device& dev, const DenseState& st, Points& x, double w
   Points after = y.topRows(nv);
   for (Eigen::Index v = 0; v < nv; ++v)
     if (st.boundary[static_cast<size_t>(v)]) after.row(v).normalize();
+  for (Eigen::Index l = nv; l < y.rows(); ++l)  // landmarks on the sphere stay on it exactly
+    if (std::abs(x.row(l).norm() - 1) <= 1e-9) y.row(l).normalize();
   Eigen::VectorXd v1 = tet_volumes(dev, after, st.tets);
   it.folded = newly_inverted(st.v0, v1);
   if (it.folded > 0) untangle_flow_folds(dev, st.reference, st.tets, after, st.boundary, st.v0, v1, 2);
