@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "cli.hpp"
+#include "dense_options.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/format.hpp"
@@ -11,6 +12,7 @@
 #include "vpm/json.hpp"
 #include "vpm/metrics.hpp"
 #include "vpm/collective.hpp"
+#include "vpm/dense_registration.hpp"
 #include "vpm/registration.hpp"
 #include "vpm/timing.hpp"
 
@@ -57,8 +59,9 @@ RegistrationOptions parse_options(const cli::Args& args) {
 struct Inputs {
   std::string in, out, src, dst, templ;
   std::vector<int> exclude;  // --exclude-labels: regions never used as landmarks
-  TetMesh mesh;
+  TetMesh mesh, templ_mesh;
   LandmarkFile landmarks, targets;
+  DenseRegistrationOptions dense;  // --dense-iterations etc.: dense registration after the landmarks
 };
 
 std::vector<int> label_list(const std::string& option, const std::string& text) {
@@ -92,11 +95,15 @@ Inputs read_inputs(const cli::Args& args, const cli::Command& self) {
                      (!out ? "-o OUT" : !src ? "--landmarks SRC.csv (or --template)" : "--targets DST.csv") +
                      "; usage: " + usage);
   if (!templ && args.has("--exclude-labels")) throw InputError("--exclude-labels needs --template");
+  for (const char* flag : {"--dense-iterations", "--dense-widths", "--dense-step"})
+    if (!templ && args.has(flag)) throw InputError(std::string(flag) + " needs --template");
+  io.dense = cli::dense_options(args);
   io.out = *out;
   io.src = src.value_or("");
   io.dst = dst.value_or("");
   io.templ = templ.value_or("");
   if (const auto ex = args.get("--exclude-labels")) io.exclude = label_list("--exclude-labels", *ex);
+  io.dense.exclude_labels = io.exclude;  // held-out regions stay out of the dense force too
   if (!is_mesh_path(io.out)) throw InputError(io.out + ": unknown file extension for a tet mesh");
   return io;
 }
@@ -109,7 +116,8 @@ void read_files(Inputs& io) {
         throw InputError(io.in + ": tet " + std::to_string(t) + ": vertex index " + std::to_string(io.mesh.tets(t, c)) +
                          " out of range");
   if (!io.templ.empty()) {
-    const RegionLandmarks lm = region_landmarks(io.mesh, read_mesh(io.templ), io.exclude);
+    io.templ_mesh = read_mesh(io.templ);
+    const RegionLandmarks lm = region_landmarks(io.mesh, io.templ_mesh, io.exclude);
     if (lm.labels.size() < 4)
       throw InputError(io.in + ", " + io.templ + ": " + std::to_string(lm.labels.size()) +
                        " atlas regions in common (cell field 'label'); need at least 4 for --template");
@@ -125,9 +133,26 @@ void read_files(Inputs& io) {
                      " has " + std::to_string(io.targets.points.rows()) + " targets");
 }
 
-// register_landmarks with its structured errors turned into file:line and flag messages.
-RegistrationResult register_mapped(Device& dev, const Inputs& io, Points& ball, const RegistrationOptions& opt) {
+// The dense registration (--dense-iterations): register_dense with the held-out regions kept out
+// of its force; the landmark stage's result carries the final landmark errors.
+RegistrationResult register_densely(Device& dev, const Inputs& io, Points& ball, const RegistrationOptions& opt,
+                                    std::optional<DenseRegistrationResult>& dense) {
+  dense = register_dense(dev, ball, io.mesh.tets, cell_labels(io.mesh), io.templ_mesh.vertices, io.templ_mesh.tets,
+                         cell_labels(io.templ_mesh), io.landmarks.points, io.targets.points, opt, io.dense);
+  RegistrationResult res = dense->landmark;
+  res.landmark_rms_error = dense->landmark_rms_error;
+  res.landmark_max_error = dense->landmark_max_error;
+  res.max_normal_velocity = dense->max_normal_velocity;
+  res.inverted_tets = dense->inverted_tets;
+  return res;
+}
+
+// register_landmarks (or register_dense) with its structured errors turned into file:line and
+// flag messages.
+RegistrationResult register_mapped(Device& dev, const Inputs& io, Points& ball, const RegistrationOptions& opt,
+                                   std::optional<DenseRegistrationResult>& dense) {
   try {
+    if (io.dense.iterations > 0) return register_densely(dev, io, ball, opt, dense);
     return register_landmarks(dev, ball, io.mesh.tets, io.landmarks.points, io.targets.points, opt);
   } catch (const RegistrationInputError& e) {
     using Subject = RegistrationInputError::Subject;
@@ -141,8 +166,8 @@ RegistrationResult register_mapped(Device& dev, const Inputs& io, Points& ball, 
   }
 }
 
-Json report_json(const std::string& device, const Inputs& io, const RegistrationResult& res, const MapMetrics& mm,
-                 Json timings) {
+Json report_json(const std::string& device, const Inputs& io, const RegistrationResult& res,
+                 const std::optional<DenseRegistrationResult>& dense, const MapMetrics& mm, Json timings) {
   Json r = Json::object();
   r["device"] = device;
   Json input = Json::object();
@@ -157,6 +182,7 @@ Json report_json(const std::string& device, const Inputs& io, const Registration
     r[k] = *summary.find(k);
   r["converged"] = res.landmark_max_error <= kLandmarkTolerance;
   r["registration"] = to_json(res);
+  if (dense) r["dense"] = to_json(*dense);
   r["timings_s"] = timings;
   return r;
 }
@@ -176,7 +202,8 @@ int run(const cli::Command& self, const std::vector<std::string>& argv) {
   Device& dev = Device::current();
   Points ball = io.mesh.vertices;
   t0 = Clock::now();
-  const RegistrationResult res = register_mapped(dev, io, ball, opt);
+  std::optional<DenseRegistrationResult> dense;
+  const RegistrationResult res = register_mapped(dev, io, ball, opt, dense);
   timings["register"] = seconds_since(t0);
   t0 = Clock::now();
   const MapMetrics mm = map_metrics(dev, io.mesh.vertices, ball, io.mesh.tets);
@@ -198,7 +225,7 @@ int run(const cli::Command& self, const std::vector<std::string>& argv) {
   cli::info(line.str());
   if (const auto report_path = args.get("--report")) {
     timings["total"] = seconds_since(t_start);
-    write_json_file(*report_path, report_json(dev.name(), io, res, mm, timings));
+    write_json_file(*report_path, report_json(dev.name(), io, res, dense, mm, timings));
   }
   // the flow's landmarks are exact up to the RK4 error (about 1e-10); far from it something is off
   return cli::convergence_status("register", "landmark max error", res.landmark_max_error, kLandmarkTolerance,
@@ -206,7 +233,7 @@ int run(const cli::Command& self, const std::vector<std::string>& argv) {
                                  [](double v) { return strprintf("%.2e", v); });
 }
 
-vpm::cli::Registrar reg(
+vpm::cli::Registrar reg(cli::with_dense_options(
     {"register", "MAPPED -o OUT (--landmarks SRC.csv --targets DST.csv | --template TEMPLATE.vtu)", "register a mapped mesh: move landmarks to targets by a divergence-free flow",
      {{"--landmarks", "SRC.csv", "landmarks in MAPPED's ball (x,y,z or vertex_id a line)", false, 0, true},
       {"--targets", "DST.csv", "their targets, paired line by line", false, 0, true},
@@ -225,5 +252,5 @@ vpm::cli::Registrar reg(
       {"--no-untangle", "", "skip local untangling (folded results exit 3)"},
       {"--no-restore", "", "skip the volume restoration after the flow"},
       {"--allow-partial", "", "exit 0 even when a landmark misses its target by over 1e-3 (the warning stays)"}},
-     run});
+     run}, "--exclude-labels", 0));
 }  // namespace

@@ -10,6 +10,7 @@
 
 #include "support/devices.hpp"
 #include "support/fixtures.hpp"
+#include "support/shapes.hpp"
 #include "vpm/collective.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
@@ -28,20 +29,6 @@ namespace {
 // seed), targets kept inside radius 0.85.
 void random_landmarks(int n, double shift, unsigned seed, Points& p, Points& q) {
   test::random_landmarks(n, seed, 0.75, shift, 0.85, shift, p, q);
-}
-
-// A smoother ball mesh than test::ball_mesh (whose shell-by-shell projection flattens tets at
-// every shell's corners): cube_mesh(n) on [-1,1]^3 through the elliptical cube-to-ball map
-// x' = x sqrt(1 - y^2/2 - z^2/2 + y^2 z^2/3) (and cyclic), smooth inside, sphere on the boundary.
-TetMesh smooth_ball(int n) {
-  TetMesh m = test::cube_mesh(n);
-  for (int i = 0; i < m.vertices.rows(); ++i) {
-    const double x = 2 * m.vertices(i, 0) - 1, y = 2 * m.vertices(i, 1) - 1, z = 2 * m.vertices(i, 2) - 1;
-    m.vertices.row(i) << x * std::sqrt(std::max(0.0, 1 - y * y / 2 - z * z / 2 + y * y * z * z / 3)),
-        y * std::sqrt(std::max(0.0, 1 - z * z / 2 - x * x / 2 + z * z * x * x / 3)),
-        z * std::sqrt(std::max(0.0, 1 - x * x / 2 - y * y / 2 + x * x * y * y / 3));
-  }
-  return m;
 }
 
 }  // namespace
@@ -79,7 +66,7 @@ TEST_CASE("pathlines: endpoints, analytic velocity, inside the ball, arcs on the
 }
 
 TEST_CASE("registration moves landmarks to targets, preserves volumes, keeps the sphere") {
-  const TetMesh m = smooth_ball(8);
+  const TetMesh m = test::smooth_ball_mesh(8);
   Points p, q;
   random_landmarks(6, 0.1, 2, p, q);
   std::vector<Points> results;
@@ -111,7 +98,7 @@ TEST_CASE("registration moves landmarks to targets, preserves volumes, keeps the
 }
 
 TEST_CASE("volume restoration after the flow lowers the distortion and keeps the landmarks") {
-  const TetMesh m = smooth_ball(8);
+  const TetMesh m = test::smooth_ball_mesh(8);
   Points p, q;
   random_landmarks(6, 0.1, 2, p, q);
   std::vector<double> restored_tet;
@@ -151,7 +138,7 @@ TEST_CASE("volume distortion is discretisation error: it shrinks as the mesh is 
   auto host = Device::host();
   double mad[2];
   for (int k = 0; k < 2; ++k) {
-    const TetMesh m = smooth_ball(k == 0 ? 6 : 12);
+    const TetMesh m = test::smooth_ball_mesh(k == 0 ? 6 : 12);
     Points x = m.vertices;
     RegistrationOptions opt;
     opt.width_factor = 1.0;  // a field both meshes resolve (width 0.49 vs h 0.33 and 0.17)
@@ -277,7 +264,7 @@ TEST_CASE("bad input is refused with InputError") {
 
 TEST_CASE("a folding registration is refused with NumericalError and leaves the mesh unchanged") {
   // test::ball_mesh flattens tets at the corners of every interior shell: the same landmark
-  // moves that fold nothing on smooth_ball(8) invert some of them.
+  // moves that fold nothing on test::smooth_ball_mesh(8) invert some of them.
   const TetMesh m = test::ball_mesh(8);
   Points p, q;
   random_landmarks(6, 0.15, 2, p, q);
@@ -319,12 +306,12 @@ std::string slurp(const std::string& path) {
 }  // namespace
 
 TEST_CASE("vpm register: registers a mapped mesh, writes fields and the report") {
-  TetMesh m = smooth_ball(6);
+  TetMesh m = test::smooth_ball_mesh(6);
   m.set_point_field("original_position", m.vertices);
   const std::string mesh = tmp("ball.vtu"), out = tmp("out.vtu"), report = tmp("report.json");
   write_mesh(mesh, m);
   // landmarks: a header, a vertex id and two coordinate lines; targets as coordinates
-  const int interior = 3 + 7 * (3 + 7 * 3);  // the centre vertex of smooth_ball(6)
+  const int interior = 3 + 7 * (3 + 7 * 3);  // the centre vertex of test::smooth_ball_mesh(6)
   write_text(tmp("src.csv"), "x,y,z\n" + std::to_string(interior) + "\n0.3,0.2,0.1\n-0.4, 0.1, 0.2\r\n\n");
   write_text(tmp("dst.csv"), "0.05,0.0,0.02\n0.35,0.25,0.1\n-0.42,0.05,0.25\n");
   std::filesystem::remove(out);
@@ -348,9 +335,9 @@ TEST_CASE("vpm register: registers a mapped mesh, writes fields and the report")
 }
 
 TEST_CASE("vpm register --template: atlas-region centroids as landmarks, held-out regions excluded") {
-  // template: smooth_ball(6) labelled by octant; moving: the same mesh turned 6 degrees about z
+  // template: test::smooth_ball_mesh(6) labelled by octant; moving: the same mesh turned 6 degrees about z
   // and squeezed a little in z, so its region centroids sit away from the template's.
-  TetMesh fixed = smooth_ball(6);
+  TetMesh fixed = test::smooth_ball_mesh(6);
   FieldValues label(fixed.num_tets(), 1);
   for (int t = 0; t < fixed.num_tets(); ++t) {
     Eigen::RowVector3d c = Eigen::RowVector3d::Zero();
@@ -412,7 +399,7 @@ TEST_CASE("vpm register --template: atlas-region centroids as landmarks, held-ou
 
 TEST_CASE("vpm register: landmarks far from their targets after the flow warn and exit 4") {
   // one RK4 step for moves of up to 0.3: the flow misses the targets by about 2e-3
-  TetMesh m = smooth_ball(6);
+  TetMesh m = test::smooth_ball_mesh(6);
   m.set_point_field("original_position", FieldValues(m.vertices));
   write_mesh(tmp("few_steps.vtu"), m);
   write_text(tmp("few_src.csv"), "0.3,0.2,0.1\n-0.4,0.1,0.2\n0.1,-0.5,0.3\n0.0,0.2,-0.6\n");
@@ -432,7 +419,7 @@ TEST_CASE("vpm register: landmarks far from their targets after the flow warn an
 }
 
 TEST_CASE("vpm register: bad input exits 2 naming the file and line") {
-  const TetMesh m = smooth_ball(4);
+  const TetMesh m = test::smooth_ball_mesh(4);
   const std::string mesh = tmp("ball4.vtu"), out = tmp("bad_out.vtu"), err = tmp("bad_err.txt");
   write_mesh(mesh, m);
   TetMesh scaled = m;

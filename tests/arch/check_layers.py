@@ -17,7 +17,7 @@ PUBLIC = {
     "linalg": ["sparse", "laplacian", "solver"],
     "image": ["image", "mesh_image", "mesh_image_report"],
     "map": ["initial_map", "untangle", "volume_map", "ball_map"],
-    "register": ["rbf", "registration"],
+    "register": ["rbf", "registration", "dense_registration"],
     "collective": ["collective", "elements", "sampling", "statistics", "map_back", "cohort_view", "view_page"],
 }
 WITH = {"with_tetgen": "image", "with_cgal": "image", "with_nifti": "image"}

@@ -152,4 +152,18 @@ TetMesh voxel_ellipsoid_mesh(long target_tets, unsigned seed) {
   return m;
 }
 
+// A smoother ball mesh than test::ball_mesh (whose shell-by-shell projection flattens tets at
+// every shell's corners): cube_mesh(n) on [-1,1]^3 through the elliptical cube-to-ball map
+// x' = x sqrt(1 - y^2/2 - z^2/2 + y^2 z^2/3) (and cyclic), smooth inside, sphere on the boundary.
+TetMesh smooth_ball_mesh(int n) {
+  TetMesh m = cube_mesh(n);
+  for (int i = 0; i < m.vertices.rows(); ++i) {
+    const double x = 2 * m.vertices(i, 0) - 1, y = 2 * m.vertices(i, 1) - 1, z = 2 * m.vertices(i, 2) - 1;
+    m.vertices.row(i) << x * std::sqrt(std::max(0.0, 1 - y * y / 2 - z * z / 2 + y * y * z * z / 3)),
+        y * std::sqrt(std::max(0.0, 1 - z * z / 2 - x * x / 2 + z * z * x * x / 3)),
+        z * std::sqrt(std::max(0.0, 1 - x * x / 2 - y * y / 2 + x * x * y * y / 3));
+  }
+  return m;
+}
+
 }  // namespace vpm::test

@@ -27,4 +27,9 @@ TetMesh dumbbell_mesh(int n);
 /// std::mt19937(seed). Vertices are numbered in order of first use, cells in x-fastest order.
 TetMesh voxel_ellipsoid_mesh(long target_tets, unsigned seed = 1);
 
+/// A smoother ball mesh than ball_mesh (whose shell-by-shell projection flattens tets at every
+/// shell's corners): cube_mesh(n) on [-1,1]^3 through the elliptical cube-to-ball map, smooth
+/// inside, the unit sphere on the boundary.
+TetMesh smooth_ball_mesh(int n);
+
 }  // namespace vpm::test

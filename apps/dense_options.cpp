@@ -1,0 +1,57 @@
+// The dense-registration flags of `vpm register` and `vpm demo`.
+#include "dense_options.hpp"
+
+#include <sstream>
+
+#include "vpm/error.hpp"
+
+namespace vpm::cli {
+
+DenseRegistrationOptions dense_options(const Args& args, DenseRegistrationOptions o) {
+  o.iterations = args.get_int("--dense-iterations", o.iterations);
+  if (o.iterations < 0 || o.iterations > 1000) throw InputError("--dense-iterations: expected 0 to 1000");
+  if (const auto w = args.get("--dense-widths")) {
+    o.widths.clear();
+    std::stringstream ss(*w);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+      size_t used = 0;
+      double v = 0;
+      try {
+        v = std::stod(item, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used == 0 || used != item.size() || !(v > 0 && v <= 2))
+        throw InputError("--dense-widths: expected widths in (0, 2] separated by commas, got '" + item + "'");
+      o.widths.push_back(v);
+    }
+    if (o.widths.empty()) throw InputError("--dense-widths: expected at least one width");
+  }
+  o.step = args.get_double("--dense-step", o.step);
+  if (!(o.step > 0 && o.step <= 1)) throw InputError("--dense-step: expected a fraction in (0, 1]");
+  return o;
+}
+
+Command with_dense_options(Command command, const std::string& after, int default_iterations) {
+  const DenseRegistrationOptions d;
+  std::ostringstream widths;
+  for (size_t i = 0; i < d.widths.size(); ++i) widths << (i ? "," : "") << d.widths[i];
+  std::ostringstream step;
+  step << d.step;
+  const std::vector<OptionSpec> rows = {
+          {"--dense-iterations", "N",
+           "dense iterations after the landmarks: region boundaries pulled onto the template's by "
+           "divergence-free flows (default " + std::to_string(default_iterations) + ")"},
+          {"--dense-widths", "W[,W...]", "Gaussian widths of the dense levels, coarse to fine (default " + widths.str() + ")",
+           false, 0, true},
+          {"--dense-step", "S", "fraction of the boundary displacement taken per dense iteration (default " +
+                                    step.str() + ")", false, 0, true}};
+  auto at = command.options.begin();
+  while (at != command.options.end() && at->flag != after) ++at;
+  if (at != command.options.end()) ++at;
+  command.options.insert(at, rows.begin(), rows.end());
+  return command;
+}
+
+}  // namespace vpm::cli

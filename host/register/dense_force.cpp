@@ -1,0 +1,198 @@
+// ---- dense registration: region boundaries, closest-point matches, smoothing, agreement ----
+#include "register/dense_force.hpp"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <unordered_set>
+
+#include "vpm/locate.hpp"
+
+namespace vpm {
+
+std::vector<int> without_labels(const std::vector<int>& labels, const std::vector<int>& exclude) {
+  const std::unordered_set<int> ex(exclude.begin(), exclude.end());
+  std::vector<int> out(labels);
+  for (int& l : out)
+    if (l < 0 || ex.count(l)) l = 0;
+  return out;
+}
+
+RegionFaces region_faces(const Tets& tets, const std::vector<int>& labels) {
+  static const int kFace[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+  struct Entry {
+    std::array<int, 3> key;
+    int tet;
+  };
+  std::vector<Entry> all;
+  all.reserve(static_cast<size_t>(4 * tets.rows()));
+  for (Eigen::Index t = 0; t < tets.rows(); ++t)
+    for (const auto& f : kFace) {
+      std::array<int, 3> k = {tets(t, f[0]), tets(t, f[1]), tets(t, f[2])};
+      std::sort(k.begin(), k.end());
+      all.push_back({k, static_cast<int>(t)});
+    }
+  std::sort(all.begin(), all.end(), [](const Entry& a, const Entry& b) { return a.key < b.key; });
+  std::vector<std::pair<int, std::array<int, 3>>> out;  // (label, face)
+  for (size_t i = 0; i < all.size();) {
+    const bool pair = i + 1 < all.size() && all[i + 1].key == all[i].key;
+    const int la = labels[static_cast<size_t>(all[i].tet)];
+    const int lb = pair ? labels[static_cast<size_t>(all[i + 1].tet)] : 0;
+    if (la != lb) {
+      if (la > 0) out.push_back({la, all[i].key});
+      if (lb > 0) out.push_back({lb, all[i].key});
+    }
+    i += pair ? 2 : 1;
+  }
+  std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  RegionFaces rf;
+  rf.faces.resize(static_cast<Eigen::Index>(out.size()), 3);
+  for (size_t f = 0; f < out.size(); ++f) {
+    rf.label.push_back(out[f].first);
+    for (int c = 0; c < 3; ++c) rf.faces(static_cast<Eigen::Index>(f), c) = out[f].second[static_cast<size_t>(c)];
+  }
+  return rf;
+}
+
+RegionSurface region_surface(const Points& v, const RegionFaces& rf) {
+  RegionSurface s;
+  const Eigen::Index nf = rf.faces.rows();
+  s.centroid.resize(nf, 3);
+  s.area.resize(nf);
+  for (Eigen::Index f = 0; f < nf; ++f) {
+    const Eigen::Vector3d a = v.row(rf.faces(f, 0)), b = v.row(rf.faces(f, 1)), c = v.row(rf.faces(f, 2));
+    s.centroid.row(f) = ((a + b + c) / 3).transpose();
+    s.area(f) = 0.5 * (b - a).cross(c - a).norm();
+    if (f == 0 || rf.label[static_cast<size_t>(f)] != rf.label[static_cast<size_t>(f - 1)]) {
+      s.labels.push_back(rf.label[static_cast<size_t>(f)]);
+      s.offset.push_back(static_cast<long>(f));
+    }
+  }
+  s.offset.push_back(static_cast<long>(nf));
+  return s;
+}
+
+namespace {
+
+/// Row of the closest point to `p` among rows [b, e) of `pts`.
+long closest(const Points& pts, long b, long e, const Eigen::Vector3d& p) {
+  long best = b;
+  double d = std::numeric_limits<double>::infinity();
+  for (long j = b; j < e; ++j) {
+    const double dj = (pts.row(j).transpose() - p).squaredNorm();
+    if (dj < d) {
+      d = dj;
+      best = j;
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+BoundaryMatches closest_matches(const RegionSurface& s, const RegionSurface& t) {
+  std::vector<Eigen::Vector3d> at, disp;
+  std::vector<double> w;
+  BoundaryMatches m;
+  for (size_t rs = 0; rs < s.labels.size(); ++rs) {
+    const auto it = std::lower_bound(t.labels.begin(), t.labels.end(), s.labels[rs]);
+    if (it == t.labels.end() || *it != s.labels[rs]) continue;
+    const size_t rt = static_cast<size_t>(it - t.labels.begin());
+    m.regions.push_back(s.labels[rs]);
+    const long sb = s.offset[rs], se = s.offset[rs + 1], tb = t.offset[rt], te = t.offset[rt + 1];
+    for (long i = sb; i < se; ++i) {
+      const Eigen::Vector3d p = s.centroid.row(i).transpose();
+      at.push_back(p);
+      disp.push_back(t.centroid.row(closest(t.centroid, tb, te, p)).transpose() - p);
+      w.push_back(s.area(i));
+    }
+    for (long j = tb; j < te; ++j) {
+      const Eigen::Vector3d q = t.centroid.row(j).transpose();
+      const Eigen::Vector3d p = s.centroid.row(closest(s.centroid, sb, se, q)).transpose();
+      at.push_back(p);
+      disp.push_back(q - p);
+      w.push_back(t.area(j));
+    }
+  }
+  const Eigen::Index k = static_cast<Eigen::Index>(at.size());
+  m.at.resize(k, 3);
+  m.displacement.resize(k, 3);
+  m.weight.resize(k);
+  double wsum = 0, dsum = 0;
+  for (Eigen::Index i = 0; i < k; ++i) {
+    m.at.row(i) = at[static_cast<size_t>(i)].transpose();
+    m.displacement.row(i) = disp[static_cast<size_t>(i)].transpose();
+    wsum += w[static_cast<size_t>(i)];
+    dsum += w[static_cast<size_t>(i)] * disp[static_cast<size_t>(i)].norm();
+  }
+  const double mean_w = k > 0 && wsum > 0 ? wsum / static_cast<double>(k) : 1.0;
+  for (Eigen::Index i = 0; i < k; ++i) m.weight(i) = w[static_cast<size_t>(i)] / mean_w;
+  m.mean_distance = wsum > 0 ? dsum / wsum : 0.0;
+  return m;
+}
+
+Points ball_grid(double h) {
+  const int n = static_cast<int>(std::floor(1 / h));
+  std::vector<Eigen::Vector3d> pts;
+  for (int i = -n; i <= n; ++i)
+    for (int j = -n; j <= n; ++j)
+      for (int k = -n; k <= n; ++k) {
+        const Eigen::Vector3d p(i * h, j * h, k * h);
+        if (p.norm() < 1) pts.push_back(p);
+      }
+  Points out(static_cast<Eigen::Index>(pts.size()), 3);
+  for (size_t i = 0; i < pts.size(); ++i) out.row(static_cast<Eigen::Index>(i)) = pts[i].transpose();
+  return out;
+}
+
+Points smooth_matches(const BoundaryMatches& m, const Points& centres, double sigma) {
+  Points out = Points::Zero(centres.rows(), 3);
+  const double cut2 = 9 * sigma * sigma, inv = 1 / (sigma * sigma);
+  for (Eigen::Index c = 0; c < centres.rows(); ++c) {
+    const Eigen::Vector3d x = centres.row(c).transpose();
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    double wsum = 0;
+    for (Eigen::Index i = 0; i < m.at.rows(); ++i) {
+      const double d2 = (m.at.row(i).transpose() - x).squaredNorm();
+      if (d2 > cut2) continue;
+      const double g = m.weight(i) * std::exp(-d2 * inv);
+      sum += g * m.displacement.row(i).transpose();
+      wsum += g;
+    }
+    out.row(c) = (sum / (wsum + 1)).transpose();
+  }
+  return out;
+}
+
+std::vector<int> labels_at(const Points& vertices, const Tets& tets, const std::vector<int>& labels,
+                           const Points& points) {
+  const TetLocator locator(vertices, tets);
+  const std::vector<Location> loc = locator.locate_all(points);
+  std::vector<int> out(loc.size(), 0);
+  for (size_t i = 0; i < loc.size(); ++i)
+    if (loc[i].tet >= 0 && loc[i].min_bary > -0.05) out[i] = labels[static_cast<size_t>(loc[i].tet)];
+  return out;
+}
+
+double mean_dice(const std::vector<int>& a, const std::vector<int>& b, const std::vector<int>& regions) {
+  if (regions.empty()) return 0;
+  const int top = std::max(*std::max_element(regions.begin(), regions.end()), 0);
+  std::vector<double> ca(static_cast<size_t>(top + 1), 0), cb(ca), both(ca);
+  for (size_t i = 0; i < a.size(); ++i) {
+    const int la = a[i], lb = b[i];
+    if (la > 0 && la <= top) ca[static_cast<size_t>(la)] += 1;
+    if (lb > 0 && lb <= top) cb[static_cast<size_t>(lb)] += 1;
+    if (la == lb && la > 0 && la <= top) both[static_cast<size_t>(la)] += 1;
+  }
+  double sum = 0;
+  for (int r : regions) {
+    const size_t l = static_cast<size_t>(std::max(r, 0));
+    sum += ca[l] + cb[l] > 0 ? 2 * both[l] / (ca[l] + cb[l]) : 1.0;
+  }
+  return sum / static_cast<double>(regions.size());
+}
+
+}  // namespace vpm

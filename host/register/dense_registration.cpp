@@ -1,0 +1,245 @@
+// Dense registration (vpm/dense_registration.hpp): the landmark registration, then flows that
+// pull region boundaries onto the template's, then the exact landmark correction and the
+// volume restoration; the report's JSON.
+#include "vpm/dense_registration.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "register/dense_force.hpp"
+#include "register/registration_steps.hpp"
+#include "vpm/device.hpp"
+#include "vpm/error.hpp"
+#include "vpm/geometry.hpp"
+#include "vpm/timing.hpp"
+#include "vpm/topology.hpp"
+
+namespace vpm {
+
+Json to_json(const DenseIteration& it) {
+  Json j = Json::object();
+  j["width"] = it.width;
+  j["matches"] = it.matches;
+  j["centres"] = it.centres;
+  j["mean_match_distance"] = it.mean_match_distance;
+  j["max_move"] = it.max_move;
+  j["agreement"] = it.agreement;
+  j["folded"] = it.folded;
+  j["accepted"] = it.accepted;
+  j["seconds"] = it.seconds;
+  return j;
+}
+
+Json to_json(const DenseRegistrationResult& r) {
+  Json j = Json::object();
+  j["landmark"] = to_json(r.landmark);
+  if (r.correction) j["correction"] = to_json(*r.correction);
+  if (r.restore) j["restore"] = to_json(*r.restore);
+  Json its = Json::array();
+  for (const DenseIteration& it : r.iterations) its.push_back(to_json(it));
+  j["iterations"] = its;
+  Json regions = Json::array();
+  for (int l : r.regions) regions.push_back(l);
+  j["regions"] = regions;
+  j["agreement_before"] = r.agreement_before;
+  j["agreement_landmarks"] = r.agreement_landmarks;
+  j["agreement_after"] = r.agreement_after;
+  j["landmark_rms_error"] = r.landmark_rms_error;
+  j["landmark_max_error"] = r.landmark_max_error;
+  j["max_normal_velocity"] = r.max_normal_velocity;
+  j["inverted_tets"] = r.inverted_tets;
+  Json t = Json::object();
+  t["landmark"] = r.seconds_landmark;
+  t["dense"] = r.seconds_dense;
+  t["correction"] = r.seconds_correction;
+  t["restore"] = r.seconds_restore;
+  t["total"] = r.seconds_total;
+  j["timings_s"] = t;
+  return j;
+}
+
+namespace {
+
+/// What every iteration needs and nothing changes: the reference map, its boundary and
+/// volumes, the region faces, the template's boundaries and its labels at the grid points.
+struct DenseState {
+  const Points& reference;
+  const Tets& tets;
+  std::vector<int> labels;
+  std::vector<char> boundary;
+  Eigen::VectorXd v0;
+  RegionFaces faces;
+  RegionSurface templ;
+  Points grid;
+  std::vector<int> grid_templ;
+  std::vector<int> regions;
+};
+
+void check_dense(const Tets& tets, const std::vector<int>& labels, const Tets& ttets,
+                 const std::vector<int>& tlabels, const DenseRegistrationOptions& o) {
+  auto bad = [](const std::string& what) { throw InputError("dense registration: " + what); };
+  if (labels.size() != static_cast<size_t>(tets.rows()))
+    bad(std::to_string(labels.size()) + " labels for " + std::to_string(tets.rows()) + " tets");
+  if (tlabels.size() != static_cast<size_t>(ttets.rows()))
+    bad("template: " + std::to_string(tlabels.size()) + " labels for " + std::to_string(ttets.rows()) + " tets");
+  if (o.iterations < 0) bad("iterations must be >= 0");
+  if (o.widths.empty()) bad("no widths");
+  for (double w : o.widths)
+    if (!(w > 0) || w > 2) bad("widths must lie in (0, 2]");
+  if (!(o.step > 0 && o.step <= 1)) bad("step must lie in (0, 1]");
+  if (!(o.centre_spacing >= 0.25) || !(o.smoothing > 0) || !(o.ridge >= 0)) bad("invalid smoothing options");
+  if (o.advect_steps < 1 || o.agreement_grid < 4) bad("advect steps >= 1 and agreement grid >= 4 required");
+}
+
+int newly_inverted(const Eigen::VectorXd& v0, const Eigen::VectorXd& v1) {
+  int n = 0;
+  for (Eigen::Index t = 0; t < v1.size(); ++t) n += v1(t) <= 0 && v0(t) > 0;
+  return n;
+}
+
+/// One dense iteration at `width` on `x` (the vertices, then the tracked landmarks): kept in `x`
+/// and `agreement` when it raises the agreement without leaving a fold.
+DenseIteration dense_step(Device& dev, const DenseState& st, Points& x, double width,
+                          const DenseRegistrationOptions& o, double& agreement, double& max_normal) {
+  const auto t0 = Clock::now();
+  const Eigen::Index nv = st.reference.rows();
+  DenseIteration it;
+  it.width = width;
+  const BoundaryMatches m = closest_matches(region_surface(x.topRows(nv), st.faces), st.templ);
+  it.matches = static_cast<long>(m.at.rows());
+  it.mean_match_distance = m.mean_distance;
+  const Points centres = ball_grid(o.centre_spacing * width);
+  it.centres = static_cast<int>(centres.rows());
+  RbfFitOptions fo;
+  fo.kernel = RbfKernel::Tangent;
+  fo.lambda = 1 / (width * width);
+  fo.ridge = o.ridge;
+  DivFreeField field = fit_divfree(centres, smooth_matches(m, centres, o.smoothing * width), fo);
+  field.coefficients *= o.step;
+  max_normal = std::max(max_normal, max_normal_velocity(dev, {field}, 1000));
+  Points y = x;
+  advect(dev, y, {field}, o.advect_steps);
+  Points after = y.topRows(nv);
+  for (Eigen::Index v = 0; v < nv; ++v)
+    if (st.boundary[static_cast<size_t>(v)]) after.row(v).normalize();
+  for (Eigen::Index l = nv; l < y.rows(); ++l)  // landmarks on the sphere stay on it exactly
+    if (std::abs(x.row(l).norm() - 1) <= 1e-9) y.row(l).normalize();
+  Eigen::VectorXd v1 = tet_volumes(dev, after, st.tets);
+  it.folded = newly_inverted(st.v0, v1);
+  if (it.folded > 0) untangle_flow_folds(dev, st.reference, st.tets, after, st.boundary, st.v0, v1, 2);
+  it.max_move = (after - x.topRows(nv)).rowwise().norm().maxCoeff();
+  it.agreement = mean_dice(st.grid_templ, labels_at(after, st.tets, st.labels, st.grid), st.regions);
+  it.accepted = newly_inverted(st.v0, v1) == 0 && it.agreement > agreement;
+  if (it.accepted) {
+    x.topRows(nv) = after;
+    x.bottomRows(x.rows() - nv) = y.bottomRows(x.rows() - nv);
+    agreement = it.agreement;
+  }
+  it.seconds = seconds_since(t0);
+  return it;
+}
+
+/// The dense iterations, coarse to fine; a level ends at its first rejected iteration.
+void dense_iterations(Device& dev, const DenseState& st, Points& x, const DenseRegistrationOptions& o,
+                      DenseRegistrationResult& r) {
+  double agreement = r.agreement_landmarks;
+  const int levels = static_cast<int>(o.widths.size());
+  for (int l = 0; l < levels; ++l) {
+    const int n = o.iterations / levels + (l < o.iterations % levels ? 1 : 0);
+    for (int i = 0; i < n; ++i) {
+      r.iterations.push_back(dense_step(dev, st, x, o.widths[static_cast<size_t>(l)], o, agreement,
+                                        r.max_normal_velocity));
+      if (!r.iterations.back().accepted) break;
+    }
+  }
+  r.agreement_after = agreement;
+}
+
+DenseState dense_state(Device& dev, const Points& ball, const Tets& tets, const std::vector<int>& labels,
+                       const Points& tball, const Tets& ttets, const std::vector<int>& tlabels,
+                       const DenseRegistrationOptions& o) {
+  DenseState st{ball, tets, without_labels(labels, o.exclude_labels), {}, {}, {}, {}, {}, {}, {}};
+  st.boundary = boundary_vertex_mask(static_cast<int>(ball.rows()), boundary_faces(tets));
+  st.v0 = tet_volumes(dev, ball, tets);
+  st.faces = region_faces(tets, st.labels);
+  const std::vector<int> tl = without_labels(tlabels, o.exclude_labels);
+  st.templ = region_surface(tball, region_faces(ttets, tl));
+  const RegionSurface own = region_surface(ball, st.faces);
+  std::set_intersection(own.labels.begin(), own.labels.end(), st.templ.labels.begin(), st.templ.labels.end(),
+                        std::back_inserter(st.regions));
+  st.grid = ball_grid(2.0 / o.agreement_grid);
+  st.grid_templ = labels_at(tball, ttets, tl, st.grid);
+  return st;
+}
+
+/// The final numbers: landmark errors against `targets`, inverted tets against the reference.
+void finish(Device& dev, DenseRegistrationResult& r, const DenseState& st, const Points& work,
+            const Points& landmarks_final, const Points& targets, bool refuse_folds) {
+  const Eigen::VectorXd err = (landmarks_final - targets).rowwise().norm();
+  r.landmark_rms_error = std::sqrt(err.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(err.size(), 1)));
+  r.landmark_max_error = err.size() ? err.maxCoeff() : 0.0;
+  r.inverted_tets = 0;
+  const Eigen::VectorXd v1 = tet_volumes(dev, work, st.tets);
+  for (Eigen::Index t = 0; t < v1.size(); ++t) r.inverted_tets += v1(t) <= 0;
+  if (refuse_folds && newly_inverted(st.v0, v1) > 0) {
+    std::ostringstream s;
+    s << "dense registration folded the mesh: " << newly_inverted(st.v0, v1) << " of " << v1.size()
+      << " tets inverted after the landmark correction";
+    throw NumericalError(s.str());
+  }
+}
+
+}  // namespace
+
+DenseRegistrationResult register_dense(Device& dev, Points& ball, const Tets& tets, const std::vector<int>& labels,
+                                       const Points& tball, const Tets& ttets, const std::vector<int>& tlabels,
+                                       const Points& landmarks, const Points& targets,
+                                       const RegistrationOptions& lo, const DenseRegistrationOptions& o) {
+  const auto t_start = Clock::now();
+  check_dense(tets, labels, ttets, tlabels, o);
+  DenseRegistrationResult r;
+  const DenseState st = dense_state(dev, ball, tets, labels, tball, ttets, tlabels, o);
+  r.regions = st.regions;
+  r.agreement_before = mean_dice(st.grid_templ, labels_at(ball, tets, st.labels, st.grid), st.regions);
+  Points work = ball;
+  RegistrationOptions first = lo;
+  first.restore_volumes = lo.restore_volumes && o.iterations == 0;
+  auto t0 = Clock::now();
+  r.landmark = register_landmarks(dev, work, tets, landmarks, targets, first);
+  r.seconds_landmark = seconds_since(t0);
+  r.max_normal_velocity = r.landmark.max_normal_velocity;
+  r.agreement_landmarks = mean_dice(st.grid_templ, labels_at(work, tets, st.labels, st.grid), st.regions);
+  r.agreement_after = r.agreement_landmarks;
+  Points lm = r.landmark.landmarks_final;
+  if (o.iterations > 0) {
+    t0 = Clock::now();
+    Points x(work.rows() + lm.rows(), 3);
+    x << work, lm;
+    dense_iterations(dev, st, x, o, r);
+    work = x.topRows(work.rows());
+    lm = x.bottomRows(lm.rows());
+    r.seconds_dense = seconds_since(t0);
+    if (o.exact_landmarks) {
+      t0 = Clock::now();
+      RegistrationOptions co = lo;
+      co.rigid = false;
+      co.restore_volumes = false;
+      r.correction = register_landmarks(dev, work, tets, lm, targets, co);
+      lm = r.correction->landmarks_final;
+      r.max_normal_velocity = std::max(r.max_normal_velocity, r.correction->max_normal_velocity);
+      r.seconds_correction = seconds_since(t0);
+    }
+    if (lo.restore_volumes) {
+      t0 = Clock::now();
+      r.restore = restore_volumes(dev, ball, tets, work, landmark_vertices(ball, landmarks), lm);
+      r.seconds_restore = seconds_since(t0);
+    }
+  }
+  finish(dev, r, st, work, lm, targets, lo.refuse_folds);
+  ball = std::move(work);
+  r.seconds_total = seconds_since(t_start);
+  return r;
+}
+
+}  // namespace vpm

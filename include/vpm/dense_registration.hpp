@@ -1,0 +1,108 @@
+#pragma once
+// Dense volume-preserving registration of labelled meshes (issue 13): the landmark registration
+// of vpm/registration.hpp followed by iterations that pull the boundaries of the subject's
+// labelled regions onto the template's, each by a divergence-free flow tangent to the sphere,
+// so volumes stay preserved and the ball stays the domain.
+//
+// One iteration, at Gaussian width w (coarse to fine over DenseRegistrationOptions::widths):
+// 1. Force: the region boundaries are the faces between tets of different labels (label > 0,
+//    regions in `exclude_labels` counted as unlabelled so a held-out region is never seen).
+//    For every region both meshes carry, each subject boundary face is matched to the closest
+//    template boundary face of the same region (displacement q - p) and each template face to
+//    the closest subject face (displacement q - p placed at the subject face): symmetric
+//    closest-point matches, weighted by face area.
+// 2. Smoothing: the matches are averaged with a Gaussian of width `smoothing` x w at centres on
+//    a grid of spacing `centre_spacing` x w in the ball (sum w_i g_i d_i / (sum w_i g_i + 1), so
+//    centres without data ask for no motion).
+// 3. Projection: the divergence-free tangent RBF field (vpm/rbf.hpp, RbfKernel::Tangent) fitted
+//    to the centre values with a smoothing ridge: exactly divergence-free and tangent to the
+//    sphere, whatever the force was.
+// 4. Step: every vertex (and every landmark) is advected through `step` x the field with RK4;
+//    boundary vertices are put back on the sphere; tets the flow inverted are untangled locally
+//    (the map before registration as reference). The iteration is kept only when it raises the
+//    label agreement (mean Dice of the force's regions, tet labels at ball grid points) and
+//    leaves no inverted tet; otherwise it is undone and the level ends.
+// After the iterations, a landmark flow (register_landmarks without rotation) takes the landmarks
+// from where the dense flows left them back exactly onto their targets, and the volume
+// restoration of the landmark registration runs once against the map before registration.
+#include <Eigen/Core>
+#include <optional>
+#include <vector>
+
+#include "vpm/json.hpp"
+#include "vpm/mesh.hpp"
+#include "vpm/registration.hpp"
+
+namespace vpm {
+
+class Device;
+
+struct DenseRegistrationOptions {
+  /// Dense iterations in all, split evenly over the widths (coarse first); 0 = landmark
+  /// registration only (the result is then register_landmarks' alone).
+  int iterations = 0;
+  std::vector<double> widths = {0.3, 0.2, 0.14};  ///< Gaussian widths of the levels (ball units)
+  double step = 0.8;            ///< fraction of the smoothed displacement taken per iteration
+  double centre_spacing = 1.0;  ///< grid spacing of the field's centres, x the width
+  double smoothing = 0.5;       ///< width of the Gaussian averaging the matches, x the width
+  double ridge = 0.3;           ///< smoothing ridge of the fit, x the mean Gram diagonal
+  int advect_steps = 4;         ///< RK4 steps per iteration
+  std::vector<int> exclude_labels;  ///< regions the force never sees (held out)
+  int agreement_grid = 40;      ///< cells per axis of the ball grid for the label agreement
+  /// Move the landmarks back exactly onto their targets after the dense iterations.
+  bool exact_landmarks = true;
+};
+
+/// One dense iteration.
+struct DenseIteration {
+  double width = 0;
+  long matches = 0;               ///< closest-point matches (both directions)
+  int centres = 0;                ///< centres of the fitted field
+  double mean_match_distance = 0; ///< area-weighted mean |q - p| of the matches (ball units)
+  double max_move = 0;            ///< largest vertex displacement of the step
+  double agreement = 0;           ///< label agreement after the step
+  int folded = 0;                 ///< tets the step inverted (before untangling)
+  bool accepted = false;
+  double seconds = 0;
+};
+/// {"width", "matches", "centres", "mean_match_distance", "max_move", "agreement", "folded",
+///  "accepted", "seconds"}
+Json to_json(const DenseIteration& iteration);
+
+struct DenseRegistrationResult {
+  RegistrationResult landmark;                ///< the landmark registration (first stage)
+  std::optional<RegistrationResult> correction;  ///< the final landmark flow (when run)
+  std::optional<RegistrationRestore> restore;    ///< the final volume restoration (when run)
+  std::vector<DenseIteration> iterations;
+  std::vector<int> regions;       ///< labels the force used
+  double agreement_before = 0;    ///< label agreement of the mapped mesh
+  double agreement_landmarks = 0; ///< after the landmark registration
+  double agreement_after = 0;     ///< at the end
+  double landmark_rms_error = 0, landmark_max_error = 0;  ///< at the end (ball units)
+  double max_normal_velocity = 0; ///< largest max |u . n| of all flows
+  int inverted_tets = 0;          ///< at the end
+  double seconds_landmark = 0, seconds_dense = 0, seconds_correction = 0, seconds_restore = 0,
+         seconds_total = 0;
+};
+/// {"landmark": to_json(RegistrationResult), "correction" (when run), "restore" (when run),
+///  "iterations": [...], "regions", "agreement_before", "agreement_landmarks", "agreement_after",
+///  "landmark_rms_error", "landmark_max_error", "max_normal_velocity", "inverted_tets",
+///  "timings_s": {"landmark", "dense", "correction", "restore", "total"}}
+Json to_json(const DenseRegistrationResult& result);
+
+/// Registers the labelled mapped mesh `ball` (n x 3, in/out; `tets` m x 4, `labels` m tet
+/// labels) to the labelled template (`template_ball`, `template_tets`, `template_labels`):
+/// landmark registration of `landmarks` onto `targets` with `landmark_options` (their volume
+/// restoration deferred to the end when dense iterations run), then the dense iterations.
+/// Throws what register_landmarks throws, InputError for label counts that do not match the
+/// tets or invalid options (widths <= 0, step outside (0, 1], iterations < 0), and
+/// NumericalError when the final result would have inverted tets (`ball` then unchanged).
+DenseRegistrationResult register_dense(Device& device, Points& ball, const Tets& tets,
+                                       const std::vector<int>& labels, const Points& template_ball,
+                                       const Tets& template_tets,
+                                       const std::vector<int>& template_labels,
+                                       const Points& landmarks, const Points& targets,
+                                       const RegistrationOptions& landmark_options,
+                                       const DenseRegistrationOptions& options);
+
+}  // namespace vpm
