@@ -3,6 +3,7 @@
 // back to a subject's native space.
 #include <cmath>
 
+#include "collective/native_positions.hpp"
 #include "vpm/cohort_view.hpp"
 #include "vpm/error.hpp"
 #include "vpm/sampling.hpp"
@@ -11,15 +12,8 @@ namespace vpm {
 
 namespace {
 
-Points original_positions(const TetMesh& registered) {
-  const Field* f = registered.find_point_field("original_position");
-  if (!f || f->values.cols() != 3)
-    throw InputError("the registered mesh has no point field original_position (3 components): not a mapped mesh");
-  return f->values;
-}
-
 std::vector<float> pull_back(const Points& ball, const TetMesh& registered) {
-  const Points native = pull_back_points(ball, registered.vertices, registered.tets, original_positions(registered));
+  const Points native = pull_back_points(ball, registered.vertices, registered.tets, detail::native_positions(registered, "view"));
   std::vector<float> out(static_cast<size_t>(native.rows()) * 3);
   for (Eigen::Index i = 0; i < native.rows(); ++i)
     for (int c = 0; c < 3; ++c) out[3 * i + c] = static_cast<float>(native(i, c));
