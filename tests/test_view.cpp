@@ -161,6 +161,17 @@ TEST_CASE("the page carries the manifest and the arrays the browser reads") {
   CHECK(m.find("subjects")->at(0).find("foci")->find("pet")->number() == 2);
 }
 
+TEST_CASE("normals' z-scores are against the other normals") {
+  const std::vector<std::vector<double>> x = {{1.0, 5.0}, {2.0, 5.0}, {3.0, 5.0}, {4.0, 5.0}, {10.0, 5.0}};
+  const auto z = leave_one_out_z(x);
+  // normal 4 (10) against {1, 2, 3, 4}: mean 2.5, sample std sqrt(5/3)
+  CHECK(z[4][0] == Approx((10.0 - 2.5) / std::sqrt(5.0 / 3.0)));
+  // normal 0 (1) against {2, 3, 4, 10}: mean 4.75, squared deviations 38.75, sample std sqrt(38.75/3)
+  CHECK(z[0][0] == Approx((1.0 - 4.75) / std::sqrt(38.75 / 3.0)));
+  CHECK(std::isnan(z[2][1]));  // no spread among the others
+  CHECK(std::isnan(leave_one_out_z({{1.0}, {2.0}, {3.0}})[0][0]));  // too few normals
+}
+
 TEST_CASE("a results folder without comparisons is refused naming it") {
   const std::string dir = VPM_TEST_TMP "/view_empty";
   std::filesystem::create_directories(dir + "/compare");

@@ -1,5 +1,6 @@
 // load_cohort_view (vpm/cohort_view.hpp): a cohort read back from the workflow's results folder.
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include "collective/cohort_view_detail.hpp"
@@ -93,6 +94,28 @@ ViewSubject& subject_for(CohortView& v, std::map<std::string, size_t>& index, co
 
 std::vector<float> to_float(const std::vector<double>& x) { return {x.begin(), x.end()}; }
 
+}  // namespace
+
+std::vector<std::vector<double>> leave_one_out_z(const std::vector<std::vector<double>>& x) {
+  const size_t n = x.size(), m = n ? x[0].size() : 0;
+  std::vector<std::vector<double>> z(n, std::vector<double>(m, std::nan("")));
+  for (size_t e = 0; e < m; ++e) {
+    double sum = 0, sq = 0;
+    int count = 0;
+    for (size_t i = 0; i < n; ++i)
+      if (std::isfinite(x[i][e])) sum += x[i][e], sq += x[i][e] * x[i][e], ++count;
+    for (size_t i = 0; i < n && count >= 4; ++i) {
+      if (!std::isfinite(x[i][e])) continue;
+      const double k = count - 1, mean = (sum - x[i][e]) / k;
+      const double var = (sq - x[i][e] * x[i][e] - k * mean * mean) / (k - 1);
+      if (var > 0) z[i][e] = (x[i][e] - mean) / std::sqrt(var);
+    }
+  }
+  return z;
+}
+
+namespace {
+
 /// The reference of one feature and every subject's values and z-scores against it.
 void add_feature(CohortView& v, const CanonicalElements& el, const std::vector<const ComparisonFile*>& comps,
                  Tables& tables, std::map<std::string, size_t>& index) {
@@ -101,10 +124,13 @@ void add_feature(CohortView& v, const CanonicalElements& el, const std::vector<c
   for (const std::string& p : first.normal_tables) normals.push_back(tables.get(p));
   const Reference ref = build_reference(normals, first.normal_tables, first.feature, first.normalisation);
   v.features.push_back({first.feature, first.normalisation, first.options, ref.subjects, to_float(ref.mean), to_float(ref.std)});
+  std::vector<std::vector<double>> x;
+  for (const ElementTable& t : normals) x.push_back(normalised_feature(t, first.feature, first.normalisation));
+  const std::vector<std::vector<double>> z = leave_one_out_z(x);
   for (size_t i = 0; i < normals.size(); ++i) {
     ViewSubject& s = subject_for(v, index, subject_id(normals[i], first.normal_tables[i]), false);
-    s.values[first.feature] = to_float(normalised_feature(normals[i], first.feature, first.normalisation));
-    s.z[first.feature] = to_float(compare_to_reference(el, ref, normals[i], first.options).z);
+    s.values[first.feature] = to_float(x[i]);
+    s.z[first.feature] = to_float(z[i]);
   }
   for (const ComparisonFile* c : comps) {
     if (c->normal_tables != first.normal_tables || c->normalisation != first.normalisation)

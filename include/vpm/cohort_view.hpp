@@ -47,7 +47,7 @@ struct ViewSubject {
   /// sphere(v) * mid_radius(k), pulled back through the registered mesh.
   std::vector<float> native;
   std::map<std::string, std::vector<float>> values;  ///< per feature: normalised value per element
-  std::map<std::string, std::vector<float>> z;       ///< per feature: z per element against the reference
+  std::map<std::string, std::vector<float>> z;       ///< per feature: z per element (normals: leave-one-out)
   std::map<std::string, int> foci_count;             ///< patients: clusters per feature
   std::map<std::string, std::vector<std::int32_t>> cluster;  ///< patients: per feature, focus id per element (0: none)
   std::map<std::string, std::vector<ViewFocus>> foci;  ///< patients: per feature
@@ -98,6 +98,12 @@ std::vector<float> native_shell_surfaces(const CanonicalElements& elements, cons
 /// Native positions (elements x 3) of every element's centre (its triangle's centroid direction
 /// at the shell's middle radius) through `registered`.
 std::vector<float> native_element_centres(const CanonicalElements& elements, const TetMesh& registered);
+
+/// Each normal's z against the reference of the other normals (leave-one-out; sample standard
+/// deviation): x[i][e] is normal i's value at element e. NaN where fewer than 4 normals have a
+/// finite value or the others' spread is 0. A normal compared with a reference that holds it
+/// would look closer to the normals than a patient does.
+std::vector<std::vector<double>> leave_one_out_z(const std::vector<std::vector<double>>& x);
 
 /// Reads a cohort from the workflow's results folder (docs/cohort.md): the comparisons
 /// compare/*.json (patients; their reference tables name the normals), each subject's table and
