@@ -128,6 +128,20 @@ TEST_CASE("dense registration undoes a known incompressible flow that landmarks 
   if (results.size() == 2) CHECK((results[0] - results[1]).cwiseAbs().maxCoeff() < 1e-9);
 }
 
+TEST_CASE("dense registration of a subject to itself is the identity") {
+  Case c = make_case();
+  c.subject = c.templ;
+  c.landmarks = region_landmarks(c.subject, c.templ);
+  for (const auto& dev : test::devices()) {
+    INFO(dev->name());
+    Points ball;
+    const DenseRegistrationResult r = run_dense(*dev, c, ball, 4);
+    CHECK((ball - c.templ.vertices).cwiseAbs().maxCoeff() < 1e-9);
+    CHECK(r.inverted_tets == 0);
+    CHECK(r.landmark_max_error < 1e-9);
+  }
+}
+
 TEST_CASE("dense registration: held-out regions stay out of the force and bad options are refused") {
   const Case c = make_case();
   Device& dev = *Device::host();
