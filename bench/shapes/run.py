@@ -1,0 +1,100 @@
+#!/usr/bin/python3
+"""The shapes benchmark (issue 15; docs/shapes.md): genus-0 solids beyond brains meshed by
+`vpm mesh-image` and mapped by `vpm map`, one row per shape and size, with the map's outcome as
+a user sees it (exit status, converged, distortion, folds, time).
+
+Usage: run.py OUT_DIR [--sizes 30k,300k] [--shapes limbs,hand,...] [--vpm build/vpm]
+       [--timeout 600]
+Writes OUT_DIR/shapes.json and OUT_DIR/shapes.md (and prints the table). Sizes: 30k (mesh-image's
+default density, 25-30k tets) and 300k (--max-volume chosen for about 300k tets).
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def run(cmd, timeout):
+    t0 = time.time()
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+        return p.returncode, time.time() - t0, (p.stderr.strip().splitlines() or [""])[-1]
+    except subprocess.TimeoutExpired:
+        return "timeout", time.time() - t0, f"killed after {timeout} s"
+
+
+def one(vpm, out, shape, size, timeout):
+    mask = os.path.join(out, f"{shape}.nii.gz")
+    base = os.path.join(out, f"{shape}_{size}")
+    density = [] if size == "30k" else ["--max-volume", "__V__"]
+    if density:
+        volume = json.load(open(os.path.join(out, f"{shape}_30k_mesh.json")))["mesh"]["volume_mm3"]
+        density[1] = f"{volume / 300000 * 1.6:.4f}"  # TetGen's tets average ~1/1.6 of the bound
+    rc, secs, last = run([vpm, "mesh-image", mask, "-o", base + ".vtu", "--report", base + "_mesh.json"] + density, timeout)
+    row = {"shape": shape, "size": size, "mesh_exit": rc, "mesh_s": round(secs, 2)}
+    if rc != 0:
+        row["message"] = last
+        return row
+    mesh = json.load(open(base + "_mesh.json"))
+    row.update(tets=mesh["mesh"]["tets"], vertices=mesh["mesh"]["vertices"],
+               min_dihedral_deg=mesh["mesh"].get("min_dihedral_deg"))
+    rc, secs, last = run([vpm, "map", base + ".vtu", "-o", base + "_ball.vtu", "--report", base + "_map.json"], timeout)
+    row.update(map_exit=rc, map_s=round(secs, 2), message=last)
+    if rc in (0, 4) and os.path.exists(base + "_map.json"):
+        m = json.load(open(base + "_map.json"))
+        f, i = m["final"], m["initial"]
+        row.update(converged=m["converged"], reason=m["convergence"].get("reason"),
+                   vertex=f["vertex_volume_ratio"]["mean_abs_dev"], tet=f["tet_volume_ratio"]["mean_abs_dev"],
+                   folds=f["inverted_tets"], initial_vertex=i["vertex_volume_ratio"]["mean_abs_dev"],
+                   initial_max_abs_log=i["tet_volume_ratio"]["max_abs_log"],
+                   untangle_s=m["timings_s"].get("volume_map_untangle", 0))
+    return row
+
+
+def table(rows):
+    lines = ["| shape | tets | exit | converged | vertex \\|r-1\\| | tet \\|r-1\\| | folds | initial map vertex / max \\|log r\\| | map s (untangle) |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        if "vertex" in r:
+            lines.append(f"| {r['shape']} {r['size']} | {r['tets']:,} | {r['map_exit']} | {r['converged']}"
+                         f"{'' if r['converged'] else ' (' + str(r['reason']) + ')'} | {100 * r['vertex']:.2f} % | "
+                         f"{100 * r['tet']:.2f} % | {r['folds']} | {100 * r['initial_vertex']:.1f} % / "
+                         f"{r['initial_max_abs_log']:.1f} | {r['map_s']:.1f} ({r['untangle_s']:.1f}) |")
+        else:
+            lines.append(f"| {r['shape']} {r['size']} | {r.get('tets', '-')} | mesh {r['mesh_exit']}, map "
+                         f"{r.get('map_exit', '-')} | - | - | - | - | - | {r.get('map_s', '-')} | ")
+            lines.append(f"|  | {r.get('message', '')} |||||||| ")
+    return "\n".join(lines)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("out")
+    ap.add_argument("--sizes", default="30k")
+    ap.add_argument("--shapes", default="limbs,hand,slab,coil,kidney")
+    ap.add_argument("--vpm", default=os.path.join(HERE, "..", "..", "build", "vpm"))
+    ap.add_argument("--timeout", type=int, default=600)
+    a = ap.parse_args()
+    os.makedirs(a.out, exist_ok=True)
+    shapes = a.shapes.split(",")
+    missing = [s for s in shapes if not os.path.exists(os.path.join(a.out, f"{s}.nii.gz"))]
+    if missing:
+        subprocess.run(["/usr/bin/python3", os.path.join(HERE, "make_shapes.py"), a.out] + missing, check=True)
+    rows = []
+    for size in a.sizes.split(","):
+        for s in shapes:
+            rows.append(one(os.path.abspath(a.vpm), a.out, s, size, a.timeout))
+            print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
+    json.dump({"date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()), "rows": rows},
+              open(os.path.join(a.out, "shapes.json"), "w"), indent=2)
+    md = table(rows)
+    open(os.path.join(a.out, "shapes.md"), "w").write(md + "\n")
+    print(md)
+
+
+if __name__ == "__main__":
+    main()
