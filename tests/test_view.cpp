@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 
 #include "support/fixtures.hpp"
 #include "support/process.hpp"
@@ -182,6 +183,19 @@ TEST_CASE("a results folder without comparisons is refused naming it") {
     CHECK(std::string(e.what()).find("view_empty/compare: no comparison") != std::string::npos);
   }
   CHECK_THROWS_AS(load_cohort_view(VPM_TEST_TMP "/no_such_results"), InputError);
+  // a comparison's sidecar without its options is named, not dereferenced
+  {
+    std::ofstream(dir + "/compare/sub-P01_pet.json")
+        << R"({"reference": {"feature": "pet", "tables": []}, "patient": ")" << dir
+        << R"(/compare/sub-P01_pet.json", "options": {}, "result": {"clusters": []}})";
+  }
+  try {
+    load_cohort_view(dir);
+    FAIL("no error");
+  } catch (const InputError& e) {
+    CHECK(std::string(e.what()).find("sub-P01_pet.json: no 'normalisation'") != std::string::npos);
+  }
+  std::filesystem::remove(dir + "/compare/sub-P01_pet.json");
   CHECK(test::run_status(std::string(VPM_BINARY) + " view " + dir + " -o " + dir + "/x.html 2>/dev/null") == 2);
   CHECK(!std::filesystem::exists(dir + "/x.html"));
 }

@@ -32,6 +32,13 @@ std::string resolve(const std::string& path, const fs::path& results, const std:
   throw InputError(path + ": " + what + " not found");
 }
 
+/// json[key], or InputError naming the sidecar and the key.
+const Json& need(const Json& json, const char* key, const std::string& side) {
+  const Json* j = json.find(key);
+  if (!j || j->type() == Json::Type::Null) throw InputError(side + ": no '" + key + "'");
+  return *j;
+}
+
 std::vector<ComparisonFile> read_comparisons(const fs::path& results, const std::string& only) {
   const fs::path dir = results / "compare";
   if (!fs::is_directory(dir)) throw InputError(dir.string() + ": no such folder; run the workflow's group level (vpm compare) first");
@@ -51,11 +58,11 @@ std::vector<ComparisonFile> read_comparisons(const fs::path& results, const std:
     if (!tables || c.feature.empty()) throw InputError(side + ": no reference feature or tables");
     for (size_t i = 0; i < tables->size(); ++i)
       c.normal_tables.push_back(resolve(tables->at(i).string(), results, "a normal's table named in " + side));
-    c.normalisation = parse_normalisation(ref->find("normalisation")->string());
-    c.options.threshold = opt->find("threshold")->number();
-    c.options.fdr_q = opt->find("fdr_q")->number();
-    c.options.min_cluster = static_cast<int>(opt->find("min_cluster")->number());
-    c.options.sign = static_cast<int>(opt->find("sign")->number());
+    c.normalisation = parse_normalisation(need(*ref, "normalisation", side).string());
+    c.options.threshold = need(*opt, "threshold", side).number();
+    c.options.fdr_q = need(*opt, "fdr_q", side).number();
+    c.options.min_cluster = static_cast<int>(need(*opt, "min_cluster", side).number());
+    c.options.sign = static_cast<int>(need(*opt, "sign", side).number());
     c.clusters = res->find("clusters") ? res->find("clusters")->size() : 0;
     out.push_back(std::move(c));
   }
