@@ -4,6 +4,7 @@
 // table of its foci in native space (paper Figs. 8 and 10).
 import { HIGHLIGHT } from './colour.js';
 import { drawDistribution, drawSlice, worldToVoxel, fmt } from './plot.js';
+import { esc } from './table.js';
 
 export class Detail {
   constructor(ctx) {
@@ -136,7 +137,7 @@ export class Detail {
     if (!rows) return;
     table.innerHTML = '<tr><th>focus</th><th>mm\u00b3</th><th>peak z</th><th>centroid (mm)</th><th>region</th></tr>' +
       rows.map((r) => `<tr data-focus="${r.id}"><td>${r.id}</td><td>${fmt(r.volume_mm3)}</td><td>${fmt(r.peak_z)}</td>` +
-        `<td>${r.centroid.map((v) => fmt(v)).join(', ')}</td><td>${r.region}</td></tr>`).join('');
+        `<td>${r.centroid.map((v) => fmt(v)).join(', ')}</td><td>${esc(r.region)}</td></tr>`).join('');
     table.querySelectorAll('tr[data-focus]').forEach((tr, i) => tr.addEventListener('click', () => {
       const peak = rows[i].peak_element;
       if (peak >= 0) this.open(subject, feature, peak, { turn: true });

@@ -5,7 +5,8 @@ import { loadPageData } from './data.js';
 import { SurfaceModel } from './geometry.js';
 import { TableScene, BufferAttribute } from './scene.js';
 import { Detail } from './detail.js';
-import { sequential, diverging, faded, robustRange, sequentialCss, divergingCss, HIGHLIGHT } from './colour.js';
+import { sequential, diverging, faded, robustRange, HIGHLIGHT } from './colour.js';
+import { buildTables, drawBars } from './table.js';
 import { fmt } from './plot.js';
 
 performance.mark('vpm:script');
@@ -47,50 +48,7 @@ $('#threshold').value = String(state.threshold);
 const area = $('#table-area');
 const scene = new TableScene($('#gl'));
 
-function buildTable(title, rows, id) {
-  const h = document.createElement('h2');
-  h.textContent = `${title} (${rows.length})`;
-  area.appendChild(h);
-  const table = document.createElement('table');
-  table.id = id;
-  const head = table.createTHead().insertRow();
-  head.insertCell().textContent = 'subject';
-  for (const c of columns) {
-    const th = document.createElement('th');
-    th.innerHTML = `<div>${c.label}</div><div class="bar ${c.kind}"></div><div class="bar-labels"></div>` +
-      (c.kind === 'z' ? '<div class="bar-note">saturated: in a focus; faded: outside foci</div>' : '<div class="bar-note">&nbsp;</div>');
-    th.dataset.kind = c.kind;
-    th.dataset.feature = c.feature;
-    head.appendChild(th);
-  }
-  const body = table.createTBody();
-  for (const s of rows) {
-    const tr = body.insertRow();
-    tr.dataset.subject = s.id;
-    const th = document.createElement('th');
-    th.innerHTML = `<div class="sid">${s.id}</div><div class="group">${s.group}</div>`;
-    if (s.group === 'patient')
-      for (const f of features)
-        th.innerHTML += `<div class="foci" data-subject="${s.id}" data-feature="${f.name}" data-count="${s.foci[f.name]}">` +
-          `${s.foci[f.name]} foci (${f.name})</div>`;
-    tr.appendChild(th);
-    columns.forEach((c, ci) => {
-      const td = tr.insertCell();
-      const el = document.createElement('div');
-      el.className = 'cell';
-      td.appendChild(el);
-      cellsFor(s).push({ el, column: ci });
-    });
-  }
-  area.appendChild(table);
-}
-const pending = new Map();
-function cellsFor(s) {
-  if (!pending.has(s.index)) pending.set(s.index, []);
-  return pending.get(s.index);
-}
-buildTable('Patients', patients, 'patients');
-buildTable('Normals', normals, 'normals');
+const pending = buildTables(area, { patients, normals, columns, features });
 
 // ---- geometry and colours -------------------------------------------------------------------
 const attrs = subjects.map(() => ({ position: null, normal: null }));
@@ -171,21 +129,7 @@ function setHighlight(e) {
 
 // ---- colour bars ----------------------------------------------------------------------------
 function updateBars() {
-  document.querySelectorAll('th[data-kind]').forEach((th) => {
-    const bar = th.querySelector('.bar');
-    const labels = th.querySelector('.bar-labels');
-    if (th.dataset.kind === 'value') {
-      const [lo, hi] = ranges[th.dataset.feature];
-      bar.style.background = sequentialCss();
-      labels.innerHTML = `<span>${fmt(lo)}</span><span>${fmt(hi)}</span>`;
-    } else {
-      bar.style.background = divergingCss();
-      labels.innerHTML = `<span>\u2264 -${fmt(state.threshold + 3)}</span><span>|z| < ${fmt(state.threshold)}</span>` +
-        `<span>\u2265 ${fmt(state.threshold + 3)}</span>`;
-      th.title = 'saturated: elements in a focus (a cluster of adjacent elements beyond the threshold vpm compare used); ' +
-        'faded: beyond the threshold outside any focus';
-    }
-  });
+  drawBars(ranges, state.threshold);
   $('#threshold-value').textContent = fmt(state.threshold);
   $('#shell-value').textContent = `${state.shell + 1} of ${K}` + (state.shell === K - 1 ? ' (outer)' : '');
 }
