@@ -362,6 +362,8 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   const vpm::Image atlas_b = st.ceiling ? atlas : vpm::resample_image(atlas, pull, vpm::Interpolation::nearest);
   vpm::MeshImageOptions subject_meshing = st.meshing;
   if (st.ceiling) subject_meshing.target_vertices = static_cast<int>(1.3 * st.meshing.target_vertices);
+  // a rotated brain can leave the image grid (the brainstem, at the bottom): cap it flat there
+  if (st.max_rotation > 0) subject_meshing.close_at_border = true;
   timings["read_and_deform"] = seconds_since(t0);
 
   const Subject tmpl = mesh_and_map(dev, image, atlas, st.meshing, "colin27", st.out);

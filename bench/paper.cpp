@@ -103,17 +103,19 @@ Maps map_both(Device& dev, TetMesh mesh, const std::string& name) {
   return {map_to_ball(dev, mesh, vr, name, initial_only), map_to_ball(dev, mesh, vr, name)};
 }
 
-// Histogram of log r over [-1.5, 1.5] in 60 bins (values beyond go to the end bins).
+// Histogram of log r over [-0.6, 0.6] in 120 bins of 0.01 (values beyond go to the end bins).
 Json log_histogram(const Eigen::VectorXd& r) {
-  std::vector<long> bins(60, 0);
+  constexpr int kBins = 120;
+  constexpr double kLo = -0.6, kWidth = 0.01;
+  std::vector<long> bins(kBins, 0);
   for (Eigen::Index i = 0; i < r.size(); ++i) {
     if (!(r(i) > 0)) continue;
-    const int b = static_cast<int>(std::floor((std::log(r(i)) + 1.5) / 0.05));
-    bins[static_cast<size_t>(std::clamp(b, 0, 59))]++;
+    const int b = static_cast<int>(std::floor((std::log(r(i)) - kLo) / kWidth));
+    bins[static_cast<size_t>(std::clamp(b, 0, kBins - 1))]++;
   }
   Json j = Json::object();
-  j["lo"] = -1.5;
-  j["hi"] = 1.5;
+  j["lo"] = kLo;
+  j["hi"] = kLo + kBins * kWidth;
   Json counts = Json::array();
   for (long c : bins) counts.push_back(c);
   j["counts"] = counts;

@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Collects bench/paper's results (bench/paper/run.sh) into RESULTS/paper.json, RESULTS/paper.md
 (the reproduced Tables 1 and 2 beside the paper's numbers) and RESULTS/fig3.png (Fig. 3: histograms
-of log vertex volume ratio, harmonic map in red, volume-preserving map in blue; drawn with numpy
-and zlib, no plotting library). Usage: tables.py RESULTS   (default bench/results/paper)"""
+of log vertex volume ratio, harmonic map in red, volume-preserving map in blue, x from -0.6 to 0.6
+with ticks every 0.1 (long at 0), y the fraction of vertices on a log scale from 1e-4 to 1; drawn
+with numpy and zlib, no plotting library). Usage: tables.py RESULTS   (default bench/results/paper)"""
 import glob
 import json
 import os
@@ -33,9 +34,9 @@ def table1(t1):
     return rows
 
 
-def table2(runs):
+def table2(runs, failed):
     out = {}
-    rows = ["| registration | " + " | ".join(NAMES) + " | vertex / tet abs(r-1) | runs |", "|---" * 7 + "|"]
+    rows = ["| registration | " + " | ".join(NAMES) + " | vertex / tet abs(r-1) | runs (failed) |", "|---" * 7 + "|"]
     for dense, label in ((0, "landmarks only"), (12, "dense (12 iterations)")):
         sel = [r for (s, d), r in sorted(runs.items()) if d == dense]
         if not sel:
@@ -49,7 +50,10 @@ def table2(runs):
                       "dice_before": [o["dice_image_before"] for o in r["overlap"]["held_out"]],
                       "vertex_mean_abs_dev": r["registration"]["vertex_volume_ratio"]["mean_abs_dev"],
                       "seconds": r["timings_s"]["total"]} for (s, d), r in sorted(runs.items()) if d == dense]}
-        rows.append("| %s | %s | %.1f %% / %.1f %% | %d |" % (label, " | ".join("%.3f" % x for x in dice), 100 * vd, 100 * td, len(sel)))
+        nf = sum(1 for (s, d) in failed if d == dense)
+        out[label]["failed_seeds"] = sorted(s for (s, d) in failed if d == dense)
+        rows.append("| %s | %s | %.2f %% / %.2f %% | %d (%d) |" % (
+            label, " | ".join("%.3f" % x for x in dice), 100 * vd, 100 * td, len(sel), nf))
     rows.append("| paper (Hu et al. 2014) | %s | 3.0 %% | |" % " | ".join("%.3f" % x for x in PAPER_DICE))
     return rows, out
 
@@ -67,10 +71,11 @@ def png(path, rgb):
 def fig3(hist, path, w=640, h=360, margin=40):
     img = np.full((h, w, 3), 255, np.uint8)
     hv, hh = np.array(hist["volume"]["counts"], float), np.array(hist["harmonic"]["counts"], float)
-    n, top = len(hv), max(hv.max() / hv.sum(), hh.max() / hh.sum())
+    n = len(hv)
     bw = (w - 2 * margin) / n
     for counts, colour, shrink in ((hh, (220, 60, 50), 0), (hv, (40, 90, 220), 0.25)):
-        frac = counts / counts.sum() / top
+        share = counts / counts.sum()  # log scale: 1e-4 at the axis, 1 at the top
+        frac = np.where(share > 0, np.clip((np.log10(np.maximum(share, 1e-12)) + 4) / 4, 0, 1), 0)
         for i, f in enumerate(frac):
             x0, x1 = int(margin + (i + shrink) * bw), int(margin + (i + 1 - shrink) * bw) - 1
             y0 = int(h - margin - f * (h - 2 * margin))
@@ -78,9 +83,12 @@ def fig3(hist, path, w=640, h=360, margin=40):
     img[h - margin:h - margin + 2, margin:w - margin] = 0          # x axis (log r from lo to hi)
     img[margin:h - margin + 2, margin:margin + 2] = 0              # y axis (fraction of vertices)
     lo, hi = hist["volume"]["lo"], hist["volume"]["hi"]
-    for t in np.arange(lo, hi + 1e-9, 0.5):                        # ticks every 0.5 in log r
+    for t in np.arange(lo, hi + 1e-9, 0.1):                        # ticks every 0.1 in log r
         x = int(margin + (t - lo) / (hi - lo) * (w - 2 * margin))
-        img[h - margin:h - margin + (10 if abs(t) < 1e-9 else 6), x:x + 2] = 0
+        img[h - margin:h - margin + (12 if abs(t) < 1e-9 else 6), x:x + 2] = 0
+    for d in range(5):                                             # decades 1e-4 .. 1
+        y = int(h - margin - d / 4 * (h - 2 * margin))
+        img[y:y + 2, margin - 6:margin] = 0
     png(path, img)
 
 
@@ -91,7 +99,11 @@ def main():
     for f in glob.glob(os.path.join(res, "table2", "seed*_dense*.json")):
         s, d = os.path.basename(f)[4:-5].split("_dense")
         runs[(int(s), int(d))] = json.load(open(f))
-    rows2, t2 = table2(runs)
+    failed = set()
+    for f in glob.glob(os.path.join(res, "table2", "seed*_dense*.failed")):
+        s, d = os.path.basename(f)[4:-7].split("_dense")
+        failed.add((int(s), int(d)))
+    rows2, t2 = table2(runs, failed)
     load = open(os.path.join(res, "load.txt")).read().strip() if os.path.exists(os.path.join(res, "load.txt")) else ""
     md = ["## Table 1: mapping a deformed Colin27 (%d seeds, medians; %d vertices, %d tets; %s)" % (
         t1["seeds"], t1["vertices"], t1["tets"], t1["device"]), ""] + table1(t1) + [
