@@ -6,9 +6,10 @@
 // volume-preserving map), and the corresponding vertices compared in the ball after the best
 // rotation (Kabsch). Prints a table and writes JSON (also log-ratio histograms for Fig. 3).
 //
-//   vpm_bench_paper [--seeds N] [--target-vertices V] [--data DIR] [--out FILE]
+//   vpm_bench_paper [--seeds N] [--amplitude F] [--target-vertices V] [--data DIR] [--out FILE]
 //
-// Defaults: 5 seeds, 5200 vertices (the paper's size), bench/results/paper/table1.json.
+// Defaults: 5 seeds, amplitude 1 (F scales the flow), 5200 vertices (the paper's size),
+// bench/results/paper/table1.json.
 // Tables 2 and Fig. 3 come from bench/paper/run.sh (docs/paper.md).
 #include <algorithm>
 #include <cmath>
@@ -51,7 +52,7 @@ struct Deformed {
   double rotation_deg = 0, max_displacement = 0;  // displacement in units of R
 };
 
-Deformed deform(const Points& v, unsigned seed, double max_rotation_deg) {
+Deformed deform(const Points& v, unsigned seed, double max_rotation_deg, double amplitude) {
   const Vec c = v.colwise().mean().transpose();
   double R = 0;
   for (Eigen::Index i = 0; i < v.rows(); ++i) R += (v.row(i).transpose() - c).norm();
@@ -63,7 +64,7 @@ Deformed deform(const Points& v, unsigned seed, double max_rotation_deg) {
   for (int k = 0; k < 4; ++k) {
     Vec off(u(rng), u(rng), u(rng)), a(u(rng), u(rng), u(rng));
     f.centres.push_back(c + 0.5 * R * off / std::max(1.0, off.norm()));
-    f.potentials.push_back(a.normalized() * mag(rng) * R * f.width / std::exp(-0.5));
+    f.potentials.push_back(amplitude * a.normalized() * mag(rng) * R * f.width / std::exp(-0.5));
   }
   std::normal_distribution<double> g;
   Deformed d;
@@ -124,6 +125,7 @@ Json log_histogram(const Eigen::VectorXd& r) {
 
 struct Settings {
   int seeds = 5, target_vertices = 5200;
+  double amplitude = 1;  // scales the flow (1: each term peaks at 3-6 % of R)
   std::string data = "/usr/share/mricron/templates", out = "bench/results/paper/table1.json";
 };
 
@@ -141,9 +143,10 @@ Settings parse_settings(int argc, char** argv) {
     const std::string a = argv[i];
     if (a == "--seeds" && i + 1 < argc) st.seeds = std::atoi(argv[++i]);
     else if (a == "--target-vertices" && i + 1 < argc) st.target_vertices = std::atoi(argv[++i]);
+    else if (a == "--amplitude" && i + 1 < argc) st.amplitude = std::atof(argv[++i]);
     else if (a == "--data" && i + 1 < argc) st.data = argv[++i];
     else if (a == "--out" && i + 1 < argc) st.out = argv[++i];
-    else throw std::invalid_argument("usage: vpm_bench_paper [--seeds N] [--target-vertices V] [--data DIR] [--out FILE]");
+    else throw std::invalid_argument("usage: vpm_bench_paper [--seeds N] [--amplitude F] [--target-vertices V] [--data DIR] [--out FILE]");
   }
   return st;
 }
@@ -183,7 +186,7 @@ int main(int argc, char** argv) try {
               "harmonic: disp vert/tet", "volume-pres.: disp vert/tet");
   for (int seed = 1; seed <= st.seeds; ++seed) {
     const auto t0 = Clock::now();
-    const Deformed d = deform(mesh.vertices, static_cast<unsigned>(seed), 10.0);
+    const Deformed d = deform(mesh.vertices, static_cast<unsigned>(seed), 10.0, st.amplitude);
     TetMesh moved = mesh;
     moved.vertices = d.vertices;
     const MapMetrics dm = map_metrics(dev, mesh.vertices, moved.vertices, mesh.tets);
@@ -216,6 +219,7 @@ int main(int argc, char** argv) try {
   j["vertices"] = static_cast<long>(n);
   j["tets"] = static_cast<long>(mesh.num_tets());
   j["seeds"] = st.seeds;
+  j["amplitude"] = st.amplitude;
   j["runs"] = runs;
   j["median"] = summary_json(S);
   j["fig3_log_vertex_ratio"]["harmonic"] = log_histogram(orig.harmonic.initial.vertex_ratio);

@@ -23,14 +23,15 @@ def med(xs):
     return statistics.median(xs) if xs else float("nan")
 
 
-def table1(t1):
-    m = t1["median"]
-    rows = ["| map | displacement (% of radius) | vertex mean abs(r-1) | tet mean abs(r-1) | paper: displacement / distortion |",
-            "|---|---|---|---|---|"]
-    for key, label in (("harmonic", "initial (harmonic) map"), ("volume", "volume-preserving map")):
-        rows.append("| %s | %.2f %% | %.1f %% | %.1f %% | %.2f %% / %.1f %% |" % (
-            label, 100 * m[key + "_displacement"], 100 * m[key + "_vertex_mean_abs_dev"],
-            100 * m[key + "_tet_mean_abs_dev"], *PAPER_T1[key]))
+def table1(tables):
+    rows = ["| flow | map | displacement (% of radius) | vertex mean abs(r-1) | tet mean abs(r-1) | paper: displacement / distortion |",
+            "|---|---|---|---|---|---|"]
+    for t1 in tables:
+        m = t1["median"]
+        for key, label in (("harmonic", "initial (harmonic) map"), ("volume", "volume-preserving map")):
+            rows.append("| x%g | %s | %.2f %% | %.2f %% | %.2f %% | %.2f %% / %.1f %% |" % (
+                t1.get("amplitude", 1), label, 100 * m[key + "_displacement"], 100 * m[key + "_vertex_mean_abs_dev"],
+                100 * m[key + "_tet_mean_abs_dev"], *PAPER_T1[key]))
     return rows
 
 
@@ -95,6 +96,7 @@ def fig3(hist, path, w=640, h=360, margin=40):
 def main():
     res = sys.argv[1] if len(sys.argv) > 1 else "bench/results/paper"
     t1 = json.load(open(os.path.join(res, "table1.json")))
+    t1s = [t1] + [json.load(open(f)) for f in sorted(glob.glob(os.path.join(res, "table1_x*.json")))]
     runs = {}
     for f in glob.glob(os.path.join(res, "table2", "seed*_dense*.json")):
         s, d = os.path.basename(f)[4:-5].split("_dense")
@@ -106,11 +108,13 @@ def main():
     rows2, t2 = table2(runs, failed)
     load = open(os.path.join(res, "load.txt")).read().strip() if os.path.exists(os.path.join(res, "load.txt")) else ""
     md = ["## Table 1: mapping a deformed Colin27 (%d seeds, medians; %d vertices, %d tets; %s)" % (
-        t1["seeds"], t1["vertices"], t1["tets"], t1["device"]), ""] + table1(t1) + [
+        t1["seeds"], t1["vertices"], t1["tets"], t1["device"]), ""] + table1(t1s) + [
         "", "## Table 2: held-out Dice after registration (medians over seeds)", ""] + rows2 + [
         "", "Machine load (uptime at start and end):", "", "```", load, "```", ""]
     open(os.path.join(res, "paper.md"), "w").write("\n".join(md))
-    json.dump({"table1": t1["median"], "table1_runs": t1["runs"], "table2": t2,
+    json.dump({"table1": t1["median"], "table1_runs": t1["runs"],
+               "table1_stronger_flows": [{"amplitude": t["amplitude"], "median": t["median"], "runs": t["runs"]} for t in t1s[1:]],
+               "table2": t2,
                "paper": {"table1": PAPER_T1, "dice": dict(zip(NAMES, PAPER_DICE)), "registration_distortion": 0.03}},
               open(os.path.join(res, "paper.json"), "w"), indent=1)
     fig3(t1["fig3_log_vertex_ratio"], os.path.join(res, "fig3.png"))
