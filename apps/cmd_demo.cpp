@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "cli.hpp"
+#include "demo_deformation.hpp"
 #include "dense_options.hpp"
 #include "vpm/ball_map.hpp"
 #include "vpm/collective.hpp"
@@ -41,25 +42,6 @@ using vpm::Points;
 
 // Regions whose overlap is measured; they are never used as landmarks (held out).
 const std::vector<int> kEvaluated = {71, 72, 77, 78};  // Caudate_L/R, Thalamus_L/R
-
-// The second subject: Colin27 resampled through a smooth, invertible deformation (world mm):
-// an anisotropic scaling about the brain centre plus four Gaussian displacement bumps (largest
-// displacement gradient about 0.2, so the map stays a diffeomorphism).
-Eigen::Vector3d deformation(const Eigen::Vector3d& c, const Eigen::Vector3d& x) {
-  static const double kScale[3] = {1 / 1.06, 1 / 0.94, 1 / 1.03};
-  static const double kBumps[4][6] = {{25, 20, 10, 5, -4, 3},
-                                      {-25, -15, 20, -4, 5, -3},
-                                      {10, -30, -15, 3, 4, 5},
-                                      {-15, 25, -20, -5, -3, -4}};
-  const double s2 = 2 * 22.0 * 22.0;
-  Eigen::Vector3d y;
-  for (int k = 0; k < 3; ++k) y(k) = c(k) + kScale[k] * (x(k) - c(k));
-  for (const auto& b : kBumps) {
-    const Eigen::Vector3d centre = c + Eigen::Vector3d(b[0], b[1], b[2]);
-    y += std::exp(-(x - centre).squaredNorm() / s2) * Eigen::Vector3d(b[3], b[4], b[5]);
-  }
-  return y;
-}
 
 Eigen::Vector3d mask_centroid(const vpm::Image& im) {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -142,6 +124,8 @@ vpm::DenseRegistrationOptions demo_dense() {
 struct Settings {
   fs::path out, data;
   int grid = 96;
+  unsigned seed = 0;          // --seed: 0 is the demo's fixed deformation (demo_deformation.hpp)
+  double max_rotation = 0;    // --max-rotation DEG
   bool ceiling = false;  // --ceiling: the subject is Colin27 meshed at another size
   vpm::RegistrationOptions registration;
   vpm::DenseRegistrationOptions dense = demo_dense();
@@ -159,6 +143,11 @@ Settings parse_settings(const vpm::cli::Command& self, const std::vector<std::st
   s.registration.width_factor = args.get_double("--width-factor", s.registration.width_factor);
   if (!(s.registration.width_factor > 0)) throw vpm::InputError("--width-factor: must be positive");
   s.ceiling = args.has("--ceiling");
+  const int seed = args.get_int("--seed", 0);
+  if (seed < 0) throw vpm::InputError("--seed: expected 0 or a positive integer");
+  s.seed = static_cast<unsigned>(seed);
+  s.max_rotation = args.get_double("--max-rotation", 0);
+  if (!(s.max_rotation >= 0 && s.max_rotation <= 90)) throw vpm::InputError("--max-rotation: expected 0 to 90 degrees");
   s.dense = vpm::cli::dense_options(args, s.dense);
   s.meshing.target_vertices = args.get_int("--target-vertices", s.meshing.target_vertices);
   if (s.meshing.target_vertices < 100) throw vpm::InputError("--target-vertices: expected at least 100");
@@ -281,6 +270,9 @@ vpm::Json demo_json(const std::string& device, const Settings& st, const Subject
   vpm::Json report = vpm::Json::object();
   report["device"] = device;
   report["data"] = st.data.string();
+  report["deformation"]["seed"] = static_cast<long>(st.seed);
+  report["deformation"]["max_rotation_deg"] = st.max_rotation;
+  report["deformation"]["rotation_deg"] = vpm::cli::demo_rotation_deg(st.seed, st.max_rotation);
   report["subjects"]["colin27"] = to_json(tmpl);
   report["subjects"]["subject"] = to_json(subj);
   vpm::Json jr = vpm::to_json(vpm::registration_summary(reg.result, reg.metrics));
@@ -363,13 +355,15 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   const vpm::Image image = vpm::read_nifti((st.data / "ch2bet.nii.gz").string());
   const vpm::Image atlas = vpm::read_nifti((st.data / "aal.nii.gz").string());
   const Eigen::Vector3d centre = mask_centroid(image);
-  const auto pull = [&](const Eigen::Vector3d& x) { return deformation(centre, x); };
+  const auto pull = vpm::cli::demo_deformation(centre, st.seed, st.max_rotation);
   // --ceiling: the subject is Colin27 itself, meshed at 1.3x the vertices, so the overlap after
   // registration is what independent meshing and mapping leave (the best any subject can reach)
   const vpm::Image image_b = st.ceiling ? image : vpm::resample_image(image, pull, vpm::Interpolation::linear);
   const vpm::Image atlas_b = st.ceiling ? atlas : vpm::resample_image(atlas, pull, vpm::Interpolation::nearest);
   vpm::MeshImageOptions subject_meshing = st.meshing;
   if (st.ceiling) subject_meshing.target_vertices = static_cast<int>(1.3 * st.meshing.target_vertices);
+  // a rotated brain can leave the image grid (the brainstem, at the bottom): cap it flat there
+  if (st.max_rotation > 0) subject_meshing.close_at_border = true;
   timings["read_and_deform"] = seconds_since(t0);
 
   const Subject tmpl = mesh_and_map(dev, image, atlas, st.meshing, "colin27", st.out);
@@ -394,6 +388,8 @@ vpm::cli::Registrar reg(vpm::cli::with_dense_options(
       {"--target-vertices", "N", "mesh density (default 5200, the paper's size)"},
       {"--grid", "N", "ball grid for the Dice overlap, N^3 points (default 96)"},
       {"--width-factor", "F", "registration kernel width factor (default 0.5)"},
+      {"--seed", "S", "the subject's deformation: 0 (default) the fixed one, S > 0 drawn from seed S"},
+      {"--max-rotation", "DEG", "rotate the subject by up to DEG degrees about the brain centre (default 0)"},
       {"--ceiling", "", "the subject is Colin27 itself meshed at 1.3x the vertices: the best overlap reachable"}},
      run}, "--width-factor", kDenseIterations));
 }  // namespace

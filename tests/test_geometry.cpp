@@ -5,6 +5,7 @@
 
 #include "support/devices.hpp"
 #include "support/fixtures.hpp"
+#include "support/incompressible.hpp"
 #include "vpm/device.hpp"
 #include "vpm/geometry.hpp"
 #include "vpm/icosphere.hpp"
@@ -111,4 +112,28 @@ TEST_CASE("icosphere: 20 * 4^L outward triangles on the unit sphere, a closed ge
   }
   CHECK_THROWS_AS(icosphere(-1), InputError);
   CHECK_THROWS_AS(icosphere(11), InputError);
+}
+
+TEST_CASE("the paper benchmark's deformation is divergence-free and keeps volumes") {
+  test::IncompressibleFlow f;  // support/incompressible.hpp (bench/paper.cpp, Table 1)
+  f.width = 0.35;
+  f.centres = {{0.2, -0.1, 0.3}, {-0.3, 0.2, -0.1}};
+  f.potentials = {{0.02, -0.03, 0.01}, {-0.01, 0.02, 0.03}};
+  const double h = 1e-5;
+  for (const Eigen::Vector3d x : {Eigen::Vector3d(0.1, 0.2, -0.3), Eigen::Vector3d(-0.4, 0.0, 0.25)}) {
+    double div = 0;  // central differences: error O(h^2) plus round-off / h
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d e = h * Eigen::Vector3d::Unit(k);
+      div += (f.velocity(x + e)(k) - f.velocity(x - e)(k)) / (2 * h);
+    }
+    CHECK(std::abs(div) < 1e-8);  // |grad u| is about 0.2 here
+  }
+  // the flow's Jacobian determinant is 1: small tets (edge 1e-4) keep their volume to the
+  // first-order straight-edge error, while the flow moves them by about 0.05
+  for (const Eigen::Vector3d p : {Eigen::Vector3d(0.1, 0.2, -0.3), Eigen::Vector3d(0.0, -0.2, 0.2)}) {
+    Eigen::Matrix3d e0 = 1e-4 * Eigen::Matrix3d::Identity(), e1;
+    for (int k = 0; k < 3; ++k) e1.col(k) = f.flow(p + e0.col(k)) - f.flow(p);
+    CHECK((f.flow(p) - p).norm() > 0.01);
+    CHECK(std::abs(e1.determinant() / e0.determinant() - 1) < 1e-4);
+  }
 }

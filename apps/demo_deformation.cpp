@@ -1,0 +1,66 @@
+#include "demo_deformation.hpp"
+
+#include <array>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+namespace vpm::cli {
+
+namespace {
+
+struct Params {
+  Eigen::Vector3d scale;                 // output -> input scale factors about c
+  std::vector<std::array<double, 6>> bumps;  // centre offset (mm), displacement (mm)
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  double angle_deg = 0;
+};
+
+Params draw(unsigned seed, double max_rotation_deg) {
+  Params p;
+  std::mt19937 rng(seed == 0 ? 2014u : seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  if (seed == 0) {  // the demo's fixed subject (README and docs/register.md measure it)
+    p.scale = Eigen::Vector3d(1 / 1.06, 1 / 0.94, 1 / 1.03);
+    p.bumps = {{25, 20, 10, 5, -4, 3}, {-25, -15, 20, -4, 5, -3}, {10, -30, -15, 3, 4, 5}, {-15, 25, -20, -5, -3, -4}};
+  } else {
+    for (int k = 0; k < 3; ++k) p.scale(k) = 1 / (1 + 0.06 * u(rng));
+    for (int b = 0; b < 4; ++b) {
+      std::array<double, 6> bump{};
+      for (int k = 0; k < 3; ++k) bump[k] = 30 * u(rng);
+      for (int k = 3; k < 6; ++k) bump[k] = 5 * u(rng);
+      p.bumps.push_back(bump);
+    }
+  }
+  if (max_rotation_deg > 0) {
+    std::mt19937 rrng(seed + 7919u);  // its own stream: the rotation does not change the bumps
+    std::normal_distribution<double> g;
+    Eigen::Vector3d axis(g(rrng), g(rrng), g(rrng));
+    p.angle_deg = max_rotation_deg * std::uniform_real_distribution<double>(0, 1)(rrng);
+    p.rotation = Eigen::AngleAxisd(p.angle_deg * M_PI / 180, axis.normalized()).toRotationMatrix();
+  }
+  return p;
+}
+
+}  // namespace
+
+std::function<Eigen::Vector3d(const Eigen::Vector3d&)> demo_deformation(const Eigen::Vector3d& c, unsigned seed,
+                                                                        double max_rotation_deg) {
+  const Params p = draw(seed, max_rotation_deg);
+  const double s2 = 2 * 22.0 * 22.0;
+  return [c, p, s2](const Eigen::Vector3d& x0) {
+    const Eigen::Vector3d x = c + p.rotation * (x0 - c);
+    Eigen::Vector3d y = c + p.scale.cwiseProduct(x - c);
+    for (const auto& b : p.bumps) {
+      const Eigen::Vector3d centre = c + Eigen::Vector3d(b[0], b[1], b[2]);
+      y += std::exp(-(x - centre).squaredNorm() / s2) * Eigen::Vector3d(b[3], b[4], b[5]);
+    }
+    return y;
+  };
+}
+
+double demo_rotation_deg(unsigned seed, double max_rotation_deg) { return draw(seed, max_rotation_deg).angle_deg; }
+
+}  // namespace vpm::cli

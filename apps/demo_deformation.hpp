@@ -1,0 +1,23 @@
+#pragma once
+// The deformation that makes `vpm demo`'s second subject from Colin27 (world mm), and its seeded
+// variants (--seed S --max-rotation DEG) used by bench/paper for Table 2 of the paper.
+#include <functional>
+
+#include <Eigen/Core>
+
+namespace vpm::cli {
+
+/// Pull-back map x -> y (output world position -> input world position) for resample_image
+/// about the brain centre `c`. Seed 0 is the demo's fixed deformation: anisotropic scaling of
+/// up to 6 % plus four Gaussian displacement bumps of 5-7 mm (largest displacement gradient about
+/// 0.2, a diffeomorphism). Seed S > 0 draws the scale factors (0.94-1.06), the bump centres
+/// (within 30 mm of c) and displacements (up to 5 mm a component) from std::mt19937(S), with the
+/// same bump width. A rotation about c by an angle drawn uniformly in [0, max_rotation_deg]
+/// (a random axis; none when 0) is applied first.
+std::function<Eigen::Vector3d(const Eigen::Vector3d&)> demo_deformation(const Eigen::Vector3d& c, unsigned seed,
+                                                                        double max_rotation_deg);
+
+/// The rotation angle (degrees) demo_deformation(c, seed, max_rotation_deg) applies.
+double demo_rotation_deg(unsigned seed, double max_rotation_deg);
+
+}  // namespace vpm::cli
