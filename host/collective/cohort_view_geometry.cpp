@@ -24,8 +24,7 @@ std::vector<float> pull_back(const Points& ball, const TetMesh& registered) {
 
 std::vector<double> shell_mid_radii(const CanonicalElements& el) {
   std::vector<double> r(el.definition().shells);
-  for (int k = 0; k < static_cast<int>(r.size()); ++k)
-    r[k] = std::cbrt(0.5 * (std::pow(el.radius(k), 3) + std::pow(el.radius(k + 1), 3)));
+  for (int k = 0; k < static_cast<int>(r.size()); ++k) r[k] = el.mid_radius(k);
   return r;
 }
 
@@ -53,15 +52,8 @@ std::vector<float> native_shell_surfaces(const CanonicalElements& el, const TriS
 }
 
 std::vector<float> native_element_centres(const CanonicalElements& el, const TetMesh& registered) {
-  const std::vector<double> radii = shell_mid_radii(el);
-  const TriSurface& s = el.sphere();
   Points ball(el.size(), 3);
-  for (int e = 0; e < el.size(); ++e) {
-    const int t = el.triangle_of(e);
-    Eigen::Vector3d c = Eigen::Vector3d::Zero();
-    for (int v = 0; v < 3; ++v) c += s.vertices.row(s.triangles(t, v)).transpose();
-    ball.row(e) = c.normalized().transpose() * radii[el.shell_of(e)];
-  }
+  for (int e = 0; e < el.size(); ++e) ball.row(e) = el.centre(e).transpose();
   return pull_back(ball, registered);
 }
 

@@ -101,13 +101,8 @@ ViewSlices read_view_slices(const std::string& image_path, const std::string& z_
 std::vector<int> element_labels(const CanonicalElements& el, const std::string& template_mesh) {
   const TetMesh t = read_mesh(template_mesh);
   const std::vector<int> labels = cell_labels(t);
-  const std::vector<double> radii = shell_mid_radii(el);
   Points centres(el.size(), 3);
-  for (int e = 0; e < el.size(); ++e) {
-    Eigen::Vector3d c = Eigen::Vector3d::Zero();
-    for (int v = 0; v < 3; ++v) c += el.sphere().vertices.row(el.sphere().triangles(el.triangle_of(e), v)).transpose();
-    centres.row(e) = c.normalized().transpose() * radii[el.shell_of(e)];
-  }
+  for (int e = 0; e < el.size(); ++e) centres.row(e) = el.centre(e).transpose();
   return sample_labels(t.vertices, t.tets, labels, centres);
 }
 

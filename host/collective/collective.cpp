@@ -68,38 +68,5 @@ Points ball_grid_points(int per_axis) {
   return out;
 }
 
-std::vector<int> sample_labels(const Points& vertices, const Tets& tets, const std::vector<int>& tet_labels,
-                               const Points& points, int outside_label, double outside_tolerance) {
-  if (static_cast<long>(tet_labels.size()) != tets.rows())
-    throw InputError("sample_labels: " + std::to_string(tet_labels.size()) + " labels for " +
-                     std::to_string(tets.rows()) + " tets");
-  const TetLocator locator(vertices, tets);
-  const std::vector<Location> loc = locator.locate_all(points);
-  std::vector<int> out(loc.size(), outside_label);
-  for (size_t i = 0; i < loc.size(); ++i)
-    if (loc[i].tet >= 0 && loc[i].min_bary >= -outside_tolerance) out[i] = tet_labels[loc[i].tet];
-  return out;
-}
-
-std::vector<LabelOverlap> dice_overlap(const std::vector<int>& a, const std::vector<int>& b,
-                                       const std::vector<int>& labels) {
-  if (a.size() != b.size())
-    throw InputError("dice_overlap: samplings of different lengths (" + std::to_string(a.size()) + " and " +
-                     std::to_string(b.size()) + ")");
-  std::vector<LabelOverlap> out;
-  for (int label : labels) {
-    LabelOverlap o;
-    o.label = label;
-    for (size_t i = 0; i < a.size(); ++i) {
-      const bool in_a = a[i] == label, in_b = b[i] == label;
-      o.count_a += in_a;
-      o.count_b += in_b;
-      o.both += in_a && in_b;
-    }
-    o.dice = o.count_a + o.count_b == 0 ? 1.0 : 2.0 * o.both / double(o.count_a + o.count_b);
-    out.push_back(o);
-  }
-  return out;
-}
 
 }  // namespace vpm

@@ -45,16 +45,10 @@ void write_element_table(const std::string& tsv_path, const CanonicalElements& e
   detail::AtomicFile f(tsv_path);
   std::ostream& out = f.stream();
   out << "element\tshell\ttriangle\tvolume\tcentre_x\tcentre_y\tcentre_z\n" << std::setprecision(17);
-  const TriSurface& s = el.sphere();
   for (int e = 0; e < el.size(); ++e) {
-    const int k = el.shell_of(e), t = el.triangle_of(e);
-    const Eigen::Vector3d dir =
-        (s.vertices.row(s.triangles(t, 0)) + s.vertices.row(s.triangles(t, 1)) + s.vertices.row(s.triangles(t, 2)))
-            .normalized()
-            .transpose();
-    const double r = std::cbrt(0.5 * (std::pow(el.radius(k), 3) + std::pow(el.radius(k + 1), 3)));
-    out << e << '\t' << k << '\t' << t << '\t' << el.volume(e) << '\t' << r * dir.x() << '\t' << r * dir.y() << '\t'
-        << r * dir.z() << '\n';
+    const Eigen::Vector3d c = el.centre(e);
+    out << e << '\t' << el.shell_of(e) << '\t' << el.triangle_of(e) << '\t' << el.volume(e) << '\t' << c.x() << '\t'
+        << c.y() << '\t' << c.z() << '\n';
   }
   const std::string json_path = sidecar_path(tsv_path);
   write_json_file(json_path, sidecar(el));

@@ -132,6 +132,19 @@ CanonicalElements::CanonicalElements(const ElementDefinition& definition) : def_
 
 double CanonicalElements::radius(int k) const { return std::cbrt(static_cast<double>(k) / def_.shells); }
 
+double CanonicalElements::mid_radius(int k) const {
+  return std::cbrt(0.5 * (std::pow(radius(k), 3) + std::pow(radius(k + 1), 3)));
+}
+
+Eigen::Vector3d CanonicalElements::centre(int id) const {
+  const int t = triangle_of(id);
+  const Eigen::Vector3d dir = (sphere_.vertices.row(sphere_.triangles(t, 0)) + sphere_.vertices.row(sphere_.triangles(t, 1)) +
+                               sphere_.vertices.row(sphere_.triangles(t, 2)))
+                                  .normalized()
+                                  .transpose();
+  return mid_radius(shell_of(id)) * dir;
+}
+
 double CanonicalElements::volume(int id) const {
   const int k = shell_of(id);
   return solid_angle_[triangle_of(id)] * (std::pow(radius(k + 1), 3) - std::pow(radius(k), 3)) / 3;

@@ -9,7 +9,7 @@
 #include <limits>
 #include <unordered_set>
 
-#include "vpm/locate.hpp"
+#include "vpm/labels.hpp"
 
 namespace vpm {
 
@@ -167,31 +167,10 @@ Points smooth_matches(const BoundaryMatches& m, const Points& centres, double si
   return out;
 }
 
-std::vector<int> labels_at(const Points& vertices, const Tets& tets, const std::vector<int>& labels,
-                           const Points& points) {
-  const TetLocator locator(vertices, tets);
-  const std::vector<Location> loc = locator.locate_all(points);
-  std::vector<int> out(loc.size(), 0);
-  for (size_t i = 0; i < loc.size(); ++i)
-    if (loc[i].tet >= 0 && loc[i].min_bary > -0.05) out[i] = labels[static_cast<size_t>(loc[i].tet)];
-  return out;
-}
-
 double mean_dice(const std::vector<int>& a, const std::vector<int>& b, const std::vector<int>& regions) {
   if (regions.empty()) return 0;
-  const int top = std::max(*std::max_element(regions.begin(), regions.end()), 0);
-  std::vector<double> ca(static_cast<size_t>(top + 1), 0), cb(ca), both(ca);
-  for (size_t i = 0; i < a.size(); ++i) {
-    const int la = a[i], lb = b[i];
-    if (la > 0 && la <= top) ca[static_cast<size_t>(la)] += 1;
-    if (lb > 0 && lb <= top) cb[static_cast<size_t>(lb)] += 1;
-    if (la == lb && la > 0 && la <= top) both[static_cast<size_t>(la)] += 1;
-  }
   double sum = 0;
-  for (int r : regions) {
-    const size_t l = static_cast<size_t>(std::max(r, 0));
-    sum += ca[l] + cb[l] > 0 ? 2 * both[l] / (ca[l] + cb[l]) : 1.0;
-  }
+  for (const LabelOverlap& o : dice_overlap(a, b, regions)) sum += o.dice;
   return sum / static_cast<double>(regions.size());
 }
 

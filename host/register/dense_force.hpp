@@ -48,10 +48,8 @@ Points ball_grid(double spacing);
 /// sum w_i g_i d_i / (sum w_i g_i + 1) (c x 3).
 Points smooth_matches(const BoundaryMatches& matches, const Points& centres, double sigma);
 
-/// Mean Dice, over `regions`, of the tet labels of two meshes sampled at `points` (`templ` the
-/// template's labels at the points, computed once with `labels_at`).
-std::vector<int> labels_at(const Points& vertices, const Tets& tets, const std::vector<int>& labels,
-                           const Points& points);
+/// Mean Dice over `regions` of two label samplings of the same points (vpm/labels.hpp); 0 when
+/// there are no regions.
 double mean_dice(const std::vector<int>& a, const std::vector<int>& b, const std::vector<int>& regions);
 
 }  // namespace vpm

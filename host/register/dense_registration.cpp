@@ -12,6 +12,7 @@
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/geometry.hpp"
+#include "vpm/labels.hpp"
 #include "vpm/timing.hpp"
 #include "vpm/topology.hpp"
 
@@ -129,7 +130,7 @@ DenseIteration dense_step(Device& dev, const DenseState& st, Points& x, double w
   it.folded = newly_inverted(st.v0, v1);
   if (it.folded > 0) untangle_flow_folds(dev, st.reference, st.tets, after, st.boundary, st.v0, v1, 2);
   it.max_move = (after - x.topRows(nv)).rowwise().norm().maxCoeff();
-  it.agreement = mean_dice(st.grid_templ, labels_at(after, st.tets, st.labels, st.grid), st.regions);
+  it.agreement = mean_dice(st.grid_templ, sample_labels(after, st.tets, st.labels, st.grid), st.regions);
   it.accepted = newly_inverted(st.v0, v1) == 0 && it.agreement > agreement;
   if (it.accepted) {
     x.topRows(nv) = after;
@@ -169,7 +170,7 @@ DenseState dense_state(Device& dev, const Points& ball, const Tets& tets, const 
   std::set_intersection(own.labels.begin(), own.labels.end(), st.templ.labels.begin(), st.templ.labels.end(),
                         std::back_inserter(st.regions));
   st.grid = ball_grid(2.0 / o.agreement_grid);
-  st.grid_templ = labels_at(tball, ttets, tl, st.grid);
+  st.grid_templ = sample_labels(tball, ttets, tl, st.grid);
   return st;
 }
 
@@ -201,7 +202,7 @@ DenseRegistrationResult register_dense(Device& dev, Points& ball, const Tets& te
   DenseRegistrationResult r;
   const DenseState st = dense_state(dev, ball, tets, labels, tball, ttets, tlabels, o);
   r.regions = st.regions;
-  r.agreement_before = mean_dice(st.grid_templ, labels_at(ball, tets, st.labels, st.grid), st.regions);
+  r.agreement_before = mean_dice(st.grid_templ, sample_labels(ball, tets, st.labels, st.grid), st.regions);
   Points work = ball;
   RegistrationOptions first = lo;
   first.restore_volumes = lo.restore_volumes && o.iterations == 0;
@@ -209,7 +210,7 @@ DenseRegistrationResult register_dense(Device& dev, Points& ball, const Tets& te
   r.landmark = register_landmarks(dev, work, tets, landmarks, targets, first);
   r.seconds_landmark = seconds_since(t0);
   r.max_normal_velocity = r.landmark.max_normal_velocity;
-  r.agreement_landmarks = mean_dice(st.grid_templ, labels_at(work, tets, st.labels, st.grid), st.regions);
+  r.agreement_landmarks = mean_dice(st.grid_templ, sample_labels(work, tets, st.labels, st.grid), st.regions);
   r.agreement_after = r.agreement_landmarks;
   Points lm = r.landmark.landmarks_final;
   if (o.iterations > 0) {

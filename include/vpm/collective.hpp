@@ -1,10 +1,11 @@
 #pragma once
 // Comparing subjects in the common ball (paper 6.2, docs/design.md 5 "Overlap"): labelled regions
 // located by their centroids (landmarks for registration) and compared by Dice overlap of the
-// tets' label field sampled at common points of the ball.
+// tets' label field sampled at common points of the ball (vpm/labels.hpp).
 #include <Eigen/Core>
 #include <vector>
 
+#include "vpm/labels.hpp"
 #include "vpm/mesh.hpp"
 
 namespace vpm {
@@ -32,24 +33,5 @@ RegionLandmarks region_landmarks(const TetMesh& moving, const TetMesh& fixed, co
 /// The centres of the cells of a regular grid of `per_axis`^3 cells over [-1, 1]^3 that lie
 /// inside the unit ball (k x 3, k about 0.52 per_axis^3), i fastest.
 Points ball_grid_points(int per_axis);
-
-/// Label at each of `points` (k x 3) in the mesh (`vertices` n x 3, `tets` m x 4,
-/// `tet_labels` m entries): the label of the containing tet; `outside_label` for points farther
-/// outside the mesh than `outside_tolerance` in barycentric terms (points in the thin gap
-/// between the sphere and an inscribed ball mesh take the label of the nearest tet).
-std::vector<int> sample_labels(const Points& vertices, const Tets& tets, const std::vector<int>& tet_labels,
-                               const Points& points, int outside_label = 0, double outside_tolerance = 0.05);
-
-/// Overlap of one label between two label samplings of the same points.
-struct LabelOverlap {
-  int label = 0;
-  long long count_a = 0, count_b = 0, both = 0;  ///< sample points labelled `label` in a, b, both
-  double dice = 0;  ///< 2 |A and B| / (|A| + |B|); 1 when both are empty
-};
-
-/// Dice overlap of each of `labels` between samplings `a` and `b` (same length: one label per
-/// common sample point). InputError when the lengths differ.
-std::vector<LabelOverlap> dice_overlap(const std::vector<int>& a, const std::vector<int>& b,
-                                       const std::vector<int>& labels);
 
 }  // namespace vpm

@@ -63,6 +63,10 @@ class CanonicalElements {
   const TriSurface& sphere() const { return sphere_; }
   /// Inner radius of shell k (k = 0..K; radius(K) = 1).
   double radius(int k) const;
+  /// The radius halving shell k's volume: cbrt((radius(k)^3 + radius(k + 1)^3) / 2).
+  double mid_radius(int k) const;
+  /// Element `id`'s centre: the direction of its triangle's centroid at its shell's mid_radius.
+  Eigen::Vector3d centre(int id) const;
   /// Exact volume of element `id`: solid angle of its triangle x (r_{k+1}^3 - r_k^3) / 3.
   double volume(int id) const;
   ElementVolumeStats volume_stats() const;

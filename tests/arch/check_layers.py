@@ -12,7 +12,7 @@ import sys
 LAYERS = ["core", "mesh", "io", "linalg", "image", "map", "register", "collective"]
 PUBLIC = {
     "core": ["device", "error", "json", "timing", "format"],
-    "mesh": ["mesh", "topology", "geometry", "validate", "metrics", "locate", "icosphere", "mesh_stats"],
+    "mesh": ["mesh", "topology", "geometry", "validate", "metrics", "locate", "icosphere", "mesh_stats", "labels"],
     "io": ["io", "landmarks"],
     "linalg": ["sparse", "laplacian", "solver"],
     "image": ["image", "mesh_image", "mesh_image_report"],
