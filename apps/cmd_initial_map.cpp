@@ -25,6 +25,8 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   else if (u == "always") opt.untangle = vpm::InitialMapOptions::Untangle::Always;
   else throw vpm::InputError("option --untangle: '" + u + "' is not one of never, if-folded, always");
   opt.area_correction = args.has("--area-correction");
+  opt.sphere_density = vpm::cli::parse_option(
+      "--sphere", [&] { return vpm::parse_sphere_density(args.get("--sphere", "area")); });
   opt.split_edges = !args.has("--no-split");
   const auto report_path = args.get("--report");
 
@@ -59,6 +61,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
 
 vpm::cli::Registrar reg({"initial-map", "MESH -o OUT", "the fold-free initial map to the unit ball (paper 4.1)",
                          {{"--untangle", "never|if-folded|always", "untangle the harmonic map (default if-folded)"},
+                          {"--sphere", "area|conformal", "boundary map to the sphere: equal-area (default) or conformal only"},
                           {"--area-correction", "", "equalise areas on the sphere before the interior map"},
                           {"--no-split", "", "do not split interior edges between boundary vertices"},
                           {"--report", "REPORT.json", "write the report (stages, metrics, timings)"}},

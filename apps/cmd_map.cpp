@@ -55,6 +55,8 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
                  in.c_str(), vr.sliver_tets, vpm::kSliverDihedralDeg, vr.min_dihedral_deg, vr.min_dihedral_tet, in.c_str());
   vpm::BallMapOptions bo;
   bo.volume = vo;
+  bo.initial.sphere_density = vpm::cli::parse_option(
+      "--sphere", [&] { return vpm::parse_sphere_density(args.get("--sphere", "area")); });
   vpm::BallMap bm = vpm::map_to_ball(dev, mesh, vr, in, bo);
 
   t0 = Clock::now();
@@ -80,6 +82,7 @@ vpm::cli::Registrar reg({"map", "MESH -o OUT", "map a tet mesh to the unit ball,
                           {"--tolerance", "T", "stop at this vertex mean |r-1| (default 0.01); missing it warns, by over 2x exits 4"},
                           {"--allow-partial", "", "exit 0 even when the map misses --tolerance by over 2x (the warning stays)"},
                           {"--method", "moser|paper|vsem", "moser (default) or a peer method for comparison"},
+                          {"--sphere", "area|conformal", "boundary map to the sphere: equal-area (default) or conformal only"},
                           {"--boundary", "slide|fixed", "boundary vertices slide on the sphere (moser default) or stay"},
                           {"--solver", "cg|paper", "Jacobi CG (default) or the paper's BiCGSTAB on the normal equations"},
                           {"--rk-steps", "N", "RK4 steps per Moser round (default 40)"},

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include <Eigen/Geometry>
+
 #include "support/devices.hpp"
 #include "support/fixtures.hpp"
 #include "support/shapes.hpp"
@@ -90,6 +92,58 @@ TEST_CASE("sphere map of a closed surface: no flipped triangles, balanced") {
   for (int i = 0; i < m.num_vertices(); ++i)
     if (b[i]) CHECK(std::abs(r.sphere.row(i).norm() - 1) < 1e-14);
   CHECK(r.report.area_distortion_balanced < r.report.area_distortion_conformal + 1e-12);
+}
+
+namespace {
+// Largest |log(sphere area share / input area share)| over the vertices (areas lumped: a third
+// of each triangle's).
+double max_abs_log_area(const Points& in, const Points& sp, const Triangles& f) {
+  Eigen::VectorXd a = Eigen::VectorXd::Zero(in.rows()), b = Eigen::VectorXd::Zero(in.rows());
+  for (Eigen::Index t = 0; t < f.rows(); ++t) {
+    const Eigen::Vector3d p0 = in.row(f(t, 0)), p1 = in.row(f(t, 1)), p2 = in.row(f(t, 2));
+    const Eigen::Vector3d q0 = sp.row(f(t, 0)), q1 = sp.row(f(t, 1)), q2 = sp.row(f(t, 2));
+    for (int j = 0; j < 3; ++j) {
+      a(f(t, j)) += (p1 - p0).cross(p2 - p0).norm();
+      b(f(t, j)) += (q1 - q0).cross(q2 - q0).norm();
+    }
+  }
+  const double sa = a.sum(), sb = b.sum();
+  double worst = 0;
+  for (Eigen::Index i = 0; i < a.size(); ++i)
+    if (a(i) > 0) worst = std::max(worst, std::abs(std::log((b(i) / sb) / (a(i) / sa))));
+  return worst;
+}
+}  // namespace
+
+TEST_CASE("equal-area sphere map: an elongated shape is not squeezed, nothing flips") {
+  // a rod of aspect 6 and the C-shaped slab: the conformal map shrinks their ends exponentially
+  TetMesh rod = test::box_mesh(24, 4, 4);
+  rod.vertices.col(0) *= 6.0;
+  for (const auto& [name, m] : {std::pair<const char*, TetMesh>{"rod", rod}, {"bent", test::bent_mesh(4)}}) {
+    INFO(name);
+    const TriSurface s{m.vertices, boundary_faces(m.tets)};
+    InitialMapOptions conformal;
+    conformal.sphere_density = InitialMapOptions::SphereDensity::conformal;
+    const SphereMapResult c = sphere_map(s, conformal);
+    const SphereMapResult a = sphere_map(s);  // area is the default
+    REQUIRE(c.flipped_triangles == 0);
+    CHECK(a.flipped_triangles == 0);
+    CHECK(a.report.density_kept);
+    CHECK(a.report.density_target == "area");
+    CHECK(*a.report.density_steps > 0);
+    CHECK(a.report.density_misfit_after < 0.1 * a.report.density_misfit_before);
+    const double log_c = max_abs_log_area(m.vertices, c.sphere, s.triangles);
+    const double log_a = max_abs_log_area(m.vertices, a.sphere, s.triangles);
+    INFO("max |log area ratio| conformal " << log_c << ", area " << log_a);
+    CHECK(log_c > 2.0);            // the squeeze the correction is for
+    CHECK(log_a < 0.35 * log_c);   // ... removed to within a small factor
+    CHECK(a.report.area_distortion_final < 0.5 * c.report.area_distortion_final);
+    const auto b = boundary_vertex_mask(m.num_vertices(), s.triangles);
+    for (int i = 0; i < m.num_vertices(); ++i)
+      if (b[i]) CHECK(std::abs(a.sphere.row(i).norm() - 1) < 1e-14);
+  }
+  CHECK(parse_sphere_density("conformal") == InitialMapOptions::SphereDensity::conformal);
+  CHECK_THROWS_AS(parse_sphere_density("volume"), InputError);
 }
 
 TEST_CASE("initial map of convex and non-convex shapes is fold-free") {

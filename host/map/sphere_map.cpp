@@ -222,6 +222,21 @@ void balance(const Points& in, const Triangles& f, const InitialMapOptions& opt,
   }
 }
 
+// Step 2.5: area equalisation, kept when it brings the sphere areas closer to the input's
+// shares without a flip.
+void equalise(const Points& in, const Triangles& f, const InitialMapOptions& opt, Points& s, SphereMapReport& rep) {
+  rep.density_target = "area";
+  Points q = s;
+  const EquiarealStats st =
+      equalise_density(in, f, vertex_area_shares(in, f), q, opt.density_max_steps, opt.density_tolerance);
+  rep.density_steps = st.steps;
+  rep.density_misfit_before = st.misfit_before;
+  rep.density_misfit_after = st.misfit_after;
+  rep.area_distortion_density = st.distortion_after;
+  rep.density_kept = st.steps > 0 && st.misfit_after < st.misfit_before && flipped_sphere_triangles(q, f) == 0;
+  if (rep.density_kept) s = std::move(q);
+}
+
 }  // namespace
 
 SphereMapResult sphere_map(const TriSurface& surf, const InitialMapOptions& opt) {
@@ -244,6 +259,8 @@ SphereMapResult sphere_map(const TriSurface& surf, const InitialMapOptions& opt)
   if (vol < 0) s.col(0) *= -1;
   rep.area_distortion_conformal = area_distortion(in, s, f);
   if (opt.moebius_balance) balance(in, f, opt, s, &flips, rep);
+  if (opt.sphere_density != InitialMapOptions::SphereDensity::conformal && flips == 0)
+    equalise(in, f, opt, s, rep);
   if (opt.area_correction) rep.area_correction_steps = area_flow(in, f, s, opt.area_correction_steps, false);
   if (flipped_sphere_triangles(s, f) > 0) {
     // Extreme conformal scale factors (protrusions, coarse elongated shapes) can make a chord
@@ -260,6 +277,18 @@ SphereMapResult sphere_map(const TriSurface& surf, const InitialMapOptions& opt)
   r.sphere.col(2).setOnes();
   for (size_t i = 0; i < cs.used.size(); ++i) r.sphere.row(cs.used[i]) = s.row(static_cast<Eigen::Index>(i));
   return r;
+}
+
+InitialMapOptions::SphereDensity parse_sphere_density(const std::string& name) {
+  using D = InitialMapOptions::SphereDensity;
+  if (name == "conformal") return D::conformal;
+  if (name == "area") return D::area;
+  throw InputError("sphere density '" + name + "' is not one of conformal, area");
+}
+
+const char* to_string(InitialMapOptions::SphereDensity d) {
+  using D = InitialMapOptions::SphereDensity;
+  return d == D::conformal ? "conformal" : "area";
 }
 
 Json to_json(const SphereMapReport& r) {
@@ -279,6 +308,16 @@ Json to_json(const SphereMapReport& r) {
     j["moebius_kept"] = r.moebius_kept;
   }
   if (r.area_correction_steps) j["area_correction_steps"] = *r.area_correction_steps;
+  if (r.density_steps) {
+    Json e = Json::object();
+    e["target"] = r.density_target;
+    e["steps"] = *r.density_steps;
+    e["log_misfit_before"] = r.density_misfit_before;
+    e["log_misfit_after"] = r.density_misfit_after;
+    e["area_distortion"] = r.area_distortion_density;
+    e["kept"] = r.density_kept;
+    j["density"] = e;
+  }
   if (r.flipped_before_repair) j["flipped_before_repair"] = *r.flipped_before_repair;
   if (r.repair_steps) j["repair_steps"] = *r.repair_steps;
   j["area_distortion_final"] = r.area_distortion_final;

@@ -42,4 +42,21 @@ int moebius_balance(const Eigen::VectorXd& w, Points& s, int max_it, double tol,
 /// Area-equalising flow on the sphere (see map/sphere_steps.cpp); returns the steps taken.
 int area_flow(const Points& in, const Triangles& f, Points& s, int steps, bool until_unflipped);
 
+/// What equalise_density did. misfit_* = area-weighted mean square of log(sphere area /
+/// target) over the vertices (0 when every vertex has its target); distortion_* =
+/// area_distortion (against the input's triangle areas).
+struct EquiarealStats {
+  int steps = 0, flips_before = 0;
+  double misfit_before = 0, misfit_after = 0, distortion_before = 0, distortion_after = 0;
+};
+/// Moves the sphere map s of surface (in, f) until each vertex's lumped sphere area (a third of
+/// its triangles' chord areas) is its share `target` (k entries, normalised here) of the
+/// sphere's, by a log-density Moser flow on the sphere (map/sphere_density.cpp). Never flips
+/// a triangle that was not flipped; stops after `max_steps`, when the area distortion is at
+/// most `tolerance`, or when it stalls.
+EquiarealStats equalise_density(const Points& in, const Triangles& f, const Eigen::VectorXd& target, Points& s,
+                                int max_steps, double tolerance);
+/// Each vertex's share of the surface's area (a third of its triangles' areas), summing to 1.
+Eigen::VectorXd vertex_area_shares(const Points& in, const Triangles& f);
+
 }  // namespace vpm::detail

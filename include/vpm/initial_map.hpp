@@ -53,6 +53,16 @@ struct InitialMapOptions {
   /// during the Moser rounds; the sliding boundary does not need it). Off by default.
   bool area_correction = false;
   int area_correction_steps = 30;
+  /// What the sphere map equalises after the conformal map and balancing: nothing (conformal)
+  /// or each boundary vertex's share of the surface area (area), by a log-density Moser flow on
+  /// the sphere (map/sphere_density.cpp), so that protrusions are not squeezed exponentially
+  /// as in the conformal map. Never flips a triangle; kept only when it brings the sphere areas
+  /// closer to the target. (Shares of the volume each boundary vertex encloses were tried as
+  /// the target and were worse on every shape measured: docs/shapes.md.)
+  enum class SphereDensity { conformal, area };
+  SphereDensity sphere_density = SphereDensity::area;
+  int density_max_steps = 300;
+  double density_tolerance = 0.02;  ///< stop at this area distortion (mean |area ratio - 1|)
   // ---- step 3: harmonic interior
   double solver_tolerance = 1e-10;   ///< relative residual when an iterative solver is used
   // ---- step 4: untangling
@@ -87,6 +97,13 @@ struct SphereMapReport {
   double moebius_centroid_norm = 0, area_distortion_balanced = 0;
   bool moebius_kept = false;
   std::optional<int> area_correction_steps;  ///< InitialMapOptions::area_correction
+  // area equalisation (InitialMapOptions::sphere_density area): its target ("area"), the
+  // flow's steps, the area-weighted mean square of log(sphere area / target) before and
+  // after, the area distortion reached, kept or not
+  std::string density_target;
+  std::optional<int> density_steps;
+  double density_misfit_before = 0, density_misfit_after = 0, area_distortion_density = 0;
+  bool density_kept = false;
   std::optional<int> flipped_before_repair;  ///< chord triangles facing inwards, repaired by
   std::optional<int> repair_steps;           ///< ... this many area-flow steps
   double area_distortion_final = 0;
@@ -95,7 +112,8 @@ struct SphereMapReport {
 /// {"vertices", "faces", "planar_weights", "flipped_after_conformal", "flipped_after_south_pole"?,
 ///  "south_pole_correction"?, "mirrored", "area_distortion_conformal", "moebius_iterations"?,
 ///  "moebius_centroid_norm"?, "area_distortion_balanced"?, "moebius_kept"?,
-///  "area_correction_steps"?, "flipped_before_repair"?, "repair_steps"?, "area_distortion_final",
+///  "area_correction_steps"?, "density"? {"target","steps","log_misfit_before",
+///  "log_misfit_after","area_distortion","kept"}, "flipped_before_repair"?, "repair_steps"?, "area_distortion_final",
 ///  "flipped_triangles"} (? = only when present)
 Json to_json(const SphereMapReport& report);
 
@@ -177,6 +195,10 @@ struct InitialMapResult {
 InitialMapResult initial_map(Device& device, const TetMesh& input, const InitialMapOptions& options = {});
 
 // ---- the steps, exposed for tests, benchmarks and other stages --------------------------
+
+/// "conformal", "area" (InitialMapOptions::SphereDensity); InputError otherwise.
+InitialMapOptions::SphereDensity parse_sphere_density(const std::string& name);
+const char* to_string(InitialMapOptions::SphereDensity d);
 
 /// Result of step 1.
 struct SplitResult {
