@@ -4,7 +4,10 @@
 // (docs/solver.md). The peers are in solver/peers.cpp.
 //
 //   vpm_bench_solver [--sizes 25000,100000,400000,1600000] [--quick] [--repeats 5]
-//                    [--json solver.json] [--no-viennacl] [--no-eigen] [--eigen-threads N]
+//                    [--json solver.json] [--no-viennacl] [--no-eigen] [--no-amg]
+//                    [--eigen-threads N]
+// AMG peers (vpm-amg-cg on the device, vpm-amg-cg-host): median_s is the solve without the
+// hierarchy update, reported as setup_update_s (median) and setup_build_s (first build).
 //
 // --eigen-threads N runs Eigen with N threads only (default: all hardware threads and 1 thread,
 // both reported).
@@ -35,7 +38,7 @@ struct Options {
   std::vector<long> sizes = {25000, 100000, 400000, 1600000};  ///< target tet counts
   int repeats = 5;
   std::string json_path = "solver.json";
-  bool use_viennacl = true, use_eigen = true;
+  bool use_viennacl = true, use_eigen = true, use_amg = true;
   std::vector<int> eigen_threads;  ///< empty: all hardware threads and 1
   bool help = false;
 };
@@ -58,6 +61,7 @@ Options parse_options(int argc, char** argv) {
     else if (a == "--json") o.json_path = next();
     else if (a == "--no-viennacl") o.use_viennacl = false;
     else if (a == "--no-eigen") o.use_eigen = false;
+    else if (a == "--no-amg") o.use_amg = false;
     else if (a == "--eigen-threads") o.eigen_threads = {std::max(1, std::stoi(next()))};
     else if (a == "-h" || a == "--help") {
       o.help = true;
@@ -138,7 +142,8 @@ struct Run {
   double median_s = 0, relative_residual = 0, spmv_gbs = 0, spmv_fraction = 0;
   int iterations = 0;
   int threads = 0;
-  std::vector<double> times;
+  std::vector<double> times, update_times;  ///< AMG: hierarchy value updates per solve
+  double build_s = 0;                       ///< AMG: the first full hierarchy build
   std::string note;
 };
 
@@ -174,9 +179,13 @@ std::vector<Run> time_peers(const Problem& p, std::vector<Peer>& peers, int repe
       try {
         r.times.push_back(peers[q].solve_once());
         r.iterations = peers[q].iterations();
+        if (peers[q].setup_update_seconds) {
+          r.update_times.push_back(peers[q].setup_update_seconds());
+          r.build_s = peers[q].setup_build_seconds();
+        }
         if (rep == repeats - 1)
           r.relative_residual = (p.K.multiply(peers[q].solution()) - p.b).norm() / p.b.norm();
-        spmv_t[q].push_back(peers[q].spmv_seconds());
+        if (!peers[q].setup_update_seconds) spmv_t[q].push_back(peers[q].spmv_seconds());
       } catch (const std::exception& ex) {
         r.note = std::string("failed: ") + ex.what();
       }
@@ -203,6 +212,10 @@ std::vector<Run> run_size(Device& dev, long target, const Options& o, const Tria
   Problem p(dev, name, test::voxel_ellipsoid_mesh(target));
   std::cerr << "\n" << name << ": " << p.n << " vertices, " << p.mesh.num_tets() << " tets\n";
   std::vector<Peer> peers = {vpm_peer(dev, p, triad.device_gbs)};
+  if (o.use_amg) {
+    peers.push_back(vpm_amg_peer(dev, p, triad.device_gbs, false));
+    if (!dev.is_host()) peers.push_back(vpm_amg_peer(dev, p, triad.host_gbs, true));
+  }
   if (o.use_eigen)
     for (Peer& e : eigen_peers(p, o.eigen_threads, triad.host_gbs)) peers.push_back(std::move(e));
   if (viennacl_status == "ok") {
@@ -223,12 +236,14 @@ double us_per_iteration_per_mnnz(const Run& r) {
 }
 
 void print_table(const std::vector<Run>& runs) {
-  std::printf("\n%-16s %9s %9s %-28s %10s %6s %10s %9s %7s %12s\n", "mesh", "tets", "nnz", "solver",
-              "median_s", "iters", "rel_res", "spmv_GB/s", "%triad", "us/it/Mnnz");
+  std::printf("\n%-16s %9s %9s %-28s %10s %6s %10s %9s %7s %12s %9s %9s\n", "mesh", "tets", "nnz",
+              "solver", "median_s", "iters", "rel_res", "spmv_GB/s", "%triad", "us/it/Mnnz",
+              "update_s", "build_s");
   for (const auto& r : runs)
-    std::printf("%-16s %9ld %9ld %-28s %10.4f %6d %10.2e %9.2f %6.0f%% %12.1f\n", r.mesh.c_str(), r.tets,
-                r.nnz, r.solver.c_str(), r.median_s, r.iterations, r.relative_residual, r.spmv_gbs,
-                100 * r.spmv_fraction, us_per_iteration_per_mnnz(r));
+    std::printf("%-16s %9ld %9ld %-28s %10.4f %6d %10.2e %9.2f %6.0f%% %12.1f %9.4f %9.4f\n",
+                r.mesh.c_str(), r.tets, r.nnz, r.solver.c_str(), r.median_s, r.iterations,
+                r.relative_residual, r.spmv_gbs, 100 * r.spmv_fraction, us_per_iteration_per_mnnz(r),
+                r.update_times.empty() ? 0.0 : median(r.update_times), r.build_s);
 }
 
 Json to_json(const Run& r) {
@@ -247,6 +262,14 @@ Json to_json(const Run& r) {
   j["spmv_gbs"] = r.spmv_gbs;
   j["spmv_fraction_of_triad"] = r.spmv_fraction;
   j["us_per_iteration_per_mnnz"] = us_per_iteration_per_mnnz(r);
+  if (!r.update_times.empty()) {
+    Json us = Json::array();
+    for (double t : r.update_times) us.push_back(t);
+    j["setup_update_times_s"] = us;
+    j["setup_update_s"] = median(r.update_times);
+    j["setup_build_s"] = r.build_s;
+    j["median_with_update_s"] = r.median_s + median(r.update_times);
+  }
   if (!r.note.empty()) j["note"] = r.note;
   if (r.threads > 0) j["threads"] = r.threads;
   return j;
@@ -271,7 +294,8 @@ Json speedups(const std::vector<Run>& runs) {
 void add_runs(Json& out, const std::vector<Run>& runs) {
   Json arr = Json::array(), extra = Json::array();
   for (const auto& r : runs) {
-    const bool contract = r.solver == "vpm-cg" || r.solver == "eigen-cg" || r.solver == "viennacl-cg";
+    const bool contract = r.solver == "vpm-cg" || r.solver == "eigen-cg" || r.solver == "viennacl-cg" ||
+                          r.solver.rfind("vpm-amg", 0) == 0;
     (contract ? arr : extra).push_back(to_json(r));
   }
   out["runs"] = arr;
@@ -289,7 +313,7 @@ int main(int argc, char** argv) try {
   Options o = parse_options(argc, argv);
   if (o.help) {
     std::cout << "vpm_bench_solver [--sizes N,N,...] [--quick] [--repeats R] [--json FILE] "
-                 "[--no-viennacl] [--no-eigen]\n";
+                 "[--no-viennacl] [--no-eigen] [--no-amg]\n";
     return 0;
   }
   Device& dev = Device::current();

@@ -223,6 +223,24 @@ __kernel void bicg_p(const int n, __global const real* S, __global const real* r
   p[i] = r[i] + S[S_BETA] * (p[i] - S[S_OMEGA] * v[i]);
 }
 
+// PCG (general preconditioner): x += alpha p; r -= alpha q
+__kernel void pcg_update_xr(const int n, __global const real* S, __global real* x,
+                            __global real* r, __global const real* p, __global const real* q) {
+  const int i = get_global_id(0);
+  if (i >= n) return;
+  const real alpha = S[S_ALPHA];
+  x[i] += alpha * p[i];
+  r[i] -= alpha * q[i];
+}
+
+// PCG: p = z + beta p
+__kernel void pcg_update_p(const int n, __global const real* S, __global const real* z,
+                           __global real* p) {
+  const int i = get_global_id(0);
+  if (i >= n) return;
+  p[i] = z[i] + S[S_BETA] * p[i];
+}
+
 // triad (bandwidth reference for benchmarks): a = b + s c
 __kernel void triad(const int n, const real s, __global real* a, __global const real* b,
                     __global const real* c) {

@@ -119,6 +119,41 @@ Peer vpm_peer(Device& dev, Problem& p, double triad_gbs) {
   return e;
 }
 
+Peer vpm_amg_peer(Device& dev, Problem& p, double triad_gbs, bool host) {
+  struct State {
+    std::shared_ptr<Device> host_device;
+    std::unique_ptr<PoissonSolver> solver;
+    Eigen::VectorXd x;
+    double build = 0, update = 0;
+    int iterations = 0;
+  };
+  auto s = std::make_shared<State>();
+  if (host) s->host_device = Device::host();
+  Device& d = host ? *s->host_device : dev;
+  SolverOptions o;
+  o.preconditioner = Preconditioner::amg;
+  o.relative_tolerance = kTolerance;
+  s->solver = std::make_unique<PoissonSolver>(d, p.n, p.mesh.tets, o);
+  Peer e;
+  e.solver = host ? "vpm-amg-cg-host" : "vpm-amg-cg";
+  e.triad_gbs = triad_gbs;
+  e.solve_once = [&p, s] {
+    s->solver->set_positions(p.mesh.vertices);
+    s->x = Eigen::VectorXd::Zero(p.n);
+    const SolverStats st = s->solver->solve_neumann(p.b, s->x);
+    s->iterations = st.iterations;
+    if (s->build == 0) s->build = st.setup_seconds;
+    else s->update = st.setup_seconds;
+    return st.seconds - st.setup_seconds;
+  };
+  e.iterations = [s] { return s->iterations; };
+  e.solution = [s] { return s->x; };
+  e.spmv_seconds = [] { return 0.0; };
+  e.setup_update_seconds = [s] { return s->update; };
+  e.setup_build_seconds = [s] { return s->build; };
+  return e;
+}
+
 std::vector<Peer> eigen_peers(const Problem& p, const std::vector<int>& thread_counts,
                               double host_triad_gbs) {
   std::vector<Peer> peers;

@@ -43,10 +43,19 @@ struct Peer {
   std::function<int()> iterations;
   std::function<Eigen::VectorXd()> solution;
   std::function<double()> spmv_seconds;
+  /// AMG peers only: the last solve's hierarchy value update (seconds, excluded from
+  /// solve_once) and the first full build.
+  std::function<double()> setup_update_seconds;
+  std::function<double()> setup_build_seconds;
 };
 
 /// vpm's CG (PoissonSolver::solve_neumann) and its SpMV kernel alone.
 Peer vpm_peer(Device& dev, Problem& p, double triad_gbs);
+
+/// vpm's AMG-preconditioned CG ("vpm-amg-cg" on `dev`, "vpm-amg-cg-host" on the host
+/// backend): its own PoissonSolver; each solve first re-sets the positions, so every solve
+/// updates the hierarchy's values (timed separately), as in a flow step.
+Peer vpm_amg_peer(Device& dev, Problem& p, double triad_gbs, bool host);
 
 /// Eigen's Jacobi-preconditioned CG on -K, one peer per thread count ("eigen-cg", or
 /// "eigen-cg-1thread" for 1 thread).

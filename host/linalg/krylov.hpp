@@ -43,7 +43,12 @@ int krylov(BK& bk, SolverMethod method, double tol2, int max_iterations, double*
            double bnorm2, double tol) {
   const bool cg = method == SolverMethod::cg;
   const bool normal = method == SolverMethod::paper;
-  if (cg) {
+  const bool pcg = cg && bk.has_amg();  // general preconditioner path (z = M^-1 r)
+  if (pcg) {
+    bk.precondition();
+    bk.dot2(VR, VZ, VR, VR, OP_CG_INIT);
+    bk.copy(VP, VZ);
+  } else if (cg) {
     bk.cg_init();
   } else {
     bk.copy(VR0, VR);
@@ -57,7 +62,14 @@ int krylov(BK& bk, SolverMethod method, double tol2, int max_iterations, double*
   if (rr <= tol2) return 0;
   if (max_iterations <= 0) not_converged(method, std::sqrt(rr / bnorm2), 0, tol, bk.size(), "did not converge");
   auto step = [&] {
-    if (cg) {
+    if (pcg) {
+      bk.spmv(VQ, VP, false);
+      bk.dot(VP, VQ, OP_CG_ALPHA);
+      bk.pcg_update_xr();
+      bk.precondition();
+      bk.dot2(VR, VZ, VR, VR, OP_CG_BETA);
+      bk.pcg_update_p();
+    } else if (cg) {
       bk.spmv(VQ, VP, false);
       bk.dot(VP, VQ, OP_CG_ALPHA);
       bk.cg_update_xr();

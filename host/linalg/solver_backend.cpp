@@ -1,5 +1,7 @@
 #include "linalg/solver_backend.hpp"
 
+#include "linalg/amg_device.hpp"
+
 #include <cmath>
 #include <stdexcept>
 
@@ -166,6 +168,23 @@ void HostBackend::bicg_p() {
   for (int i = 0; i < n_; ++i) p[i] = r[i] + beta * (p[i] - omega * vv[i]);
 }
 
+void HostBackend::precondition() { amg_->apply(v(VR), v(VZ)); }
+
+void HostBackend::pcg_update_xr() {
+  const double alpha = s_[S_ALPHA];
+  double *x = v(VX), *r = v(VR), *p = v(VP), *q = v(VQ);
+  for (int i = 0; i < n_; ++i) {
+    x[i] += alpha * p[i];
+    r[i] -= alpha * q[i];
+  }
+}
+
+void HostBackend::pcg_update_p() {
+  const double beta = s_[S_BETA];
+  double *z = v(VZ), *p = v(VP);
+  for (int i = 0; i < n_; ++i) p[i] = z[i] + beta * p[i];
+}
+
 void HostBackend::copy(Vec dst, Vec src) { vec_[dst] = vec_[src]; }
 void HostBackend::request_rr(int ring) { ring_[ring] = s_[S_RR]; }
 double HostBackend::wait_rr(int ring) { return ring_[ring]; }
@@ -199,6 +218,8 @@ ClBackend::ClBackend(Device& dev, int n)
   k_bicg_s_ = K("bicg_s");
   k_bicg_update_ = K("bicg_update");
   k_bicg_p_ = K("bicg_p");
+  k_pcg_xr_ = K("pcg_update_xr");
+  k_pcg_p_ = K("pcg_update_p");
   const size_t nn = std::max(1, n);
   auto& q = dev.queue();
   const std::vector<double> zeros(std::max(nn, 2 * groups_), 0.0);
@@ -222,6 +243,8 @@ ClBackend::ClBackend(Device& dev, int n)
   k_bicg_update_.set_args(n, s_, vec_[VX], vec_[VR], vec_[VS], vec_[VT], vec_[VP], d_, vec_[VR0],
                           partial_);
   k_bicg_p_.set_args(n, s_, vec_[VR], vec_[VQ], vec_[VP]);
+  k_pcg_xr_.set_args(n, s_, vec_[VX], vec_[VR], vec_[VP], vec_[VQ]);
+  k_pcg_p_.set_args(n, s_, vec_[VZ], vec_[VP]);
 }
 
 void ClBackend::set_csr_args(bc::kernel& k, bool transpose) {
@@ -312,6 +335,10 @@ void ClBackend::bicg_update() {
   finalize(OP_BI_BETA);
 }
 void ClBackend::bicg_p() { dev_.launch(k_bicg_p_, n_); }
+
+void ClBackend::precondition() { amg_->apply(vec_[VR], vec_[VZ]); }
+void ClBackend::pcg_update_xr() { dev_.launch(k_pcg_xr_, n_); }
+void ClBackend::pcg_update_p() { dev_.launch(k_pcg_p_, n_); }
 
 void ClBackend::copy(Vec dst, Vec src) {
   if (n_ > 0) bc::copy(vec_[src].begin(), vec_[src].end(), vec_[dst].begin(), dev_.queue());

@@ -7,12 +7,15 @@
 #include <boost/compute/event.hpp>
 #include <vector>
 
+#include "vpm/amg.hpp"
 #include "vpm/device.hpp"
 #include "vpm/sparse.hpp"
 
 namespace vpm::detail {
 
-enum Vec { VX, VB, VR, VP, VQ, VR0, VS, VT, VTMP, kNumVecs };
+class ClAmg;
+
+enum Vec { VX, VB, VR, VP, VQ, VR0, VS, VT, VTMP, VZ, kNumVecs };  // VZ: z = M^-1 r (AMG-PCG)
 // scalar slots and finalize ops: keep in sync with kernels/solver.cl
 enum Slot { S_RZ = 0, S_RR = 1, S_ALPHA = 2, S_BETA = 3, S_RHO = 4, S_OMEGA = 5, kNumSlots = 8 };
 enum Op { OP_CG_INIT, OP_CG_ALPHA, OP_CG_BETA, OP_BI_INIT, OP_BI_ALPHA, OP_BI_OMEGA, OP_BI_BETA,
@@ -41,6 +44,13 @@ class HostBackend {
   void bicg_s();       // s = r - alpha v   (v stored in VQ)
   void bicg_update();  // x += D(alpha p + omega s); r = s - omega t; finalize(OP_BI_BETA)
   void bicg_p();       // p = r + beta (p - omega v)
+  // General preconditioner path of CG (used when a multigrid preconditioner is set; the
+  // Jacobi CG above is untouched): z = M^-1 r, then x += alpha p, r -= alpha q; p = z + beta p.
+  void set_amg(const AmgHierarchy* h) { amg_ = h; }  // nullptr: Jacobi
+  bool has_amg() const { return amg_ != nullptr; }
+  void precondition();  // VZ = M^-1 VR (one V-cycle)
+  void pcg_update_xr();
+  void pcg_update_p();
   void copy(Vec dst, Vec src);
   void request_rr(int ring);  // queue a read of S[RR] into ring slot 0/1
   double wait_rr(int ring);   // the value read
@@ -53,6 +63,7 @@ class HostBackend {
   int n_;
   const CsrMatrix* a_ = nullptr;
   const CsrMatrix* at_ = nullptr;
+  const AmgHierarchy* amg_ = nullptr;
   std::vector<char> mask_;
   std::vector<double> d_;
   std::array<std::vector<double>, kNumVecs> vec_;
@@ -84,6 +95,11 @@ class ClBackend {
   void bicg_s();
   void bicg_update();
   void bicg_p();
+  void set_amg(ClAmg* a) { amg_ = a; }  // nullptr: Jacobi
+  bool has_amg() const { return amg_ != nullptr; }
+  void precondition();
+  void pcg_update_xr();
+  void pcg_update_p();
   void copy(Vec dst, Vec src);
   void request_rr(int ring);
   double wait_rr(int ring);
@@ -104,7 +120,8 @@ class ClBackend {
   boost::compute::vector<char> mask_;
   boost::compute::kernel k_spmv_, k_spmv_t_, k_spmv_scaled_, k_residual_, k_inv_diag_,
       k_inv_rowsq_, k_dot_, k_dot2_, k_finalize_, k_cg_init_, k_cg_xr_, k_cg_p_, k_bicg_s_,
-      k_bicg_update_, k_bicg_p_;
+      k_bicg_update_, k_bicg_p_, k_pcg_xr_, k_pcg_p_;
+  ClAmg* amg_ = nullptr;
   std::array<double, 2> ring_{};
   std::array<boost::compute::event, 2> events_;
 };

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "vpm/amg.hpp"
 #include "vpm/laplacian.hpp"
 #include "vpm/mesh.hpp"
 #include "vpm/sparse.hpp"
@@ -32,6 +33,16 @@ enum class SolverMethod {
 SolverMethod parse_solver_method(const std::string& name);
 const char* to_string(SolverMethod m);
 
+/// Preconditioner of `cg` (bicgstab and paper always use Jacobi).
+enum class Preconditioner {
+  jacobi,  ///< diagonal, fused into the CG updates (the default)
+  amg,     ///< one smoothed-aggregation V-cycle (vpm/amg.hpp) per iteration, on the solver's
+           ///< device; the hierarchy is built on the host once per matrix pattern and mask
+};
+/// "jacobi", "amg" (InputError otherwise).
+Preconditioner parse_preconditioner(const std::string& name);
+const char* to_string(Preconditioner p);
+
 struct SolverOptions {
   /// Stop when the true residual ||b - A x||_2 <= relative_tolerance * ||b||_2 (b: the right
   /// side after Dirichlet elimination). For `paper` the test is on the normal equations,
@@ -43,12 +54,18 @@ struct SolverOptions {
   /// Neumann compatibility: |sum b| <= neumann_tolerance * sum |b| or InputError. The small
   /// remaining mean is then removed from b before solving.
   double neumann_tolerance = 1e-10;
+  /// Preconditioner of `cg`; `amg` options below.
+  Preconditioner preconditioner = Preconditioner::jacobi;
+  AmgOptions amg;
 };
 
 struct SolverStats {
   int iterations = 0;              ///< iterations of the last solve (summed over columns for k > 1)
   double relative_residual = 0;    ///< ||b - A x|| / ||b|| reached (worst column for k > 1)
   double seconds = 0;              ///< wall time of the solve call, including transfers
+  /// Part of `seconds` spent building or updating the AMG hierarchy (and uploading it); 0
+  /// for Jacobi or when the hierarchy was current.
+  double setup_seconds = 0;
 };
 
 /// Solves with a fixed general CSR matrix on a device (square, any symmetry for bicgstab/paper,

@@ -14,7 +14,7 @@ PUBLIC = {
     "core": ["device", "error", "json", "timing", "format"],
     "mesh": ["mesh", "topology", "geometry", "validate", "metrics", "locate", "icosphere", "mesh_stats", "labels"],
     "io": ["io", "landmarks"],
-    "linalg": ["sparse", "laplacian", "solver"],
+    "linalg": ["sparse", "laplacian", "solver", "amg"],
     "image": ["image", "mesh_image", "mesh_image_report"],
     "map": ["initial_map", "untangle", "volume_map", "ball_map"],
     "register": ["rbf", "registration", "dense_registration"],
