@@ -150,6 +150,32 @@ int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boun
   return folds;
 }
 
+// Steps 2-4 on the refined mesh m (boundary surface surf, mask res.boundary): sphere map,
+// harmonic interior, untangling; fills res.ball and rep. False when the sphere map flipped a
+// triangle or folds remain.
+bool map_through_sphere(Device& device, const TetMesh& m, const TriSurface& surf, const InitialMapOptions& opt,
+                        const std::string& note, InitialMapResult& res, InitialMapReport& rep) {
+  auto t0 = Clock::now();
+  const SphereMapResult sm = sphere_map(surf, opt);
+  rep.boundary = sm.report;
+  rep.timings.boundary = seconds_since(t0);
+  if (sm.flipped_triangles > 0) return false;
+
+  t0 = Clock::now();
+  res.ball = harmonic_interior(device, m, res.boundary, sm.sphere, opt, note, rep);
+  rep.folds_before_untangle = static_cast<int>(inverted_tets(res.ball, m.tets).size());
+  rep.timings.harmonic = seconds_since(t0);
+
+  t0 = Clock::now();
+  rep.folds_after_untangle = untangle_map(device, m, res.boundary, opt, res.ball, rep);
+  rep.timings.untangle = seconds_since(t0);
+  rep.boundary_max_radius_error = 0;
+  for (int i = 0; i < m.num_vertices(); ++i)  // boundary exactly on the sphere
+    if (res.boundary[i])
+      rep.boundary_max_radius_error = std::max(rep.boundary_max_radius_error, std::abs(res.ball.row(i).norm() - 1.0));
+  return rep.folds_after_untangle == 0;
+}
+
 [[noreturn]] void throw_folded(const TetMesh& m, const Points& ball, const InitialMapReport& rep,
                                const std::string& note) {
   const std::vector<int> bad = inverted_tets(ball, m.tets);
@@ -191,29 +217,31 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
   const TetMesh& m = res.mesh;
   rep.timings.split = seconds_since(t0);
 
-  t0 = Clock::now();
   TriSurface surf;
   surf.vertices = m.vertices;
   surf.triangles = boundary_faces(m.tets);
   res.boundary = boundary_vertex_mask(m.num_vertices(), surf.triangles);
-  const SphereMapResult sm = sphere_map(surf, opt);
-  rep.boundary = sm.report;
-  if (sm.flipped_triangles > 0)
-    throw NumericalError("initial_map: the boundary map to the sphere flipped " + std::to_string(sm.flipped_triangles) +
-                         " of " + std::to_string(surf.triangles.rows()) + " triangles; " + note);
-  rep.timings.boundary = seconds_since(t0);
-
-  t0 = Clock::now();
-  res.ball = harmonic_interior(device, m, res.boundary, sm.sphere, opt, note, rep);
-  rep.folds_before_untangle = static_cast<int>(inverted_tets(res.ball, m.tets).size());
-  rep.timings.harmonic = seconds_since(t0);
-
-  t0 = Clock::now();
-  rep.folds_after_untangle = untangle_map(device, m, res.boundary, opt, res.ball, rep);
-  rep.timings.untangle = seconds_since(t0);
-  for (int i = 0; i < m.num_vertices(); ++i)  // boundary exactly on the sphere
-    if (res.boundary[i])
-      rep.boundary_max_radius_error = std::max(rep.boundary_max_radius_error, std::abs(res.ball.row(i).norm() - 1.0));
+  const bool done = map_through_sphere(device, m, surf, opt, note, res, rep);
+  if (!done && rep.boundary.flipped_triangles == 0 &&
+      opt.sphere_density != InitialMapOptions::SphereDensity::conformal) {
+    // untangling the map from the equal-area boundary left folds: the conformal boundary is
+    // the fallback (a flipped sphere map would flip the same way: the flow never flips)
+    InitialMapReport::Fallback fb;
+    fb.from = to_string(opt.sphere_density);
+    fb.flipped_triangles = rep.boundary.flipped_triangles;
+    fb.folds_after_untangle = rep.folds_after_untangle;
+    fb.seconds = rep.timings.boundary + rep.timings.harmonic + rep.timings.untangle;
+    InitialMapOptions conformal = opt;
+    conformal.sphere_density = InitialMapOptions::SphereDensity::conformal;
+    rep.untangle.reset();
+    rep.untangle_local_failed.reset();
+    map_through_sphere(device, m, surf, conformal, note, res, rep);
+    rep.fallback = fb;
+  }
+  if (rep.boundary.flipped_triangles > 0)
+    throw NumericalError("initial_map: the boundary map to the sphere flipped " +
+                         std::to_string(rep.boundary.flipped_triangles) + " of " +
+                         std::to_string(surf.triangles.rows()) + " triangles; " + note);
   if (rep.folds_after_untangle > 0 && opt.throw_on_folds) throw_folded(m, res.ball, rep, note);
 
   t0 = Clock::now();
@@ -254,6 +282,14 @@ Json to_json(const InitialMapReport& r) {
   rep["refined"]["vertices"] = r.refined_vertices;
   rep["refined"]["tets"] = r.refined_tets;
   rep["boundary"] = to_json(r.boundary);
+  if (r.fallback) {
+    Json& f = rep["fallback"];
+    f["from"] = r.fallback->from;
+    f["to"] = "conformal";
+    f["flipped_triangles"] = r.fallback->flipped_triangles;
+    f["folds_after_untangle"] = r.fallback->folds_after_untangle;
+    f["seconds"] = r.fallback->seconds;
+  }
   rep["harmonic"]["solver"] = r.harmonic_on_device ? "PoissonSolver CG (OpenCL)" : "PoissonSolver CG (host)";
   rep["harmonic"]["iterations"] = r.harmonic_iterations;
   rep["harmonic"]["relative_residual"] = r.harmonic_relative_residual;

@@ -21,6 +21,8 @@
 //     the boundary), solved on the host (Eigen) or by the shared solver on the device.
 //  4. untangle: vpm::untangle (Garanzha et al. 2021) with the boundary fixed; the reference
 //     shape of each tet is the refined input tet scaled to the ball mesh's volume.
+//  When steps 2-4 with the equal-area sphere map leave a fold, they are redone with the
+//  conformal sphere map (report.fallback says so).
 //
 // A map that is still folded after step 4 is never returned: NumericalError (exit 3) with the
 // number of folded tets, where they are, and the smallest dihedral angle of the input (meshes
@@ -154,6 +156,14 @@ struct InitialMapReport {
   std::optional<InitialUntangle> untangle;              ///< the last untangling run
   std::optional<InitialUntangle> untangle_local_failed;  ///< a local run that left folds
   int folds_after_untangle = 0;
+  /// Set when steps 2-4 with the equal-area sphere map left a fold after untangling and were
+  /// redone with the conformal one (the report's other fields are of the redo).
+  struct Fallback {
+    std::string from;  ///< to_string(SphereDensity) of the first attempt
+    int flipped_triangles = 0, folds_after_untangle = 0;
+    double seconds = 0;  ///< spent on the first attempt's steps 2-4
+  };
+  std::optional<Fallback> fallback;
   double boundary_max_radius_error = 0;
   MapMetrics metrics;  ///< of the returned map against the refined input
   struct Timings {
@@ -168,7 +178,8 @@ struct InitialMapReport {
 ///  "refined": {"vertices","tets"}, "boundary": to_json(SphereMapReport),
 ///  "harmonic": {"solver","iterations","relative_residual","inverted_tets"},
 ///  "folds_before_untangle", "untangle"? (to_json(UntangleResult) + "scope", "rings"),
-///  "untangle_local_failed"?, "folds_after_untangle", "boundary_max_radius_error",
+///  "untangle_local_failed"?, "folds_after_untangle", "fallback"? {"from","to",
+///  "flipped_triangles","folds_after_untangle","seconds"}, "boundary_max_radius_error",
 ///  "metrics": to_json(MapMetrics), "timings_s": {"input_quality","metrics","split","boundary",
 ///  "harmonic","untangle","total"}}
 Json to_json(const InitialMapReport& report);
