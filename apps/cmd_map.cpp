@@ -9,6 +9,7 @@
 #include "vpm/ball_map.hpp"
 #include "vpm/io.hpp"
 #include "vpm/json.hpp"
+#include "vpm/solver.hpp"
 #include "vpm/validate.hpp"
 #include "vpm/timing.hpp"
 
@@ -33,6 +34,9 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   vo.solver = args.get("--solver", "cg");
   if (vo.solver != "cg" && vo.solver != "paper")
     throw vpm::InputError("option --solver: '" + vo.solver + "' is not one of cg, paper");
+  vo.preconditioner = vpm::cli::parse_option("--preconditioner", [&] {
+    return std::string(vpm::to_string(vpm::parse_preconditioner(args.get("--preconditioner", "jacobi"))));
+  });
   vo.rk_steps = args.get_int("--rk-steps", 40);
   if (vo.rk_steps < 1) throw vpm::InputError("option --rk-steps: must be >= 1");
   vo.progress = [](const std::string& line) { vpm::cli::progress(line); };
@@ -85,6 +89,7 @@ vpm::cli::Registrar reg({"map", "MESH -o OUT", "map a tet mesh to the unit ball,
                           {"--sphere", "area|conformal", "boundary map to the sphere: equal-area (default) or conformal only"},
                           {"--boundary", "slide|fixed", "boundary vertices slide on the sphere (moser default) or stay"},
                           {"--solver", "cg|paper", "Jacobi CG (default) or the paper's BiCGSTAB on the normal equations"},
+                          {"--preconditioner", "jacobi|amg", "of CG: Jacobi (default) or smoothed-aggregation AMG"},
                           {"--rk-steps", "N", "RK4 steps per Moser round (default 40)"},
                           {"--report", "REPORT.json", "write the report (metrics, rounds, timings)"}},
                          run});

@@ -339,6 +339,30 @@ TEST_CASE("vpm map: writes the ball mesh with fields and the report, refuses bad
   CHECK(j.find("final")->find("vertex_volume_ratio")->find("mean_abs_dev")->number() <
         j.find("initial")->find("vertex_volume_ratio")->find("mean_abs_dev")->number());
   CHECK(j.find("timings_s")->find("total") != nullptr);
+  CHECK(j.find("volume_map")->find("preconditioner")->string() == "jacobi");
+
+  // the AMG preconditioner gives the same map (to the solver tolerance) with fewer iterations
+  REQUIRE(run_status(vpm + " map " + tmp("in.vtu") + " -o " + tmp("out_amg.vtu") + " --report " +
+                     tmp("report_amg.json") + " --preconditioner amg --quiet") == 0);
+  std::ifstream in_amg(tmp("report_amg.json"));
+  std::stringstream ss_amg;
+  ss_amg << in_amg.rdbuf();
+  const Json ja = Json::parse(ss_amg.str());
+  const Json& va = *ja.find("volume_map");
+  CHECK(va.find("preconditioner")->string() == "amg");
+  const double first_jacobi = j.find("volume_map")->find("rounds")->at(0).find("solver_iterations")->number();
+  const double first_amg = va.find("rounds")->at(0).find("solver_iterations")->number();
+  CHECK(first_amg < 0.5 * first_jacobi);
+  const TetMesh out_amg = read_mesh(tmp("out_amg.vtu"));
+  REQUIRE(out_amg.num_vertices() == out.num_vertices());
+  // not bit-identical: each solve stops at a different point inside its 1e-8 tolerance and the
+  // rounds amplify that (measured 2e-3 of the radius), so compare the maps' quality
+  CHECK((out_amg.vertices - out.vertices).cwiseAbs().maxCoeff() < 2e-2);
+  const double vj = j.find("final")->find("vertex_volume_ratio")->find("mean_abs_dev")->number();
+  const double vg = ja.find("final")->find("vertex_volume_ratio")->find("mean_abs_dev")->number();
+  CHECK(vg < 1.2 * vj + 1e-4);
+  CHECK(ja.find("final")->find("inverted_tets")->number() == 0);
+  CHECK(run_status(vpm + " map " + tmp("in.vtu") + " -o " + tmp("bad.vtu") + " --preconditioner ilu 2>/dev/null") == 2);
 
   // --rounds 0 stops after the initial map
   REQUIRE(run_status(vpm + " map " + tmp("in.vtu") + " -o " + tmp("out0.vtu") + " --rounds 0 --quiet") == 0);

@@ -74,6 +74,7 @@ Json to_json(const VolumeMapResult& res) {
   j["method"] = to_string(res.method);
   j["boundary"] = res.slide ? "slide" : "fixed";
   j["solver"] = res.solver;
+  j["preconditioner"] = res.preconditioner;
   j["rk_steps"] = res.rk_steps;
   j["advection"] = res.device_advection ? "device" : "host";
   j["local_untangle_available"] = true;
@@ -153,7 +154,8 @@ void set_up(detail::MapContext& c) {
   c.ref_dual = Eigen::VectorXd::Zero(c.n);
   for (int t = 0; t < c.m; ++t)
     for (int k = 0; k < 4; ++k) c.ref_dual(tets(t, k)) += 0.25 * c.ref_tet(t);
-  c.solver = std::make_unique<detail::MapSolver>(c.dev, c.n, tets, opt.solver, opt.solver_tolerance);
+  c.solver = std::make_unique<detail::MapSolver>(c.dev, c.n, tets, opt.solver, opt.solver_tolerance,
+                                                   opt.preconditioner);
   if (advection_on_device(c.dev, opt))
     c.advector = std::make_unique<detail::DeviceAdvector>(c.dev, tets, c.nbr, c.boundary);
   c.polish_on_device = polish_on_device(c.dev, opt);
@@ -171,6 +173,7 @@ VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, cons
   res.method = opt.method;
   res.slide = c.slide;
   res.solver = opt.solver;
+  res.preconditioner = opt.preconditioner;
   res.rk_steps = opt.rk_steps;
   res.device_advection = c.advector != nullptr;
 

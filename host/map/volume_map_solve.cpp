@@ -50,12 +50,14 @@ struct MapSolver::Impl {
   std::unique_ptr<PoissonSolver> poisson;
 };
 
-MapSolver::MapSolver(Device& device, int n, const Tets& tets, const std::string& method, double tol)
+MapSolver::MapSolver(Device& device, int n, const Tets& tets, const std::string& method, double tol,
+                     const std::string& preconditioner)
     : impl_(new Impl{device, n, tets, SolverOptions{}, nullptr}) {
   if (method != "cg" && method != "paper")
     throw InputError("--solver: '" + method + "' is not one of cg, paper");
   impl_->options.method = parse_solver_method(method);
   impl_->options.relative_tolerance = tol;
+  impl_->options.preconditioner = parse_preconditioner(preconditioner);
   impl_->options.neumann_tolerance = 1e-8;
 }
 MapSolver::~MapSolver() = default;
@@ -97,7 +99,10 @@ SolveStats MapSolver::dirichlet(const Eigen::SparseMatrix<double>& K, const std:
     }
   Eigen::SparseMatrix<double> A(nf, nf);
   A.setFromTriplets(tri.begin(), tri.end());
-  SparseSolver solver(impl_->dev, CsrMatrix::from_eigen(A), impl_->options);
+  // a new matrix every call: an AMG hierarchy would be built for three solves, so Jacobi here
+  SolverOptions options = impl_->options;
+  options.preconditioner = Preconditioner::jacobi;
+  SparseSolver solver(impl_->dev, CsrMatrix::from_eigen(A), options);
   SolveStats st;
   for (int c = 0; c < 3; ++c) {
     Eigen::VectorXd xc(nf);

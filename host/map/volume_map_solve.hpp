@@ -32,8 +32,9 @@ Eigen::SparseMatrix<double> weighted_stiffness(const Points& x, const Tets& tets
 class MapSolver {
  public:
   /// `method`: "cg" or "paper" (normal equations, BiCGSTAB). `tolerance`: relative residual.
+  /// `preconditioner`: "jacobi" or "amg" (of cg).
   MapSolver(Device& device, int num_vertices, const Tets& tets, const std::string& method,
-            double tolerance);
+            double tolerance, const std::string& preconditioner = "jacobi");
   ~MapSolver();
   /// Neumann: K(x) psi = b (b sums to zero); psi in: warm start, out: zero-mean solution.
   SolveStats neumann(const Points& x, const Eigen::VectorXd& b, Eigen::VectorXd& psi);

@@ -84,6 +84,9 @@ struct VolumeMapOptions {
   MapBoundary boundary = MapBoundary::automatic;
   /// Linear solver: "cg" (Jacobi CG) or "paper" (BiCGSTAB on the normal equations).
   std::string solver = "cg";
+  /// Preconditioner of "cg": "jacobi" or "amg" (smoothed aggregation, vpm/amg.hpp; the
+  /// hierarchy is built once and its values refreshed every solve).
+  std::string preconditioner = "jacobi";
   /// Relative residual of each linear solve.
   double solver_tolerance = 1e-8;
   /// Local untangling (theta 0.5, two rings, boundary fixed) of rounds that fold.
@@ -162,12 +165,13 @@ struct VolumeMapResult {
   VolumeMapMethod method = VolumeMapMethod::moser;
   bool slide = true;          ///< boundary vertices slid on the sphere (else fixed)
   std::string solver = "cg";  ///< VolumeMapOptions::solver
+  std::string preconditioner = "jacobi";  ///< VolumeMapOptions::preconditioner
   int rk_steps = 40;
   bool device_advection = false;  ///< the advection ran on the OpenCL device
   VolumeMapTimings timings;
 };
 
-/// {"method", "boundary", "solver", "rk_steps", "advection", "local_untangle_available",
+/// {"method", "boundary", "solver", "preconditioner", "rk_steps", "advection", "local_untangle_available",
 ///  "initial": {"vertex_mean_abs_dev", "tet_mean_abs_dev"},
 ///  "final": {"vertex_mean_abs_dev", "tet_mean_abs_dev", "inverted_tets"}, "stop_reason",
 ///  "rounds": [to_json(round)...], "timings_s": {"solve", "field", "advect", "untangle", "total"}}
