@@ -59,6 +59,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
                  in.c_str(), vr.sliver_tets, vpm::kSliverDihedralDeg, vr.min_dihedral_deg, vr.min_dihedral_tet, in.c_str());
   vpm::BallMapOptions bo;
   bo.volume = vo;
+  bo.initial.preconditioner = vo.preconditioner;
   bo.initial.sphere_density = vpm::cli::parse_option(
       "--sphere", [&] { return vpm::parse_sphere_density(args.get("--sphere", "area")); });
   vpm::BallMap bm = vpm::map_to_ball(dev, mesh, vr, in, bo);

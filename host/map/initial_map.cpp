@@ -105,6 +105,7 @@ Points harmonic_interior(Device& device, const TetMesh& m, const std::vector<cha
                            : Eigen::RowVector3d((m.vertices.row(i) - c) / std::max(r, 1e-300));
   SolverOptions so;
   so.relative_tolerance = opt.solver_tolerance;
+  so.preconditioner = parse_preconditioner(opt.preconditioner);
   SolverStats st;
   try {
     PoissonSolver ps(device, n, m.tets, so);

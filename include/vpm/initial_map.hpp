@@ -66,6 +66,8 @@ struct InitialMapOptions {
   int density_max_steps = 300;
   double density_tolerance = 0.02;  ///< stop at this area distortion (mean |area ratio - 1|)
   // ---- step 3: harmonic interior
+  /// Preconditioner of the harmonic solve's CG: "jacobi" or "amg" (vpm/amg.hpp).
+  std::string preconditioner = "jacobi";
   double solver_tolerance = 1e-10;   ///< relative residual when an iterative solver is used
   // ---- step 4: untangling
   enum class Untangle { Never, IfFolded, Always };
