@@ -191,6 +191,20 @@ TEST_CASE("triangles flipped on the sphere are repaired along the sphere, then t
   const std::vector<int> folded = inverted_tets(x, m.tets);
   if (!folded.empty()) untangle_local(m.vertices, m.tets, x, boundary, folded, 4);
   CHECK(inverted_tets(x, m.tets).empty());
+
+  // A reference that has the flipped face itself (a sliver of the previous state on the
+  // sphere): nothing to restore, so no repair, but no exception either (it used to end
+  // `vpm map` with exit 2, "reference tet ... is not positively oriented"); the caller's tet
+  // untangling takes over. x is left on the sphere.
+  Points z = m.vertices;
+  z.row(v) = (pu + 0.6 * (pu - pv)).normalized();
+  const Points z0 = z;
+  int left = -1;
+  REQUIRE_NOTHROW(left = unflip_sphere_faces(z0, faces, z));
+  CHECK(left == static_cast<int>(flipped_sphere_faces(faces, z).size()));
+  CHECK(left > 0);
+  for (int i = 0; i < m.num_vertices(); ++i)
+    if (boundary[i]) CHECK(std::abs(z.row(i).norm() - 1) < 1e-12);
 }
 
 TEST_CASE("untangle never returns more folds than it was given") {

@@ -126,7 +126,11 @@ Points harmonic_interior(Device& device, const TetMesh& m, const std::vector<cha
 }
 
 // Step 4: untangling (InitialMapOptions::untangle): locally first when only folds are to be
-// repaired, globally if that leaves any. Returns the folds left.
+// repaired (rings, then 2x and 4x the rings around what is left, while each run leaves fewer
+// folds), globally if folds remain, then locally again with twice the rings if the global run
+// left a few (at most kCleanupMaxFolds). Returns the folds left.
+constexpr int kLocalWidenings = 3;
+constexpr int kCleanupMaxFolds = 64;
 int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boundary, const InitialMapOptions& opt,
                  Points& ball, InitialMapReport& rep) {
   int folds = rep.folds_before_untangle;
@@ -134,12 +138,17 @@ int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boun
                    (opt.untangle == InitialMapOptions::Untangle::IfFolded && folds > 0);
   if (!run) return folds;
   const bool local = opt.untangle == InitialMapOptions::Untangle::IfFolded && opt.local_untangle_rings > 0;
-  if (local) {  // few folds: free only their neighbourhood (fast)
+  if (local) {  // few folds: free only their neighbourhood (fast), widening it while that helps
     Points trial = ball;
-    const UntangleResult ul = untangle_local(device, m.vertices, m.tets, trial, boundary, inverted_tets(ball, m.tets),
-                                             opt.local_untangle_rings, opt.untangle_options);
-    rep.untangle = InitialUntangle{ul, true, opt.local_untangle_rings};
-    folds = ul.inverted_after;
+    int left = folds;
+    for (int k = 0, rings = opt.local_untangle_rings; k < kLocalWidenings && left > 0; ++k, rings *= 2) {
+      const UntangleResult ul = untangle_local(device, m.vertices, m.tets, trial, boundary,
+                                               inverted_tets(trial, m.tets), rings, opt.untangle_options);
+      rep.untangle = InitialUntangle{ul, true, rings};
+      if (ul.inverted_after >= left) break;  // no progress: the global run takes over
+      left = ul.inverted_after;
+    }
+    folds = left;
     if (folds == 0) ball = std::move(trial);
   }
   if (!local || folds > 0) {
@@ -147,6 +156,19 @@ int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boun
     if (local) rep.untangle_local_failed = rep.untangle;
     rep.untangle = InitialUntangle{ur, false, 0};
     folds = ur.inverted_after;
+    if (folds > 0 && folds <= kCleanupMaxFolds && opt.local_untangle_rings > 0) {
+      // a few folds left by the global run: free a wider neighbourhood of each (the global
+      // run's small theta keeps shape, the local one's reference is the input there)
+      const int rings = 2 * opt.local_untangle_rings;
+      Points trial = ball;
+      const UntangleResult uc = untangle_local(device, m.vertices, m.tets, trial, boundary,
+                                               inverted_tets(ball, m.tets), rings, opt.untangle_options);
+      rep.untangle_cleanup = InitialUntangle{uc, true, rings};
+      if (uc.inverted_after < folds) {
+        ball = std::move(trial);
+        folds = uc.inverted_after;
+      }
+    }
   }
   return folds;
 }
@@ -236,6 +258,7 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
     conformal.sphere_density = InitialMapOptions::SphereDensity::conformal;
     rep.untangle.reset();
     rep.untangle_local_failed.reset();
+    rep.untangle_cleanup.reset();
     map_through_sphere(device, m, surf, conformal, note, res, rep);
     rep.fallback = fb;
   }
@@ -298,6 +321,7 @@ Json to_json(const InitialMapReport& r) {
   rep["folds_before_untangle"] = r.folds_before_untangle;
   if (r.untangle) rep["untangle"] = untangle_json(*r.untangle);
   if (r.untangle_local_failed) rep["untangle_local_failed"] = untangle_json(*r.untangle_local_failed);
+  if (r.untangle_cleanup) rep["untangle_cleanup"] = untangle_json(*r.untangle_cleanup);
   rep["folds_after_untangle"] = r.folds_after_untangle;
   rep["boundary_max_radius_error"] = r.boundary_max_radius_error;
   rep["metrics"] = to_json(r.metrics);

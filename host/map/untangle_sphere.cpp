@@ -1,6 +1,7 @@
 // Repair of boundary triangles flipped on the unit sphere (vpm/untangle.hpp).
 #include <Eigen/Geometry>
 
+#include "vpm/error.hpp"
 #include "vpm/untangle.hpp"
 
 namespace vpm {
@@ -37,7 +38,14 @@ int unflip_sphere_faces(const Points& reference, const Triangles& faces, Points&
     }
   }
   for (int rings = 2; rings <= 4 && !flipped.empty(); rings += 2) {
-    untangle_local(r, cone, p, fixed, flipped, rings, untangle_local_options());
+    try {
+      untangle_local(r, cone, p, fixed, flipped, rings, untangle_local_options());
+    } catch (const InputError&) {
+      // a reference cone near one of these faces is itself degenerate or flipped (a sliver
+      // triangle of `reference` on the sphere): no shape to restore here; the tet untangling
+      // that follows repairs (or reports) what is left
+      break;
+    }
     flipped = flipped_sphere_faces(faces, p);
   }
   for (int v = 0; v < n; ++v)
