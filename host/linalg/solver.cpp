@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "linalg/amg_state.hpp"
+#include "linalg/csr_ops.hpp"
 #include "linalg/krylov.hpp"
 #include "linalg/solver_backend.hpp"
 #include "vpm/device.hpp"
@@ -42,29 +43,6 @@ const char* to_string(SolverMethod m) {
   return "?";
 }
 
-namespace {
-
-CsrMatrix transpose(const CsrMatrix& a) {
-  CsrMatrix t;
-  t.rows = a.cols;
-  t.cols = a.rows;
-  t.row_ptr.assign(t.rows + 1, 0);
-  for (int c : a.col) ++t.row_ptr[c + 1];
-  for (int i = 0; i < t.rows; ++i) t.row_ptr[i + 1] += t.row_ptr[i];
-  t.col.resize(a.col.size());
-  t.val.resize(a.val.size());
-  std::vector<int> next(t.row_ptr.begin(), t.row_ptr.end() - 1);
-  for (int r = 0; r < a.rows; ++r)
-    for (int k = a.row_ptr[r]; k < a.row_ptr[r + 1]; ++k) {
-      const int q = next[a.col[k]]++;
-      t.col[q] = r;
-      t.val[q] = a.val[k];
-    }
-  return t;
-}
-
-}  // namespace
-
 // ------------------------------------------------------------------ SparseSolver ----------
 
 struct SparseSolver::Impl {
@@ -87,7 +65,7 @@ SparseSolver::SparseSolver(Device& device, const CsrMatrix& a, SolverOptions opt
                      std::to_string(a.cols) + ", not square");
   auto& s = *impl_;
   s.a = a;
-  s.at = transpose(a);
+  s.at = detail::csr_transpose(a);
   s.symmetric = s.at.row_ptr == a.row_ptr && s.at.col == a.col && s.at.val == a.val;
   s.mask.assign(a.rows, 0);
   if (device.is_host()) {
