@@ -16,14 +16,6 @@ using namespace vpm;
 
 namespace {
 
-Eigen::VectorXd zero_sum_random(int n, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g;
-  Eigen::VectorXd b(n);
-  for (int i = 0; i < n; ++i) b[i] = g(rng);
-  b.array() -= b.mean();
-  return b;
-}
 
 Eigen::MatrixXd dense(const CsrMatrix& a) { return Eigen::MatrixXd(a.to_eigen()); }
 
@@ -105,7 +97,7 @@ TEST_CASE("AMG: the V-cycle alone converges fast (Neumann and Dirichlet)") {
   const TetMesh m = test::voxel_ellipsoid_mesh(20000);
   const int n = m.num_vertices();
   const CsrMatrix k = cotan_laplacian(m.vertices, m.tets);
-  const Eigen::VectorXd b = zero_sum_random(n, 3);
+  const Eigen::VectorXd b = test::zero_sum_random(n, 3);
   AmgOptions o;
   o.coarse_size = 100;
   const AmgHierarchy h(k, {}, o);
@@ -128,7 +120,7 @@ TEST_CASE("AMG-CG: few iterations, flat under refinement, Jacobi-CG unchanged") 
   for (long tets : {3000L, 24000L}) {
     const TetMesh m = test::voxel_ellipsoid_mesh(tets);
     const int n = m.num_vertices();
-    const Eigen::VectorXd b = zero_sum_random(n, 7);
+    const Eigen::VectorXd b = test::zero_sum_random(n, 7);
     auto host = Device::host();
     SolverOptions o;
     PoissonSolver s(*host, n, m.tets, o);
@@ -151,7 +143,7 @@ TEST_CASE("AMG-CG: Neumann and Dirichlet on host and device, device V-cycle equa
   const TetMesh m = test::voxel_ellipsoid_mesh(8000);
   const int n = m.num_vertices();
   const CsrMatrix k = cotan_laplacian(m.vertices, m.tets);
-  const Eigen::VectorXd b = zero_sum_random(n, 11);
+  const Eigen::VectorXd b = test::zero_sum_random(n, 11);
   const std::vector<char> fixed = boundary_vertex_mask(n, boundary_faces(m.tets));
   FieldValues affine(n, 1);
   for (int i = 0; i < n; ++i) affine(i, 0) = 0.3 * m.vertices(i, 0) - m.vertices(i, 2) + 2;

@@ -15,22 +15,13 @@ namespace {
 TetMesh jittered_ball(int n, double amount, unsigned seed = 1) {
   return test::jitter_interior(test::ball_mesh(n), n, amount, seed);
 }
-
-Eigen::VectorXd zero_sum_random(int n, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g;
-  Eigen::VectorXd b(n);
-  for (int i = 0; i < n; ++i) b[i] = g(rng);
-  b.array() -= b.mean();
-  return b;
-}
 }  // namespace
 
 TEST_CASE("Neumann CG: residual reached, zero mean, host and device agree") {
   const TetMesh m = jittered_ball(7, 0.2);
   const int n = m.num_vertices();
   const CsrMatrix k = cotan_laplacian(m.vertices, m.tets);
-  const Eigen::VectorXd b = zero_sum_random(n, 4);
+  const Eigen::VectorXd b = test::zero_sum_random(n, 4);
   Eigen::VectorXd reference;
   for (auto& dev : test::devices()) {
     INFO("device " << dev->name());
@@ -55,7 +46,7 @@ TEST_CASE("both reduction modes (per work item, per work group) give the host's 
   }
   const TetMesh m = jittered_ball(7, 0.2);
   const int n = m.num_vertices();
-  const Eigen::VectorXd b = zero_sum_random(n, 5);
+  const Eigen::VectorXd b = test::zero_sum_random(n, 5);
   auto solve = [&](Device& dev, SolverMethod method) {
     SolverOptions o;
     o.method = method;
@@ -117,7 +108,7 @@ TEST_CASE("Dirichlet CG reproduces a linear field (the harmonic map of an affine
 TEST_CASE("warm start from the previous step's solution reduces iterations") {
   const TetMesh m = jittered_ball(7, 0.2, 3);
   const int n = m.num_vertices();
-  const Eigen::VectorXd b = zero_sum_random(n, 8);
+  const Eigen::VectorXd b = test::zero_sum_random(n, 8);
   for (auto& dev : test::devices()) {
     INFO("device " << dev->name());
     PoissonSolver s(*dev, n, m.tets);
@@ -140,7 +131,7 @@ TEST_CASE("warm start from the previous step's solution reduces iterations") {
 TEST_CASE("non-convergence throws NumericalError with the residual reached") {
   const TetMesh m = jittered_ball(6, 0.2);
   const int n = m.num_vertices();
-  const Eigen::VectorXd b = zero_sum_random(n, 2);
+  const Eigen::VectorXd b = test::zero_sum_random(n, 2);
   for (auto& dev : test::devices()) {
     INFO("device " << dev->name());
     SolverOptions o;
@@ -162,7 +153,7 @@ TEST_CASE("non-convergence throws NumericalError with the residual reached") {
 TEST_CASE("an incompatible Neumann right side is reported, not solved") {
   const TetMesh m = test::ball_mesh(4);
   const int n = m.num_vertices();
-  Eigen::VectorXd b = zero_sum_random(n, 5);
+  Eigen::VectorXd b = test::zero_sum_random(n, 5);
   b[0] += 1.0;
   for (auto& dev : test::devices()) {
     PoissonSolver s(*dev, n, m.tets);
@@ -185,7 +176,7 @@ TEST_CASE("BiCGSTAB on a non-symmetric system and the paper's normal equations")
       const int j = a.col[q];
       a.val[q] = -a.val[q] + (i == j ? 0.05 : 0.02 * (i < j ? 1 : -1));
     }
-  const Eigen::VectorXd b = zero_sum_random(n, 12) + Eigen::VectorXd::Constant(n, 0.3);
+  const Eigen::VectorXd b = test::zero_sum_random(n, 12) + Eigen::VectorXd::Constant(n, 0.3);
   Eigen::VectorXd ref;
   for (auto& dev : test::devices()) {
     INFO("device " << dev->name());

@@ -75,4 +75,13 @@ void random_landmarks(int n, unsigned seed, double radius, double reach, double 
   }
 }
 
+Eigen::VectorXd zero_sum_random(int n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g;
+  Eigen::VectorXd b(n);
+  for (int i = 0; i < n; ++i) b[i] = g(rng);
+  b.array() -= b.mean();
+  return b;
+}
+
 }  // namespace vpm::test

@@ -1,5 +1,7 @@
 #pragma once
 // Small meshes generated in code for tests (no files needed).
+#include <Eigen/Core>
+
 #include "vpm/mesh.hpp"
 
 namespace vpm::test {
@@ -25,6 +27,10 @@ TetMesh jitter_interior(TetMesh m, int n, double amount, unsigned seed);
 /// ball and redrawn until source + reach x d lies within `max_radius`. Rows of p (sources), q.
 void random_landmarks(int n, unsigned seed, double radius, double reach, double max_radius, double move, Points& p,
                       Points& q);
+
+/// n standard normal values (std::mt19937 seeded with `seed`) with their mean removed: a
+/// compatible right-hand side for Neumann problems.
+Eigen::VectorXd zero_sum_random(int n, unsigned seed);
 
 /// cube_mesh(3) without its centre column of cells: a solid torus (boundary genus 1).
 TetMesh tunnel_cube();
