@@ -16,6 +16,7 @@
 
 #include "cli.hpp"
 #include "demo_deformation.hpp"
+#include "demo_overlap.hpp"
 #include "dense_options.hpp"
 #include "vpm/ball_map.hpp"
 #include "vpm/collective.hpp"
@@ -38,6 +39,8 @@ using vpm::Clock;
 using vpm::seconds_since;
 using vpm::strprintf;
 using vpm::Points;
+using vpm::cli::Overlap;
+using vpm::cli::volume_bound;
 
 
 // Regions whose overlap is measured; they are never used as landmarks (held out).
@@ -113,11 +116,14 @@ Subject mesh_and_map(vpm::Device& dev, const vpm::Image& image, const vpm::Image
   return s;
 }
 
-// The demo's dense registration: 12 iterations (docs/register.md: held-out Dice up by 0.05-0.16).
+// The demo's dense registration: 12 iterations pulled by the region boundaries and the T1
+// intensities together (docs/register.md: held-out Dice up by 0.05-0.16 over the landmarks).
 constexpr int kDenseIterations = 12;
+constexpr vpm::DenseForce kDenseForce = vpm::DenseForce::both;
 vpm::DenseRegistrationOptions demo_dense() {
   vpm::DenseRegistrationOptions d;
   d.iterations = kDenseIterations;
+  d.force = kDenseForce;
   return d;
 }
 
@@ -127,6 +133,7 @@ struct Settings {
   unsigned seed = 0;          // --seed: 0 is the demo's fixed deformation (demo_deformation.hpp)
   double max_rotation = 0;    // --max-rotation DEG
   bool ceiling = false;  // --ceiling: the subject is Colin27 meshed at another size
+  bool incompressible = false;  // --incompressible: the deformation keeps local volumes
   vpm::RegistrationOptions registration;
   vpm::DenseRegistrationOptions dense = demo_dense();
   vpm::MeshImageOptions meshing;
@@ -143,6 +150,7 @@ Settings parse_settings(const vpm::cli::Command& self, const std::vector<std::st
   s.registration.width_factor = args.get_double("--width-factor", s.registration.width_factor);
   if (!(s.registration.width_factor > 0)) throw vpm::InputError("--width-factor: must be positive");
   s.ceiling = args.has("--ceiling");
+  s.incompressible = args.has("--incompressible");
   const int seed = args.get_int("--seed", 0);
   if (seed < 0) throw vpm::InputError("--seed: expected 0 or a positive integer");
   s.seed = static_cast<unsigned>(seed);
@@ -173,7 +181,8 @@ struct Registration {
 
 // Registers the subject's ball to the template's by region centroids; writes the landmark
 // files and subject_registered.vtu.
-Registration register_subject(vpm::Device& dev, const Subject& tmpl, const Subject& subj, const Settings& st) {
+Registration register_subject(vpm::Device& dev, const Subject& tmpl, const Subject& subj, const Settings& st,
+                              const vpm::Image& tmpl_image, const vpm::Image& subj_image) {
   Registration r;
   r.tmpl_labels = vpm::cell_labels(tmpl.map.mesh);
   r.subj_labels = vpm::cell_labels(subj.map.mesh);
@@ -189,8 +198,13 @@ Registration register_subject(vpm::Device& dev, const Subject& tmpl, const Subje
   r.registered = sm.vertices;
   vpm::DenseRegistrationOptions dense = st.dense;
   dense.exclude_labels = kEvaluated;  // the held-out regions stay invisible to the dense force
+  vpm::DenseImages images;  // T1 intensities of both, for the image force
+  images.subject = &subj_image;
+  images.subject_native = vpm::cli::native_positions(sm);
+  images.templ = &tmpl_image;
+  images.template_native = vpm::cli::native_positions(tmpl.map.mesh);
   r.dense = vpm::register_dense(dev, r.registered, sm.tets, r.subj_labels, tmpl.map.mesh.vertices,
-                                tmpl.map.mesh.tets, r.tmpl_labels, src, dst, st.registration, dense);
+                                tmpl.map.mesh.tets, r.tmpl_labels, src, dst, st.registration, dense, &images);
   r.result = r.dense.landmark;
   r.result.landmark_rms_error = r.dense.landmark_rms_error;
   r.result.landmark_max_error = r.dense.landmark_max_error;
@@ -205,63 +219,6 @@ Registration register_subject(vpm::Device& dev, const Subject& tmpl, const Subje
   return r;
 }
 
-// Dice of the held-out regions and the mean Dice of the landmark regions, before and after.
-struct Overlap {
-  long points = 0;
-  // labels of the tets (capped by the mesh resolution) and, the honest measure, labels read from
-  // each subject's own atlas image through its map (ball point -> native position -> voxel)
-  std::vector<vpm::LabelOverlap> before, after, image_before, image_after;  // per kEvaluated region
-  double landmark_before = 0, landmark_after = 0, image_landmark_before = 0, image_landmark_after = 0;
-  double seconds = 0;
-};
-
-// Labels of ball `points` read from a subject's atlas image through its ball mesh at `ball`.
-std::vector<int> image_labels(const Points& points, const Points& ball, const vpm::TetMesh& mesh,
-                              const vpm::Image& atlas) {
-  const vpm::Field* f = mesh.find_point_field("original_position");
-  if (!f || f->values.cols() != 3) throw vpm::InputError("demo: the ball map has no original_position field");
-  const Points native = f->values;
-  const Points x = vpm::pull_back_points(points, ball, mesh.tets, native);
-  std::vector<int> out(static_cast<size_t>(x.rows()));
-  for (Eigen::Index i = 0; i < x.rows(); ++i)
-    out[static_cast<size_t>(i)] =
-        static_cast<int>(std::lround(vpm::sample_image(atlas, x.row(i).transpose(), vpm::Interpolation::nearest)));
-  return out;
-}
-
-double mean_dice(const std::vector<vpm::LabelOverlap>& v) {
-  double s = 0;
-  for (const auto& o : v) s += o.dice;
-  return v.empty() ? 0.0 : s / v.size();
-}
-
-Overlap measure_overlap(const Subject& tmpl, const Subject& subj, const Registration& reg, int grid,
-                        const vpm::Image& tmpl_atlas, const vpm::Image& subj_atlas) {
-  const auto t0 = Clock::now();
-  const std::vector<int>&lab_t = reg.tmpl_labels, &lab_s = reg.subj_labels, &labels = reg.landmark_labels;
-  const Points samples = vpm::ball_grid_points(grid);
-  const auto& tm = tmpl.map.mesh;
-  const auto& sm = subj.map.mesh;
-  const std::vector<int> s_t = vpm::sample_labels(tm.vertices, tm.tets, lab_t, samples);
-  const std::vector<int> s_before = vpm::sample_labels(sm.vertices, sm.tets, lab_s, samples);
-  const std::vector<int> s_after = vpm::sample_labels(reg.registered, sm.tets, lab_s, samples);
-  Overlap o;
-  o.points = static_cast<long>(samples.rows());
-  o.before = vpm::dice_overlap(s_t, s_before, kEvaluated);
-  o.after = vpm::dice_overlap(s_t, s_after, kEvaluated);
-  o.landmark_before = mean_dice(vpm::dice_overlap(s_t, s_before, labels));
-  o.landmark_after = mean_dice(vpm::dice_overlap(s_t, s_after, labels));
-  const std::vector<int> i_t = image_labels(samples, tm.vertices, tm, tmpl_atlas);
-  const std::vector<int> i_before = image_labels(samples, sm.vertices, sm, subj_atlas);
-  const std::vector<int> i_after = image_labels(samples, reg.registered, sm, subj_atlas);
-  o.image_before = vpm::dice_overlap(i_t, i_before, kEvaluated);
-  o.image_after = vpm::dice_overlap(i_t, i_after, kEvaluated);
-  o.image_landmark_before = mean_dice(vpm::dice_overlap(i_t, i_before, labels));
-  o.image_landmark_after = mean_dice(vpm::dice_overlap(i_t, i_after, labels));
-  o.seconds = seconds_since(t0);
-  return o;
-}
-
 using Names = std::map<int, std::string>;
 std::string name_of(const Names& names, int l) { return names.count(l) ? names.at(l) : "label " + std::to_string(l); }
 
@@ -272,6 +229,7 @@ vpm::Json demo_json(const std::string& device, const Settings& st, const Subject
   report["data"] = st.data.string();
   report["deformation"]["seed"] = static_cast<long>(st.seed);
   report["deformation"]["max_rotation_deg"] = st.max_rotation;
+  report["deformation"]["incompressible"] = st.incompressible;
   report["deformation"]["rotation_deg"] = vpm::cli::demo_rotation_deg(st.seed, st.max_rotation);
   report["subjects"]["colin27"] = to_json(tmpl);
   report["subjects"]["subject"] = to_json(subj);
@@ -289,6 +247,7 @@ vpm::Json demo_json(const std::string& device, const Settings& st, const Subject
     o["dice_after"] = ov.after[i].dice;
     o["dice_image_before"] = ov.image_before[i].dice;
     o["dice_image_after"] = ov.image_after[i].dice;
+    o["dice_volume_bound"] = volume_bound(ov.image_before[i]);
     jd.push_back(o);
   }
   vpm::Json jo = vpm::Json::object();
@@ -312,8 +271,8 @@ std::string two_pcts(const char* f, const vpm::MapMetrics& m) {
 void print_summary(const std::string& device, const Settings& st, const Subject& t, const Subject& s,
                    const Registration& reg, const Overlap& ov, const Names& names, double total) {
   std::ostringstream out;
-  auto row = [&](const std::string& what, const std::string& a, const std::string& b) {
-    out << strprintf("  %-34s %14s %14s\n", what.c_str(), a.c_str(), b.c_str());
+  auto row = [&](const std::string& what, const std::string& a, const std::string& b, const std::string& c = "") {
+    out << strprintf("  %-34s %14s %14s %8s\n", what.c_str(), a.c_str(), b.c_str(), c.c_str());
   };
   out << "vpm demo on " << device << " (Colin27 + AAL from " << st.data.string() << ")\n";
   row("", "colin27", "subject");
@@ -331,13 +290,15 @@ void print_summary(const std::string& device, const Settings& st, const Subject&
       << std::count_if(reg.dense.iterations.begin(), reg.dense.iterations.end(), [](const auto& i) { return i.accepted; })
       << " of " << reg.dense.iterations.size() << " dense iterations kept, " << strprintf("%.1f", reg.seconds) << " s\n";
   out << "Dice with colin27 in the ball (" << ov.points << " points; held-out regions), labels read from each\n"
-      << "subject's atlas image through its map (tet labels, capped by the mesh resolution, in brackets):\n";
+      << "subject's atlas image through its map (tet labels, capped by the mesh resolution, in brackets);\n"
+      << "bound: the most a volume-preserving registration can reach, from the two region volumes:\n";
   auto pair = [](const vpm::LabelOverlap& image, const vpm::LabelOverlap& tet) {
     return strprintf("%.3f", image.dice) + " (" + strprintf("%.3f", tet.dice) + ")";
   };
-  row("", "before", "after");
+  row("", "before", "after", "bound");
   for (size_t i = 0; i < kEvaluated.size(); ++i)
-    row(name_of(names, kEvaluated[i]), pair(ov.image_before[i], ov.before[i]), pair(ov.image_after[i], ov.after[i]));
+    row(name_of(names, kEvaluated[i]), pair(ov.image_before[i], ov.before[i]), pair(ov.image_after[i], ov.after[i]),
+        strprintf("%.3f", volume_bound(ov.image_before[i])));
   row("mean of the landmark regions",
       strprintf("%.3f", ov.image_landmark_before) + " (" + strprintf("%.3f", ov.landmark_before) + ")",
       strprintf("%.3f", ov.image_landmark_after) + " (" + strprintf("%.3f", ov.landmark_after) + ")");
@@ -355,7 +316,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   const vpm::Image image = vpm::read_nifti((st.data / "ch2bet.nii.gz").string());
   const vpm::Image atlas = vpm::read_nifti((st.data / "aal.nii.gz").string());
   const Eigen::Vector3d centre = mask_centroid(image);
-  const auto pull = vpm::cli::demo_deformation(centre, st.seed, st.max_rotation);
+  const auto pull = vpm::cli::demo_deformation(centre, st.seed, st.max_rotation, st.incompressible);
   // --ceiling: the subject is Colin27 itself, meshed at 1.3x the vertices, so the overlap after
   // registration is what independent meshing and mapping leave (the best any subject can reach)
   const vpm::Image image_b = st.ceiling ? image : vpm::resample_image(image, pull, vpm::Interpolation::linear);
@@ -368,9 +329,10 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
 
   const Subject tmpl = mesh_and_map(dev, image, atlas, st.meshing, "colin27", st.out);
   const Subject subj = mesh_and_map(dev, image_b, atlas_b, subject_meshing, "subject", st.out);
-  const Registration reg = register_subject(dev, tmpl, subj, st);
+  const Registration reg = register_subject(dev, tmpl, subj, st, image, image_b);
   timings["register"] = reg.seconds;
-  const Overlap ov = measure_overlap(tmpl, subj, reg, st.grid, atlas, atlas_b);
+  const Overlap ov = vpm::cli::measure_overlap(tmpl.map.mesh, subj.map.mesh, reg.registered, reg.tmpl_labels,
+                                               reg.subj_labels, reg.landmark_labels, kEvaluated, st.grid, atlas, atlas_b);
   timings["overlap"] = ov.seconds;
   const double total = seconds_since(t_start);
   timings["total"] = total;
@@ -390,6 +352,7 @@ vpm::cli::Registrar reg(vpm::cli::with_dense_options(
       {"--width-factor", "F", "registration kernel width factor (default 0.5)"},
       {"--seed", "S", "the subject's deformation: 0 (default) the fixed one, S > 0 drawn from seed S"},
       {"--max-rotation", "DEG", "rotate the subject by up to DEG degrees about the brain centre (default 0)"},
+      {"--incompressible", "", "the subject's deformation keeps local volumes (the default one changes them by up to 20 %)"},
       {"--ceiling", "", "the subject is Colin27 itself meshed at 1.3x the vertices: the best overlap reachable"}},
-     run}, "--width-factor", kDenseIterations));
+     run}, "--width-factor", kDenseIterations, kDenseForce));
 }  // namespace

@@ -8,6 +8,7 @@
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/format.hpp"
+#include "vpm/image.hpp"
 #include "vpm/io.hpp"
 #include "vpm/json.hpp"
 #include "vpm/metrics.hpp"
@@ -62,6 +63,9 @@ struct Inputs {
   TetMesh mesh, templ_mesh;
   LandmarkFile landmarks, targets;
   DenseRegistrationOptions dense;  // --dense-iterations etc.: dense registration after the landmarks
+  std::string image, templ_image;  // --image, --template-image: the image force's two images
+  Image subject_image, template_image;
+  DenseImages images;
 };
 
 std::vector<int> label_list(const std::string& option, const std::string& text) {
@@ -95,9 +99,17 @@ Inputs read_inputs(const cli::Args& args, const cli::Command& self) {
                      (!out ? "-o OUT" : !src ? "--landmarks SRC.csv (or --template)" : "--targets DST.csv") +
                      "; usage: " + usage);
   if (!templ && args.has("--exclude-labels")) throw InputError("--exclude-labels needs --template");
-  for (const char* flag : {"--dense-iterations", "--dense-widths", "--dense-step"})
+  for (const char* flag : {"--dense-iterations", "--dense-widths", "--dense-step", "--dense-force", "--image",
+                           "--template-image"})
     if (!templ && args.has(flag)) throw InputError(std::string(flag) + " needs --template");
   io.dense = cli::dense_options(args);
+  io.image = args.get("--image").value_or("");
+  io.templ_image = args.get("--template-image").value_or("");
+  if (io.image.empty() != io.templ_image.empty())
+    throw InputError(io.image.empty() ? "--template-image needs --image" : "--image needs --template-image");
+  if (io.dense.force != DenseForce::labels && io.image.empty())
+    throw InputError(std::string("--dense-force ") + to_string(io.dense.force) +
+                     " needs --image SUBJECT.nii.gz and --template-image TEMPLATE.nii.gz");
   io.out = *out;
   io.src = src.value_or("");
   io.dst = dst.value_or("");
@@ -106,6 +118,24 @@ Inputs read_inputs(const cli::Args& args, const cli::Command& self) {
   io.dense.exclude_labels = io.exclude;  // held-out regions stay out of the dense force too
   if (!is_mesh_path(io.out)) throw InputError(io.out + ": unknown file extension for a tet mesh");
   return io;
+}
+
+// The native positions of a mapped mesh's vertices (its point field original_position).
+Points native_positions(const TetMesh& mesh, const std::string& path) {
+  const Field* f = mesh.find_point_field("original_position");
+  if (!f || f->values.cols() != 3)
+    throw InputError(path + ": no point field original_position (3 components), which the image force needs to read "
+                            "the image through the map (write it with `vpm map`)");
+  return f->values;
+}
+
+void read_images(Inputs& io) {
+  io.subject_image = read_nifti(io.image);
+  io.template_image = read_nifti(io.templ_image);
+  io.images.subject = &io.subject_image;
+  io.images.templ = &io.template_image;
+  io.images.subject_native = native_positions(io.mesh, io.in);
+  io.images.template_native = native_positions(io.templ_mesh, io.templ);
 }
 
 void read_files(Inputs& io) {
@@ -124,6 +154,7 @@ void read_files(Inputs& io) {
     io.landmarks.points = lm.source;
     io.targets.points = lm.target;
     io.src = io.dst = io.templ + " (region centroids)";
+    if (!io.image.empty()) read_images(io);
     return;
   }
   io.landmarks = read_landmarks_csv(io.src, io.mesh.vertices);
@@ -138,7 +169,8 @@ void read_files(Inputs& io) {
 RegistrationResult register_densely(Device& dev, const Inputs& io, Points& ball, const RegistrationOptions& opt,
                                     std::optional<DenseRegistrationResult>& dense) {
   dense = register_dense(dev, ball, io.mesh.tets, cell_labels(io.mesh), io.templ_mesh.vertices, io.templ_mesh.tets,
-                         cell_labels(io.templ_mesh), io.landmarks.points, io.targets.points, opt, io.dense);
+                         cell_labels(io.templ_mesh), io.landmarks.points, io.targets.points, opt, io.dense,
+                         io.image.empty() ? nullptr : &io.images);
   RegistrationResult res = dense->landmark;
   res.landmark_rms_error = dense->landmark_rms_error;
   res.landmark_max_error = dense->landmark_max_error;
@@ -239,6 +271,8 @@ vpm::cli::Registrar reg(cli::with_dense_options(
       {"--targets", "DST.csv", "their targets, paired line by line", false, 0, true},
       {"--template", "TEMPLATE.vtu", "instead of the two files: the centroids of the atlas regions (cell field label) MAPPED shares with this mapped template", false, 0, true},
       {"--exclude-labels", "L[,L...]", "with --template: regions never used as landmarks (held out)"},
+      {"--image", "SUBJECT.nii.gz", "with --template: MAPPED's image in its native space (for --dense-force image|both)"},
+      {"--template-image", "TEMPLATE.nii.gz", "the template's image in its native space (with --image)"},
       {"--steps", "K", "pathline samples and RK4 steps (default 50)"},
       {"--report", "R.json", "write the report (landmark errors, metrics, timings)"},
       {"--width", "W", "Gaussian width of the RBF kernel in ball units", false, 1},

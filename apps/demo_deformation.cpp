@@ -47,15 +47,23 @@ Params draw(unsigned seed, double max_rotation_deg) {
 }  // namespace
 
 std::function<Eigen::Vector3d(const Eigen::Vector3d&)> demo_deformation(const Eigen::Vector3d& c, unsigned seed,
-                                                                        double max_rotation_deg) {
-  const Params p = draw(seed, max_rotation_deg);
-  const double s2 = 2 * 22.0 * 22.0;
-  return [c, p, s2](const Eigen::Vector3d& x0) {
+                                                                        double max_rotation_deg, bool incompressible) {
+  Params p = draw(seed, max_rotation_deg);
+  const double sigma = 22.0, s2 = 2 * sigma * sigma;
+  if (incompressible) {
+    p.scale /= std::cbrt(p.scale.prod());  // the same shape change, volume kept
+    // curl(a g) = grad g x a, g = exp(-r^2 / s2): divergence-free, largest |.| = |a| e^-1/2 / sigma
+    for (auto& b : p.bumps)
+      for (int k = 3; k < 6; ++k) b[static_cast<size_t>(k)] *= sigma * std::exp(0.5);
+  }
+  return [c, p, s2, incompressible](const Eigen::Vector3d& x0) {
     const Eigen::Vector3d x = c + p.rotation * (x0 - c);
     Eigen::Vector3d y = c + p.scale.cwiseProduct(x - c);
     for (const auto& b : p.bumps) {
-      const Eigen::Vector3d centre = c + Eigen::Vector3d(b[0], b[1], b[2]);
-      y += std::exp(-(x - centre).squaredNorm() / s2) * Eigen::Vector3d(b[3], b[4], b[5]);
+      const Eigen::Vector3d r = x - (c + Eigen::Vector3d(b[0], b[1], b[2]));
+      const Eigen::Vector3d a(b[3], b[4], b[5]);
+      const double g = std::exp(-r.squaredNorm() / s2);
+      y += incompressible ? Eigen::Vector3d((-2 * g / s2) * r.cross(a)) : Eigen::Vector3d(g * a);
     }
     return y;
   };

@@ -30,10 +30,29 @@ DenseRegistrationOptions dense_options(const Args& args, DenseRegistrationOption
   }
   o.step = args.get_double("--dense-step", o.step);
   if (!(o.step > 0 && o.step <= 1)) throw InputError("--dense-step: expected a fraction in (0, 1]");
+  if (const auto f = args.get("--dense-force")) {
+    try {
+      o.force = dense_force_from_string(*f);
+    } catch (const InputError& e) {
+      throw InputError(std::string("--dense-force: ") + e.what());
+    }
+  }
+  o.image_grid = args.get_int("--dense-image-grid", o.image_grid);
+  if (o.image_grid < 8 || o.image_grid > 256) throw InputError("--dense-image-grid: expected 8 to 256 cells");
+  o.image_smoothing = args.get_double("--dense-image-smoothing", o.image_smoothing);
+  if (!(o.image_smoothing >= 0 && o.image_smoothing <= 2))
+    throw InputError("--dense-image-smoothing: expected 0 to 2 (x the level's width)");
   return o;
 }
 
-Command with_dense_options(Command command, const std::string& after, int default_iterations) {
+std::string fmt_number(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+Command with_dense_options(Command command, const std::string& after, int default_iterations,
+                           DenseForce default_force) {
   const DenseRegistrationOptions d;
   std::ostringstream widths;
   for (size_t i = 0; i < d.widths.size(); ++i) widths << (i ? "," : "") << d.widths[i];
@@ -46,7 +65,14 @@ Command with_dense_options(Command command, const std::string& after, int defaul
           {"--dense-widths", "W[,W...]", "Gaussian widths of the dense levels, coarse to fine (default " + widths.str() + ")",
            false, 0, true},
           {"--dense-step", "S", "fraction of the boundary displacement taken per dense iteration (default " +
-                                    step.str() + ")", false, 0, true}};
+                                    step.str() + ")", false, 0, true},
+          {"--dense-force", "labels|image|both",
+           std::string("what the dense flows pull: region boundaries, image intensities (demons), or both (default ") +
+               to_string(default_force) + ")", false, 0, true},
+          {"--dense-image-grid", "N", "cells across the ball of the image force's grid (default " +
+                                          std::to_string(d.image_grid) + ")", false, 0, true},
+          {"--dense-image-smoothing", "F", "Gaussian smoothing of the images before the image force, x the level's width (default " +
+                                               fmt_number(d.image_smoothing) + ")", false, 0, true}};
   auto at = command.options.begin();
   while (at != command.options.end() && at->flag != after) ++at;
   if (at != command.options.end()) ++at;

@@ -7,12 +7,14 @@
 
 namespace vpm::cli {
 
-/// --dense-iterations N, --dense-widths W[,W...], --dense-step S into `options` (InputError
-/// naming the flag for bad values).
+/// --dense-iterations N, --dense-widths W[,W...], --dense-step S, --dense-force F,
+/// --dense-image-grid N into `options` (InputError naming the flag for bad values).
 DenseRegistrationOptions dense_options(const Args& args, DenseRegistrationOptions options = {});
 
 /// `command` with the option table rows of those flags inserted after the row of `after`
-/// (`default_iterations`: the command's default of --dense-iterations).
-Command with_dense_options(Command command, const std::string& after, int default_iterations);
+/// (`default_iterations`, `default_force`: the command's defaults of --dense-iterations and
+/// --dense-force).
+Command with_dense_options(Command command, const std::string& after, int default_iterations,
+                           DenseForce default_force = DenseForce::labels);
 
 }  // namespace vpm::cli

@@ -12,6 +12,7 @@
 #include "vpm/dense_registration.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
+#include "vpm/image.hpp"
 #include "vpm/io.hpp"
 #include "vpm/metrics.hpp"
 
@@ -77,17 +78,51 @@ double overlap(const Case& c, const Points& ball) {
 }
 
 DenseRegistrationResult run_dense(Device& dev, const Case& c, Points& ball, int iterations,
-                                  std::vector<int> exclude = {}, bool restore = true) {
+                                  std::vector<int> exclude = {}, bool restore = true,
+                                  DenseForce force = DenseForce::labels, const DenseImages* images = nullptr) {
   DenseRegistrationOptions o;
   o.iterations = iterations;
   o.widths = {0.5, 0.35};
   o.step = 0.8;
   o.exclude_labels = std::move(exclude);
+  o.force = force;
+  o.image_grid = 32;
   RegistrationOptions lo;
   lo.restore_volumes = restore;
   ball = c.subject.vertices;
   return register_dense(dev, ball, c.subject.tets, c.labels, c.templ.vertices, c.templ.tets, c.labels,
-                        c.landmarks.source, c.landmarks.target, lo, o);
+                        c.landmarks.source, c.landmarks.target, lo, o, images);
+}
+
+// Native space of both subjects: the template's ball scaled to 50 mm (the subject is the
+// template's mesh moved in the ball, so its vertices have the same native positions). The
+// image: two smooth blobs over the two inner regions and a ramp, on a 2 mm grid.
+constexpr double kNativeMm = 50;
+Image native_image() {
+  Image im;
+  im.dims = {61, 61, 61};
+  im.spacing = {2, 2, 2};
+  im.affine = Eigen::Matrix4d::Identity();
+  im.affine.topLeftCorner<3, 3>() *= 2;
+  im.affine.topRightCorner<3, 1>() = Eigen::Vector3d::Constant(-60);
+  im.data.resize(im.size());
+  const Eigen::Vector3d a = kNativeMm * Eigen::Vector3d(0.25, 0.1, 0), b = kNativeMm * Eigen::Vector3d(-0.3, -0.1, 0.05);
+  for (int k = 0; k < 61; ++k)
+    for (int j = 0; j < 61; ++j)
+      for (int i = 0; i < 61; ++i) {
+        const Eigen::Vector3d x = im.to_world(Eigen::Vector3d(i, j, k));
+        im.data[im.index(i, j, k)] = static_cast<float>(100 * std::exp(-(x - a).squaredNorm() / (2 * 12.0 * 12.0)) +
+                                                        70 * std::exp(-(x - b).squaredNorm() / (2 * 10.0 * 10.0)) +
+                                                        20 + 0.3 * x(2));
+      }
+  return im;
+}
+
+DenseImages case_images(const Case& c, const Image& image) {
+  DenseImages im;
+  im.subject = im.templ = &image;
+  im.subject_native = im.template_native = kNativeMm * c.templ.vertices;
+  return im;
 }
 
 }  // namespace
@@ -126,6 +161,52 @@ TEST_CASE("dense registration undoes a known incompressible flow that landmarks 
     results.push_back(flow_only);
   }
   if (results.size() == 2) CHECK((results[0] - results[1]).cwiseAbs().maxCoeff() < 1e-9);
+}
+
+TEST_CASE("dense registration by the image force (demons) undoes the known flow without labels in the force") {
+  const Case c = make_case();
+  const Image image = native_image();
+  const DenseImages images = case_images(c, image);
+  std::vector<Points> results;
+  for (const auto& dev : test::devices()) {
+    INFO(dev->name());
+    Points landmark_only, dense;
+    run_dense(*dev, c, landmark_only, 0);
+    const DenseRegistrationResult r = run_dense(*dev, c, dense, 16, {}, true, DenseForce::image, &images);
+    const double after0 = overlap(c, landmark_only), after = overlap(c, dense);
+    INFO("Dice landmarks " << after0 << ", image force " << after << "; mismatch " << r.mismatch_landmarks << " -> "
+                           << r.mismatch_after);
+    CHECK(after > after0 + 0.03);
+    CHECK(r.mismatch_before > r.mismatch_landmarks);
+    CHECK(r.mismatch_after < 0.7 * r.mismatch_landmarks);
+    for (const DenseIteration& it : r.iterations)
+      if (it.accepted) CHECK(it.mismatch <= r.mismatch_landmarks);
+    CHECK(r.inverted_tets == 0);
+    CHECK(r.landmark_max_error < 1e-6);
+    CHECK(r.max_normal_velocity < 1e-12);
+    const Json j = to_json(r);
+    CHECK(j.find("force")->string() == "image");
+    CHECK(j.find("mismatch_after") != nullptr);
+    Points flow_only;
+    run_dense(*dev, c, flow_only, 3, {}, false, DenseForce::image, &images);
+    results.push_back(flow_only);
+  }
+  if (results.size() == 2) CHECK((results[0] - results[1]).cwiseAbs().maxCoeff() < 1e-9);
+  // the image force of a subject against itself asks for nothing: every iteration is refused
+  Case same = c;
+  same.subject = same.templ;
+  same.landmarks = region_landmarks(same.subject, same.templ);
+  Points ball;
+  const DenseRegistrationResult r = run_dense(*Device::host(), same, ball, 4, {}, true, DenseForce::both, &images);
+  CHECK(r.mismatch_landmarks < 1e-20);
+  CHECK((ball - same.templ.vertices).cwiseAbs().maxCoeff() < 1e-9);
+  // an image force without images, or with native positions of another mesh, is refused
+  CHECK_THROWS_AS(run_dense(*Device::host(), c, ball, 2, {}, true, DenseForce::image, nullptr), InputError);
+  DenseImages bad = images;
+  bad.subject_native = bad.subject_native.topRows(10);
+  CHECK_THROWS_AS(run_dense(*Device::host(), c, ball, 2, {}, true, DenseForce::image, &bad), InputError);
+  CHECK(dense_force_from_string("both") == DenseForce::both);
+  CHECK_THROWS_AS(dense_force_from_string("intensity"), InputError);
 }
 
 TEST_CASE("dense registration of a subject to itself is the identity") {
@@ -202,4 +283,41 @@ TEST_CASE("vpm register --dense-iterations: dense registration from the command 
   CHECK(test::run_status(vpm + "--landmarks a.csv --targets b.csv --dense-iterations 2 2>" + dir + "err.txt") == 2);
   CHECK(test::slurp(dir + "err.txt").find("--dense-iterations needs --template") != std::string::npos);
   CHECK(test::run_status(vpm + "--template " + dir + "templ.vtu --dense-iterations -1 2>" + dir + "err.txt") == 2);
+}
+
+TEST_CASE("vpm register --dense-force image: the image force from the command line") {
+  const Case c = make_case();
+  const std::string dir = std::string(VPM_TEST_TMP) + "/dense_image_";
+  TetMesh subject = c.subject, templ = c.templ;
+  subject.set_point_field("original_position", FieldValues(kNativeMm * c.templ.vertices));
+  templ.set_point_field("original_position", FieldValues(kNativeMm * c.templ.vertices));
+  write_mesh(dir + "templ.vtu", templ);
+  write_mesh(dir + "subject.vtu", subject);
+  write_nifti(dir + "image.nii.gz", native_image());
+  const std::string vpm = std::string(VPM_BINARY) + " register " + dir + "subject.vtu -o " + dir + "out.vtu --template " +
+                          dir + "templ.vtu --quiet ";
+  const std::string images = "--image " + dir + "image.nii.gz --template-image " + dir + "image.nii.gz ";
+  REQUIRE(test::run_status(vpm + images + "--dense-force image --dense-iterations 6 --dense-image-grid 32 --report " +
+                           dir + "r.json 2>" + dir + "err.txt") == 0);
+  const Json j = Json::parse(test::slurp(dir + "r.json"));
+  const Json* d = j.find("dense");
+  REQUIRE(d != nullptr);
+  CHECK(d->find("force")->string() == "image");
+  CHECK(d->find("mismatch_after")->number() < d->find("mismatch_landmarks")->number());
+  CHECK(j.find("inverted_tets")->number() == 0);
+  // refused: an image force without images, one image alone, a mesh without native positions
+  auto refused = [&](const std::string& args, const std::string& message) {
+    CHECK(test::run_status(vpm + args + " 2>" + dir + "err.txt") == 2);
+    const std::string err = test::slurp(dir + "err.txt");
+    INFO(err);
+    CHECK(err.find(message) != std::string::npos);
+  };
+  refused("--dense-iterations 2 --dense-force image", "--dense-force image needs --image");
+  refused("--dense-iterations 2 --image " + dir + "image.nii.gz", "--image needs --template-image");
+  refused("--dense-iterations 2 --dense-force intensity", "expected labels, image or both");
+  write_mesh(dir + "bare.vtu", c.templ);
+  CHECK(test::run_status(std::string(VPM_BINARY) + " register " + dir + "subject.vtu -o " + dir + "out.vtu --template " +
+                         dir + "bare.vtu --quiet " + images + "--dense-force both --dense-iterations 2 2>" + dir +
+                         "err.txt") == 2);
+  CHECK(test::slurp(dir + "err.txt").find("bare.vtu: no point field original_position") != std::string::npos);
 }

@@ -16,23 +16,6 @@ Points pull_back_samples(const CanonicalElements& el, const Points& ball, const 
   return pull_back_points(el.samples(), ball, tets, native);
 }
 
-Points pull_back_points(const Points& s, const Points& ball, const Tets& tets, const Points& native) {
-  if (ball.rows() != native.rows())
-    throw InputError("pull_back: the ball mesh has " + std::to_string(ball.rows()) +
-                     " vertices but its native positions " + std::to_string(native.rows()));
-  const TetLocator locator(ball, tets);
-  const std::vector<Location> loc = locator.locate_all(s);
-  Points out(s.rows(), 3);
-  detail::parallel_for(static_cast<int>(s.rows()), 4096, [&](int begin, int end) {
-    for (int i = begin; i < end; ++i) {
-      Eigen::RowVector3d p = Eigen::RowVector3d::Zero();
-      for (int k = 0; k < 4; ++k) p += loc[i].bary[k] * native.row(tets(loc[i].tet, k));
-      out.row(i) = p;
-    }
-  });
-  return out;
-}
-
 ElementFeature sample_feature(const CanonicalElements& el, const Points& positions, const Image& image,
                               const std::string& name) {
   const int n = el.size(), S = el.definition().samples;

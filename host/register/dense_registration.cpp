@@ -5,9 +5,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <sstream>
 
 #include "register/dense_force.hpp"
+#include "register/dense_image_force.hpp"
 #include "register/registration_steps.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
@@ -18,6 +20,21 @@
 
 namespace vpm {
 
+const char* to_string(DenseForce f) {
+  switch (f) {
+    case DenseForce::labels: return "labels";
+    case DenseForce::image: return "image";
+    case DenseForce::both: return "both";
+  }
+  return "labels";
+}
+
+DenseForce dense_force_from_string(const std::string& w) {
+  for (DenseForce f : {DenseForce::labels, DenseForce::image, DenseForce::both})
+    if (w == to_string(f)) return f;
+  throw InputError("dense force '" + w + "': expected labels, image or both");
+}
+
 Json to_json(const DenseIteration& it) {
   Json j = Json::object();
   j["width"] = it.width;
@@ -26,6 +43,7 @@ Json to_json(const DenseIteration& it) {
   j["mean_match_distance"] = it.mean_match_distance;
   j["max_move"] = it.max_move;
   j["agreement"] = it.agreement;
+  if (it.mismatch >= 0) j["mismatch"] = it.mismatch;
   j["folded"] = it.folded;
   j["accepted"] = it.accepted;
   j["seconds"] = it.seconds;
@@ -46,6 +64,12 @@ Json to_json(const DenseRegistrationResult& r) {
   j["agreement_before"] = r.agreement_before;
   j["agreement_landmarks"] = r.agreement_landmarks;
   j["agreement_after"] = r.agreement_after;
+  j["force"] = to_string(r.force);
+  if (r.mismatch_before >= 0) {
+    j["mismatch_before"] = r.mismatch_before;
+    j["mismatch_landmarks"] = r.mismatch_landmarks;
+    j["mismatch_after"] = r.mismatch_after;
+  }
   j["landmark_rms_error"] = r.landmark_rms_error;
   j["landmark_max_error"] = r.landmark_max_error;
   j["max_normal_velocity"] = r.max_normal_velocity;
@@ -75,6 +99,22 @@ struct DenseState {
   Points grid;
   std::vector<int> grid_templ;
   std::vector<int> regions;
+  std::unique_ptr<const ImageForce> image;  ///< with DenseForce::image and both
+  DenseForce force = DenseForce::labels;
+  double image_reach = 1.5;
+
+  double agreement(const Points& ball) const {
+    return mean_dice(grid_templ, sample_labels(ball, tets, labels, grid), regions);
+  }
+  double mismatch(const Points& ball) const { return image ? image->mismatch(image->subject_values(ball)) : -1.0; }
+};
+
+/// How well `ball` fits the template by the force's own measure (larger is better).
+struct Fit {
+  double agreement = 0, mismatch = -1;
+  bool better_than(const Fit& o, DenseForce force) const {
+    return force == DenseForce::labels ? agreement > o.agreement : mismatch < o.mismatch;
+  }
 };
 
 void check_dense(const Tets& tets, const std::vector<int>& labels, const Tets& ttets,
@@ -91,6 +131,9 @@ void check_dense(const Tets& tets, const std::vector<int>& labels, const Tets& t
   if (!(o.step > 0 && o.step <= 1)) bad("step must lie in (0, 1]");
   if (!(o.centre_spacing >= 0.25) || !(o.smoothing > 0) || !(o.ridge >= 0)) bad("invalid smoothing options");
   if (o.advect_steps < 1 || o.agreement_grid < 4) bad("advect steps >= 1 and agreement grid >= 4 required");
+  if (o.force != DenseForce::labels &&
+      (!(o.image_grid >= 4 && o.image_grid <= 512) || !(o.image_reach > 0) || !(o.image_smoothing >= 0)))
+    bad("the image force needs 4 to 512 grid cells, a positive reach and a smoothing >= 0");
 }
 
 int newly_inverted(const Eigen::VectorXd& v0, const Eigen::VectorXd& v1) {
@@ -99,15 +142,33 @@ int newly_inverted(const Eigen::VectorXd& v0, const Eigen::VectorXd& v1) {
   return n;
 }
 
+/// The displacements the force asks for with the subject at `ball`.
+BoundaryMatches dense_force(const DenseState& st, const Points& ball, double image_sigma) {
+  if (st.force == DenseForce::labels) return closest_matches(region_surface(ball, st.faces), st.templ);
+  BoundaryMatches m = st.image->demons(st.image->subject_values(ball), image_sigma, st.image_reach);
+  if (st.force == DenseForce::image) return m;
+  const BoundaryMatches b = closest_matches(region_surface(ball, st.faces), st.templ);
+  BoundaryMatches both;
+  both.at.resize(m.at.rows() + b.at.rows(), 3);
+  both.at << m.at, b.at;
+  both.displacement.resize(both.at.rows(), 3);
+  both.displacement << m.displacement, b.displacement;
+  both.weight.resize(both.at.rows());
+  both.weight << m.weight, b.weight;
+  both.regions = b.regions;
+  both.mean_distance = b.mean_distance;
+  return both;
+}
+
 /// One dense iteration at `width` on `x` (the vertices, then the tracked landmarks): kept in `x`
-/// and `agreement` when it raises the agreement without leaving a fold.
+/// and `fit` when it improves the fit without leaving a fold.
 DenseIteration dense_step(Device& dev, const DenseState& st, Points& x, double width,
-                          const DenseRegistrationOptions& o, double& agreement, double& max_normal) {
+                          const DenseRegistrationOptions& o, Fit& fit, double& max_normal) {
   const auto t0 = Clock::now();
   const Eigen::Index nv = st.reference.rows();
   DenseIteration it;
   it.width = width;
-  const BoundaryMatches m = closest_matches(region_surface(x.topRows(nv), st.faces), st.templ);
+  const BoundaryMatches m = dense_force(st, x.topRows(nv), o.image_smoothing * width);
   it.matches = static_cast<long>(m.at.rows());
   it.mean_match_distance = m.mean_distance;
   const Points centres = ball_grid(o.centre_spacing * width);
@@ -130,12 +191,14 @@ DenseIteration dense_step(Device& dev, const DenseState& st, Points& x, double w
   it.folded = newly_inverted(st.v0, v1);
   if (it.folded > 0) untangle_flow_folds(dev, st.reference, st.tets, after, st.boundary, st.v0, v1, 2);
   it.max_move = (after - x.topRows(nv)).rowwise().norm().maxCoeff();
-  it.agreement = mean_dice(st.grid_templ, sample_labels(after, st.tets, st.labels, st.grid), st.regions);
-  it.accepted = newly_inverted(st.v0, v1) == 0 && it.agreement > agreement;
+  const Fit now{st.agreement(after), st.mismatch(after)};
+  it.agreement = now.agreement;
+  it.mismatch = now.mismatch;
+  it.accepted = newly_inverted(st.v0, v1) == 0 && now.better_than(fit, st.force);
   if (it.accepted) {
     x.topRows(nv) = after;
     x.bottomRows(x.rows() - nv) = y.bottomRows(x.rows() - nv);
-    agreement = it.agreement;
+    fit = now;
   }
   it.seconds = seconds_since(t0);
   return it;
@@ -144,23 +207,24 @@ DenseIteration dense_step(Device& dev, const DenseState& st, Points& x, double w
 /// The dense iterations, coarse to fine; a level ends at its first rejected iteration.
 void dense_iterations(Device& dev, const DenseState& st, Points& x, const DenseRegistrationOptions& o,
                       DenseRegistrationResult& r) {
-  double agreement = r.agreement_landmarks;
+  Fit fit{r.agreement_landmarks, r.mismatch_landmarks};
   const int levels = static_cast<int>(o.widths.size());
   for (int l = 0; l < levels; ++l) {
     const int n = o.iterations / levels + (l < o.iterations % levels ? 1 : 0);
     for (int i = 0; i < n; ++i) {
-      r.iterations.push_back(dense_step(dev, st, x, o.widths[static_cast<size_t>(l)], o, agreement,
+      r.iterations.push_back(dense_step(dev, st, x, o.widths[static_cast<size_t>(l)], o, fit,
                                         r.max_normal_velocity));
       if (!r.iterations.back().accepted) break;
     }
   }
-  r.agreement_after = agreement;
+  r.agreement_after = fit.agreement;
+  r.mismatch_after = fit.mismatch;
 }
 
 DenseState dense_state(Device& dev, const Points& ball, const Tets& tets, const std::vector<int>& labels,
                        const Points& tball, const Tets& ttets, const std::vector<int>& tlabels,
-                       const DenseRegistrationOptions& o) {
-  DenseState st{ball, tets, without_labels(labels, o.exclude_labels), {}, {}, {}, {}, {}, {}, {}};
+                       const DenseRegistrationOptions& o, const DenseImages* images) {
+  DenseState st{ball, tets, without_labels(labels, o.exclude_labels), {}, {}, {}, {}, {}, {}, {}, nullptr, o.force, o.image_reach};
   st.boundary = boundary_vertex_mask(static_cast<int>(ball.rows()), boundary_faces(tets));
   st.v0 = tet_volumes(dev, ball, tets);
   st.faces = region_faces(tets, st.labels);
@@ -171,6 +235,10 @@ DenseState dense_state(Device& dev, const Points& ball, const Tets& tets, const 
                         std::back_inserter(st.regions));
   st.grid = ball_grid(2.0 / o.agreement_grid);
   st.grid_templ = sample_labels(tball, ttets, tl, st.grid);
+  if (o.force != DenseForce::labels && o.iterations > 0) {
+    if (!images) throw InputError(std::string("dense registration: the ") + to_string(o.force) + " force needs images");
+    st.image = std::make_unique<const ImageForce>(*images, tball, ttets, ball, tets, o.image_grid);
+  }
   return st;
 }
 
@@ -196,13 +264,16 @@ void finish(Device& dev, DenseRegistrationResult& r, const DenseState& st, const
 DenseRegistrationResult register_dense(Device& dev, Points& ball, const Tets& tets, const std::vector<int>& labels,
                                        const Points& tball, const Tets& ttets, const std::vector<int>& tlabels,
                                        const Points& landmarks, const Points& targets,
-                                       const RegistrationOptions& lo, const DenseRegistrationOptions& o) {
+                                       const RegistrationOptions& lo, const DenseRegistrationOptions& o,
+                                       const DenseImages* images) {
   const auto t_start = Clock::now();
   check_dense(tets, labels, ttets, tlabels, o);
   DenseRegistrationResult r;
-  const DenseState st = dense_state(dev, ball, tets, labels, tball, ttets, tlabels, o);
+  const DenseState st = dense_state(dev, ball, tets, labels, tball, ttets, tlabels, o, images);
   r.regions = st.regions;
-  r.agreement_before = mean_dice(st.grid_templ, sample_labels(ball, tets, st.labels, st.grid), st.regions);
+  r.force = o.force;
+  r.agreement_before = st.agreement(ball);
+  r.mismatch_before = st.mismatch(ball);
   Points work = ball;
   RegistrationOptions first = lo;
   first.restore_volumes = lo.restore_volumes && o.iterations == 0;
@@ -210,8 +281,9 @@ DenseRegistrationResult register_dense(Device& dev, Points& ball, const Tets& te
   r.landmark = register_landmarks(dev, work, tets, landmarks, targets, first);
   r.seconds_landmark = seconds_since(t0);
   r.max_normal_velocity = r.landmark.max_normal_velocity;
-  r.agreement_landmarks = mean_dice(st.grid_templ, sample_labels(work, tets, st.labels, st.grid), st.regions);
+  r.agreement_landmarks = st.agreement(work);
   r.agreement_after = r.agreement_landmarks;
+  r.mismatch_landmarks = r.mismatch_after = st.mismatch(work);
   Points lm = r.landmark.landmarks_final;
   if (o.iterations > 0) {
     t0 = Clock::now();

@@ -1,16 +1,23 @@
 #pragma once
-// Dense volume-preserving registration of labelled meshes (issue 13): the landmark registration
-// of vpm/registration.hpp followed by iterations that pull the boundaries of the subject's
-// labelled regions onto the template's, each by a divergence-free flow tangent to the sphere,
-// so volumes stay preserved and the ball stays the domain.
+// Dense volume-preserving registration (issue 13): the landmark registration of
+// vpm/registration.hpp followed by iterations that pull the subject onto the template (its
+// labelled regions' boundaries, its image intensities, or both), each by a divergence-free flow
+// tangent to the sphere, so volumes stay preserved and the ball stays the domain.
 //
 // One iteration, at Gaussian width w (coarse to fine over DenseRegistrationOptions::widths):
-// 1. Force: the region boundaries are the faces between tets of different labels (label > 0,
-//    regions in `exclude_labels` counted as unlabelled so a held-out region is never seen).
-//    For every region both meshes carry, each subject boundary face is matched to the closest
-//    template boundary face of the same region (displacement q - p) and each template face to
-//    the closest subject face (displacement q - p placed at the subject face): symmetric
-//    closest-point matches, weighted by face area.
+// 1. Force (DenseRegistrationOptions::force):
+//    * labels: the region boundaries are the faces between tets of different labels (label > 0,
+//      regions in `exclude_labels` counted as unlabelled so a held-out region is never seen).
+//      For every region both meshes carry, each subject boundary face is matched to the closest
+//      template boundary face of the same region (displacement q - p) and each template face to
+//      the closest subject face (displacement q - p placed at the subject face): symmetric
+//      closest-point matches, weighted by face area.
+//    * image: both subjects' images (DenseImages) are read on a regular grid of `image_grid`
+//      cells across the ball through their maps (ball point -> native position -> trilinear
+//      voxel), the subject's scaled to the template's mean and spread; at every grid point the
+//      demons displacement (S - T) g / (|g|^2 + (S - T)^2 / (2 r h)^2), g the mean gradient of
+//      the two, h the grid spacing, r = image_reach (so at most r h long), weight 1.
+//    * both: the two sets of displacements together.
 // 2. Smoothing: the matches are averaged with a Gaussian of width `smoothing` x w at centres on
 //    a grid of spacing `centre_spacing` x w in the ball (sum w_i g_i d_i / (sum w_i g_i + 1), so
 //    centres without data ask for no motion).
@@ -19,16 +26,20 @@
 //    sphere, whatever the force was.
 // 4. Step: every vertex (and every landmark) is advected through `step` x the field with RK4;
 //    boundary vertices are put back on the sphere; tets the flow inverted are untangled locally
-//    (the map before registration as reference). The iteration is kept only when it raises the
-//    label agreement (mean Dice of the force's regions, tet labels at ball grid points) and
-//    leaves no inverted tet; otherwise it is undone and the level ends.
+//    (the map before registration as reference). The iteration is kept only when it leaves no
+//    inverted tet and improves the force's own measure: the label agreement (mean Dice of the
+//    force's regions, tet labels at ball grid points) for `labels`, the image mismatch (mean
+//    squared difference on the image grid / the template's variance) for `image` and `both`;
+//    otherwise it is undone and the level ends.
 // After the iterations, a landmark flow (register_landmarks without rotation) takes the landmarks
 // from where the dense flows left them back exactly onto their targets, and the volume
 // restoration of the landmark registration runs once against the map before registration.
 #include <Eigen/Core>
 #include <optional>
+#include <string>
 #include <vector>
 
+#include "vpm/image.hpp"
 #include "vpm/json.hpp"
 #include "vpm/mesh.hpp"
 #include "vpm/registration.hpp"
@@ -37,7 +48,32 @@ namespace vpm {
 
 class Device;
 
+/// What the dense force pulls on (see the top of this header).
+enum class DenseForce { labels, image, both };
+
+/// "labels", "image", "both"; and back (InputError naming the accepted words otherwise).
+const char* to_string(DenseForce force);
+DenseForce dense_force_from_string(const std::string& word);
+
+/// The images of an intensity-driven dense registration (DenseForce::image or both): each
+/// subject's image in its own native space (world mm), and the native positions of its ball
+/// mesh's vertices (the mesh field original_position), row for row.
+struct DenseImages {
+  const Image* subject = nullptr;
+  Points subject_native;
+  const Image* templ = nullptr;
+  Points template_native;
+};
+
 struct DenseRegistrationOptions {
+  DenseForce force = DenseForce::labels;  ///< what pulls (images required for image and both)
+  int image_grid = 48;          ///< cells across the ball of the image force's grid
+  /// Gaussian smoothing of both images' grid values before the image force, x the level's width
+  /// (coarse levels see coarse features: a larger capture range).
+  double image_smoothing = 0;
+  /// Largest demons displacement at a grid point, x the grid spacing (the step's ceiling before
+  /// smoothing; 1.5 moved about as far per iteration as 4 and much further than 0.5 on the demo).
+  double image_reach = 1.5;
   /// Dense iterations in all, split evenly over the widths (coarse first); 0 = landmark
   /// registration only (the result is then register_landmarks' alone).
   int iterations = 0;
@@ -61,12 +97,13 @@ struct DenseIteration {
   double mean_match_distance = 0; ///< area-weighted mean |q - p| of the matches (ball units)
   double max_move = 0;            ///< largest vertex displacement of the step
   double agreement = 0;           ///< label agreement after the step
+  double mismatch = -1;           ///< image mismatch after the step (-1: no image force)
   int folded = 0;                 ///< tets the step inverted (before untangling)
   bool accepted = false;
   double seconds = 0;
 };
 /// {"width", "matches", "centres", "mean_match_distance", "max_move", "agreement", "folded",
-///  "accepted", "seconds"}
+///  "accepted", "seconds"} and "mismatch" with the image force
 Json to_json(const DenseIteration& iteration);
 
 struct DenseRegistrationResult {
@@ -78,6 +115,9 @@ struct DenseRegistrationResult {
   double agreement_before = 0;    ///< label agreement of the mapped mesh
   double agreement_landmarks = 0; ///< after the landmark registration
   double agreement_after = 0;     ///< at the end
+  /// The image mismatch at the same three stages (-1: no image force).
+  double mismatch_before = -1, mismatch_landmarks = -1, mismatch_after = -1;
+  DenseForce force = DenseForce::labels;
   double landmark_rms_error = 0, landmark_max_error = 0;  ///< at the end (ball units)
   double max_normal_velocity = 0; ///< largest max |u . n| of all flows
   int inverted_tets = 0;          ///< at the end
@@ -86,6 +126,7 @@ struct DenseRegistrationResult {
 };
 /// {"landmark": to_json(RegistrationResult), "correction" (when run), "restore" (when run),
 ///  "iterations": [...], "regions", "agreement_before", "agreement_landmarks", "agreement_after",
+///  "force", "mismatch_before", "mismatch_landmarks", "mismatch_after" (with the image force),
 ///  "landmark_rms_error", "landmark_max_error", "max_normal_velocity", "inverted_tets",
 ///  "timings_s": {"landmark", "dense", "correction", "restore", "total"}}
 Json to_json(const DenseRegistrationResult& result);
@@ -94,8 +135,10 @@ Json to_json(const DenseRegistrationResult& result);
 /// labels) to the labelled template (`template_ball`, `template_tets`, `template_labels`):
 /// landmark registration of `landmarks` onto `targets` with `landmark_options` (their volume
 /// restoration deferred to the end when dense iterations run), then the dense iterations.
+/// `images` is required for DenseForce::image and both (and unused for labels).
 /// Throws what register_landmarks throws, InputError for label counts that do not match the
-/// tets or invalid options (widths <= 0, step outside (0, 1], iterations < 0), and
+/// tets, invalid options (widths <= 0, step outside (0, 1], iterations < 0), an image force
+/// without images or with native positions that do not match the meshes, and
 /// NumericalError when the final result would have inverted tets (`ball` then unchanged).
 DenseRegistrationResult register_dense(Device& device, Points& ball, const Tets& tets,
                                        const std::vector<int>& labels, const Points& template_ball,
@@ -103,6 +146,7 @@ DenseRegistrationResult register_dense(Device& device, Points& ball, const Tets&
                                        const std::vector<int>& template_labels,
                                        const Points& landmarks, const Points& targets,
                                        const RegistrationOptions& landmark_options,
-                                       const DenseRegistrationOptions& options);
+                                       const DenseRegistrationOptions& options,
+                                       const DenseImages* images = nullptr);
 
 }  // namespace vpm

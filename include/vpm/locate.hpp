@@ -42,4 +42,13 @@ class TetLocator {
   std::unique_ptr<Impl> impl_;
 };
 
+/// Points carried from one embedding of a tet mesh to another: each of `points` (k x 3) is
+/// located in the mesh at `from` (n x 3, with `tets`) and mapped to the same barycentric
+/// combination of the vertices at `to` (n x 3), e.g. ball points to a subject's native space
+/// through its ball map (`to` = the mesh's original_position). Points outside the mesh (the thin
+/// gap between an inscribed mesh and the sphere) use the nearest boundary tet's clamped
+/// barycentric coordinates. InputError when `from` and `to` differ in rows. Runs on the host
+/// threads.
+Points pull_back_points(const Points& points, const Points& from, const Tets& tets, const Points& to);
+
 }  // namespace vpm

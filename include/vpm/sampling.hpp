@@ -10,6 +10,7 @@
 #include "vpm/elements.hpp"
 #include "vpm/image.hpp"
 #include "vpm/json.hpp"
+#include "vpm/locate.hpp"
 #include "vpm/mesh.hpp"
 
 namespace vpm {
@@ -20,10 +21,6 @@ namespace vpm {
 /// gap between the inscribed mesh and the sphere use the nearest boundary tet's clamped
 /// barycentric coordinates. Runs on the host threads.
 Points pull_back_samples(const CanonicalElements& elements, const Points& ball, const Tets& tets, const Points& native);
-
-/// Native positions of any ball points (k x 3) through a ball mesh, by the same rules as
-/// pull_back_samples (which calls it with the element samples).
-Points pull_back_points(const Points& points, const Points& ball, const Tets& tets, const Points& native);
 
 /// One feature's per-element statistics over the element's samples inside the image grid.
 struct ElementFeature {

@@ -1,0 +1,168 @@
+// ---- dense registration: the intensity (demons) force on a ball grid ----
+#include "register/dense_image_force.hpp"
+
+#include <cmath>
+
+#include "core/parallel.hpp"
+#include "vpm/error.hpp"
+#include "vpm/image.hpp"
+#include "vpm/locate.hpp"
+
+namespace vpm {
+
+namespace {
+
+/// `image` at `points` (world mm; trilinear, 0 outside the grid).
+std::vector<double> read_at(const Image& image, const Points& points) {
+  std::vector<double> out(static_cast<size_t>(points.rows()));
+  detail::parallel_for(static_cast<int>(points.rows()), 4096, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i)
+      out[static_cast<size_t>(i)] = sample_image(image, points.row(i).transpose(), Interpolation::linear);
+  });
+  return out;
+}
+
+}  // namespace
+
+ImageForce::ImageForce(const DenseImages& images, const Points& tball, const Tets& ttets, const Points& ball,
+                       const Tets& tets, int cells)
+    : images_(images), tets_(tets), cells_(cells), h_(2.0 / cells) {
+  if (!images.subject || !images.templ) throw InputError("dense registration: the image force needs both images");
+  if (cells < 4) throw InputError("dense registration: the image grid needs at least 4 cells");
+  if (images.template_native.rows() != tball.rows())
+    throw InputError("dense registration: the template has " + std::to_string(tball.rows()) +
+                     " vertices but " + std::to_string(images.template_native.rows()) + " native positions");
+  index_.assign(static_cast<size_t>(cells) * cells * cells, -1);
+  std::vector<Eigen::Vector3d> pts;
+  for (int k = 0; k < cells; ++k)
+    for (int j = 0; j < cells; ++j)
+      for (int i = 0; i < cells; ++i) {
+        const Eigen::Vector3d p(-1 + (i + 0.5) * h_, -1 + (j + 0.5) * h_, -1 + (k + 0.5) * h_);
+        if (p.norm() >= 1) continue;
+        const int c = i + cells * (j + cells * k);
+        index_[static_cast<size_t>(c)] = static_cast<long>(pts.size());
+        cell_of_.push_back(c);
+        pts.push_back(p);
+      }
+  grid_.resize(static_cast<Eigen::Index>(pts.size()), 3);
+  for (size_t i = 0; i < pts.size(); ++i) grid_.row(static_cast<Eigen::Index>(i)) = pts[i].transpose();
+  templ_ = read_at(*images.templ, pull_back_points(grid_, tball, ttets, images.template_native));
+  double s = 0, s2 = 0;
+  for (double v : templ_) {
+    s += v;
+    s2 += v * v;
+  }
+  const double n = static_cast<double>(templ_.size());
+  templ_mean_ = s / n;
+  templ_var_ = std::max(s2 / n - templ_mean_ * templ_mean_, 1e-300);
+  scale_ = 1;
+  offset_ = 0;
+  const std::vector<double> v = subject_values(ball);
+  double m = 0, m2 = 0;
+  for (double x : v) {
+    m += x;
+    m2 += x * x;
+  }
+  m /= n;
+  const double var = m2 / n - m * m;
+  if (!(var > 0)) throw InputError("dense registration: the subject's image is constant inside its map");
+  scale_ = std::sqrt(templ_var_ / var);
+  offset_ = templ_mean_ - scale_ * m;
+}
+
+std::vector<double> ImageForce::subject_values(const Points& ball) const {
+  if (images_.subject_native.rows() != ball.rows())
+    throw InputError("dense registration: the subject has " + std::to_string(ball.rows()) + " vertices but " +
+                     std::to_string(images_.subject_native.rows()) + " native positions");
+  std::vector<double> v = read_at(*images_.subject, pull_back_points(grid_, ball, tets_, images_.subject_native));
+  for (double& x : v) x = scale_ * x + offset_;
+  return v;
+}
+
+double ImageForce::mismatch(const std::vector<double>& subject) const {
+  double s = 0;
+  for (size_t i = 0; i < subject.size(); ++i) s += (subject[i] - templ_[i]) * (subject[i] - templ_[i]);
+  return s / static_cast<double>(subject.size()) / templ_var_;
+}
+
+Eigen::Vector3d ImageForce::gradient(const std::vector<double>& f, long p) const {
+  const int c = cell_of_[static_cast<size_t>(p)];
+  const int ijk[3] = {c % cells_, (c / cells_) % cells_, c / (cells_ * cells_)};
+  const int stride[3] = {1, cells_, cells_ * cells_};
+  Eigen::Vector3d g = Eigen::Vector3d::Zero();
+  for (int a = 0; a < 3; ++a) {
+    const long lo = ijk[a] > 0 ? index_[static_cast<size_t>(c - stride[a])] : -1;
+    const long hi = ijk[a] + 1 < cells_ ? index_[static_cast<size_t>(c + stride[a])] : -1;
+    const double f0 = f[static_cast<size_t>(p)];
+    if (lo >= 0 && hi >= 0) g(a) = (f[static_cast<size_t>(hi)] - f[static_cast<size_t>(lo)]) / (2 * h_);
+    else if (hi >= 0) g(a) = (f[static_cast<size_t>(hi)] - f0) / h_;
+    else if (lo >= 0) g(a) = (f0 - f[static_cast<size_t>(lo)]) / h_;
+  }
+  return g;
+}
+
+std::vector<double> ImageForce::smoothed(const std::vector<double>& f, double sigma) const {
+  const double s = sigma / h_;  // in cells
+  if (s < 0.25) return f;
+  const int r = static_cast<int>(std::ceil(3 * s));
+  std::vector<double> kernel(static_cast<size_t>(2 * r + 1));
+  for (int i = -r; i <= r; ++i) kernel[static_cast<size_t>(i + r)] = std::exp(-0.5 * i * i / (s * s));
+  const size_t cells3 = index_.size();
+  std::vector<double> value(cells3, 0.0), mass(cells3, 0.0);
+  for (size_t p = 0; p < cell_of_.size(); ++p) {
+    value[static_cast<size_t>(cell_of_[p])] = f[p];
+    mass[static_cast<size_t>(cell_of_[p])] = 1;
+  }
+  const int n = cells_;
+  for (int axis = 0; axis < 3; ++axis) {  // separable: one axis at a time, values and mass alike
+    const int stride = axis == 0 ? 1 : axis == 1 ? n : n * n;
+    for (std::vector<double>* a : {&value, &mass}) {
+      std::vector<double> out(cells3, 0.0);
+      detail::parallel_for(n * n, 16, [&](int begin, int end) {
+        std::vector<double> line(static_cast<size_t>(n));
+        for (int q = begin; q < end; ++q) {
+          // the line's first cell: q enumerates the two other axes
+          const int u = q % n, v = q / n;
+          const int base = axis == 0 ? n * (u + n * v) : axis == 1 ? u + n * n * v : u + n * v;
+          for (int i = 0; i < n; ++i) line[static_cast<size_t>(i)] = (*a)[static_cast<size_t>(base + i * stride)];
+          for (int i = 0; i < n; ++i) {
+            double acc = 0;
+            for (int k = std::max(-r, -i); k <= std::min(r, n - 1 - i); ++k)
+              acc += kernel[static_cast<size_t>(k + r)] * line[static_cast<size_t>(i + k)];
+            out[static_cast<size_t>(base + i * stride)] = acc;
+          }
+        }
+      });
+      *a = std::move(out);
+    }
+  }
+  std::vector<double> g(f.size());
+  for (size_t p = 0; p < cell_of_.size(); ++p) {
+    const size_t c = static_cast<size_t>(cell_of_[p]);
+    g[p] = mass[c] > 0 ? value[c] / mass[c] : f[p];
+  }
+  return g;
+}
+
+BoundaryMatches ImageForce::demons(const std::vector<double>& subject_raw, double sigma, double reach) const {
+  const std::vector<double> subject = smoothed(subject_raw, sigma);
+  const std::vector<double> templ = sigma > 0 ? smoothed(templ_, sigma) : templ_;
+  const Eigen::Index n = grid_.rows();
+  BoundaryMatches m;
+  m.at = grid_;
+  m.displacement = Points::Zero(n, 3);
+  m.weight = Eigen::VectorXd::Ones(n);
+  const double inv_h2 = 1 / (4 * reach * reach * h_ * h_);  // |d| <= 1 / (2 sqrt(inv_h2)) = reach h
+  detail::parallel_for(static_cast<int>(n), 4096, [&](int begin, int end) {
+    for (int p = begin; p < end; ++p) {
+      const double diff = subject[static_cast<size_t>(p)] - templ[static_cast<size_t>(p)];
+      const Eigen::Vector3d g = 0.5 * (gradient(subject, p) + gradient(templ, p));
+      const double den = g.squaredNorm() + diff * diff * inv_h2;
+      if (den > 0) m.displacement.row(p) = (diff / den * g).transpose();
+    }
+  });
+  m.mean_distance = m.displacement.rowwise().norm().mean();
+  return m;
+}
+
+}  // namespace vpm
