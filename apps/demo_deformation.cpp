@@ -56,15 +56,30 @@ std::function<Eigen::Vector3d(const Eigen::Vector3d&)> demo_deformation(const Ei
     for (auto& b : p.bumps)
       for (int k = 3; k < 6; ++k) b[static_cast<size_t>(k)] *= sigma * std::exp(0.5);
   }
-  return [c, p, s2, incompressible](const Eigen::Vector3d& x0) {
+  if (incompressible)  // the time-1 flow of the curl bumps (4 RK4 steps): volume kept exactly, not to first order
+    return [c, p, s2](const Eigen::Vector3d& x0) {
+      auto velocity = [&](const Eigen::Vector3d& x) {
+        Eigen::Vector3d v = Eigen::Vector3d::Zero();
+        for (const auto& b : p.bumps) {
+          const Eigen::Vector3d r = x - (c + Eigen::Vector3d(b[0], b[1], b[2]));
+          v += (-2 * std::exp(-r.squaredNorm() / s2) / s2) * r.cross(Eigen::Vector3d(b[3], b[4], b[5]));
+        }
+        return v;
+      };
+      Eigen::Vector3d y = c + p.scale.cwiseProduct(p.rotation * (x0 - c));
+      const double h = 0.25;
+      for (int k = 0; k < 4; ++k) {
+        const Eigen::Vector3d k1 = velocity(y), k2 = velocity(y + 0.5 * h * k1), k3 = velocity(y + 0.5 * h * k2),
+                              k4 = velocity(y + h * k3);
+        y += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+      }
+      return y;
+    };
+  return [c, p, s2](const Eigen::Vector3d& x0) {
     const Eigen::Vector3d x = c + p.rotation * (x0 - c);
     Eigen::Vector3d y = c + p.scale.cwiseProduct(x - c);
-    for (const auto& b : p.bumps) {
-      const Eigen::Vector3d r = x - (c + Eigen::Vector3d(b[0], b[1], b[2]));
-      const Eigen::Vector3d a(b[3], b[4], b[5]);
-      const double g = std::exp(-r.squaredNorm() / s2);
-      y += incompressible ? Eigen::Vector3d((-2 * g / s2) * r.cross(a)) : Eigen::Vector3d(g * a);
-    }
+    for (const auto& b : p.bumps)
+      y += std::exp(-(x - (c + Eigen::Vector3d(b[0], b[1], b[2]))).squaredNorm() / s2) * Eigen::Vector3d(b[3], b[4], b[5]);
     return y;
   };
 }

@@ -14,11 +14,12 @@ namespace vpm::cli {
 /// (within 30 mm of c) and displacements (up to 5 mm a component) from std::mt19937(S), with the
 /// same bump width. A rotation about c by an angle drawn uniformly in [0, max_rotation_deg]
 /// (a random axis; none when 0) is applied first.
-/// `incompressible`: the same draw made volume-preserving to first order (the scale factors
-/// divided by the cube root of their product; each bump's displacement replaced by the curl of
-/// a Gaussian vector potential, divergence-free, of the same largest size), so a
-/// volume-preserving registration can in principle undo it; the default bumps change local
-/// volume by up to about 20 % (the caudates of seed 0 shrink by 14-20 % against the brain).
+/// `incompressible`: the same draw made volume-preserving (the scale factors divided by the cube
+/// root of their product, then the time-1 flow, 4 RK4 steps, of a velocity that is the sum of
+/// the curls of Gaussian vector potentials, one per bump, each as fast at most as the bump's
+/// displacement), so a volume-preserving registration can in principle undo it; the default
+/// bumps change local volume by up to about 20 % (the caudates of seed 0 shrink by 14-20 %
+/// against the brain).
 std::function<Eigen::Vector3d(const Eigen::Vector3d&)> demo_deformation(const Eigen::Vector3d& c, unsigned seed,
                                                                         double max_rotation_deg,
                                                                         bool incompressible = false);

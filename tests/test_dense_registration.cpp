@@ -163,7 +163,7 @@ TEST_CASE("dense registration undoes a known incompressible flow that landmarks 
   if (results.size() == 2) CHECK((results[0] - results[1]).cwiseAbs().maxCoeff() < 1e-9);
 }
 
-TEST_CASE("dense registration by the image force (demons) undoes the known flow without labels in the force") {
+TEST_CASE("dense registration by the image force undoes the known flow without labels in the force") {
   const Case c = make_case();
   const Image image = native_image();
   const DenseImages images = case_images(c, image);
@@ -176,9 +176,9 @@ TEST_CASE("dense registration by the image force (demons) undoes the known flow 
     const double after0 = overlap(c, landmark_only), after = overlap(c, dense);
     INFO("Dice landmarks " << after0 << ", image force " << after << "; mismatch " << r.mismatch_landmarks << " -> "
                            << r.mismatch_after);
-    CHECK(after > after0 + 0.03);
+    CHECK(after > after0 + 0.025);  // measured 0.788 -> 0.827
     CHECK(r.mismatch_before > r.mismatch_landmarks);
-    CHECK(r.mismatch_after < 0.7 * r.mismatch_landmarks);
+    CHECK(r.mismatch_after < 0.35 * r.mismatch_landmarks);  // measured 0.051 -> 0.011
     for (const DenseIteration& it : r.iterations)
       if (it.accepted) CHECK(it.mismatch <= r.mismatch_landmarks);
     CHECK(r.inverted_tets == 0);

@@ -1,4 +1,6 @@
 #include <catch2/catch.hpp>
+
+#include <Eigen/IterativeLinearSolvers>
 #include <Eigen/Cholesky>
 #include <random>
 
@@ -205,6 +207,32 @@ TEST_CASE("fit refuses mismatched samples and a non-positive lambda") {
   CHECK_THROWS_AS(fit_divfree(Points::Zero(3, 3), Points::Zero(2, 3), opt), InputError);
   opt.lambda = 0;
   CHECK_THROWS_AS(fit_divfree(Points::Zero(1, 3), Points::Zero(1, 3), opt), InputError);
+}
+
+TEST_CASE("smoothing ridge with thousands of samples: the sparse Gram matrix gives the dense solution") {
+  const int n = 1700;  // 5,100 unknowns: over the sparse path's threshold
+  const Points p = random_ball(n, 0.95, 21);
+  const Points v = random_vectors(n, 0.1, 22);
+  RbfFitOptions fo;
+  fo.kernel = RbfKernel::Tangent;
+  fo.lambda = 1 / (0.1 * 0.1);
+  fo.ridge = 0.3;
+  const DivFreeField f = fit_divfree(p, v, fo);
+  REQUIRE(f.centres.rows() == n);
+  // the full Gram matrix, solved by CG to 1e-12
+  Eigen::MatrixXd a(3 * n, 3 * n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      a.block<3, 3>(3 * i, 3 * j) = tangent_kernel(p.row(i).transpose(), p.row(j).transpose(), fo.lambda);
+  a.diagonal().array() += fo.ridge * a.diagonal().mean();
+  Eigen::VectorXd rhs(3 * n);
+  for (int i = 0; i < n; ++i) rhs.segment<3>(3 * i) = v.row(i).transpose();
+  Eigen::ConjugateGradient<Eigen::MatrixXd, Eigen::Lower | Eigen::Upper> cg(a);
+  cg.setTolerance(1e-12);
+  const Eigen::VectorXd c = cg.solve(rhs);
+  double worst = 0;
+  for (int i = 0; i < n; ++i) worst = std::max(worst, (f.coefficients.row(i).transpose() - c.segment<3>(3 * i)).norm());
+  CHECK(worst < 1e-5 * c.cwiseAbs().maxCoeff());
 }
 
 TEST_CASE("smoothing ridge: the fit solves (A + ridge mean(diag A) I) c = v, by Cholesky or by CG") {

@@ -1,4 +1,4 @@
-// ---- dense registration: the intensity (demons) force on a ball grid ----
+// ---- dense registration: the image force on a ball grid (local least-squares translations) ----
 #include "register/dense_image_force.hpp"
 
 #include <cmath>
@@ -144,25 +144,51 @@ std::vector<double> ImageForce::smoothed(const std::vector<double>& f, double si
   return g;
 }
 
-BoundaryMatches ImageForce::demons(const std::vector<double>& subject_raw, double sigma, double reach) const {
-  const std::vector<double> subject = smoothed(subject_raw, sigma);
-  const std::vector<double> templ = sigma > 0 ? smoothed(templ_, sigma) : templ_;
-  const Eigen::Index n = grid_.rows();
-  BoundaryMatches m;
-  m.at = grid_;
-  m.displacement = Points::Zero(n, 3);
-  m.weight = Eigen::VectorXd::Ones(n);
-  const double inv_h2 = 1 / (4 * reach * reach * h_ * h_);  // |d| <= 1 / (2 sqrt(inv_h2)) = reach h
+Points ImageForce::local_translations(const std::vector<double>& subject_raw, const Points& centres, double sigma,
+                                      double image_sigma, double cap, double* mean_length) const {
+  const std::vector<double> subject = smoothed(subject_raw, image_sigma);
+  const std::vector<double> templ = image_sigma > 0 ? smoothed(templ_, image_sigma) : templ_;
+  const Eigen::Index n = grid_.rows(), nc = centres.rows();
+  Points g(n, 3);
+  Eigen::VectorXd diff(n);
   detail::parallel_for(static_cast<int>(n), 4096, [&](int begin, int end) {
     for (int p = begin; p < end; ++p) {
-      const double diff = subject[static_cast<size_t>(p)] - templ[static_cast<size_t>(p)];
-      const Eigen::Vector3d g = 0.5 * (gradient(subject, p) + gradient(templ, p));
-      const double den = g.squaredNorm() + diff * diff * inv_h2;
-      if (den > 0) m.displacement.row(p) = (diff / den * g).transpose();
+      g.row(p) = (0.5 * (gradient(subject, p) + gradient(templ, p))).transpose();
+      diff(p) = subject[static_cast<size_t>(p)] - templ[static_cast<size_t>(p)];
     }
   });
-  m.mean_distance = m.displacement.rowwise().norm().mean();
-  return m;
+  std::vector<Eigen::Matrix3d> a(static_cast<size_t>(nc));
+  Points b(nc, 3);
+  const double cut2 = 9 * sigma * sigma, inv = 1 / (2 * sigma * sigma);
+  detail::parallel_for(static_cast<int>(nc), 8, [&](int begin, int end) {
+    for (int c = begin; c < end; ++c) {
+      const Eigen::Vector3d x = centres.row(c).transpose();
+      Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d r = Eigen::Vector3d::Zero();
+      for (Eigen::Index p = 0; p < n; ++p) {
+        const double d2 = (grid_.row(p).transpose() - x).squaredNorm();
+        if (d2 > cut2) continue;
+        const double w = std::exp(-d2 * inv);
+        const Eigen::Vector3d gp = g.row(p).transpose();
+        m += w * gp * gp.transpose();
+        r += w * diff(p) * gp;
+      }
+      a[static_cast<size_t>(c)] = m;
+      b.row(c) = r.transpose();
+    }
+  });
+  double trace = 0;
+  for (const Eigen::Matrix3d& m : a) trace += m.trace();
+  const double eps = kTextureFloor * trace / std::max<double>(1.0, static_cast<double>(nc));
+  Points t(nc, 3);
+  for (Eigen::Index c = 0; c < nc; ++c) {
+    // S(x - t) = T  ->  S - g.t = T  ->  (g g^T) t = g (S - T)
+    Eigen::Vector3d tc = (a[static_cast<size_t>(c)] + eps * Eigen::Matrix3d::Identity()).ldlt().solve(b.row(c).transpose());
+    if (tc.norm() > cap) tc *= cap / tc.norm();
+    t.row(c) = tc.transpose();
+  }
+  if (mean_length) *mean_length = nc > 0 ? t.rowwise().norm().mean() : 0.0;
+  return t;
 }
 
 }  // namespace vpm

@@ -43,7 +43,11 @@ Json to_json(const DenseIteration& it) {
   j["mean_match_distance"] = it.mean_match_distance;
   j["max_move"] = it.max_move;
   j["agreement"] = it.agreement;
-  if (it.mismatch >= 0) j["mismatch"] = it.mismatch;
+  if (it.mismatch >= 0) {
+    j["mismatch"] = it.mismatch;
+    j["image_points"] = it.image_points;
+    j["mean_translation"] = it.mean_translation;
+  }
   j["folded"] = it.folded;
   j["accepted"] = it.accepted;
   j["seconds"] = it.seconds;
@@ -86,6 +90,9 @@ Json to_json(const DenseRegistrationResult& r) {
 
 namespace {
 
+/// The image force's translations are capped at this fraction of the level's width.
+constexpr double kTranslationCap = 0.5;
+
 /// What every iteration needs and nothing changes: the reference map, its boundary and
 /// volumes, the region faces, the template's boundaries and its labels at the grid points.
 struct DenseState {
@@ -101,7 +108,6 @@ struct DenseState {
   std::vector<int> regions;
   std::unique_ptr<const ImageForce> image;  ///< with DenseForce::image and both
   DenseForce force = DenseForce::labels;
-  double image_reach = 1.5;
 
   double agreement(const Points& ball) const {
     return mean_dice(grid_templ, sample_labels(ball, tets, labels, grid), regions);
@@ -132,8 +138,8 @@ void check_dense(const Tets& tets, const std::vector<int>& labels, const Tets& t
   if (!(o.centre_spacing >= 0.25) || !(o.smoothing > 0) || !(o.ridge >= 0)) bad("invalid smoothing options");
   if (o.advect_steps < 1 || o.agreement_grid < 4) bad("advect steps >= 1 and agreement grid >= 4 required");
   if (o.force != DenseForce::labels &&
-      (!(o.image_grid >= 4 && o.image_grid <= 512) || !(o.image_reach > 0) || !(o.image_smoothing >= 0)))
-    bad("the image force needs 4 to 512 grid cells, a positive reach and a smoothing >= 0");
+      (!(o.image_grid >= 4 && o.image_grid <= 512) || !(o.image_smoothing >= 0)))
+    bad("the image force needs 4 to 512 grid cells and a smoothing >= 0");
 }
 
 int newly_inverted(const Eigen::VectorXd& v0, const Eigen::VectorXd& v1) {
@@ -142,22 +148,27 @@ int newly_inverted(const Eigen::VectorXd& v0, const Eigen::VectorXd& v1) {
   return n;
 }
 
-/// The displacements the force asks for with the subject at `ball`.
-BoundaryMatches dense_force(const DenseState& st, const Points& ball, double image_sigma) {
-  if (st.force == DenseForce::labels) return closest_matches(region_surface(ball, st.faces), st.templ);
-  BoundaryMatches m = st.image->demons(st.image->subject_values(ball), image_sigma, st.image_reach);
-  if (st.force == DenseForce::image) return m;
-  const BoundaryMatches b = closest_matches(region_surface(ball, st.faces), st.templ);
-  BoundaryMatches both;
-  both.at.resize(m.at.rows() + b.at.rows(), 3);
-  both.at << m.at, b.at;
-  both.displacement.resize(both.at.rows(), 3);
-  both.displacement << m.displacement, b.displacement;
-  both.weight.resize(both.at.rows());
-  both.weight << m.weight, b.weight;
-  both.regions = b.regions;
-  both.mean_distance = b.mean_distance;
-  return both;
+/// The displacements the force asks for at `centres` with the subject at `ball` (c x 3); the
+/// matches and their mean length go to `it`.
+Points dense_force(const DenseState& st, const Points& ball, const Points& centres, double width,
+                   const DenseRegistrationOptions& o, DenseIteration& it) {
+  Points labels, image;
+  if (st.force != DenseForce::image) {
+    const BoundaryMatches m = closest_matches(region_surface(ball, st.faces), st.templ);
+    it.matches = static_cast<long>(m.at.rows());
+    it.mean_match_distance = m.mean_distance;
+    labels = smooth_matches(m, centres, o.smoothing * width);
+  }
+  if (st.force != DenseForce::labels) {
+    double mean = 0;
+    image = st.image->local_translations(st.image->subject_values(ball), centres, o.smoothing * width,
+                                         o.image_smoothing * width, kTranslationCap * width, &mean);
+    it.image_points = static_cast<long>(st.image->grid().rows());
+    it.mean_translation = mean;
+  }
+  if (st.force == DenseForce::labels) return labels;
+  if (st.force == DenseForce::image) return image;
+  return 0.5 * (labels + image);
 }
 
 /// One dense iteration at `width` on `x` (the vertices, then the tracked landmarks): kept in `x`
@@ -168,16 +179,13 @@ DenseIteration dense_step(Device& dev, const DenseState& st, Points& x, double w
   const Eigen::Index nv = st.reference.rows();
   DenseIteration it;
   it.width = width;
-  const BoundaryMatches m = dense_force(st, x.topRows(nv), o.image_smoothing * width);
-  it.matches = static_cast<long>(m.at.rows());
-  it.mean_match_distance = m.mean_distance;
   const Points centres = ball_grid(o.centre_spacing * width);
   it.centres = static_cast<int>(centres.rows());
   RbfFitOptions fo;
   fo.kernel = RbfKernel::Tangent;
   fo.lambda = 1 / (width * width);
   fo.ridge = o.ridge;
-  DivFreeField field = fit_divfree(centres, smooth_matches(m, centres, o.smoothing * width), fo);
+  DivFreeField field = fit_divfree(centres, dense_force(st, x.topRows(nv), centres, width, o, it), fo);
   field.coefficients *= o.step;
   max_normal = std::max(max_normal, max_normal_velocity(dev, {field}, 1000));
   Points y = x;
@@ -224,7 +232,7 @@ void dense_iterations(Device& dev, const DenseState& st, Points& x, const DenseR
 DenseState dense_state(Device& dev, const Points& ball, const Tets& tets, const std::vector<int>& labels,
                        const Points& tball, const Tets& ttets, const std::vector<int>& tlabels,
                        const DenseRegistrationOptions& o, const DenseImages* images) {
-  DenseState st{ball, tets, without_labels(labels, o.exclude_labels), {}, {}, {}, {}, {}, {}, {}, nullptr, o.force, o.image_reach};
+  DenseState st{ball, tets, without_labels(labels, o.exclude_labels), {}, {}, {}, {}, {}, {}, {}, nullptr, o.force};
   st.boundary = boundary_vertex_mask(static_cast<int>(ball.rows()), boundary_faces(tets));
   st.v0 = tet_volumes(dev, ball, tets);
   st.faces = region_faces(tets, st.labels);

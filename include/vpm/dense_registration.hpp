@@ -14,11 +14,12 @@
 //      closest-point matches, weighted by face area.
 //    * image: both subjects' images (DenseImages) are read on a regular grid of `image_grid`
 //      cells across the ball through their maps (ball point -> native position -> trilinear
-//      voxel), the subject's scaled to the template's mean and spread; at every grid point the
-//      demons displacement (S - T) g / (|g|^2 + (S - T)^2 / (2 r h)^2), g the mean gradient of
-//      the two, h the grid spacing, r = image_reach (so at most r h long), weight 1.
-//    * both: the two sets of displacements together.
-// 2. Smoothing: the matches are averaged with a Gaussian of width `smoothing` x w at centres on
+//      voxel), the subject's scaled to the template's mean and spread; at every centre of the
+//      field (step 2) the translation that best explains the local difference, in the
+//      least-squares sense over the grid points around it (Gaussian weights of width
+//      `smoothing` x w; Lucas-Kanade with the mean gradient of the two images), capped at w / 2.
+//    * both: the mean of the two at each centre.
+// 2. Smoothing (labels): the matches are averaged with a Gaussian of width `smoothing` x w at centres on
 //    a grid of spacing `centre_spacing` x w in the ball (sum w_i g_i d_i / (sum w_i g_i + 1), so
 //    centres without data ask for no motion).
 // 3. Projection: the divergence-free tangent RBF field (vpm/rbf.hpp, RbfKernel::Tangent) fitted
@@ -71,9 +72,6 @@ struct DenseRegistrationOptions {
   /// Gaussian smoothing of both images' grid values before the image force, x the level's width
   /// (coarse levels see coarse features: a larger capture range).
   double image_smoothing = 0;
-  /// Largest demons displacement at a grid point, x the grid spacing (the step's ceiling before
-  /// smoothing; 1.5 moved about as far per iteration as 4 and much further than 0.5 on the demo).
-  double image_reach = 1.5;
   /// Dense iterations in all, split evenly over the widths (coarse first); 0 = landmark
   /// registration only (the result is then register_landmarks' alone).
   int iterations = 0;
@@ -98,12 +96,14 @@ struct DenseIteration {
   double max_move = 0;            ///< largest vertex displacement of the step
   double agreement = 0;           ///< label agreement after the step
   double mismatch = -1;           ///< image mismatch after the step (-1: no image force)
+  long image_points = 0;          ///< grid points of the image force
+  double mean_translation = 0;    ///< mean length of the image force's translations at the centres
   int folded = 0;                 ///< tets the step inverted (before untangling)
   bool accepted = false;
   double seconds = 0;
 };
 /// {"width", "matches", "centres", "mean_match_distance", "max_move", "agreement", "folded",
-///  "accepted", "seconds"} and "mismatch" with the image force
+///  "accepted", "seconds"} and "mismatch", "image_points", "mean_translation" with the image force
 Json to_json(const DenseIteration& iteration);
 
 struct DenseRegistrationResult {

@@ -33,6 +33,9 @@ c = json.load(open(f"{r}/compare/sub-P01_pet.json"))
 assert c["reference"]["subjects"] == 3, c["reference"]
 reg = json.load(open(f"{r}/subjects/sub-P01/sub-P01_register.json"))
 assert reg["input"]["landmarks"] >= 100 and reg["landmark_rms_error"] < 1e-6, reg["input"]
+# the default dense registration pulls by region boundaries and the T1w against the template's
+d = reg["dense"]
+assert d["force"] == "both" and d["mismatch_after"] < d["mismatch_landmarks"], {k: d.get(k) for k in ("force", "mismatch_landmarks", "mismatch_after")}
 e = json.load(open(f"{r}/evaluation.json"))
 p = e["patients"][0]
 assert p["participant_id"] == "sub-P01"
