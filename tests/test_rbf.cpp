@@ -209,6 +209,24 @@ TEST_CASE("fit refuses mismatched samples and a non-positive lambda") {
   CHECK_THROWS_AS(fit_divfree(Points::Zero(1, 3), Points::Zero(1, 3), opt), InputError);
 }
 
+// The tangent kernel's Gram matrix of `p` with the fit's ridge on its diagonal, and velocities
+// stacked into one vector: the system a ridge fit solves.
+Eigen::MatrixXd ridge_gram(const Points& p, const RbfFitOptions& fo) {
+  const Eigen::Index n = p.rows();
+  Eigen::MatrixXd a(3 * n, 3 * n);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index j = 0; j < n; ++j)
+      a.block<3, 3>(3 * i, 3 * j) = tangent_kernel(p.row(i).transpose(), p.row(j).transpose(), fo.lambda);
+  a.diagonal().array() += fo.ridge * a.diagonal().mean();
+  return a;
+}
+
+Eigen::VectorXd stacked(const Points& v) {
+  Eigen::VectorXd rhs(3 * v.rows());
+  for (Eigen::Index i = 0; i < v.rows(); ++i) rhs.segment<3>(3 * i) = v.row(i).transpose();
+  return rhs;
+}
+
 TEST_CASE("smoothing ridge with thousands of samples: the sparse Gram matrix gives the dense solution") {
   const int n = 1700;  // 5,100 unknowns: over the sparse path's threshold
   const Points p = random_ball(n, 0.95, 21);
@@ -220,13 +238,8 @@ TEST_CASE("smoothing ridge with thousands of samples: the sparse Gram matrix giv
   const DivFreeField f = fit_divfree(p, v, fo);
   REQUIRE(f.centres.rows() == n);
   // the full Gram matrix, solved by CG to 1e-12
-  Eigen::MatrixXd a(3 * n, 3 * n);
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j)
-      a.block<3, 3>(3 * i, 3 * j) = tangent_kernel(p.row(i).transpose(), p.row(j).transpose(), fo.lambda);
-  a.diagonal().array() += fo.ridge * a.diagonal().mean();
-  Eigen::VectorXd rhs(3 * n);
-  for (int i = 0; i < n; ++i) rhs.segment<3>(3 * i) = v.row(i).transpose();
+  const Eigen::MatrixXd a = ridge_gram(p, fo);
+  const Eigen::VectorXd rhs = stacked(v);
   Eigen::ConjugateGradient<Eigen::MatrixXd, Eigen::Lower | Eigen::Upper> cg(a);
   cg.setTolerance(1e-12);
   const Eigen::VectorXd c = cg.solve(rhs);
@@ -247,14 +260,7 @@ TEST_CASE("smoothing ridge: the fit solves (A + ridge mean(diag A) I) c = v, by 
     fo.ridge = 0.3;
     RbfFitInfo info;
     const DivFreeField f = fit_divfree(p, v, fo, &info);
-    Eigen::MatrixXd a(3 * n, 3 * n);
-    for (int i = 0; i < n; ++i)
-      for (int j = 0; j < n; ++j)
-        a.block<3, 3>(3 * i, 3 * j) = tangent_kernel(p.row(i).transpose(), p.row(j).transpose(), fo.lambda);
-    a.diagonal().array() += fo.ridge * a.diagonal().mean();
-    Eigen::VectorXd rhs(3 * n);
-    for (int i = 0; i < n; ++i) rhs.segment<3>(3 * i) = v.row(i).transpose();
-    const Eigen::VectorXd c = a.llt().solve(rhs);
+    const Eigen::VectorXd c = ridge_gram(p, fo).llt().solve(stacked(v));
     double worst = 0;
     for (int i = 0; i < n; ++i) worst = std::max(worst, (f.coefficients.row(i).transpose() - c.segment<3>(3 * i)).norm());
     CHECK(worst < 1e-8 * c.cwiseAbs().maxCoeff());

@@ -191,29 +191,35 @@ Eigen::VectorXd solve_gram(Eigen::MatrixXd& a, const Eigen::VectorXd& rhs, doubl
   return llt.solve(rhs);
 }
 
-/// Jacobi-preconditioned conjugate gradients on the ridge-regularised Gram system (smoothing
-/// fits): the ridge bounds the condition number, so a few dozen products replace the O(n^3)
-/// Cholesky factorisation. Relative residual 1e-12.
-Eigen::VectorXd solve_ridge_cg(const Eigen::MatrixXd& a, const Eigen::VectorXd& rhs) {
-  const Eigen::VectorXd inv_diag = a.diagonal().cwiseInverse();
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(rhs.size()), r = rhs, z = inv_diag.cwiseProduct(r), p = z;
+/// Jacobi-preconditioned conjugate gradients for a symmetric positive definite system given by
+/// its product `apply(d)` and inverse diagonal; relative residual 1e-12.
+template <class Apply>
+Eigen::VectorXd jacobi_cg(const Apply& apply, const Eigen::VectorXd& inv_diag, const Eigen::VectorXd& rhs) {
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(rhs.size()), r = rhs, z = inv_diag.cwiseProduct(r), d = z;
   double rz = r.dot(z);
   const double stop = 1e-24 * rhs.squaredNorm();
   for (Eigen::Index it = 0; it < 10 * rhs.size() && r.squaredNorm() > stop; ++it) {
-    const Eigen::VectorXd ap = a.selfadjointView<Eigen::Lower>() * p;
-    const double alpha = rz / p.dot(ap);
-    x += alpha * p;
-    r -= alpha * ap;
+    const Eigen::VectorXd ad = apply(d);
+    const double alpha = rz / d.dot(ad);
+    x += alpha * d;
+    r -= alpha * ad;
     z = inv_diag.cwiseProduct(r);
     const double rz_next = r.dot(z);
-    p = z + (rz_next / rz) * p;
+    d = z + (rz_next / rz) * d;
     rz = rz_next;
   }
   return x;
 }
 
+/// The ridge-regularised Gram system (smoothing fits) by Jacobi CG: the ridge bounds the
+/// condition number, so a few dozen products replace the O(n^3) Cholesky factorisation.
+Eigen::VectorXd solve_ridge_cg(const Eigen::MatrixXd& a, const Eigen::VectorXd& rhs) {
+  return jacobi_cg([&](const Eigen::VectorXd& d) { return Eigen::VectorXd(a.selfadjointView<Eigen::Lower>() * d); },
+                   a.diagonal().cwiseInverse(), rhs);
+}
+
 /// The ridge-regularised Gram system of many samples, sparse: blocks of pairs farther apart than
-/// 4 widths (lambda r^2 > 16, where psi < 1.2e-7) are left out, then Jacobi CG as above. For
+/// 4 widths (lambda r^2 > 16, where psi < 1.2e-7) are left out, then Jacobi CG. For
 /// fits with thousands of centres, whose dense Gram matrix would not fit in memory.
 Eigen::VectorXd solve_ridge_sparse(const Points& p, RbfKernel kind, double lambda, double ridge,
                                    const Eigen::VectorXd& rhs) {
@@ -250,21 +256,8 @@ Eigen::VectorXd solve_ridge_sparse(const Points& p, RbfKernel kind, double lambd
   Eigen::SparseMatrix<double, Eigen::RowMajor> a(3 * n, 3 * n);
   a.setFromTriplets(t.begin(), t.end());
   const double shift = ridge * diag_sum / static_cast<double>(3 * n);
-  const Eigen::VectorXd inv_diag = (a.diagonal().array() + shift).inverse().matrix();
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(rhs.size()), r = rhs, z = inv_diag.cwiseProduct(r), d = z;
-  double rz = r.dot(z);
-  const double stop = 1e-24 * rhs.squaredNorm();
-  for (Eigen::Index it = 0; it < 10 * rhs.size() && r.squaredNorm() > stop; ++it) {
-    const Eigen::VectorXd ad = a * d + shift * d;
-    const double alpha = rz / d.dot(ad);
-    x += alpha * d;
-    r -= alpha * ad;
-    z = inv_diag.cwiseProduct(r);
-    const double rz_next = r.dot(z);
-    d = z + (rz_next / rz) * d;
-    rz = rz_next;
-  }
-  return x;
+  return jacobi_cg([&](const Eigen::VectorXd& d) { return Eigen::VectorXd(a * d + shift * d); },
+                   (a.diagonal().array() + shift).inverse().matrix(), rhs);
 }
 
 /// Systems larger than this (3 x samples) go to the sparse solver.
