@@ -272,7 +272,9 @@ void print_summary(const std::string& device, const Settings& st, const Subject&
                    const Registration& reg, const Overlap& ov, const Names& names, double total) {
   std::ostringstream out;
   auto row = [&](const std::string& what, const std::string& a, const std::string& b, const std::string& c = "") {
-    out << strprintf("  %-34s %14s %14s %8s\n", what.c_str(), a.c_str(), b.c_str(), c.c_str());
+    std::string line = strprintf("  %-34s %14s %14s %8s", what.c_str(), a.c_str(), b.c_str(), c.c_str());
+    line.erase(line.find_last_not_of(' ') + 1);
+    out << line << "\n";
   };
   out << "vpm demo on " << device << " (Colin27 + AAL from " << st.data.string() << ")\n";
   row("", "colin27", "subject");

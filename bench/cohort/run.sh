@@ -2,7 +2,8 @@
 # The planted-foci benchmark (docs/cohort.md): synthesise a cohort, run the whole workflow on it
 # with CORES cores, score the foci against the truth and summarise time and memory per rule.
 # Usage: bench/cohort/run.sh OUT_DIR [NORMALS=50] [PATIENTS=10] [SEED=1]; env MORE_FEATURES (default
-# "{t1w: anat/T1w}"), CORES (2),
+# "{t1w: anat/T1w}"), REGISTER (the workflow's register settings, e.g. "{extra: '--dense-iterations 12',
+# force: labels}"; default the config's), CORES (2),
 # BUILD_DIR (build). Writes OUT_DIR/summary.json and OUT_DIR/summary.md (and prints the latter).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -23,7 +24,8 @@ if [[ ! -f $out/bids/participants.tsv ]]; then
 fi
 synth_s=$SECONDS
 snakemake -s workflow/Snakefile --cores "$cores" --directory "$out" \
-  --config bids="$out/bids" out="$out/results" "more_features=$more_features" vpm="$build/vpm"
+  --config bids="$out/bids" out="$out/results" "more_features=$more_features" vpm="$build/vpm" \
+  ${REGISTER:+"register=$REGISTER"}
 workflow_s=$((SECONDS - synth_s))
 /usr/bin/python3 bench/cohort/summary.py --results "$out/results" --synth-seconds "$synth_s" \
   --workflow-seconds "$workflow_s" --cores "$cores" --out-json "$out/summary.json" --out-md "$out/summary.md"
