@@ -228,7 +228,7 @@ Eigen::VectorXd stacked(const Points& v) {
 }
 
 TEST_CASE("smoothing ridge with thousands of samples: the sparse Gram matrix gives the dense solution") {
-  const int n = 1700;  // 5,100 unknowns: over the sparse path's threshold
+  const int n = 1700;  // 5,100 unknowns: the sparse path, whose dense Gram would take 208 MB
   const Points p = random_ball(n, 0.95, 21);
   const Points v = random_vectors(n, 0.1, 22);
   RbfFitOptions fo;
@@ -249,7 +249,7 @@ TEST_CASE("smoothing ridge with thousands of samples: the sparse Gram matrix giv
 }
 
 TEST_CASE("smoothing ridge: the fit solves (A + ridge mean(diag A) I) c = v, by Cholesky or by CG") {
-  // 60 samples take the Cholesky path, 450 (1350 unknowns) the conjugate-gradient path
+  // 60 samples take the Cholesky path, 450 (1350 unknowns) the conjugate-gradient path (sparse Gram)
   for (int n : {60, 450}) {
     INFO(n << " samples");
     const Points p = random_ball(n, 0.95, 11);

@@ -165,14 +165,24 @@ Points ImageForce::local_translations(const std::vector<double>& subject_raw, co
       const Eigen::Vector3d x = centres.row(c).transpose();
       Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
       Eigen::Vector3d r = Eigen::Vector3d::Zero();
-      for (Eigen::Index p = 0; p < n; ++p) {
-        const double d2 = (grid_.row(p).transpose() - x).squaredNorm();
-        if (d2 > cut2) continue;
-        const double w = std::exp(-d2 * inv);
-        const Eigen::Vector3d gp = g.row(p).transpose();
-        m += w * gp * gp.transpose();
-        r += w * diff(p) * gp;
+      // the grid cells within 3 sigma, in the grid points' own order (k, j, i)
+      int lo[3], hi[3];
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::max(0, static_cast<int>(std::floor((x(a) - 3 * sigma + 1) / h_ - 0.5)));
+        hi[a] = std::min(cells_ - 1, static_cast<int>(std::ceil((x(a) + 3 * sigma + 1) / h_ - 0.5)));
       }
+      for (int k = lo[2]; k <= hi[2]; ++k)
+        for (int j = lo[1]; j <= hi[1]; ++j)
+          for (int i = lo[0]; i <= hi[0]; ++i) {
+            const long p = index_[static_cast<size_t>(i + cells_ * (j + cells_ * k))];
+            if (p < 0) continue;
+            const double d2 = (grid_.row(p).transpose() - x).squaredNorm();
+            if (d2 > cut2) continue;
+            const double w = std::exp(-d2 * inv);
+            const Eigen::Vector3d gp = g.row(p).transpose();
+            m += w * gp * gp.transpose();
+            r += w * diff(p) * gp;
+          }
       a[static_cast<size_t>(c)] = m;
       b.row(c) = r.transpose();
     }

@@ -65,9 +65,9 @@ struct RbfFitOptions {
   /// Smoothing: ridge x the mean diagonal of the sample Gram matrix is added to its diagonal, so
   /// the field approximates the samples instead of interpolating them (0: interpolation).
   /// Large ridge systems (over 400 samples, no boundary samples) are solved by Jacobi-
-  /// preconditioned conjugate gradients (relative residual 1e-12) instead of Cholesky; over
-  /// 1,600 samples (without estimate_condition) with a sparse Gram matrix that leaves out the
-  /// pairs farther apart than 4 widths (psi < 1.2e-7; RbfFitInfo::max_residual is then 0).
+  /// preconditioned conjugate gradients (relative residual 1e-12) instead of Cholesky, with a
+  /// sparse Gram matrix that leaves out the pairs farther apart than 5 widths (psi < 1.4e-11;
+  /// the dense one when estimate_condition is set).
   double ridge = 0;
   /// Estimate the 2-norm condition number of the Gram matrix (eigenvalues: O(N^3), for reports).
   bool estimate_condition = false;
