@@ -115,9 +115,17 @@ struct DenseState {
   double mismatch(const Points& ball) const { return image ? image->mismatch(image->subject_values(ball)) : -1.0; }
 };
 
-/// How well `ball` fits the template by the force's own measure (larger is better).
+/// How well `ball` fits the template by the force's own measure (better_than), and the
+/// subject's image values on the image grid there (kept for the next force: one image read per
+/// iteration instead of two).
 struct Fit {
   double agreement = 0, mismatch = -1;
+  std::vector<double> values;
+  Fit(const DenseState& st, const Points& ball) : agreement(st.agreement(ball)) {
+    if (!st.image) return;
+    values = st.image->subject_values(ball);
+    mismatch = st.image->mismatch(values);
+  }
   bool better_than(const Fit& o, DenseForce force) const {
     return force == DenseForce::labels ? agreement > o.agreement : mismatch < o.mismatch;
   }
@@ -148,9 +156,9 @@ int newly_inverted(const Eigen::VectorXd& v0, const Eigen::VectorXd& v1) {
   return n;
 }
 
-/// The displacements the force asks for at `centres` with the subject at `ball` (c x 3); the
-/// matches and their mean length go to `it`.
-Points dense_force(const DenseState& st, const Points& ball, const Points& centres, double width,
+/// The displacements the force asks for at `centres` with the subject at `ball` (c x 3; `fit`
+/// holds its image values there); the matches and their mean length go to `it`.
+Points dense_force(const DenseState& st, const Points& ball, const Fit& fit, const Points& centres, double width,
                    const DenseRegistrationOptions& o, DenseIteration& it) {
   Points labels, image;
   if (st.force != DenseForce::image) {
@@ -161,7 +169,7 @@ Points dense_force(const DenseState& st, const Points& ball, const Points& centr
   }
   if (st.force != DenseForce::labels) {
     double mean = 0;
-    image = st.image->local_translations(st.image->subject_values(ball), centres, o.smoothing * width,
+    image = st.image->local_translations(fit.values, centres, o.smoothing * width,
                                          o.image_smoothing * width, kTranslationCap * width, &mean);
     it.image_points = static_cast<long>(st.image->grid().rows());
     it.mean_translation = mean;
@@ -185,7 +193,7 @@ DenseIteration dense_step(Device& dev, const DenseState& st, Points& x, double w
   fo.kernel = RbfKernel::Tangent;
   fo.lambda = 1 / (width * width);
   fo.ridge = o.ridge;
-  DivFreeField field = fit_divfree(centres, dense_force(st, x.topRows(nv), centres, width, o, it), fo);
+  DivFreeField field = fit_divfree(centres, dense_force(st, x.topRows(nv), fit, centres, width, o, it), fo);
   field.coefficients *= o.step;
   max_normal = std::max(max_normal, max_normal_velocity(dev, {field}, 1000));
   Points y = x;
@@ -199,14 +207,14 @@ DenseIteration dense_step(Device& dev, const DenseState& st, Points& x, double w
   it.folded = newly_inverted(st.v0, v1);
   if (it.folded > 0) untangle_flow_folds(dev, st.reference, st.tets, after, st.boundary, st.v0, v1, 2);
   it.max_move = (after - x.topRows(nv)).rowwise().norm().maxCoeff();
-  const Fit now{st.agreement(after), st.mismatch(after)};
+  Fit now(st, after);
   it.agreement = now.agreement;
   it.mismatch = now.mismatch;
   it.accepted = newly_inverted(st.v0, v1) == 0 && now.better_than(fit, st.force);
   if (it.accepted) {
     x.topRows(nv) = after;
     x.bottomRows(x.rows() - nv) = y.bottomRows(x.rows() - nv);
-    fit = now;
+    fit = std::move(now);
   }
   it.seconds = seconds_since(t0);
   return it;
@@ -215,7 +223,7 @@ DenseIteration dense_step(Device& dev, const DenseState& st, Points& x, double w
 /// The dense iterations, coarse to fine; a level ends at its first rejected iteration.
 void dense_iterations(Device& dev, const DenseState& st, Points& x, const DenseRegistrationOptions& o,
                       DenseRegistrationResult& r) {
-  Fit fit{r.agreement_landmarks, r.mismatch_landmarks};
+  Fit fit(st, x.topRows(st.reference.rows()));
   const int levels = static_cast<int>(o.widths.size());
   for (int l = 0; l < levels; ++l) {
     const int n = o.iterations / levels + (l < o.iterations % levels ? 1 : 0);
