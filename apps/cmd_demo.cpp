@@ -330,6 +330,11 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   timings["read_and_deform"] = seconds_since(t0);
 
   const Subject tmpl = mesh_and_map(dev, image, atlas, st.meshing, "colin27", st.out);
+  t0 = Clock::now();
+  // the subject's own images, for viewers and bench/paper/fig7.py (its slices through the maps)
+  vpm::write_nifti((st.out / "subject_t1.nii.gz").string(), image_b);
+  vpm::write_nifti((st.out / "subject_atlas.nii.gz").string(), atlas_b);
+  timings["write_subject_images"] = seconds_since(t0);
   const Subject subj = mesh_and_map(dev, image_b, atlas_b, subject_meshing, "subject", st.out);
   const Registration reg = register_subject(dev, tmpl, subj, st, image, image_b);
   timings["register"] = reg.seconds;

@@ -4,6 +4,10 @@
 #            `vpm` command does, and needs the initial and the volume-preserving map of each mesh).
 #   Table 2: `vpm demo --seed S --max-rotation 10` with --dense-iterations 0 (landmarks only) and
 #            12 (dense), seeds 0..SEEDS-1 (seed 0 without rotation: the demo's own subject).
+#   Fig. 4: bench/paper/fig4.py maps the demo's Colin27 mesh three times and renders a cut of each
+#            ball headlessly (bench/results/paper/fig4.png, fig4.json).
+#   Fig. 7: bench/paper/fig7.py renders an axial slice of seed 0's subject brought into Colin27's
+#            space through the maps (maps only, landmarks, dense) beside Colin27 (fig7.png).
 #   Then bench/paper/tables.py writes bench/results/paper/{paper.json,paper.md,fig3.png}.
 # Usage: bash bench/paper/run.sh   (env: SEEDS=5, BUILD_DIR=build; about 1.5-3 minutes on 2 cores)
 set -euo pipefail
@@ -34,5 +38,10 @@ for ((seed = 0; seed < SEEDS; ++seed)); do
     fi
   done
 done
+# Fig. 4: a cut through the ball coloured by log tet volume ratio (start, one round, end) of the
+# demo's Colin27 mesh
+nice /usr/bin/python3 bench/paper/fig4.py "$BUILD/vpm" "$WORK/seed0_dense0/colin27.vtu" "$WORK/fig4" "$OUT/fig4.png"
+# Fig. 7: a slice of the demo's subject in Colin27's space: maps only, landmarks, dense
+/usr/bin/python3 bench/paper/fig7.py "$WORK/seed0_dense0" "$WORK/seed0_dense12" "$OUT/fig7.png"
 uptime | tee -a "$OUT/load.txt"
 /usr/bin/python3 bench/paper/tables.py "$OUT"
