@@ -315,6 +315,12 @@ TEST_CASE("vpm register --dense-force image: the image force from the command li
   refused("--dense-iterations 2 --dense-force image", "--dense-force image needs --image");
   refused("--dense-iterations 2 --image " + dir + "image.nii.gz", "--image needs --template-image");
   refused("--dense-iterations 2 --dense-force intensity", "expected labels, image or both");
+  Image blank = native_image();
+  std::fill(blank.data.begin(), blank.data.end(), 0.0f);
+  write_nifti(dir + "blank.nii.gz", blank);
+  refused("--dense-iterations 2 --dense-force image --image " + dir + "blank.nii.gz --template-image " + dir +
+              "image.nii.gz",
+          "blank.nii.gz: constant where the subject's map reaches it");
   write_mesh(dir + "bare.vtu", c.templ);
   CHECK(test::run_status(std::string(VPM_BINARY) + " register " + dir + "subject.vtu -o " + dir + "out.vtu --template " +
                          dir + "bare.vtu --quiet " + images + "--dense-force both --dense-iterations 2 2>" + dir +

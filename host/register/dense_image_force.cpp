@@ -54,7 +54,13 @@ ImageForce::ImageForce(const DenseImages& images, const Points& tball, const Tet
   }
   const double n = static_cast<double>(templ_.size());
   templ_mean_ = s / n;
-  templ_var_ = std::max(s2 / n - templ_mean_ * templ_mean_, 1e-300);
+  templ_var_ = s2 / n - templ_mean_ * templ_mean_;
+  auto where = [](const Image& im, const char* who) {
+    return std::string(im.path.empty() ? who : im.path.c_str());
+  };
+  if (!(templ_var_ > 0))
+    throw InputError(where(*images.templ, "the template's image") +
+                     ": constant where the template's map reaches it (wrong image, or it does not overlap the mesh?)");
   scale_ = 1;
   offset_ = 0;
   const std::vector<double> v = subject_values(ball);
@@ -65,7 +71,9 @@ ImageForce::ImageForce(const DenseImages& images, const Points& tball, const Tet
   }
   m /= n;
   const double var = m2 / n - m * m;
-  if (!(var > 0)) throw InputError("dense registration: the subject's image is constant inside its map");
+  if (!(var > 0))
+    throw InputError(where(*images.subject, "the subject's image") +
+                     ": constant where the subject's map reaches it (wrong image, or it does not overlap the mesh?)");
   scale_ = std::sqrt(templ_var_ / var);
   offset_ = templ_mean_ - scale_ * m;
 }
