@@ -66,4 +66,13 @@ if (cd "$work" && snakemake -s "$src/workflow/Snakefile" --cores 1 -n --config b
   fail "a participants.tsv without group was accepted"
 fi
 grep -q "participants.tsv:1: needs a 'group' column" "$work/bad.log" || { cat "$work/bad.log"; fail "no clear error"; }
+# a subject given by a brain mask instead of a T1w is registered by the region boundaries alone
+cp -r "$work/bids" "$work/masked"
+for f in "$work"/masked/sub-N01/anat/sub-N01_T1w.nii*; do mv "$f" "${f/_T1w/_mask}"; done
+(cd "$work" && snakemake -s "$src/workflow/Snakefile" --cores 1 -n -p --config bids="$work/masked" \
+   out="$work/masked_results" vpm="$build/vpm") > "$work/masked.log" 2>&1 || { tail -30 "$work/masked.log"; fail "masked plan"; }
+grep -q "register .*sub-N01_ball.vtu" "$work/masked.log" || fail "no register job planned for the mask subject"
+grep "register .*sub-N01_ball.vtu" "$work/masked.log" | grep -q -- "--dense-force" && fail "a mask subject got the image force"
+grep "register .*sub-N02_ball.vtu" "$work/masked.log" | grep -q -- "--dense-force both --image" ||
+  { grep "register" "$work/masked.log"; fail "a T1w subject lost the image force"; }
 echo "cohort workflow: ok"
