@@ -200,9 +200,9 @@ Registration register_subject(vpm::Device& dev, const Subject& tmpl, const Subje
   dense.exclude_labels = kEvaluated;  // the held-out regions stay invisible to the dense force
   vpm::DenseImages images;  // T1 intensities of both, for the image force
   images.subject = &subj_image;
-  images.subject_native = vpm::cli::native_positions(sm);
+  images.subject_native = vpm::native_positions(sm, "demo: the subject's ball map");
   images.templ = &tmpl_image;
-  images.template_native = vpm::cli::native_positions(tmpl.map.mesh);
+  images.template_native = vpm::native_positions(tmpl.map.mesh, "demo: colin27's ball map");
   r.dense = vpm::register_dense(dev, r.registered, sm.tets, r.subj_labels, tmpl.map.mesh.vertices,
                                 tmpl.map.mesh.tets, r.tmpl_labels, src, dst, st.registration, dense, &images);
   r.result = r.dense.landmark;

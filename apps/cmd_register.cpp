@@ -120,15 +120,6 @@ Inputs read_inputs(const cli::Args& args, const cli::Command& self) {
   return io;
 }
 
-// The native positions of a mapped mesh's vertices (its point field original_position).
-Points native_positions(const TetMesh& mesh, const std::string& path) {
-  const Field* f = mesh.find_point_field("original_position");
-  if (!f || f->values.cols() != 3)
-    throw InputError(path + ": no point field original_position (3 components), which the image force needs to read "
-                            "the image through the map (write it with `vpm map`)");
-  return f->values;
-}
-
 void read_images(Inputs& io) {
   io.subject_image = read_nifti(io.image);
   io.template_image = read_nifti(io.templ_image);

@@ -45,12 +45,9 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   const auto images = named_images(args.get("--images", ""));
 
   const vpm::TetMesh mesh = vpm::read_mesh(mesh_path);
-  const vpm::Field* native = mesh.find_point_field("original_position");
-  if (!native || native->values.cols() != 3)
-    throw vpm::InputError(mesh_path + ": no point field original_position (3 components): not a mapped mesh "
-                          "(vpm map or vpm register writes it)");
+  const vpm::Points native = vpm::native_positions(mesh, mesh_path);
   const vpm::CanonicalElements el(table.definition);
-  const vpm::Points positions = vpm::pull_back_samples(el, mesh.vertices, mesh.tets, native->values);
+  const vpm::Points positions = vpm::pull_back_samples(el, mesh.vertices, mesh.tets, native);
   for (const auto& [name, path] : images) table.features.push_back(vpm::sample_feature(el, positions, vpm::read_nifti(path), name));
   if (const auto labels = args.get("--labels"))
     table.label_images.push_back(vpm::sample_label_fractions(el, positions, vpm::read_nifti(*labels)));

@@ -5,24 +5,17 @@
 #include <cmath>
 
 #include "vpm/collective.hpp"
-#include "vpm/error.hpp"
 #include "vpm/locate.hpp"
 #include "vpm/timing.hpp"
 
 namespace vpm::cli {
-
-Points native_positions(const TetMesh& mesh) {
-  const Field* f = mesh.find_point_field("original_position");
-  if (!f || f->values.cols() != 3) throw InputError("demo: the ball map has no original_position field");
-  return f->values;
-}
 
 namespace {
 
 // Labels of ball `points` read from a subject's atlas image through its ball mesh at `ball`.
 std::vector<int> image_labels(const Points& points, const Points& ball, const TetMesh& mesh,
                               const Image& atlas) {
-  const Points x = pull_back_points(points, ball, mesh.tets, native_positions(mesh));
+  const Points x = pull_back_points(points, ball, mesh.tets, native_positions(mesh, "demo: the ball map"));
   std::vector<int> out(static_cast<size_t>(x.rows()));
   for (Eigen::Index i = 0; i < x.rows(); ++i)
     out[static_cast<size_t>(i)] =

@@ -20,9 +20,6 @@ struct Overlap {
   double seconds = 0;
 };
 
-/// The native positions of a mapped mesh (point field original_position); InputError without it.
-Points native_positions(const TetMesh& mesh);
-
 /// The overlap on a grid of `grid`^3 ball points between the template's map `tmpl` and the
 /// subject's map `subj` before and after registration (`registered`: the subject's ball
 /// vertices after it), tets labelled `tmpl_labels` / `subj_labels`, atlas images in each

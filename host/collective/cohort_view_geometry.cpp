@@ -3,7 +3,6 @@
 // back to a subject's native space.
 #include <cmath>
 
-#include "collective/native_positions.hpp"
 #include "vpm/cohort_view.hpp"
 #include "vpm/error.hpp"
 #include "vpm/sampling.hpp"
@@ -13,7 +12,7 @@ namespace vpm {
 namespace {
 
 std::vector<float> pull_back(const Points& ball, const TetMesh& registered) {
-  const Points native = pull_back_points(ball, registered.vertices, registered.tets, detail::native_positions(registered, "view"));
+  const Points native = pull_back_points(ball, registered.vertices, registered.tets, native_positions(registered, "view: the registered mesh"));
   std::vector<float> out(static_cast<size_t>(native.rows()) * 3);
   for (Eigen::Index i = 0; i < native.rows(); ++i)
     for (int c = 0; c < 3; ++c) out[3 * i + c] = static_cast<float>(native(i, c));

@@ -2,24 +2,16 @@
 
 #include <cmath>
 
-#include "collective/native_positions.hpp"
 #include "core/parallel.hpp"
 #include "vpm/error.hpp"
 #include "vpm/locate.hpp"
 
 namespace vpm {
 
-Points detail::native_positions(const TetMesh& registered, const char* what) {
-  const Field* f = registered.find_point_field("original_position");
-  if (!f || f->values.cols() != 3)
-    throw InputError(std::string(what) + ": the registered mesh has no point field original_position (3 components)");
-  return f->values;
-}
-
 TetMesh native_mesh_with_values(const TetMesh& registered, const CanonicalElements& el,
                                 const std::vector<std::vector<double>>& values, const std::vector<std::string>& names) {
   TetMesh out;
-  out.vertices = detail::native_positions(registered, "map back");
+  out.vertices = native_positions(registered, "map back: the registered mesh");
   out.tets = registered.tets;
   out.point_data = registered.point_data;
   out.cell_data = registered.cell_data;
@@ -42,7 +34,7 @@ TetMesh native_mesh_with_values(const TetMesh& registered, const CanonicalElemen
 
 Image native_volume(const TetMesh& registered, const CanonicalElements& el, const std::vector<double>& values,
                     const Image& grid, float outside) {
-  const Points native = detail::native_positions(registered, "map back");
+  const Points native = native_positions(registered, "map back: the registered mesh");
   const TetLocator locator(native, registered.tets);
   Image out = grid;
   out.data.assign(grid.size(), outside);

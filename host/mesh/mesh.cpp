@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include "vpm/error.hpp"
+
 namespace vpm {
 
 namespace {
@@ -33,6 +35,13 @@ void TetMesh::set_point_field(const std::string& name, FieldValues values, bool 
 }
 void TetMesh::set_cell_field(const std::string& name, FieldValues values, bool integer) {
   set(cell_data, name, std::move(values), integer, tets.rows(), "cell");
+}
+
+Points native_positions(const TetMesh& mapped, const std::string& what) {
+  const Field* f = mapped.find_point_field("original_position");
+  if (!f || f->values.cols() != 3)
+    throw InputError(what + ": no point field original_position (3 components): not a mesh mapped by `vpm map`");
+  return f->values;
 }
 
 }  // namespace vpm

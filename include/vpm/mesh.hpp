@@ -40,6 +40,11 @@ struct TetMesh {
   void set_cell_field(const std::string& name, FieldValues values, bool integer = false);
 };
 
+/// The native positions of a mapped mesh's vertices: its point field original_position (n x 3),
+/// which `vpm map` writes (each vertex's position in the input mesh). InputError
+/// "`what`: no point field original_position (3 components): ..." when it is missing.
+Points native_positions(const TetMesh& mapped, const std::string& what);
+
 /// A triangle surface (input to meshing, or a mesh boundary).
 struct TriSurface {
   Points vertices;
