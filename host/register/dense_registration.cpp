@@ -112,7 +112,6 @@ struct DenseState {
   double agreement(const Points& ball) const {
     return mean_dice(grid_templ, sample_labels(ball, tets, labels, grid), regions);
   }
-  double mismatch(const Points& ball) const { return image ? image->mismatch(image->subject_values(ball)) : -1.0; }
 };
 
 /// How well `ball` fits the template by the force's own measure (better_than), and the
@@ -220,10 +219,10 @@ DenseIteration dense_step(Device& dev, const DenseState& st, Points& x, double w
   return it;
 }
 
-/// The dense iterations, coarse to fine; a level ends at its first rejected iteration.
-void dense_iterations(Device& dev, const DenseState& st, Points& x, const DenseRegistrationOptions& o,
+/// The dense iterations from `fit` (that of the landmark registration), coarse to fine; a level
+/// ends at its first rejected iteration.
+void dense_iterations(Device& dev, const DenseState& st, Points& x, const DenseRegistrationOptions& o, Fit fit,
                       DenseRegistrationResult& r) {
-  Fit fit(st, x.topRows(st.reference.rows()));
   const int levels = static_cast<int>(o.widths.size());
   for (int l = 0; l < levels; ++l) {
     const int n = o.iterations / levels + (l < o.iterations % levels ? 1 : 0);
@@ -288,8 +287,9 @@ DenseRegistrationResult register_dense(Device& dev, Points& ball, const Tets& te
   const DenseState st = dense_state(dev, ball, tets, labels, tball, ttets, tlabels, o, images);
   r.regions = st.regions;
   r.force = o.force;
-  r.agreement_before = st.agreement(ball);
-  r.mismatch_before = st.mismatch(ball);
+  const Fit before(st, ball);
+  r.agreement_before = before.agreement;
+  r.mismatch_before = before.mismatch;
   Points work = ball;
   RegistrationOptions first = lo;
   first.restore_volumes = lo.restore_volumes && o.iterations == 0;
@@ -297,15 +297,15 @@ DenseRegistrationResult register_dense(Device& dev, Points& ball, const Tets& te
   r.landmark = register_landmarks(dev, work, tets, landmarks, targets, first);
   r.seconds_landmark = seconds_since(t0);
   r.max_normal_velocity = r.landmark.max_normal_velocity;
-  r.agreement_landmarks = st.agreement(work);
-  r.agreement_after = r.agreement_landmarks;
-  r.mismatch_landmarks = r.mismatch_after = st.mismatch(work);
+  Fit after_landmarks(st, work);
+  r.agreement_landmarks = r.agreement_after = after_landmarks.agreement;
+  r.mismatch_landmarks = r.mismatch_after = after_landmarks.mismatch;
   Points lm = r.landmark.landmarks_final;
   if (o.iterations > 0) {
     t0 = Clock::now();
     Points x(work.rows() + lm.rows(), 3);
     x << work, lm;
-    dense_iterations(dev, st, x, o, r);
+    dense_iterations(dev, st, x, o, std::move(after_landmarks), r);
     work = x.topRows(work.rows());
     lm = x.bottomRows(lm.rows());
     r.seconds_dense = seconds_since(t0);
