@@ -2,6 +2,8 @@
 #include "register/dense_image_force.hpp"
 
 #include <cmath>
+#include <tuple>
+#include <utility>
 
 #include "core/parallel.hpp"
 #include "vpm/error.hpp"
@@ -20,6 +22,17 @@ std::vector<double> read_at(const Image& image, const Points& points) {
       out[static_cast<size_t>(i)] = sample_image(image, points.row(i).transpose(), Interpolation::linear);
   });
   return out;
+}
+
+/// Mean and (population) variance of `v`.
+std::pair<double, double> mean_variance(const std::vector<double>& v) {
+  double s = 0, s2 = 0;
+  for (double x : v) {
+    s += x;
+    s2 += x * x;
+  }
+  const double n = static_cast<double>(v.size()), mean = s / n;
+  return {mean, s2 / n - mean * mean};
 }
 
 }  // namespace
@@ -47,14 +60,7 @@ ImageForce::ImageForce(const DenseImages& images, const Points& tball, const Tet
   grid_.resize(static_cast<Eigen::Index>(pts.size()), 3);
   for (size_t i = 0; i < pts.size(); ++i) grid_.row(static_cast<Eigen::Index>(i)) = pts[i].transpose();
   templ_ = read_at(*images.templ, pull_back_points(grid_, tball, ttets, images.template_native));
-  double s = 0, s2 = 0;
-  for (double v : templ_) {
-    s += v;
-    s2 += v * v;
-  }
-  const double n = static_cast<double>(templ_.size());
-  templ_mean_ = s / n;
-  templ_var_ = s2 / n - templ_mean_ * templ_mean_;
+  std::tie(templ_mean_, templ_var_) = mean_variance(templ_);
   auto where = [](const Image& im, const char* who) {
     return std::string(im.path.empty() ? who : im.path.c_str());
   };
@@ -63,14 +69,7 @@ ImageForce::ImageForce(const DenseImages& images, const Points& tball, const Tet
                      ": constant where the template's map reaches it (wrong image, or it does not overlap the mesh?)");
   scale_ = 1;
   offset_ = 0;
-  const std::vector<double> v = subject_values(ball);
-  double m = 0, m2 = 0;
-  for (double x : v) {
-    m += x;
-    m2 += x * x;
-  }
-  m /= n;
-  const double var = m2 / n - m * m;
+  const auto [m, var] = mean_variance(subject_values(ball));  // at scale 1, offset 0
   if (!(var > 0))
     throw InputError(where(*images.subject, "the subject's image") +
                      ": constant where the subject's map reaches it (wrong image, or it does not overlap the mesh?)");
