@@ -100,7 +100,7 @@ Inputs read_inputs(const cli::Args& args, const cli::Command& self) {
                      "; usage: " + usage);
   if (!templ && args.has("--exclude-labels")) throw InputError("--exclude-labels needs --template");
   for (const char* flag : {"--dense-iterations", "--dense-widths", "--dense-step", "--dense-force", "--image",
-                           "--template-image"})
+                           "--template-image", "--dense-image-grid", "--dense-image-smoothing"})
     if (!templ && args.has(flag)) throw InputError(std::string(flag) + " needs --template");
   io.dense = cli::dense_options(args);
   io.image = args.get("--image").value_or("");
@@ -110,6 +110,8 @@ Inputs read_inputs(const cli::Args& args, const cli::Command& self) {
   if (io.dense.force != DenseForce::labels && io.image.empty())
     throw InputError(std::string("--dense-force ") + to_string(io.dense.force) +
                      " needs --image SUBJECT.nii.gz and --template-image TEMPLATE.nii.gz");
+  if (!io.image.empty() && io.dense.force == DenseForce::labels)  // read for nothing otherwise
+    throw InputError("--image and --template-image need --dense-force image or both");
   io.out = *out;
   io.src = src.value_or("");
   io.dst = dst.value_or("");

@@ -315,6 +315,7 @@ TEST_CASE("vpm register --dense-force image: the image force from the command li
   refused("--dense-iterations 2 --dense-force image", "--dense-force image needs --image");
   refused("--dense-iterations 2 --image " + dir + "image.nii.gz", "--image needs --template-image");
   refused("--dense-iterations 2 --dense-force intensity", "expected labels, image or both");
+  refused("--dense-iterations 2 " + images, "--image and --template-image need --dense-force image or both");
   Image blank = native_image();
   std::fill(blank.data.begin(), blank.data.end(), 0.0f);
   write_nifti(dir + "blank.nii.gz", blank);
