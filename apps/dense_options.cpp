@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "vpm/error.hpp"
+#include "vpm/format.hpp"
 
 namespace vpm::cli {
 
@@ -45,34 +46,26 @@ DenseRegistrationOptions dense_options(const Args& args, DenseRegistrationOption
   return o;
 }
 
-std::string fmt_number(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
 Command with_dense_options(Command command, const std::string& after, int default_iterations,
                            DenseForce default_force) {
   const DenseRegistrationOptions d;
-  std::ostringstream widths;
-  for (size_t i = 0; i < d.widths.size(); ++i) widths << (i ? "," : "") << d.widths[i];
-  std::ostringstream step;
-  step << d.step;
+  std::string widths;
+  for (size_t i = 0; i < d.widths.size(); ++i) widths += (i ? "," : "") + format_sig(d.widths[i], 6);
   const std::vector<OptionSpec> rows = {
           {"--dense-iterations", "N",
-           "dense iterations after the landmarks: region boundaries pulled onto the template's by "
+           "dense iterations after the landmarks: the subject pulled onto the template (--dense-force) by "
            "divergence-free flows (default " + std::to_string(default_iterations) + ")"},
-          {"--dense-widths", "W[,W...]", "Gaussian widths of the dense levels, coarse to fine (default " + widths.str() + ")",
+          {"--dense-widths", "W[,W...]", "Gaussian widths of the dense levels, coarse to fine (default " + widths + ")",
            false, 0, true},
           {"--dense-step", "S", "fraction of the boundary displacement taken per dense iteration (default " +
-                                    step.str() + ")", false, 0, true},
+                                    format_sig(d.step, 6) + ")", false, 0, true},
           {"--dense-force", "labels|image|both",
-           std::string("what the dense flows pull: region boundaries, image intensities (demons), or both (default ") +
+           std::string("what the dense flows pull: region boundaries, image intensities, or both (default ") +
                to_string(default_force) + ")", false, 0, true},
           {"--dense-image-grid", "N", "cells across the ball of the image force's grid (default " +
                                           std::to_string(d.image_grid) + ")", false, 0, true},
           {"--dense-image-smoothing", "F", "Gaussian smoothing of the images before the image force, x the level's width (default " +
-                                               fmt_number(d.image_smoothing) + ")", false, 0, true}};
+                                               format_sig(d.image_smoothing, 6) + ")", false, 0, true}};
   auto at = command.options.begin();
   while (at != command.options.end() && at->flag != after) ++at;
   if (at != command.options.end()) ++at;
