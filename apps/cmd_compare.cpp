@@ -33,6 +33,8 @@ vpm::CompareOptions compare_options(const vpm::cli::Args& args) {
   o.fdr_q = args.get_double("--fdr", 0);
   if (o.fdr_q < 0 || o.fdr_q >= 1) throw vpm::InputError("option --fdr: must be in (0, 1)");
   o.min_cluster = args.get_int("--min-cluster", o.min_cluster);
+  o.extend = args.get_double("--extend", 0);
+  if (o.extend < 0) throw vpm::InputError("option --extend: must be positive (or 0: off)");
   if (o.min_cluster < 1) throw vpm::InputError("option --min-cluster: must be >= 1");
   const std::string sign = args.get("--sign", "both");
   if (sign == "both") o.sign = 0;
@@ -80,10 +82,13 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   const std::vector<std::string> normal_paths = comma_list(*normals_arg);
   std::vector<vpm::ElementTable> normals;
   for (const std::string& p : normal_paths) normals.push_back(vpm::read_subject_table(p));
-  const vpm::Reference ref = vpm::build_reference(normals, normal_paths, *feature, norm);
+  const int smoothing = args.get_int("--smooth", 0);
+  if (smoothing < 0 || smoothing > 8) throw vpm::InputError("option --smooth: must be in 0..8");
+  if (normals.size() < 3) throw vpm::InputError("option --normals: needs at least 3 tables, got " + std::to_string(normals.size()));
+  const vpm::CanonicalElements el(normals[0].definition);
+  const vpm::Reference ref = vpm::build_reference(el, normals, normal_paths, *feature, norm, smoothing);
   vpm::ElementTable patient = vpm::read_subject_table(*patient_path);
   patient.subject = *patient_path;
-  const vpm::CanonicalElements el(ref.definition);
   const vpm::Comparison c = vpm::compare_to_reference(el, ref, patient, opt);
   map_back(args, *out, el, c);  // first: OUT.tsv, written last, marks a complete run
   vpm::write_comparison(*out, el, ref, normal_paths, *patient_path, opt, c);
@@ -100,6 +105,8 @@ vpm::cli::Registrar reg(
       {"--threshold", "Z", "|z| of a focus element (default 3)"},
       {"--fdr", "Q", "Benjamini-Hochberg false discovery rate instead of --threshold"},
       {"--min-cluster", "C", "foci are clusters of at least C adjacent elements (default 3)"},
+      {"--smooth", "R", "average every subject's feature over R rings of adjacent elements first (default 0)"},
+      {"--extend", "Z2", "grow each focus into adjacent elements with |z| >= Z2 (hysteresis; default off)"},
       {"--sign", "both|hyper|hypo", "increases, decreases or both (default both)"},
       {"--mesh", "REGISTERED.vtu", "the patient's registered mesh: writes OUT_native.vtu with fields z, focus"},
       {"--image", "IMAGE.nii[.gz]", "with --mesh: OUT_z.nii.gz, OUT_foci.nii.gz on this image's grid and the foci table OUT_foci.tsv (mm^3, centroid)"},

@@ -12,21 +12,28 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   if (!out) throw vpm::InputError("missing -o ELEMENTS.tsv; usage: " + vpm::cli::synopsis(self));
   vpm::ElementDefinition d;
   d.level = args.get_int("--level", d.level);
-  d.shells = args.get_int("--shells", d.shells);
+  d.layout = vpm::cli::parse_option("--layout", [&] { return vpm::parse_element_layout(args.get("--layout", "shells")); });
+  if (d.layout == vpm::ElementLayout::graded) {
+    if (args.has("--shells")) throw vpm::InputError("option --shells: the graded layout sets the shells from --level");
+    d.shells = vpm::graded_shells(d.level);
+  } else {
+    d.shells = args.get_int("--shells", d.shells);
+  }
   d.samples = args.get_int("--samples", d.samples);
   const vpm::CanonicalElements el(d);
   vpm::write_element_table(*out, el);
   const vpm::ElementVolumeStats st = el.volume_stats();
   vpm::cli::info("wrote " + *out + " and " + vpm::sidecar_path(*out) + ": " + std::to_string(el.size()) +
-                 " elements (" + std::to_string(el.triangles()) + " triangles x " + std::to_string(d.shells) +
-                 " shells), volume min/mean " + vpm::strprintf("%.3f", st.min / st.mean) + ", max/mean " +
+                 " elements (" + vpm::to_string(d.layout) + ": " + std::to_string(d.shells) + " shells, " +
+                 std::to_string(el.shell_triangles(0)) + " to " + std::to_string(el.triangles()) + " triangles), volume min/mean " + vpm::strprintf("%.3f", st.min / st.mean) + ", max/mean " +
                  vpm::strprintf("%.3f", st.max / st.mean) + ", std " + vpm::pct(st.std_relative) + " of the mean");
   return 0;
 }
 
 vpm::cli::Registrar reg({"elements", "-o ELEMENTS.tsv", "the canonical volume elements of the ball and their table",
                          {{"--level", "L", "icosphere subdivisions: 20 x 4^L triangles (default 3)"},
-                          {"--shells", "K", "equal-volume radial shells (default 8)"},
+                          {"--shells", "K", "equal-volume radial shells (default 8; layout shells)"},
+                          {"--layout", "shells|graded", "shells: level L in each of K shells (default); graded: near-cubic elements, coarser levels inward, K from L"},
                           {"--samples", "S", "sample points per element (default 64)"}},
                          run});
 

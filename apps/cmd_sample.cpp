@@ -38,7 +38,13 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
     throw vpm::InputError("nothing to sample: give --images NAME=IMAGE[,...] and/or --labels LABELS");
   vpm::ElementTable table;
   table.definition.level = args.get_int("--level", table.definition.level);
-  table.definition.shells = args.get_int("--shells", table.definition.shells);
+  table.definition.layout = vpm::cli::parse_option("--layout", [&] { return vpm::parse_element_layout(args.get("--layout", "shells")); });
+  if (table.definition.layout == vpm::ElementLayout::graded) {
+    if (args.has("--shells")) throw vpm::InputError("option --shells: the graded layout sets the shells from --level");
+    table.definition.shells = vpm::graded_shells(table.definition.level);
+  } else {
+    table.definition.shells = args.get_int("--shells", table.definition.shells);
+  }
   table.definition.samples = args.get_int("--samples", table.definition.samples);
   table.subject = args.get("--subject", "");
   table.mesh = mesh_path;
@@ -64,7 +70,8 @@ vpm::cli::Registrar reg(
       {"--labels", "LABELS.nii[.gz]", "a label image: per-element label fractions (label_<id> columns)"},
       {"--subject", "ID", "subject id recorded in the sidecar"},
       {"--level", "L", "element definition: icosphere subdivisions (default 3)"},
-      {"--shells", "K", "element definition: radial shells (default 8)"},
+      {"--shells", "K", "element definition: radial shells (default 8; layout shells)"},
+      {"--layout", "shells|graded", "element definition: shells (default) or graded (near-cubic elements, K from L; vpm elements)"},
       {"--samples", "S", "element definition: samples per element (default 64)"}},
      run});
 

@@ -1,6 +1,7 @@
 // Cohort statistics (vpm/statistics.hpp): subject tables round-trip, the reference, z-scores,
 // planted foci found as clusters, definitions never mixed, the result mapped back, `vpm compare`.
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <random>
@@ -252,4 +253,68 @@ TEST_CASE("vpm compare writes z, foci and the patient's native maps, refuses mix
                          "p.tsv --feature pet -o " + dir + "bad.tsv 2> " + err) == 2);
   CHECK_THAT(test::slurp(err), Catch::Contains("other.tsv") && Catch::Contains("definition differs"));
   CHECK(test::run_status("test -e " + dir + "bad.tsv") == 1);
+}
+
+TEST_CASE("statistics: hysteresis grows foci from their core, smoothing averages over adjacent elements") {
+  const CanonicalElements el(def());
+  std::vector<ElementTable> normals;
+  std::vector<std::string> names;
+  for (unsigned i = 0; i < 20; ++i) {
+    normals.push_back(subject(i + 1, 1.0));
+    names.push_back("n" + std::to_string(i));
+  }
+  const Reference ref = build_reference(normals, names, "pet", Normalisation::none);
+  // a patient with exact z: a core of 4 elements at -4, its other neighbours at -2.7, and an
+  // unrelated group of 4 at -2.7 (below the cut everywhere)
+  const std::set<int> core = planted(el, el.id(1, 17)), lonely = planted(el, el.id(1, 150));
+  std::set<int> ring;
+  for (int e : core)
+    for (int n : el.neighbours(e))
+      if (!core.count(n)) ring.insert(n);
+  for (int e : lonely) REQUIRE((!core.count(e) && !ring.count(e)));
+  ElementTable patient = normals[0];
+  for (int e = 0; e < el.size(); ++e) {
+    const double z = core.count(e) ? -4 : ring.count(e) || lonely.count(e) ? -2.7 : 0;
+    patient.features[0].mean[e] = ref.mean[e] + z * ref.std[e];
+  }
+  CompareOptions o;
+  const Comparison plain = compare_to_reference(el, ref, patient, o);
+  REQUIRE(plain.clusters.size() == 1);
+  CHECK(std::set<int>(plain.clusters[0].elements.begin(), plain.clusters[0].elements.end()) == core);
+  o.extend = 2.5;
+  const Comparison grown = compare_to_reference(el, ref, patient, o);
+  REQUIRE(grown.clusters.size() == 1);
+  std::set<int> both = core;
+  both.insert(ring.begin(), ring.end());
+  CHECK(std::set<int>(grown.clusters[0].elements.begin(), grown.clusters[0].elements.end()) == both);
+  for (int e : lonely) CHECK(grown.cluster[e] == 0);
+  o.min_cluster = 5;  // counts only the core's elements at or beyond the cut
+  CHECK(compare_to_reference(el, ref, patient, o).clusters.empty());
+
+  std::vector<double> flat(el.size(), 2.0), spike(el.size(), 0.0);
+  flat[5] = std::nan("");
+  for (double v : smooth_over_elements(el, flat, 2)) CHECK((std::isnan(v) || v == Approx(2.0)));
+  CHECK(std::isnan(smooth_over_elements(el, flat, 1)[5]));
+  const int e0 = el.id(1, 40);
+  spike[e0] = 1;
+  const std::vector<double> s1 = smooth_over_elements(el, spike, 1), s2 = smooth_over_elements(el, spike, 2);
+  double w = el.volume(e0);
+  for (int n : el.neighbours(e0)) w += el.volume(n);
+  CHECK(s1[e0] == Approx(el.volume(e0) / w));
+  for (int n : el.neighbours(e0)) CHECK(s1[n] > 0);
+  // an element two steps away: reached by two rings, not by one
+  const auto nb0 = el.neighbours(e0);
+  int far = -1;
+  for (int n : el.neighbours(nb0[0]))
+    if (n != e0 && std::find(nb0.begin(), nb0.end(), n) == nb0.end()) far = n;
+  REQUIRE(far >= 0);
+  CHECK(s1[far] == 0);
+  CHECK(s2[far] > 0);
+  // a smoothed reference has a smaller spread (independent noise averaged) and says so
+  const Reference smooth = build_reference(el, normals, names, "pet", Normalisation::none, 1);
+  CHECK(smooth.smoothing == 1);
+  double ratio = 0;
+  for (int e = 0; e < el.size(); ++e) ratio += smooth.std[e] / ref.std[e] / el.size();
+  CHECK(ratio < 0.75);
+  CHECK_THROWS_AS(build_reference(el, normals, names, "pet", Normalisation::none, -1), InputError);
 }

@@ -110,7 +110,7 @@ TEST_CASE("the page carries the manifest and the arrays the browser reads") {
   v.mid_radii = shell_mid_radii(el);
   v.display = icosphere(2);
   v.display_triangle_element = display_triangle_elements(el, v.display);
-  v.features.push_back({"pet", Normalisation::proportional, {}, 3, std::vector<float>(el.size(), 1.0f),
+  v.features.push_back({"pet", Normalisation::proportional, 0, {}, 3, std::vector<float>(el.size(), 1.0f),
                         std::vector<float>(el.size(), 0.1f)});
   const TetMesh reg = affine_registered(Eigen::Matrix3d::Identity() * 70, Eigen::Vector3d(0, 0, 0));
   for (int s = 0; s < 2; ++s) {

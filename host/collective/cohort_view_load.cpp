@@ -20,6 +20,7 @@ struct ComparisonFile {
   std::string tsv, feature, patient_table;
   std::vector<std::string> normal_tables;
   Normalisation normalisation = Normalisation::proportional;
+  int smoothing = 0;
   CompareOptions options;
   size_t clusters = 0;
 };
@@ -59,10 +60,12 @@ std::vector<ComparisonFile> read_comparisons(const fs::path& results, const std:
     for (size_t i = 0; i < tables->size(); ++i)
       c.normal_tables.push_back(resolve(tables->at(i).string(), results, "a normal's table named in " + side));
     c.normalisation = parse_normalisation(need(*ref, "normalisation", side).string());
+    if (const Json* smoothing = ref->find("smoothing")) c.smoothing = static_cast<int>(smoothing->number());
     c.options.threshold = need(*opt, "threshold", side).number();
     c.options.fdr_q = need(*opt, "fdr_q", side).number();
     c.options.min_cluster = static_cast<int>(need(*opt, "min_cluster", side).number());
     c.options.sign = static_cast<int>(need(*opt, "sign", side).number());
+    if (const Json* extend = opt->find("extend")) c.options.extend = extend->number();  // absent before 2026-11-26
     c.clusters = res->find("clusters") ? res->find("clusters")->size() : 0;
     out.push_back(std::move(c));
   }
@@ -129,10 +132,12 @@ void add_feature(CohortView& v, const CanonicalElements& el, const std::vector<c
   const ComparisonFile& first = *comps.front();
   std::vector<ElementTable> normals;
   for (const std::string& p : first.normal_tables) normals.push_back(tables.get(p));
-  const Reference ref = build_reference(normals, first.normal_tables, first.feature, first.normalisation);
-  v.features.push_back({first.feature, first.normalisation, first.options, ref.subjects, to_float(ref.mean), to_float(ref.std)});
+  const Reference ref = build_reference(el, normals, first.normal_tables, first.feature, first.normalisation, first.smoothing);
+  v.features.push_back({first.feature, first.normalisation, first.smoothing, first.options, ref.subjects, to_float(ref.mean),
+                        to_float(ref.std)});
   std::vector<std::vector<double>> x;
-  for (const ElementTable& t : normals) x.push_back(normalised_feature(t, first.feature, first.normalisation));
+  for (const ElementTable& t : normals)
+    x.push_back(smooth_over_elements(el, normalised_feature(t, first.feature, first.normalisation), first.smoothing));
   const std::vector<std::vector<double>> z = leave_one_out_z(x);
   for (size_t i = 0; i < normals.size(); ++i) {
     ViewSubject& s = subject_for(v, index, subject_id(normals[i], first.normal_tables[i]), false);
@@ -140,7 +145,8 @@ void add_feature(CohortView& v, const CanonicalElements& el, const std::vector<c
     s.z[first.feature] = to_float(z[i]);
   }
   for (const ComparisonFile* c : comps) {
-    if (c->normal_tables != first.normal_tables || c->normalisation != first.normalisation)
+    if (c->normal_tables != first.normal_tables || c->normalisation != first.normalisation ||
+        c->smoothing != first.smoothing)
       throw InputError(c->tsv + ": compared against other normals than " + first.tsv + "; one reference per feature");
     const ElementTable& t = tables.get(c->patient_table);
     const Comparison cmp = compare_to_reference(el, ref, t, c->options);
@@ -190,7 +196,9 @@ CohortView load_cohort_view(const std::string& results_dir, const CohortViewOpti
   v.definition = tables.get(comps.front().patient_table).definition;
   const CanonicalElements el(v.definition);
   v.mid_radii = shell_mid_radii(el);
-  v.display = icosphere(v.definition.level + 1);
+  // one level finer than the elements' for smooth shading, up to level 4 (2,562 vertices per shell
+  // and subject: at level 5 the page of a 60-subject cohort with 19 graded shells held 70 MB of them)
+  v.display = icosphere(v.definition.level < 4 ? v.definition.level + 1 : v.definition.level);
   v.display_triangle_element = display_triangle_elements(el, v.display);
   std::map<std::string, size_t> index;
   std::vector<std::string> order;

@@ -20,6 +20,7 @@ void write_comparison(const std::string& tsv_path, const CanonicalElements& el, 
   Json r = Json::object();
   r["feature"] = ref.feature;
   r["normalisation"] = to_string(ref.normalisation);
+  r["smoothing"] = ref.smoothing;
   r["subjects"] = ref.subjects;
   Json tables = Json::array();
   for (const std::string& t : normal_tables) tables.push_back(t);
@@ -30,6 +31,7 @@ void write_comparison(const std::string& tsv_path, const CanonicalElements& el, 
   o["threshold"] = opt.threshold;
   o["fdr_q"] = opt.fdr_q;
   o["min_cluster"] = opt.min_cluster;
+  o["extend"] = opt.extend;
   o["sign"] = opt.sign;
   j["options"] = o;
   j["result"] = to_json(c);

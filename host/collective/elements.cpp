@@ -65,15 +65,58 @@ void check(const ElementDefinition& d) {
   if (d.level < 0 || d.level > 7) bad("level " + std::to_string(d.level) + " is not in 0..7");
   if (d.shells < 1 || d.shells > 256) bad("shells " + std::to_string(d.shells) + " is not in 1..256");
   if (d.samples < 1 || d.samples > 4096) bad("samples " + std::to_string(d.samples) + " is not in 1..4096");
+  if (d.layout == ElementLayout::graded && d.shells != graded_shells(d.level))
+    bad("the graded layout at level " + std::to_string(d.level) + " has " + std::to_string(graded_shells(d.level)) +
+        " shells, not " + std::to_string(d.shells));
 }
 
+int triangles_at(int level) { return 20 << (2 * level); }
+
 }  // namespace
+
+ElementLayout parse_element_layout(const std::string& name) {
+  if (name == "shells") return ElementLayout::shells;
+  if (name == "graded") return ElementLayout::graded;
+  throw InputError("element layout '" + name + "' is not one of shells, graded");
+}
+
+const char* to_string(ElementLayout layout) { return layout == ElementLayout::graded ? "graded" : "shells"; }
+
+std::vector<int> shell_levels(const ElementDefinition& d) {
+  if (d.layout == ElementLayout::shells) return std::vector<int>(static_cast<size_t>(std::max(d.shells, 0)), d.level);
+  // the volume of a cube as wide as a level-L triangle at r = 1, as a fraction of the ball's
+  const double width = std::sqrt(4 * M_PI / triangles_at(d.level));
+  const double cube = width * width * width / (4 * M_PI / 3);
+  std::vector<int> levels;
+  for (int j = d.level; j >= 0; --j) {  // bands from the inside out: level L - j
+    const double inner = j == d.level ? 0.0 : std::pow(2.0, -3 * (j + 0.5));
+    const double outer = j == 0 ? 1.0 : std::pow(2.0, -3 * (j - 0.5));
+    const int level = d.level - j;
+    const long n = std::max(1L, std::lround((outer - inner) / (cube * triangles_at(level))));
+    levels.insert(levels.end(), static_cast<size_t>(n), level);
+  }
+  return levels;
+}
+
+int graded_shells(int level) {
+  ElementDefinition d;
+  d.level = level;
+  d.layout = ElementLayout::graded;
+  return static_cast<int>(shell_levels(d).size());
+}
+
+int ElementDefinition::elements() const {
+  int n = 0;
+  for (int l : shell_levels(*this)) n += triangles_at(l);
+  return n;
+}
 
 Json to_json(const ElementDefinition& d) {
   Json j = Json::object();
   j["level"] = d.level;
   j["shells"] = d.shells;
   j["samples"] = d.samples;
+  j["layout"] = to_string(d.layout);
   j["generator"] = "icosphere-arvo-r3";
   j["generator_version"] = ElementDefinition::kGeneratorVersion;
   return j;
@@ -90,6 +133,14 @@ ElementDefinition element_definition_from_json(const Json& j, const std::string&
   d.level = num("level");
   d.shells = num("shells");
   d.samples = num("samples");
+  if (const Json* layout = j.find("layout")) {
+    if (layout->type() != Json::Type::String) throw InputError(source + ": element definition's \"layout\" is not a string");
+    try {
+      d.layout = parse_element_layout(layout->string());
+    } catch (const InputError& e) {
+      throw InputError(source + ": " + e.what());
+    }
+  }
   if (num("generator_version") != ElementDefinition::kGeneratorVersion)
     throw InputError(source + ": element sample generator version " + std::to_string(num("generator_version")) +
                      ", this vpm makes version " + std::to_string(ElementDefinition::kGeneratorVersion));
@@ -103,51 +154,66 @@ ElementDefinition element_definition_from_json(const Json& j, const std::string&
 
 CanonicalElements::CanonicalElements(const ElementDefinition& definition) : def_(definition) {
   check(def_);
-  for (int l = 0; l <= def_.level; ++l) levels_.push_back(icosphere(l));
+  for (int l = 0; l <= def_.level; ++l) {
+    levels_.push_back(icosphere(l));
+    const TriSurface& s = levels_.back();
+    const int T = static_cast<int>(s.triangles.rows());
+    std::vector<double> omega(static_cast<size_t>(T));
+    for (int f = 0; f < T; ++f) omega[f] = solid_angle(corner(s, f, 0), corner(s, f, 1), corner(s, f, 2));
+    solid_angle_.push_back(std::move(omega));
+    // edge-adjacent triangles: the directed edge (i, j) of one is (j, i) of the other
+    std::map<std::pair<int, int>, int> owner;
+    for (int f = 0; f < T; ++f)
+      for (int i = 0; i < 3; ++i) owner[{s.triangles(f, i), s.triangles(f, (i + 1) % 3)}] = f;
+    std::vector<int> across(3 * static_cast<size_t>(T));
+    for (int f = 0; f < T; ++f)
+      for (int i = 0; i < 3; ++i) across[3 * static_cast<size_t>(f) + i] = owner.at({s.triangles(f, (i + 1) % 3), s.triangles(f, i)});
+    edge_neighbours_.push_back(std::move(across));
+  }
   sphere_ = levels_.back();
-  const int T = triangles();
-  solid_angle_.resize(static_cast<size_t>(T));
-  for (int f = 0; f < T; ++f) solid_angle_[f] = solid_angle(corner(sphere_, f, 0), corner(sphere_, f, 1), corner(sphere_, f, 2));
-  // edge-adjacent triangles: the directed edge (i, j) of one is (j, i) of the other
-  std::map<std::pair<int, int>, int> owner;
-  for (int f = 0; f < T; ++f)
-    for (int i = 0; i < 3; ++i) owner[{sphere_.triangles(f, i), sphere_.triangles(f, (i + 1) % 3)}] = f;
-  edge_neighbours_.resize(3 * static_cast<size_t>(T));
-  for (int f = 0; f < T; ++f)
-    for (int i = 0; i < 3; ++i)
-      edge_neighbours_[3 * static_cast<size_t>(f) + i] = owner.at({sphere_.triangles(f, (i + 1) % 3), sphere_.triangles(f, i)});
+  shell_level_ = shell_levels(def_);
+  offset_.assign(1, 0);
+  for (int l : shell_level_) offset_.push_back(offset_.back() + triangles_at(l));
+  // equal element volumes: shell k holds its share of the elements of the ball's volume
+  radius3_.resize(offset_.size());
+  for (size_t k = 0; k < offset_.size(); ++k) radius3_[k] = static_cast<double>(offset_[k]) / offset_.back();
+  radius3_.back() = 1.0;
   const int S = def_.samples;
   samples_.resize(static_cast<Eigen::Index>(size()) * S, 3);
   for (int e = 0; e < size(); ++e) {
-    const int f = triangle_of(e), k = shell_of(e);
-    const Vec3 a = corner(sphere_, f, 0), b = corner(sphere_, f, 1), c = corner(sphere_, f, 2);
-    const double r0 = std::pow(radius(k), 3), r1 = std::pow(radius(k + 1), 3);
-    for (int s = 0; s < S; ++s) {
-      const Vec3 u = r3(s + 1);
+    const int k = shell_of(e), f = e - offset_[k];
+    const TriSurface& s = levels_[shell_level_[k]];
+    const Vec3 a = corner(s, f, 0), b = corner(s, f, 1), c = corner(s, f, 2);
+    const double r0 = radius3_[k], r1 = radius3_[k + 1];
+    for (int i = 0; i < S; ++i) {
+      const Vec3 u = r3(i + 1);
       const double r = std::cbrt(r0 + u(2) * (r1 - r0));
-      samples_.row(static_cast<Eigen::Index>(e) * S + s) = r * arvo_sample(a, b, c, u(0), u(1)).transpose();
+      samples_.row(static_cast<Eigen::Index>(e) * S + i) = r * arvo_sample(a, b, c, u(0), u(1)).transpose();
     }
   }
 }
 
-double CanonicalElements::radius(int k) const { return std::cbrt(static_cast<double>(k) / def_.shells); }
-
-double CanonicalElements::mid_radius(int k) const {
-  return std::cbrt(0.5 * (std::pow(radius(k), 3) + std::pow(radius(k + 1), 3)));
+int CanonicalElements::shell_of(int id) const {
+  return static_cast<int>(std::upper_bound(offset_.begin(), offset_.end(), id) - offset_.begin()) - 1;
 }
 
+double CanonicalElements::radius(int k) const { return std::cbrt(radius3_[k]); }
+
+double CanonicalElements::mid_radius(int k) const { return std::cbrt(0.5 * (radius3_[k] + radius3_[k + 1])); }
+
 Eigen::Vector3d CanonicalElements::centre(int id) const {
-  const int t = triangle_of(id);
-  const Eigen::Vector3d dir = (sphere_.vertices.row(sphere_.triangles(t, 0)) + sphere_.vertices.row(sphere_.triangles(t, 1)) +
-                               sphere_.vertices.row(sphere_.triangles(t, 2)))
-                                  .normalized()
-                                  .transpose();
-  return mid_radius(shell_of(id)) * dir;
+  const int k = shell_of(id), t = id - offset_[k];
+  const TriSurface& s = levels_[shell_level_[k]];
+  const Eigen::Vector3d dir =
+      (s.vertices.row(s.triangles(t, 0)) + s.vertices.row(s.triangles(t, 1)) + s.vertices.row(s.triangles(t, 2)))
+          .normalized()
+          .transpose();
+  return mid_radius(k) * dir;
 }
 
 double CanonicalElements::volume(int id) const {
   const int k = shell_of(id);
-  return solid_angle_[triangle_of(id)] * (std::pow(radius(k + 1), 3) - std::pow(radius(k), 3)) / 3;
+  return solid_angle_[shell_level_[k]][id - offset_[k]] * (radius3_[k + 1] - radius3_[k]) / 3;
 }
 
 ElementVolumeStats CanonicalElements::volume_stats() const {
@@ -168,25 +234,29 @@ ElementVolumeStats CanonicalElements::volume_stats() const {
 }
 
 std::vector<int> CanonicalElements::neighbours(int id) const {
-  const int f = triangle_of(id), k = shell_of(id);
+  const int k = shell_of(id), f = id - offset_[k], l = shell_level_[k];
   std::vector<int> out;
-  for (int i = 0; i < 3; ++i) out.push_back(this->id(k, edge_neighbours_[3 * static_cast<size_t>(f) + i]));
-  if (k > 0) out.push_back(this->id(k - 1, f));
-  if (k + 1 < def_.shells) out.push_back(this->id(k + 1, f));
+  for (int i = 0; i < 3; ++i) out.push_back(this->id(k, edge_neighbours_[l][3 * static_cast<size_t>(f) + i]));
+  if (k > 0) out.push_back(this->id(k - 1, f >> (2 * (l - shell_level_[k - 1]))));  // same or coarser
+  if (k + 1 < def_.shells) {  // same or finer: every descendant of f at that level
+    const int d = 2 * (shell_level_[k + 1] - l);
+    for (int g = f << d; g < (f + 1) << d; ++g) out.push_back(this->id(k + 1, g));
+  }
   return out;
 }
 
 int CanonicalElements::element_of(const Eigen::Vector3d& p) const {
   const double r = p.norm();
   if (r > 1 + 1e-9) return -1;
-  const int k = std::min(def_.shells - 1, static_cast<int>(std::floor(r * r * r * def_.shells)));
+  const int k = std::min(def_.shells - 1, static_cast<int>(std::upper_bound(radius3_.begin(), radius3_.end(), r * r * r) -
+                                                           radius3_.begin()) - 1);
   if (r == 0) return id(k, 0);
   const Vec3 d = p / r;
   int f = -1;
   for (int g = 0; g < 20 && f < 0; ++g)
     if (contains(corner(levels_[0], g, 0), corner(levels_[0], g, 1), corner(levels_[0], g, 2), d)) f = g;
   if (f < 0) f = 0;  // round-off at a corner
-  for (size_t l = 1; l < levels_.size(); ++l) {
+  for (int l = 1; l <= shell_level_[k]; ++l) {
     int next = 4 * f;  // the child that contains d (the last one if round-off leaves none)
     for (int c = 0; c < 4; ++c) {
       const int g = 4 * f + c;

@@ -36,13 +36,51 @@ std::vector<double> normalised_feature(const ElementTable& t, const std::string&
   return v;
 }
 
-Reference build_reference(const std::vector<ElementTable>& normals, const std::vector<std::string>& names,
-                          const std::string& feature, Normalisation normalisation) {
+std::vector<double> smooth_over_elements(const CanonicalElements& el, const std::vector<double>& values, int rings) {
+  if (rings <= 0) return values;
+  if (static_cast<int>(values.size()) != el.size())
+    throw InputError("smoothing: " + std::to_string(values.size()) + " values for " + std::to_string(el.size()) + " elements");
+  std::vector<double> out(values.size(), kNaN);
+  std::vector<int> mark(values.size(), -1), ring, next;
+  for (int e = 0; e < el.size(); ++e) {
+    if (std::isnan(values[e])) continue;
+    double sum = 0, weight = 0;
+    ring.assign(1, e);
+    mark[e] = e;
+    for (int r = 0; r <= rings && !ring.empty(); ++r) {
+      next.clear();
+      for (int a : ring) {
+        if (!std::isnan(values[a])) {
+          sum += el.volume(a) * values[a];
+          weight += el.volume(a);
+        }
+        if (r < rings)
+          for (int b : el.neighbours(a))
+            if (mark[b] != e) {
+              mark[b] = e;
+              next.push_back(b);
+            }
+      }
+      ring.swap(next);
+    }
+    out[e] = sum / weight;
+  }
+  return out;
+}
+
+namespace {
+
+Reference reference_of(const CanonicalElements* el, const std::vector<ElementTable>& normals,
+                       const std::vector<std::string>& names, const std::string& feature, Normalisation normalisation,
+                       int smoothing) {
   if (normals.size() < 3) throw InputError("reference: needs at least 3 normals, got " + std::to_string(normals.size()));
   Reference r;
   r.definition = normals[0].definition;
   r.feature = feature;
   r.normalisation = normalisation;
+  r.smoothing = smoothing;
+  if (smoothing > 0 && el->definition() != r.definition)
+    throw InputError("reference: the elements to smooth over differ from the tables' definition");
   r.subjects = static_cast<int>(normals.size());
   std::vector<std::vector<double>> values;
   for (size_t i = 0; i < normals.size(); ++i) {
@@ -54,6 +92,7 @@ Reference build_reference(const std::vector<ElementTable>& normals, const std::v
     ElementTable named = normals[i];
     named.subject = names[i];
     values.push_back(normalised_feature(named, feature, normalisation));
+    if (smoothing > 0) values.back() = smooth_over_elements(*el, values.back(), smoothing);
   }
   const size_t n = values[0].size();
   r.mean.assign(n, kNaN);
@@ -74,6 +113,20 @@ Reference build_reference(const std::vector<ElementTable>& normals, const std::v
     r.std[e] = std::sqrt(s2 / (c - 1));
   }
   return r;
+}
+
+}  // namespace
+
+Reference build_reference(const std::vector<ElementTable>& normals, const std::vector<std::string>& names,
+                          const std::string& feature, Normalisation normalisation) {
+  return reference_of(nullptr, normals, names, feature, normalisation, 0);
+}
+
+Reference build_reference(const CanonicalElements& elements, const std::vector<ElementTable>& normals,
+                          const std::vector<std::string>& names, const std::string& feature, Normalisation normalisation,
+                          int smoothing) {
+  if (smoothing < 0) throw InputError("reference: smoothing " + std::to_string(smoothing) + " is negative");
+  return reference_of(&elements, normals, names, feature, normalisation, smoothing);
 }
 
 namespace {
@@ -98,29 +151,33 @@ double fdr_threshold(const std::vector<double>& z, double q, int sign) {
   return hi;
 }
 
-// Connected components of candidate elements of one sign; clusters of at least min_size kept.
-std::vector<FocusCluster> clusters_of(const CanonicalElements& el, const std::vector<double>& z, double cut, int sign,
-                                      int min_size) {
+// Connected components of the elements of one sign with sign * z >= low; a component is a focus
+// when at least min_size of its elements reach `cut` (low == cut: plain clusters of candidates).
+std::vector<FocusCluster> clusters_of(const CanonicalElements& el, const std::vector<double>& z, double cut, double low,
+                                      int sign, int min_size) {
   const int n = el.size();
   std::vector<char> seen(n, 0);
   std::vector<FocusCluster> out;
+  auto in = [&](int e) { return !std::isnan(z[e]) && z[e] * sign >= low; };
   for (int s0 = 0; s0 < n; ++s0) {
-    if (seen[s0] || std::isnan(z[s0]) || z[s0] * sign < cut) continue;
+    if (seen[s0] || !in(s0)) continue;
     FocusCluster c;
     c.sign = sign;
     std::vector<int> stack{s0};
     seen[s0] = 1;
+    int core = 0;
     while (!stack.empty()) {
       const int e = stack.back();
       stack.pop_back();
       c.elements.push_back(e);
+      core += z[e] * sign >= cut;
       for (int nb : el.neighbours(e))
-        if (!seen[nb] && !std::isnan(z[nb]) && z[nb] * sign >= cut) {
+        if (!seen[nb] && in(nb)) {
           seen[nb] = 1;
           stack.push_back(nb);
         }
     }
-    if (static_cast<int>(c.elements.size()) < min_size) continue;
+    if (core < min_size) continue;
     std::sort(c.elements.begin(), c.elements.end());
     for (int e : c.elements) {
       c.volume += el.volume(e);
@@ -141,7 +198,7 @@ Comparison compare_to_reference(const CanonicalElements& el, const Reference& re
   if (patient.definition != ref.definition || el.definition() != ref.definition)
     throw InputError(patient.subject + ": element definition differs from the reference's");
   Comparison c;
-  c.patient = normalised_feature(patient, ref.feature, ref.normalisation);
+  c.patient = smooth_over_elements(el, normalised_feature(patient, ref.feature, ref.normalisation), ref.smoothing);
   const std::vector<double>& x = c.patient;
   c.z.assign(x.size(), kNaN);
   for (size_t e = 0; e < x.size(); ++e)
@@ -149,7 +206,8 @@ Comparison compare_to_reference(const CanonicalElements& el, const Reference& re
   c.threshold_used = opt.fdr_q > 0 ? fdr_threshold(c.z, opt.fdr_q, opt.sign) : opt.threshold;
   for (int sign : {1, -1}) {
     if (opt.sign != 0 && opt.sign != sign) continue;
-    for (FocusCluster& f : clusters_of(el, c.z, c.threshold_used, sign, opt.min_cluster)) c.clusters.push_back(std::move(f));
+    const double low = opt.extend > 0 ? std::min(opt.extend, c.threshold_used) : c.threshold_used;
+    for (FocusCluster& f : clusters_of(el, c.z, c.threshold_used, low, sign, opt.min_cluster)) c.clusters.push_back(std::move(f));
   }
   std::stable_sort(c.clusters.begin(), c.clusters.end(),
                    [](const FocusCluster& a, const FocusCluster& b) { return a.elements.size() > b.elements.size(); });

@@ -164,6 +164,15 @@ Json manifest(BufferPack& pack, const CohortView& v) {
   m["shells"] = v.definition.shells;
   m["triangles"] = v.definition.triangles();
   m["elements"] = v.definition.elements();
+  Json levels = Json::array(), offsets = Json::array();
+  long offset = 0;
+  offsets.push_back(offset);
+  for (int l : shell_levels(v.definition)) {
+    levels.push_back(l);
+    offsets.push_back(offset += 20L << (2 * l));
+  }
+  m["shell_levels"] = levels;    // per shell, innermost first
+  m["shell_offsets"] = offsets;  // first element id of each shell, and the element count
   Json radii = Json::array();
   for (double r : v.mid_radii) radii.push_back(r);
   m["radii"] = radii;
@@ -176,6 +185,7 @@ Json manifest(BufferPack& pack, const CohortView& v) {
   Json d = Json::object();
   d["vertices"] = static_cast<long long>(v.display.vertices.rows());
   d["triangles"] = static_cast<long long>(v.display.triangles.rows());
+  d["finer"] = v.display.triangles.rows() > v.definition.triangles();  // 4 display triangles per element triangle
   m["display"] = d;
   pack.add("display_index", index, "u32");
   pack.add("display_sphere", sphere, "f32");
@@ -188,6 +198,8 @@ Json manifest(BufferPack& pack, const CohortView& v) {
     j["threshold"] = f.compare.threshold;
     j["fdr_q"] = f.compare.fdr_q;
     j["min_cluster"] = f.compare.min_cluster;
+    j["extend"] = f.compare.extend;
+    j["smoothing"] = f.smoothing;
     j["sign"] = f.compare.sign;
     j["reference_subjects"] = f.reference_subjects;
     features.push_back(j);

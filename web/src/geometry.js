@@ -1,8 +1,10 @@
 // Surfaces of the table's cells. Every subject shares one triangulation: the icosphere one level
-// finer than the elements' (each element triangle split into four display triangles), at the
-// middle radius of a shell. In the ball it is that sphere; in native space the same vertices
+// finer than the elements' (each element triangle split into four display triangles; from level 4
+// on the elements' own), at the middle radius of a shell. In the ball it is that sphere; in native space the same vertices
 // pulled back through the subject's map (vpm view computes them), so every display triangle
 // belongs to the same canonical element in every cell and picking one element picks it everywhere.
+
+import { ElementIndex } from './elements.js';
 
 export class SurfaceModel {
   constructor(manifest, array) {
@@ -11,6 +13,8 @@ export class SurfaceModel {
     this.D = d.triangles;
     this.K = manifest.shells;
     this.T = manifest.triangles;
+    this.finer = d.finer ?? true;  // pages written before level-4 elements: always one level finer
+    this.ids = new ElementIndex(manifest);
     this.radii = manifest.radii;
     this.index = array('display_index');
     this.sphere = array('display_sphere');
@@ -76,22 +80,27 @@ export class SurfaceModel {
     this.elementOfDrawn = Uint32Array.from(owner);
   }
 
-  /** The element-level surface over the same corners: per element triangle, its three corners
-   *  that are vertices of the coarser icosphere (the first 10 * 4^L + 2 display vertices),
-   *  oriented outwards. Drawn while the view turns (a quarter of the triangles). */
+  /** The surface drawn while the view turns, over the same corners, a quarter of the display
+   *  triangles: per element triangle its three corners that are vertices of the coarser
+   *  icosphere (the first 10 * 4^L + 2 display vertices); when the display is not finer than
+   *  the elements (level >= 4), per group of 4 sibling element triangles the parent triangle
+   *  over the corner copies of the 3 corner children (its colours blend 3 elements while the
+   *  view moves). Oriented outwards. */
   coarse(corners, start) {
     const VL = (this.V - 2) / 4 + 2;
-    const out = new Uint32Array(this.T * 3);
+    const group = this.finer ? 1 : 4;
+    const out = new Uint32Array((this.T / group) * 3);
     const P = (j) => [0, 1, 2].map((c) => this.sphere[3 * corners[j] + c]);
-    for (let t = 0; t < this.T; ++t) {
+    for (let g = 0; g < this.T / group; ++g) {
       const own = [];
-      for (let j = start[t]; j < start[t + 1]; ++j) if (corners[j] < VL) own.push(j);
-      if (own.length !== 3) throw new Error(`element triangle ${t}: ${own.length} coarse corners`);
+      for (let t = g * group; t < (g + 1) * group; ++t)
+        for (let j = start[t]; j < start[t + 1]; ++j) if (corners[j] < VL) own.push(j);
+      if (own.length !== 3) throw new Error(`element triangle ${g * group}: ${own.length} coarse corners`);
       const [a, b, c] = own.map(P);
       const u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]], w = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
       const n = [u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]];
       const outward = n[0] * (a[0] + b[0] + c[0]) + n[1] * (a[1] + b[1] + c[1]) + n[2] * (a[2] + b[2] + c[2]) > 0;
-      out.set(outward ? own : [own[0], own[2], own[1]], 3 * t);
+      out.set(outward ? own : [own[0], own[2], own[1]], 3 * g);
     }
     return out;
   }
@@ -133,5 +142,5 @@ export class SurfaceModel {
   }
 
   /** Element id of drawn triangle j (a raycast's faceIndex) on shell k. */
-  element(k, j) { return k * this.T + this.elementOfDrawn[j]; }
+  element(k, j) { return this.ids.at(k, this.elementOfDrawn[j]); }
 }

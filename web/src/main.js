@@ -3,6 +3,7 @@
 // feature or its z-score against the normals. One canvas, one camera for all cells.
 import { loadPageData } from './data.js';
 import { SurfaceModel } from './geometry.js';
+import { ElementIndex } from './elements.js';
 import { TableScene, BufferAttribute } from './scene.js';
 import { Detail } from './detail.js';
 import { sequential, diverging, faded, robustRange, HIGHLIGHT } from './colour.js';
@@ -14,6 +15,7 @@ const { manifest, array, bytes } = loadPageData();
 performance.mark('vpm:decoded');
 
 const model = new SurfaceModel(manifest, array);
+const ids = new ElementIndex(manifest);
 const T = manifest.triangles;
 const K = manifest.shells;
 const features = manifest.features;
@@ -97,7 +99,7 @@ function zColour(s, feature, e, threshold, out) {
 }
 /** Colours element triangle t of the shown shell in `cell` (all its corners). */
 function paintElement(cell, t) {
-  const col = colourOf(cell, state.shell * T + t);
+  const col = colourOf(cell, ids.at(state.shell, t));
   const a = cell.geometry.attributes.color.array;
   const r = Math.round(col[0] * 255), g = Math.round(col[1] * 255), b = Math.round(col[2] * 255);
   for (let j = model.cornerStart[t]; j < model.cornerStart[t + 1]; ++j) {
@@ -118,9 +120,10 @@ function setHighlight(e) {
   const old = state.highlight;
   state.highlight = e;
   for (const id of [old, e]) {
-    if (id < 0 || Math.floor(id / T) !== state.shell) continue;
+    if (id < 0 || ids.shellOf(id) !== state.shell) continue;
+    const [first, end] = ids.drawn(id);
     for (const cell of scene.cells) {
-      paintElement(cell, id % T);
+      for (let t = first; t < end; ++t) paintElement(cell, t);
       cell.geometry.attributes.color.needsUpdate = true;
     }
   }
@@ -200,7 +203,7 @@ document.addEventListener('pointermove', (ev) => {
   tooltip.style.left = `${ev.clientX + 14}px`;
   tooltip.style.top = `${ev.clientY + 10}px`;
   const focus = s.cluster?.[fe] ? array(s.cluster[fe])[e] : 0;
-  tooltip.textContent = `${s.id} \u00b7 element ${e} (shell ${Math.floor(e / T) + 1}, triangle ${e % T})\n` +
+  tooltip.textContent = `${s.id} \u00b7 element ${e} (shell ${ids.shellOf(e) + 1}, triangle ${ids.triangleOf(e)})\n` +
     `${fe} ${fmt(array(s.values[fe])[e])}, z ${fmt(array(s.z[fe])[e])}${focus ? `, focus ${focus}` : ''}\n${regionName(e)}`;
 });
 document.addEventListener('pointerup', (ev) => {
