@@ -361,7 +361,7 @@ const BadCase kBad[] = {
     {"medit_truncated.mesh", "", ":7:", "end of file"},
     {"medit_unknown_keyword.mesh", "", ":9:", "unknown keyword"},
     {"medit_text.mesh", "", ":7:", "not a number"},
-    {"vtu_binary.vtu", "", ":6:", "only ASCII"},
+    {"vtu_binary.vtu", "", ":6:", "header says"},
     {"vtu_wrong_count.vtu", "", ":10:", "wrong count"},
     {"vtu_index_range.vtu", "", ":14:", "out of range"},
     {"vtu_huge_count.vtu", "", ":4:", "more than the file"},

@@ -1,99 +1,23 @@
-// VTK XML UnstructuredGrid (.vtu), ASCII data only. Writes points, tets (VTK type 10) and every
-// point/cell field (Int32 for integer fields, Float64 otherwise); reads them back. Non-tet cells
-// are skipped on read (with their cell-data rows).
+// Reading VTK XML UnstructuredGrid (.vtu): ASCII and the binary forms VTK and ParaView write
+// (inline base64, appended raw or base64, zlib-compressed; io/vtk_binary.hpp). Points, tets (VTK
+// type 10) and every point/cell field; non-tet cells are skipped (with their cell-data rows).
+// The writer is in vtu_write.cpp.
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <map>
 
-#include "core/atomic_file.hpp"
 #include "io/formats.hpp"
 #include "io/text.hpp"
+#include "io/vtk_binary.hpp"
+#include "io/vtu_arrays.hpp"
 #include "io/xml.hpp"
 #include "vpm/error.hpp"
 
 namespace vpm::detail {
 
 namespace {
-
-struct Array {
-  std::string name, type;
-  int comps = 1;
-  std::vector<double> values;
-  size_t line = 1;
-};
-
-bool is_integer_type(const std::string& t) {
-  return t.rfind("Int", 0) == 0 || t.rfind("UInt", 0) == 0;
-}
-
-long long attr_count(const XmlWalker& w, const Tag& tag, const std::string& key, bool required,
-                     long long fallback) {
-  auto it = tag.attrs.find(key);
-  if (it == tag.attrs.end()) {
-    if (required) w.fail(tag.line, "<" + tag.name + "> has no " + key + " attribute");
-    return fallback;
-  }
-  const std::string& v = it->second;
-  char* end = nullptr;
-  errno = 0;
-  const long long x = std::strtoll(v.c_str(), &end, 10);
-  if (v.empty() || *end != '\0' || errno)
-    w.fail(tag.line, key + "=\"" + v + "\" is not an integer (not a number)");
-  if (x < 0) w.fail(tag.line, "negative count " + key + "=\"" + v + "\"");
-  if (x > 2147483647LL) w.fail(tag.line, key + "=\"" + v + "\" is too large");
-  return x;
-}
-
-// Position of the "</DataArray" closing `tag`; `label` names the array in the message if absent.
-size_t array_close(const XmlWalker& w, const Tag& tag, const std::string& label) {
-  const size_t close = w.data().find("</DataArray", tag.end);
-  if (close == std::string_view::npos) w.fail(tag.line, label + " is not closed (truncated file?)");
-  return close;
-}
-
-// Reads a DataArray's ASCII content: exactly `rows` tuples of its components.
-Array read_array(const std::string& path, XmlWalker& w, const Tag& tag, long long rows,
-                 const char* unnamed = "(unnamed)") {
-  Array a;
-  a.line = tag.line;
-  a.name = tag.attrs.count("Name") ? tag.attrs.at("Name") : "";
-  const std::string shown = a.name.empty() ? std::string(unnamed) : a.name;
-  a.type = tag.attrs.count("type") ? tag.attrs.at("type") : "";
-  if (a.type.empty()) w.fail(tag.line, "<DataArray Name=\"" + a.name + "\"> has no type attribute");
-  a.comps = static_cast<int>(attr_count(w, tag, "NumberOfComponents", false, 1));
-  if (a.comps < 1 || a.comps > 1000)
-    w.fail(tag.line, "DataArray '" + shown + "': NumberOfComponents=" + std::to_string(a.comps) +
-                         " is out of range");
-  const std::string fmt = tag.attrs.count("format") ? tag.attrs.at("format") : "ascii";
-  if (fmt != "ascii")
-    w.fail(tag.line, "DataArray '" + shown + "' has format=\"" + fmt +
-                         "\": only ASCII .vtu is supported (save as ASCII in ParaView)");
-  if (tag.self_closing) {
-    if (rows != 0) w.fail(tag.line, "DataArray '" + shown + "' is empty, expected " + std::to_string(rows) + " tuples");
-    return a;
-  }
-  const size_t close = array_close(w, tag, "DataArray '" + shown + "'");
-  Scanner s(path, w.data().substr(tag.end, close - tag.end), '\0', w.line_at(tag.end));
-  const long long count = rows * a.comps;
-  s.check_fits(count, 1, "values in DataArray '" + shown + "'");
-  a.values.resize(static_cast<size_t>(count));
-  const bool integer = is_integer_type(a.type);
-  std::string_view tok;
-  const std::string what = "DataArray '" + shown + "'";
-  for (long long i = 0; i < count; ++i) {
-    if (!s.next(tok))
-      s.fail("DataArray '" + shown + "' has " + std::to_string(i) + " values, expected " +
-             std::to_string(count) + " (wrong count or truncated)");
-    a.values[static_cast<size_t>(i)] = integer ? static_cast<double>(s.to_int(tok, what)) : s.to_real(tok, what);
-  }
-  if (s.next(tok))
-    s.fail("DataArray '" + shown + "' has more than the " + std::to_string(count) +
-           " values expected (wrong count)");
-  w.set_pos(close);
-  return a;
-}
 
 // The state of one read: the tags seen so far and the arrays they hold.
 class VtuReader {
@@ -108,6 +32,7 @@ class VtuReader {
   void on_piece(const Tag& tag);
   void on_data_array(const Tag& tag);
   void read_connectivity(const Tag& tag);
+  void read_appended(const Tag& tag);
   std::vector<int> tet_cells() const;
   void set_fields(TetMesh& mesh, const std::vector<int>& keep) const;
 
@@ -118,9 +43,11 @@ class VtuReader {
   long long n_ = -1, m_ = -1;
   size_t piece_line_ = 1;
   std::string section_;  // PointData, CellData, Points, Cells
-  std::vector<Array> point_fields_, cell_fields_;
-  Array points_, conn_, offsets_, types_;
+  std::vector<VtuArray> point_fields_, cell_fields_;
+  VtuArray points_, conn_, offsets_, types_;
   bool have_points_ = false, have_conn_ = false, have_offsets_ = false, have_types_ = false;
+  VtkBinaryLayout layout_;
+  bool big_endian_ = false, compressed_ = false;
 };
 
 void VtuReader::read_tags() {
@@ -134,7 +61,7 @@ void VtuReader::read_tags() {
     if (tag.name == "VTKFile") {
       on_vtkfile(tag);
     } else if (tag.name == "AppendedData") {
-      w_.fail(tag.line, "appended (binary) data is not supported: only ASCII .vtu");
+      read_appended(tag);
     } else if (tag.name == "Piece") {
       on_piece(tag);
     } else if (tag.name == "PointData" || tag.name == "CellData" || tag.name == "Points" ||
@@ -153,8 +80,61 @@ void VtuReader::on_vtkfile(const Tag& tag) {
   if (it == tag.attrs.end() || it->second != "UnstructuredGrid")
     w_.fail(tag.line, "not a VTK UnstructuredGrid file (type=\"" +
                           (it == tag.attrs.end() ? std::string() : it->second) + "\")");
-  if (tag.attrs.count("compressor"))
-    w_.fail(tag.line, "compressed .vtu is not supported: only ASCII data");
+  if (const auto c = tag.attrs.find("compressor"); c != tag.attrs.end() && !c->second.empty()) {
+    if (c->second != "vtkZLibDataCompressor")
+      w_.fail(tag.line, "compressor \"" + c->second + "\" is not supported (only vtkZLibDataCompressor)");
+    layout_.zlib = compressed_ = true;
+  }
+  if (const auto h = tag.attrs.find("header_type"); h != tag.attrs.end()) {
+    if (h->second != "UInt32" && h->second != "UInt64")
+      w_.fail(tag.line, "header_type \"" + h->second + "\" (expected UInt32 or UInt64)");
+    layout_.header_bytes = h->second == "UInt64" ? 8 : 4;
+  }
+  const auto order = tag.attrs.find("byte_order");
+  layout_.big_endian = big_endian_ = order != tag.attrs.end() && order->second == "BigEndian";
+}
+
+// <AppendedData encoding="raw|base64">_DATA</AppendedData>: the blob of every appended array
+// starts at its offset after the underscore (bytes for raw, characters for base64).
+void VtuReader::read_appended(const Tag& tag) {
+  const auto enc = tag.attrs.find("encoding");
+  const std::string encoding = enc == tag.attrs.end() ? "raw" : enc->second;
+  if (encoding != "raw" && encoding != "base64")
+    w_.fail(tag.line, "AppendedData encoding=\"" + encoding + "\" (expected raw or base64)");
+  if (big_endian_) w_.fail(tag.line, "big-endian binary data are not supported (byte_order=\"BigEndian\")");
+  const std::string_view d = w_.data();
+  const size_t start = d.find('_', tag.end);
+  const size_t end = d.rfind("</AppendedData>");
+  if (start == std::string_view::npos || end == std::string_view::npos || end < start)
+    w_.fail(tag.line, "AppendedData without its '_' marker or its closing tag (truncated file?)");
+  const std::string_view blob = d.substr(start + 1, end - start - 1);
+  std::vector<VtuArray*> pending;
+  for (VtuArray* a : {&points_, &conn_, &offsets_, &types_})
+    if (a->appended_offset >= 0) pending.push_back(a);
+  for (auto* list : {&point_fields_, &cell_fields_})
+    for (VtuArray& a : *list)
+      if (a.appended_offset >= 0) pending.push_back(&a);
+  std::vector<long long> starts;
+  for (const VtuArray* a : pending) starts.push_back(a->appended_offset);
+  std::sort(starts.begin(), starts.end());
+  for (VtuArray* a : pending) {
+    const std::string shown = a->name.empty() ? std::string("(unnamed)") : a->name;
+    const VtkBinaryFail fail = [&](const std::string& what) { w_.fail(a->line, "DataArray '" + shown + "': " + what); };
+    const size_t off = static_cast<size_t>(a->appended_offset);
+    if (off >= blob.size()) fail("offset " + std::to_string(off) + " is past the appended data (truncated file?)");
+    std::vector<unsigned char> bytes;
+    if (encoding == "raw") {
+      size_t used = 0;
+      bytes = vtk_raw_blob(reinterpret_cast<const unsigned char*>(blob.data()) + off, blob.size() - off, layout_, used, fail);
+    } else {  // this array's characters run to the next array's offset
+      const auto next = std::upper_bound(starts.begin(), starts.end(), a->appended_offset);
+      const size_t stop = next == starts.end() ? blob.size() : static_cast<size_t>(*next);
+      bytes = vtk_base64_blob(blob.substr(off, stop - off), layout_, fail);
+    }
+    set_binary_values(w_, *a, bytes);
+    a->appended_offset = -1;
+  }
+  w_.set_pos(end);
 }
 
 void VtuReader::on_piece(const Tag& tag) {
@@ -164,8 +144,9 @@ void VtuReader::on_piece(const Tag& tag) {
   piece_line_ = tag.line;
   n_ = attr_count(w_, tag, "NumberOfPoints", true, 0);
   m_ = attr_count(w_, tag, "NumberOfCells", true, 0);
-  // A point takes >= 3 values of >= 2 bytes, a cell >= 3 values (offset, type, index): 2x margin.
-  if (n_ * 3 + m_ * 3 > static_cast<long long>(data_.size()))
+  // A point takes >= 3 values of >= 2 bytes, a cell >= 3 values (offset, type, index): 2x margin
+  // (compressed data can be smaller).
+  if (!compressed_ && n_ * 3 + m_ * 3 > static_cast<long long>(data_.size()))
     w_.fail(tag.line, "declares " + std::to_string(n_) + " points and " + std::to_string(m_) +
                           " cells, more than the file's " + std::to_string(data_.size()) +
                           " bytes could hold (truncated or wrong count)");
@@ -178,18 +159,18 @@ void VtuReader::on_data_array(const Tag& tag) {
   }
   const std::string name = tag.attrs.count("Name") ? tag.attrs.at("Name") : "";
   if (section_ == "Points") {
-    points_ = read_array(path_, w_, tag, n_, "Points");
+    points_ = read_array(path_, w_, tag, n_, layout_, "Points");
     if (points_.comps != 3) w_.fail(tag.line, "Points must have 3 components, found " + std::to_string(points_.comps));
     have_points_ = true;
   } else if (section_ == "PointData") {
-    point_fields_.push_back(read_array(path_, w_, tag, n_));
+    point_fields_.push_back(read_array(path_, w_, tag, n_, layout_));
   } else if (section_ == "CellData") {
-    cell_fields_.push_back(read_array(path_, w_, tag, m_));
+    cell_fields_.push_back(read_array(path_, w_, tag, m_, layout_));
   } else if (name == "offsets") {
-    offsets_ = read_array(path_, w_, tag, m_);
+    offsets_ = read_array(path_, w_, tag, m_, layout_);
     have_offsets_ = true;
   } else if (name == "types") {
-    types_ = read_array(path_, w_, tag, m_);
+    types_ = read_array(path_, w_, tag, m_, layout_);
     have_types_ = true;
   } else if (name == "connectivity") {
     read_connectivity(tag);
@@ -199,19 +180,22 @@ void VtuReader::on_data_array(const Tag& tag) {
 // The connectivity's length is the last offset; VTK writes connectivity first, so without
 // offsets yet its tokens are counted.
 void VtuReader::read_connectivity(const Tag& tag) {
-  if (!have_offsets_) {
+  const auto fmt = tag.attrs.find("format");
+  if (fmt != tag.attrs.end() && fmt->second != "ascii") {
+    conn_ = read_array(path_, w_, tag, -1, layout_);  // its length is checked against the offsets later
+  } else if (!have_offsets_) {
     const size_t close = array_close(w_, tag, "DataArray 'connectivity'");
-    Scanner c(path_, w_.data().substr(tag.end, close - tag.end), '\0');
+    Scanner c(path_, array_text(w_, tag, close), '\0');
     std::string_view tok;
     long long k = 0;
     while (c.next(tok)) ++k;
-    conn_ = read_array(path_, w_, tag, k);
+    conn_ = read_array(path_, w_, tag, k, layout_);
   } else {
     const double last = m_ > 0 ? offsets_.values.back() : 0.0;
     if (!(last >= 0 && last < 4.0e9))
       w_.fail(offsets_.line, "last offset in 'offsets' is negative or too large");
     const long long len = static_cast<long long>(last);
-    conn_ = read_array(path_, w_, tag, len);
+    conn_ = read_array(path_, w_, tag, len, layout_);
   }
   have_conn_ = true;
 }
@@ -222,7 +206,12 @@ void VtuReader::check_complete() {
   if (!seen_piece_) throw InputError(path_ + ":" + std::to_string(last) + ": no <Piece> element (truncated file?)");
   if (!closed_) throw InputError(path_ + ":" + std::to_string(last) + ": no </VTKFile> (truncated file?)");
   if (!have_points_) w_.fail(piece_line_, "Piece has no <Points> array");
-  for (const Array* a : {&conn_, &offsets_, &types_})
+  for (const VtuArray* a : {&points_, &conn_, &offsets_, &types_})
+    if (a->appended_offset >= 0) w_.fail(a->line, "appended DataArray '" + a->name + "' but no <AppendedData> (truncated file?)");
+  for (const auto* list : {&point_fields_, &cell_fields_})
+    for (const VtuArray& a : *list)
+      if (a.appended_offset >= 0) w_.fail(a.line, "appended DataArray '" + a.name + "' but no <AppendedData> (truncated file?)");
+  for (const VtuArray* a : {&conn_, &offsets_, &types_})
     if (!a->type.empty() && !is_integer_type(a->type))
       w_.fail(a->line, "Cells array '" + a->name + "' has type " + a->type + ", expected an integer type");
   if (m_ > 0 && (!have_conn_ || !have_offsets_ || !have_types_))
@@ -303,71 +292,6 @@ TetMesh read_vtu(const std::string& path) {
   reader.read_tags();
   reader.check_complete();
   return reader.build_mesh();
-}
-
-void write_vtu(const std::string& path, const TetMesh& mesh) {
-  AtomicFile file(path);
-  TextOut o(file.stream());
-  const long long n = mesh.num_vertices(), m = mesh.num_tets();
-  o << "<?xml version=\"1.0\"?>\n"
-       "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
-       "  <UnstructuredGrid>\n"
-       "    <Piece NumberOfPoints=\"";
-  o.integer(n) << "\" NumberOfCells=\"";
-  o.integer(m) << "\">\n";
-  auto fields = [&](const char* section, const std::vector<Field>& fs) {
-    o << "      <" << section << ">\n";
-    for (const Field& f : fs) {
-      o << "        <DataArray type=\"" << (f.integer ? "Int32" : "Float64") << "\" Name=\""
-        << xml_escape(f.name) << "\" NumberOfComponents=\"";
-      o.integer(f.values.cols()) << "\" format=\"ascii\">\n";
-      for (Eigen::Index i = 0; i < f.values.rows(); ++i) {
-        for (Eigen::Index k = 0; k < f.values.cols(); ++k) {
-          if (k) o << ' ';
-          if (f.integer)
-            o.integer(static_cast<long long>(std::llround(f.values(i, k))));
-          else
-            o.real(f.values(i, k));
-        }
-        o << '\n';
-      }
-      o << "        </DataArray>\n";
-    }
-    o << "      </" << section << ">\n";
-  };
-  fields("PointData", mesh.point_data);
-  fields("CellData", mesh.cell_data);
-  o << "      <Points>\n"
-       "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"ascii\">\n";
-  for (long long i = 0; i < n; ++i) {
-    o.real(mesh.vertices(i, 0)) << ' ';
-    o.real(mesh.vertices(i, 1)) << ' ';
-    o.real(mesh.vertices(i, 2)) << '\n';
-  }
-  o << "        </DataArray>\n"
-       "      </Points>\n"
-       "      <Cells>\n"
-       "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
-  for (long long i = 0; i < m; ++i) {
-    for (int k = 0; k < 4; ++k) {
-      if (k) o << ' ';
-      o.integer(mesh.tets(i, k));
-    }
-    o << '\n';
-  }
-  o << "        </DataArray>\n"
-       "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
-  for (long long i = 0; i < m; ++i) o.integer(4 * (i + 1)) << ((i % 16 == 15 || i + 1 == m) ? '\n' : ' ');
-  o << "        </DataArray>\n"
-       "        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
-  for (long long i = 0; i < m; ++i) o << ((i % 32 == 31 || i + 1 == m) ? "10\n" : "10 ");
-  o << "        </DataArray>\n"
-       "      </Cells>\n"
-       "    </Piece>\n"
-       "  </UnstructuredGrid>\n"
-       "</VTKFile>\n";
-  o.flush();
-  file.commit();
 }
 
 }  // namespace vpm::detail

@@ -1,0 +1,98 @@
+// .vtu files as VTK and ParaView write them (host/io/vtk_binary.hpp): inline base64, appended raw
+// and base64, zlib blocks, UInt32 and UInt64 headers, <InformationKey> children; fixtures written
+// by VTK's own writer (tests/data/vtk/make_fixtures.py). Every one reads exactly as the ASCII
+// one; corrupt copies give an InputError naming the file, never a crash.
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "vpm/error.hpp"
+#include "vpm/io.hpp"
+
+using namespace vpm;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string fixture(const std::string& name) { return std::string(VPM_TEST_DATA) + "/vtk/grid_" + name + ".vtu"; }
+
+const char* kEncodings[] = {"binary", "binary_u64", "binary_zlib", "appended_raw", "appended_raw_zlib_u64",
+                            "appended_base64", "appended_base64_zlib"};
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+void spit(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
+
+}  // namespace
+
+TEST_CASE("io: .vtu in every binary form VTK writes reads exactly as its ASCII twin") {
+  const TetMesh ref = read_mesh(fixture("ascii"));  // VTK 9's ASCII, with <InformationKey> in Points
+  REQUIRE(ref.num_vertices() == 64);
+  REQUIRE(ref.num_tets() == 135);
+  REQUIRE(ref.point_data.size() == 3);
+  REQUIRE(ref.cell_data.size() == 1);
+  CHECK(ref.find_cell_field("label")->integer);
+  CHECK(ref.find_point_field("vertex_label")->integer);
+  CHECK(!ref.find_point_field("ratio32")->integer);
+  CHECK(ref.find_point_field("original_position")->values(5, 1) == 0.5 * 70 + 1e-9 * 5);  // all 17 digits
+  for (const char* e : kEncodings) {
+    INFO(e);
+    const TetMesh m = read_mesh(fixture(e));
+    CHECK(m.vertices == ref.vertices);
+    CHECK(m.tets == ref.tets);
+    REQUIRE(m.point_data.size() == ref.point_data.size());
+    REQUIRE(m.cell_data.size() == ref.cell_data.size());
+    for (const Field& f : ref.point_data) {
+      const Field* g = m.find_point_field(f.name);
+      REQUIRE(g);
+      CHECK(g->values == f.values);
+      CHECK(g->integer == f.integer);
+    }
+    CHECK(m.find_cell_field("label")->values == ref.find_cell_field("label")->values);
+  }
+}
+
+TEST_CASE("io: corrupt binary .vtu files are InputErrors naming the file, never crashes") {
+  const std::string target = std::string(VPM_TEST_TMP) + "/corrupt_binary.vtu";
+  std::uint32_t rng = 2024;
+  auto next = [&rng]() { return rng = rng * 1664525u + 1013904223u; };
+  int errors = 0;
+  for (const char* e : kEncodings) {
+    const std::string good = slurp(fixture(e));
+    for (int trial = 0; trial < 40; ++trial) {
+      std::string text = good;
+      if (trial % 2 == 0) {
+        text.resize(next() % text.size());
+      } else {  // flips anywhere, the binary data and their headers included
+        for (int k = 0; k < 4; ++k) text[next() % text.size()] = static_cast<char>(next() & 0xff);
+      }
+      spit(target, text);
+      try {
+        read_mesh(target);
+      } catch (const InputError& err) {
+        ++errors;
+        INFO(e << " trial " << trial);
+        CHECK_THAT(std::string(err.what()), Catch::StartsWith(target));
+      }
+    }
+  }
+  CHECK(errors > 150);
+  // what the messages say for the common cases
+  std::string cut = slurp(fixture("appended_raw"));
+  spit(target, cut.substr(0, cut.size() - 400) + "\n  </AppendedData>\n</VTKFile>\n");
+  CHECK_THROWS_WITH(read_mesh(target), Catch::Contains("runs past the data"));
+  std::string other = slurp(fixture("binary_zlib"));
+  other.replace(other.find("vtkZLibDataCompressor"), 21, "vtkLZ4DataCompressor");
+  spit(target, other);
+  CHECK_THROWS_WITH(read_mesh(target), Catch::Contains("vtkLZ4DataCompressor") && Catch::Contains("not supported"));
+  std::string big = slurp(fixture("binary"));
+  big.replace(big.find("LittleEndian"), 12, "BigEndian");
+  spit(target, big);
+  CHECK_THROWS_WITH(read_mesh(target), Catch::Contains("big-endian"));
+}
