@@ -143,6 +143,30 @@ TEST_CASE("volume map: polish rounds lower the per-tet distortion left by the Mo
   CHECK(max_boundary_radius_error(b, im.mesh.tets) < 1e-12);
 }
 
+TEST_CASE("volume map: the polish runs the longer CGLS when the Moser rounds stop far from the tolerance") {
+  const InitialMapResult& im = ellipsoid_start();
+  auto host = Device::host();
+  VolumeMapOptions o;
+  o.rounds = 1;  // one Moser round, then the polish from wherever it got
+  o.polish_rounds = 2;
+  o.polish_iterations = 20;
+  o.polish_iterations_far = 70;
+  for (double tolerance : {1e-4, 0.5}) {
+    INFO("tolerance " << tolerance);
+    o.tolerance = tolerance;
+    Points x = im.ball;
+    const VolumeMapResult r = volume_preserving_map(*host, im.mesh.vertices, im.mesh.tets, x, o);
+    REQUIRE(r.rounds.size() >= 2);
+    REQUIRE(r.rounds[0].kind == "moser");
+    const bool far = r.rounds[0].vertex_mean_abs_dev > 5 * tolerance;
+    CHECK(far == (tolerance < 0.01));
+    for (size_t k = 1; k < r.rounds.size(); ++k) {
+      CHECK(r.rounds[k].kind == "polish");
+      CHECK(r.rounds[k].solver_iterations == (far ? 70 : 20));
+    }
+  }
+}
+
 TEST_CASE("volume map: polish_only runs only polish rounds and never moves pinned vertices") {
   const InitialMapResult& im = ellipsoid_start();
   auto host = Device::host();

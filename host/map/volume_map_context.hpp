@@ -59,7 +59,7 @@ void paper_step(MapContext& c, Points& x, double dt, VolumeMapRound& r);
 
 /// One Gauss-Newton direction of the polish on the relative tet volumes (map/polish.hpp), on
 /// the device or the host threads (VolumeMapOptions::polish). x is not changed.
-void polish_step(MapContext& c, const Points& x, VolumeMapRound& r, Points& dx_out);
+void polish_step(MapContext& c, const Points& x, VolumeMapRound& r, Points& dx_out, int iterations);
 
 /// Moves the boundary vertices that are not pinned back onto the unit sphere (when sliding).
 void project_boundary(const MapContext& c, Points& x);

@@ -167,6 +167,10 @@ int fold_free_polish(MapContext& c, Points& x, const Points& saved, const Points
 void run_polish(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& d) {
   const VolumeMapOptions& opt = c.opt;
   const int n_polish = opt.method == VolumeMapMethod::moser && opt.rounds != 0 ? opt.polish_rounds : 0;
+  // when the Moser rounds stalled far from the tolerance (long thin parts such as fingers), a
+  // longer CGLS: early-stopped, it only reaches the smooth part of the correction
+  const int iterations = !opt.polish_only && d.vertex > 5 * opt.tolerance ? std::max(opt.polish_iterations, opt.polish_iterations_far)
+                                                  : opt.polish_iterations;
   for (int k = 1; k <= n_polish; ++k) {
     const auto t_round = Clock::now();
     VolumeMapRound r;
@@ -174,7 +178,7 @@ void run_polish(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& 
     r.kind = "polish";
     const Points saved = x;
     Points dx;
-    polish_step(c, x, r, dx);
+    polish_step(c, x, r, dx, iterations);
     const auto t2 = Clock::now();
     const int folds = fold_free_polish(c, x, saved, dx, r);
     r.time_advect += seconds_since(t2) - r.time_untangle;

@@ -155,7 +155,7 @@ void paper_step(MapContext& c, Points& x, double dt, VolumeMapRound& r) {
 }
 
 // Polish: one Gauss-Newton direction on the relative tet volumes (map/polish.hpp).
-void polish_step(MapContext& c, const Points& x, VolumeMapRound& r, Points& dx_out) {
+void polish_step(MapContext& c, const Points& x, VolumeMapRound& r, Points& dx_out, int iterations) {
   const auto t0 = Clock::now();
   const Eigen::VectorXd vol = tet_volumes(x, c.tets);
   const Eigen::VectorXd target = c.ref_tet * vol.sum();
@@ -163,9 +163,9 @@ void polish_step(MapContext& c, const Points& x, VolumeMapRound& r, Points& dx_o
   detail::PolishDirection d;
   if (c.polish_on_device) {
     if (!c.polisher) c.polisher = std::make_unique<detail::DevicePolisher>(c.dev, c.tets, c.n, c.freedom);
-    d = c.polisher->direction(x, target, c.opt.polish_iterations);
+    d = c.polisher->direction(x, target, iterations);
   } else {
-    d = detail::polish_direction_host(x, c.tets, target, c.freedom, c.opt.polish_iterations);
+    d = detail::polish_direction_host(x, c.tets, target, c.freedom, iterations);
   }
   r.solver_iterations += d.iterations;
   r.solver_residual = d.residual;

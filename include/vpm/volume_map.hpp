@@ -104,6 +104,11 @@ struct VolumeMapOptions {
   /// step that folds is untangled locally like a round, then halved.
   int polish_rounds = 8;
   int polish_iterations = 60;
+  /// The polish's CGLS iterations when the polish starts with the vertex mean |r-1| above 5 x
+  /// `tolerance` (the Moser rounds stalled far from it, as on a hand's fingers: 3.1 % with 60,
+  /// 1.0 % with 200; docs/shapes.md); otherwise `polish_iterations` (brains hand over at about
+  /// 2 %). Not with polish_only.
+  int polish_iterations_far = 200;
   /// Skip the Moser rounds: only the polish rounds run (method moser). Registration uses it to
   /// give back, against the pre-registration map, the volume that linear tets lost under its
   /// divergence-free flow.
