@@ -143,12 +143,27 @@ TEST_CASE("the page carries the manifest and the arrays the browser reads") {
   CHECK(n01.find("group")->string() == "normal");
   const Json* buf = m.find("buffers")->find(n01.find("z")->find("pet")->string());
   REQUIRE(buf);
-  CHECK(buf->find("type")->string() == "f32");
+  CHECK(buf->find("type")->string() == "q16");  // 16-bit codes: base + step * code
   const size_t off = static_cast<size_t>(buf->find("offset")->number());
   CHECK(off % 8 == 0);
-  std::vector<float> z(el.size());
-  std::memcpy(z.data(), blob.data() + off, z.size() * sizeof(float));
-  CHECK(z == v.subjects[1].z["pet"]);
+  std::vector<std::uint16_t> code(el.size());
+  std::memcpy(code.data(), blob.data() + off, code.size() * 2);
+  const double base = buf->find("base")->number(), step = buf->find("step")->number();
+  CHECK(step == Approx(6.0 / 65534));  // z spans -2.75 .. 3.25
+  for (int e = 0; e < el.size(); ++e) CHECK(std::abs(base + step * code[e] - v.subjects[1].z["pet"][e]) <= 0.51 * step);
+  // NaN is code 65535; a constant array decodes exactly
+  CohortView w = v;
+  w.subjects[1].z["pet"][3] = std::nanf("");
+  write_view_page(path + ".nan.html", w);
+  const std::string page2 = test::slurp(path + ".nan.html");
+  const Json m2 = Json::parse(between(page2, "<script id=\"vpm-manifest\" type=\"application/json\">", "</script>"));
+  const std::string blob2 = unbase64(between(page2, "<script id=\"vpm-buffers\" type=\"application/octet-stream\">", "</script>"));
+  const Json* b2 = m2.find("buffers")->find(m2.find("subjects")->at(1).find("z")->find("pet")->string());
+  std::uint16_t c3 = 0;
+  std::memcpy(&c3, blob2.data() + static_cast<size_t>(b2->find("offset")->number()) + 6, 2);
+  CHECK(c3 == 65535);
+  const Json* vb = m.find("buffers")->find(n01.find("values")->find("pet")->string());
+  CHECK(vb->find("base")->number() == 1.0);  // all 1.0: base 1, codes 0
   // native positions quantised to 16 bits: within half a step of the floats
   const Json& nat = *m.find("subjects")->at(0).find("native");
   const Json* nb = m.find("buffers")->find(nat.find("buffer")->string());

@@ -2,6 +2,7 @@
 // manifest naming them, and the browser application, in one HTML file (layout: docs/view.md).
 #include "vpm/view_page.hpp"
 
+#include <cmath>
 #include <cstring>
 
 #include "core/atomic_file.hpp"
@@ -33,6 +34,26 @@ class BufferPack {
     const char* p = reinterpret_cast<const char*>(values.data());
     blob_.append(p, p + values.size() * sizeof(T));
     ++count_;
+    return name;
+  }
+  /// `values` as 16-bit codes: base + step * code, code 65535 = NaN (type "q16" with "base" and
+  /// "step"; the page decodes it to float32). Half the bytes of float32, within step / 2.
+  std::string add_q16(const std::string& name, const std::vector<float>& values) {
+    float lo = 0, hi = 0;
+    bool any = false;
+    for (float v : values)
+      if (std::isfinite(v)) {
+        lo = any ? std::min(lo, v) : v;
+        hi = any ? std::max(hi, v) : v;
+        any = true;
+      }
+    const double step = hi > lo ? (static_cast<double>(hi) - lo) / 65534.0 : 1.0;
+    std::vector<std::uint16_t> code(values.size());
+    for (size_t i = 0; i < values.size(); ++i)
+      code[i] = std::isfinite(values[i]) ? static_cast<std::uint16_t>(std::lround((values[i] - lo) / step)) : 65535;
+    add(name, code, "q16");
+    table_[name]["base"] = static_cast<double>(lo);
+    table_[name]["step"] = step;
     return name;
   }
   const std::string& blob() const { return blob_; }
@@ -134,8 +155,8 @@ Json subject_entry(BufferPack& pack, const ViewSubject& s, size_t i, const Cohor
   j["id"] = s.id;
   j["group"] = s.patient ? "patient" : "normal";
   j["native"] = native_entry(pack, key, s.native);
-  for (const auto& [f, x] : s.values) values[f] = pack.add(key + "_value_" + f, x, "f32");
-  for (const auto& [f, x] : s.z) z[f] = pack.add(key + "_z_" + f, x, "f32");
+  for (const auto& [f, x] : s.values) values[f] = pack.add_q16(key + "_value_" + f, x);
+  for (const auto& [f, x] : s.z) z[f] = pack.add_q16(key + "_z_" + f, x);
   j["values"] = values;
   j["z"] = z;
   if (s.patient) {

@@ -27,6 +27,13 @@ export function loadPageData(doc = document) {
     if (cache.has(name)) return cache.get(name);
     const b = manifest.buffers[name];
     if (!b) throw new Error(`the page has no buffer '${name}'`);
+    if (b.type === 'q16') {  // 16-bit codes: base + step * code, 65535 = NaN (view_page.cpp)
+      if (b.offset % 2) throw new Error(`buffer '${name}' is misaligned`);
+      const code = new Uint16Array(blob, b.offset, b.length), a = new Float32Array(b.length);
+      for (let i = 0; i < b.length; ++i) a[i] = code[i] === 65535 ? NaN : b.base + b.step * code[i];
+      cache.set(name, a);
+      return a;
+    }
     const Type = TYPES[b.type];
     if (!Type) throw new Error(`buffer '${name}': unknown type ${b.type}`);
     if (b.offset % Type.BYTES_PER_ELEMENT) throw new Error(`buffer '${name}' is misaligned`);
