@@ -1,6 +1,7 @@
 // The round loops of the volume-preserving map (map/volume_map_context.hpp): Moser rounds
 // (or the paper's steps, or vsem iterations), each fold-checked, then the polish rounds.
 #include <algorithm>
+#include <cmath>
 #include <string>
 
 #include "map/volume_map_context.hpp"
@@ -168,9 +169,11 @@ void run_polish(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& 
   const VolumeMapOptions& opt = c.opt;
   const int n_polish = opt.method == VolumeMapMethod::moser && opt.rounds != 0 ? opt.polish_rounds : 0;
   // when the Moser rounds stalled far from the tolerance (long thin parts such as fingers), a
-  // longer CGLS: early-stopped, it only reaches the smooth part of the correction
-  const int iterations = !opt.polish_only && d.vertex > 5 * opt.tolerance ? std::max(opt.polish_iterations, opt.polish_iterations_far)
-                                                  : opt.polish_iterations;
+  // longer CGLS: early-stopped, it only reaches the smooth part of the correction, and on a finer
+  // mesh the same correction spans more elements (cube root of the tet count past 30,000)
+  const int far = static_cast<int>(std::lround(opt.polish_iterations_far * std::max(1.0, std::cbrt(c.m / 30000.0))));
+  const int iterations = !opt.polish_only && d.vertex > 5 * opt.tolerance ? std::max(opt.polish_iterations, far)
+                                                                             : opt.polish_iterations;
   for (int k = 1; k <= n_polish; ++k) {
     const auto t_round = Clock::now();
     VolumeMapRound r;

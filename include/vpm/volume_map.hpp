@@ -106,8 +106,9 @@ struct VolumeMapOptions {
   int polish_iterations = 60;
   /// The polish's CGLS iterations when the polish starts with the vertex mean |r-1| above 5 x
   /// `tolerance` (the Moser rounds stalled far from it, as on a hand's fingers: 3.1 % with 60,
-  /// 1.0 % with 200; docs/shapes.md); otherwise `polish_iterations` (brains hand over at about
-  /// 2 %). Not with polish_only.
+  /// 1.0 % with 200; docs/shapes.md), at up to 30,000 tets, times cbrt(tets / 30,000) above (the
+  /// hand at 322k: 3.4 % with 200, 0.9 % with 440); otherwise `polish_iterations` (brains hand
+  /// over at about 2 %). Not with polish_only.
   int polish_iterations_far = 200;
   /// Skip the Moser rounds: only the polish rounds run (method moser). Registration uses it to
   /// give back, against the pre-registration map, the volume that linear tets lost under its
