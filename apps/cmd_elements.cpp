@@ -1,5 +1,6 @@
 // vpm elements -o ELEMENTS.tsv: the canonical volume elements of the ball (vpm/elements.hpp).
 #include "cli.hpp"
+#include "element_options.hpp"
 #include "vpm/elements.hpp"
 #include "vpm/format.hpp"
 
@@ -10,16 +11,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   args.expect_positional(0, "usage: " + vpm::cli::synopsis(self));
   const auto out = args.get("-o");
   if (!out) throw vpm::InputError("missing -o ELEMENTS.tsv; usage: " + vpm::cli::synopsis(self));
-  vpm::ElementDefinition d;
-  d.level = args.get_int("--level", d.level);
-  d.layout = vpm::cli::parse_option("--layout", [&] { return vpm::parse_element_layout(args.get("--layout", "shells")); });
-  if (d.layout == vpm::ElementLayout::graded) {
-    if (args.has("--shells")) throw vpm::InputError("option --shells: the graded layout sets the shells from --level");
-    d.shells = vpm::graded_shells(d.level);
-  } else {
-    d.shells = args.get_int("--shells", d.shells);
-  }
-  d.samples = args.get_int("--samples", d.samples);
+  const vpm::ElementDefinition d = vpm::cli::element_definition(args);
   const vpm::CanonicalElements el(d);
   vpm::write_element_table(*out, el);
   const vpm::ElementVolumeStats st = el.volume_stats();

@@ -2,6 +2,7 @@
 #include <sstream>
 
 #include "cli.hpp"
+#include "element_options.hpp"
 #include "vpm/elements.hpp"
 #include "vpm/error.hpp"
 #include "vpm/image.hpp"
@@ -37,15 +38,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   if (!args.has("--images") && !args.has("--labels"))
     throw vpm::InputError("nothing to sample: give --images NAME=IMAGE[,...] and/or --labels LABELS");
   vpm::ElementTable table;
-  table.definition.level = args.get_int("--level", table.definition.level);
-  table.definition.layout = vpm::cli::parse_option("--layout", [&] { return vpm::parse_element_layout(args.get("--layout", "shells")); });
-  if (table.definition.layout == vpm::ElementLayout::graded) {
-    if (args.has("--shells")) throw vpm::InputError("option --shells: the graded layout sets the shells from --level");
-    table.definition.shells = vpm::graded_shells(table.definition.level);
-  } else {
-    table.definition.shells = args.get_int("--shells", table.definition.shells);
-  }
-  table.definition.samples = args.get_int("--samples", table.definition.samples);
+  table.definition = vpm::cli::element_definition(args);
   table.subject = args.get("--subject", "");
   table.mesh = mesh_path;
   const auto images = named_images(args.get("--images", ""));
