@@ -52,6 +52,10 @@ RegistrationOptions parse_options(const cli::Args& args) {
   opt.rigid = !args.has("--no-rigid");
   opt.untangle = !args.has("--no-untangle");
   opt.restore_volumes = !args.has("--no-restore");
+  opt.restore_iterations = args.get_int("--restore-iterations", opt.restore_iterations);
+  if (opt.restore_iterations < 1) throw InputError("--restore-iterations: must be positive");
+  if (!opt.restore_volumes && args.has("--restore-iterations"))
+    throw InputError("--restore-iterations: the restoration is off (--no-restore)");
   return opt;
 }
 
@@ -278,6 +282,7 @@ vpm::cli::Registrar reg(cli::with_dense_options(
       {"--no-rigid", "", "skip the rotation step"},
       {"--no-untangle", "", "skip local untangling (folded results exit 3)"},
       {"--no-restore", "", "skip the volume restoration after the flow"},
+      {"--restore-iterations", "N", "CGLS iterations per restoration step (default 10; more: lower volume distortion, the regions drift more)"},
       {"--allow-partial", "", "exit 0 even when a landmark misses its target by over 1e-3 (the warning stays)"}},
      run}, "--exclude-labels", 0));
 }  // namespace

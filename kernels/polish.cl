@@ -71,34 +71,58 @@ __kernel void polish_apply(const int m, __global const int* tets, __global const
   STORE_PARTIALS(acc, 0.0, partial);
 }
 
-// s = P A^T y (gather over the vertex's tet slots 4 t + k; P: flags 0 free, 1 tangent to the
-// sphere at x_v, 2 zero); partial[g] = |s|^2, partial[G + g] = |y|^2 over this work item's
-// range of y (used once for |b|^2 and for the final |r|^2).
+// (A^T y)_v: gather over the vertex's tet slots 4 t + k
+inline void polish_gather(const int v, __global const int* inc_ptr, __global const int* inc_slot,
+                          __global const real* sg, __global const real* y, real* sx, real* sy, real* sz) {
+  real ax = 0.0, ay = 0.0, az = 0.0;
+  for (int j = inc_ptr[v]; j < inc_ptr[v + 1]; ++j) {
+    const int slot = inc_slot[j];
+    const real w = y[slot >> 2];
+    __global const real* g = sg + 3 * slot;
+    ax += w * g[0];
+    ay += w * g[1];
+    az += w * g[2];
+  }
+  *sx = ax;
+  *sy = ay;
+  *sz = az;
+}
+
+// s = P A^T y; P: flags 0 free, 1 tangent to the sphere at x_v, 2 zero, 3 in an anchor group:
+// anchor[v] = g << 8 | row, the group's vertices group_vertex[group_ptr[g] ..) and its projector
+// (k x k, row-major at group_matrix[group_offset[g]]): s_v = sum_j P[row][j] (A^T y)_(vertex j);
+// partial[g] = |s|^2, partial[G + g] = |y|^2 over this work item's range of y (used once for
+// |b|^2 and for the final |r|^2).
 __kernel void polish_apply_t(const int n, const int m, __global const int* inc_ptr,
                              __global const int* inc_slot, __global const real* sg,
                              __global const real* y, __global const char* flags,
-                             __global const real* x, __global real* s, __global real* partial) {
+                             __global const real* x, __global real* s, __global real* partial,
+                             __global const int* anchor, __global const int* group_ptr,
+                             __global const int* group_vertex, __global const int* group_offset,
+                             __global const real* group_matrix) {
   REDUCE_SCRATCH;
   real acc = 0.0;
   STRIDE_BEGIN(n) {
     real sx = 0.0, sy = 0.0, sz = 0.0;
-    if (flags[i] != 2) {
-      for (int j = inc_ptr[i]; j < inc_ptr[i + 1]; ++j) {
-        const int slot = inc_slot[j];
-        const real w = y[slot >> 2];
-        __global const real* g = sg + 3 * slot;
-        sx += w * g[0];
-        sy += w * g[1];
-        sz += w * g[2];
-      }
-      if (flags[i] == 1) {
-        const real px = x[3 * i], py = x[3 * i + 1], pz = x[3 * i + 2];
-        const real inv = 1.0 / sqrt(px * px + py * py + pz * pz);
-        const real nx = px * inv, ny = py * inv, nz = pz * inv;
-        const real dn = sx * nx + sy * ny + sz * nz;
-        sx -= dn * nx;
-        sy -= dn * ny;
-        sz -= dn * nz;
+    if (flags[i] == 0 || flags[i] == 1) polish_gather(i, inc_ptr, inc_slot, sg, y, &sx, &sy, &sz);
+    if (flags[i] == 1) {
+      const real px = x[3 * i], py = x[3 * i + 1], pz = x[3 * i + 2];
+      const real inv = 1.0 / sqrt(px * px + py * py + pz * pz);
+      const real nx = px * inv, ny = py * inv, nz = pz * inv;
+      const real dn = sx * nx + sy * ny + sz * nz;
+      sx -= dn * nx;
+      sy -= dn * ny;
+      sz -= dn * nz;
+    } else if (flags[i] == 3) {
+      const int g = anchor[i] >> 8, row = anchor[i] & 255;
+      const int b = group_ptr[g], k = group_ptr[g + 1] - b;
+      __global const real* P = group_matrix + group_offset[g] + row * k;
+      for (int j = 0; j < k; ++j) {
+        real gx, gy, gz;
+        polish_gather(group_vertex[b + j], inc_ptr, inc_slot, sg, y, &gx, &gy, &gz);
+        sx += P[j] * gx;
+        sy += P[j] * gy;
+        sz += P[j] * gz;
       }
     }
     s[3 * i] = sx;

@@ -4,10 +4,13 @@
 #include <boost/compute/algorithm/copy.hpp>
 #include <boost/compute/algorithm/fill.hpp>
 #include <boost/compute/container/vector.hpp>
+#include <algorithm>
 #include <cmath>
+#include <map>
 
 #include "core/parallel.hpp"
 #include "vpm/device.hpp"
+#include "vpm/error.hpp"
 #include "vpm/geometry.hpp"
 
 namespace vpm::detail {
@@ -23,8 +26,55 @@ std::vector<char> polish_freedom(const std::vector<char>& boundary, bool slide, 
   return f;
 }
 
+AnchorGroups anchor_groups(const std::vector<VolumeAnchor>& anchors) {
+  // union-find over anchors through their vertices
+  const int a_n = static_cast<int>(anchors.size());
+  std::vector<int> parent(static_cast<size_t>(a_n));
+  for (int a = 0; a < a_n; ++a) parent[static_cast<size_t>(a)] = a;
+  auto root = [&](int a) {
+    while (parent[static_cast<size_t>(a)] != a) a = parent[static_cast<size_t>(a)] = parent[static_cast<size_t>(parent[static_cast<size_t>(a)])];
+    return a;
+  };
+  std::map<int, int> owner;  // vertex -> an anchor using it
+  for (int a = 0; a < a_n; ++a)
+    for (int v : anchors[static_cast<size_t>(a)].vertices) {
+      const auto [it, fresh] = owner.emplace(v, a);
+      if (!fresh) parent[static_cast<size_t>(root(a))] = root(it->second);
+    }
+  std::map<int, std::vector<int>> members;  // root -> anchors, in order
+  for (int a = 0; a < a_n; ++a) members[root(a)].push_back(a);
+  AnchorGroups g;
+  for (const auto& [r, list] : members) {
+    std::vector<int> verts;
+    for (int a : list)
+      for (int v : anchors[static_cast<size_t>(a)].vertices) verts.push_back(v);
+    std::sort(verts.begin(), verts.end());
+    verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+    const int k = static_cast<int>(verts.size());
+    Eigen::MatrixXd W = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(list.size()), k);
+    for (size_t i = 0; i < list.size(); ++i) {
+      const VolumeAnchor& an = anchors[static_cast<size_t>(list[i])];
+      for (int c = 0; c < 4; ++c) {
+        const auto at = std::lower_bound(verts.begin(), verts.end(), an.vertices[static_cast<size_t>(c)]) - verts.begin();
+        W(static_cast<Eigen::Index>(i), at) += an.weights[static_cast<size_t>(c)];
+      }
+    }
+    // P = I - W^+ W: the orthogonal projector onto the null space of W (rank-revealing, so
+    // anchors at the same point do not break it)
+    const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(W);
+    const Eigen::MatrixXd P = Eigen::MatrixXd::Identity(k, k) - cod.pseudoInverse() * W;
+    g.offset.push_back(static_cast<int>(g.matrix.size()));
+    for (int i = 0; i < k; ++i)
+      for (int j = 0; j < k; ++j) g.matrix.push_back(P(i, j));
+    g.vertices.insert(g.vertices.end(), verts.begin(), verts.end());
+    g.ptr.push_back(static_cast<int>(g.vertices.size()));
+  }
+  return g;
+}
+
 PolishDirection polish_direction_host(const Points& x, const Tets& tets, const Eigen::VectorXd& target,
-                                      const std::vector<char>& freedom, int iterations) {
+                                      const std::vector<char>& freedom, const std::vector<VolumeAnchor>& anchors,
+                                      int iterations) {
   const int n = static_cast<int>(x.rows()), m = static_cast<int>(tets.rows());
   const Eigen::VectorXd vol = tet_volumes(x, tets);
   // per-tet scaled gradients sg_{t,k} = vol_t grad phi_k / target_t
@@ -46,6 +96,7 @@ PolishDirection polish_direction_host(const Points& x, const Tets& tets, const E
       b(t) = 1.0 - vol(t) / target(t);
     }
   });
+  const AnchorGroups groups = anchor_groups(anchors);
   auto project = [&](Points& d) {
     for (int v = 0; v < n; ++v) {
       if (freedom[v] == kPolishFixed) {
@@ -53,6 +104,17 @@ PolishDirection polish_direction_host(const Points& x, const Tets& tets, const E
       } else if (freedom[v] == kPolishTangent) {
         const Eigen::Vector3d nv = x.row(v).transpose().normalized(), u = d.row(v).transpose();
         d.row(v) = (u - u.dot(nv) * nv).transpose();
+      }
+    }
+    for (int gi = 0; gi < groups.groups(); ++gi) {  // d_V <- P d_V
+      const int b = groups.ptr[static_cast<size_t>(gi)], k = groups.ptr[static_cast<size_t>(gi) + 1] - b;
+      const double* P = groups.matrix.data() + groups.offset[static_cast<size_t>(gi)];
+      Points dv(k, 3);
+      for (int i = 0; i < k; ++i) dv.row(i) = d.row(groups.vertices[static_cast<size_t>(b + i)]);
+      for (int i = 0; i < k; ++i) {
+        Eigen::RowVector3d o = Eigen::RowVector3d::Zero();
+        for (int j = 0; j < k; ++j) o += P[i * k + j] * dv.row(j);
+        d.row(groups.vertices[static_cast<size_t>(b + i)]) = o;
       }
     }
   };
@@ -119,12 +181,15 @@ struct DevicePolisher::Impl {
   Device& dev;
   int n, m;
   size_t G;  // reduction grid
-  bc::vector<int> tets, inc_ptr, inc_slot;
+  bc::vector<int> tets, inc_ptr, inc_slot, anchor, group_ptr, group_vertex, group_offset;
+  bc::vector<double> group_matrix;
   bc::vector<char> freedom;
   bc::vector<double> x, target, sg, b, r, q, dx, p, s, partial, S;
   bc::kernel k_setup, k_apply, k_apply_t, k_scalars, k_update, k_update_p;
   Impl(Device& d, int n_, int m_)
       : dev(d), n(n_), m(m_), tets(d.context()), inc_ptr(d.context()), inc_slot(d.context()),
+        anchor(d.context()), group_ptr(d.context()), group_vertex(d.context()), group_offset(d.context()),
+        group_matrix(d.context()),
         freedom(d.context()), x(d.context()), target(d.context()), sg(d.context()), b(d.context()),
         r(d.context()), q(d.context()), dx(d.context()), p(d.context()), s(d.context()),
         partial(d.context()), S(d.context()) {}
@@ -134,7 +199,8 @@ struct DevicePolisher::Impl {
   }
 };
 
-DevicePolisher::DevicePolisher(Device& dev, const Tets& tets, int n, const std::vector<char>& freedom) {
+DevicePolisher::DevicePolisher(Device& dev, const Tets& tets, int n, const std::vector<char>& freedom,
+                               const std::vector<VolumeAnchor>& anchors) {
   const int m = static_cast<int>(tets.rows());
   impl_ = std::make_unique<Impl>(dev, n, m);
   Impl& I = *impl_;
@@ -154,7 +220,32 @@ DevicePolisher::DevicePolisher(Device& dev, const Tets& tets, int n, const std::
   I.tets = bc::vector<int>(tets.data(), tets.data() + 4 * static_cast<size_t>(m), queue);
   I.inc_ptr = bc::vector<int>(ptr.begin(), ptr.end(), queue);
   I.inc_slot = bc::vector<int>(slot.begin(), slot.end(), queue);
-  I.freedom = bc::vector<char>(freedom.begin(), freedom.end(), queue);
+  // anchors: flag 3 on their vertices, vertex -> (group, row) packed as group << 8 | row (groups
+  // are small: a few landmarks' tets); every buffer gets at least one entry so that it exists
+  const AnchorGroups groups = anchor_groups(anchors);
+  std::vector<char> flags = freedom;
+  std::vector<int> anchor_of(static_cast<size_t>(std::max(n, 1)), -1);
+  for (int gi = 0; gi < groups.groups(); ++gi) {
+    const int b = groups.ptr[static_cast<size_t>(gi)], k = groups.ptr[static_cast<size_t>(gi) + 1] - b;
+    if (k > 255) throw InputError("polish: an anchor group of " + std::to_string(k) + " vertices (at most 255)");
+    for (int i = 0; i < k; ++i) {
+      const auto v = static_cast<size_t>(groups.vertices[static_cast<size_t>(b + i)]);
+      flags[v] = 3;
+      anchor_of[v] = gi << 8 | i;
+    }
+  }
+  auto at_least_one = [](auto v) {
+    if (v.empty()) v.resize(1);
+    return v;
+  };
+  I.freedom = bc::vector<char>(flags.begin(), flags.end(), queue);
+  I.anchor = bc::vector<int>(anchor_of.begin(), anchor_of.end(), queue);
+  const auto gv = at_least_one(groups.vertices), go = at_least_one(groups.offset);
+  const auto gm = at_least_one(groups.matrix);
+  I.group_ptr = bc::vector<int>(groups.ptr.begin(), groups.ptr.end(), queue);
+  I.group_vertex = bc::vector<int>(gv.begin(), gv.end(), queue);
+  I.group_offset = bc::vector<int>(go.begin(), go.end(), queue);
+  I.group_matrix = bc::vector<double>(gm.begin(), gm.end(), queue);
   const size_t n3 = 3 * static_cast<size_t>(std::max(n, 1)), mm = static_cast<size_t>(std::max(m, 1));
   I.x = bc::vector<double>(n3, dev.context());
   I.target = bc::vector<double>(mm, dev.context());
@@ -175,7 +266,8 @@ DevicePolisher::DevicePolisher(Device& dev, const Tets& tets, int n, const std::
   I.k_apply = dev.kernel("polish", "polish_apply");
   I.k_apply.set_args(m, I.tets, I.sg, I.p, I.q, I.partial);
   I.k_apply_t = dev.kernel("polish", "polish_apply_t");
-  I.k_apply_t.set_args(n, m, I.inc_ptr, I.inc_slot, I.sg, I.r, I.freedom, I.x, I.s, I.partial);
+  I.k_apply_t.set_args(n, m, I.inc_ptr, I.inc_slot, I.sg, I.r, I.freedom, I.x, I.s, I.partial, I.anchor,
+                       I.group_ptr, I.group_vertex, I.group_offset, I.group_matrix);
   I.k_scalars = dev.kernel("polish", "polish_scalars");
   I.k_scalars.set_arg(0, static_cast<int>(dev.reduction_partials(I.G)));
   set_args_at(I.k_scalars, 2, I.partial, I.S);

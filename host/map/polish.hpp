@@ -3,13 +3,15 @@
 // CGLS from dx = 0 on the linearised relative tet volumes,
 //   min |A dx - b|,  A_(t, v) = vol_t grad phi_v / target_t,  b_t = 1 - vol_t / target_t,
 // early-stopped after `iterations` (the minimum-norm start is the regularisation), with each
-// vertex free, tangent to the unit sphere, or fixed. Host reference and OpenCL
+// vertex free, tangent to the unit sphere, or fixed, and each anchor's weighted sum of its four
+// vertices' dx zero (VolumeAnchor; the orthogonal projection onto those planes). Host reference and OpenCL
 // (kernels/polish.cl), same arithmetic.
 #include <Eigen/Core>
 #include <memory>
 #include <vector>
 
 #include "vpm/mesh.hpp"
+#include "vpm/volume_map.hpp"
 
 namespace vpm {
 class Device;
@@ -24,6 +26,17 @@ enum PolishFreedom : char { kPolishFree = 0, kPolishTangent = 1, kPolishFixed = 
 /// `boundary` n entries, `pinned` n entries or empty.
 std::vector<char> polish_freedom(const std::vector<char>& boundary, bool slide, const std::vector<char>& pinned);
 
+/// The anchors' constraints grouped: anchors that share a vertex form one group, projected
+/// jointly. Per group g: its vertices vertices[ptr[g] .. ptr[g+1]) (sorted, each in one group),
+/// and the k x k projector P = I - W^T (W W^T)^+ W (row-major at matrix[offset[g]]), W the
+/// group's anchors x vertices weight matrix; dx_V <- P dx_V per coordinate.
+struct AnchorGroups {
+  std::vector<int> ptr{0}, vertices, offset;
+  std::vector<double> matrix;
+  int groups() const { return static_cast<int>(ptr.size()) - 1; }
+};
+AnchorGroups anchor_groups(const std::vector<VolumeAnchor>& anchors);
+
 struct PolishDirection {
   Points dx;           ///< n x 3
   int iterations = 0;  ///< CGLS iterations done (fewer than asked when A^T r vanished)
@@ -31,15 +44,17 @@ struct PolishDirection {
 };
 
 /// Host reference. `x` n x 3 positions, `tets` m x 4, `target` m target volumes (same total as
-/// x's), `freedom` n entries (polish_freedom).
+/// x's), `freedom` n entries (polish_freedom), `anchors` on free vertices.
 PolishDirection polish_direction_host(const Points& x, const Tets& tets, const Eigen::VectorXd& target,
-                                      const std::vector<char>& freedom, int iterations);
+                                      const std::vector<char>& freedom, const std::vector<VolumeAnchor>& anchors,
+                                      int iterations);
 
 /// OpenCL: connectivity (vertex -> tet-corner incidence) and freedom uploaded once; each call
 /// uploads x and target, runs the iterations without a host synchronisation, reads dx back.
 class DevicePolisher {
  public:
-  DevicePolisher(Device& device, const Tets& tets, int num_vertices, const std::vector<char>& freedom);
+  DevicePolisher(Device& device, const Tets& tets, int num_vertices, const std::vector<char>& freedom,
+                 const std::vector<VolumeAnchor>& anchors);
   ~DevicePolisher();
   PolishDirection direction(const Points& x, const Eigen::VectorXd& target, int iterations);
 

@@ -103,6 +103,25 @@ Json to_json(const VolumeMapResult& res) {
 
 namespace {
 
+// Anchor vertices: in range, interior, not pinned; weights not all zero.
+void check_anchors(const Points& reference, const Tets& tets, const VolumeMapOptions& opt) {
+  if (opt.anchors.empty()) return;
+  const std::vector<char> boundary = boundary_vertex_mask(static_cast<int>(reference.rows()), boundary_faces(tets));
+  for (size_t a = 0; a < opt.anchors.size(); ++a) {
+    const VolumeAnchor& an = opt.anchors[a];
+    double w2 = 0;
+    for (int k = 0; k < 4; ++k) {
+      const int v = an.vertices[static_cast<size_t>(k)];
+      const std::string where = "volume map: anchor " + std::to_string(a) + " vertex " + std::to_string(v);
+      if (v < 0 || v >= reference.rows()) throw InputError(where + " is out of range");
+      if (boundary[static_cast<size_t>(v)]) throw InputError(where + " is on the boundary");
+      if (!opt.pinned.empty() && opt.pinned[static_cast<size_t>(v)]) throw InputError(where + " is pinned");
+      w2 += an.weights[static_cast<size_t>(k)] * an.weights[static_cast<size_t>(k)];
+    }
+    if (!(w2 > 0)) throw InputError("volume map: anchor " + std::to_string(a) + " has no weight");
+  }
+}
+
 void check_inputs(const Points& reference, const Tets& tets, const Points& ball, const VolumeMapOptions& opt) {
   if (reference.rows() != ball.rows())
     throw InputError("volume map: reference has " + std::to_string(reference.rows()) +
@@ -116,6 +135,9 @@ void check_inputs(const Points& reference, const Tets& tets, const Points& ball,
                      std::to_string(reference.rows()) + " vertices");
   if (!opt.pinned.empty() && !opt.polish_only)
     throw InputError("volume map: pinned vertices need polish_only (Moser rounds move every vertex)");
+  if (!opt.anchors.empty() && !opt.polish_only)
+    throw InputError("volume map: anchors need polish_only (Moser rounds move every vertex)");
+  check_anchors(reference, tets, opt);
   if (opt.polish_only && opt.method != VolumeMapMethod::moser)
     throw InputError("volume map: polish_only needs the moser method");
 }
@@ -143,6 +165,8 @@ void set_up(detail::MapContext& c) {
   c.frozen = c.boundary;
   for (size_t v = 0; v < opt.pinned.size(); ++v)
     if (opt.pinned[v]) c.frozen[v] = 1;
+  for (const VolumeAnchor& a : opt.anchors)
+    for (int v : a.vertices) c.frozen[static_cast<size_t>(v)] = 1;
   c.nbr = detail::tet_neighbors(tets);
   c.vertex_tet.assign(static_cast<size_t>(c.n), 0);
   for (int t = c.m - 1; t >= 0; --t)

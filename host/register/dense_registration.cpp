@@ -321,7 +321,8 @@ DenseRegistrationResult register_dense(Device& dev, Points& ball, const Tets& te
     }
     if (lo.restore_volumes) {
       t0 = Clock::now();
-      r.restore = restore_volumes(dev, ball, tets, work, landmark_vertices(ball, landmarks), lm);
+      r.restore = restore_volumes(dev, ball, tets, work, landmark_vertices(ball, landmarks), lm, lo.restore_iterations,
+                                  lo.restore_rounds);
       r.seconds_restore = seconds_since(t0);
     }
   }

@@ -67,6 +67,7 @@ Json to_json(const RegistrationRestore& r) {
   j["tet_mean_abs_dev"] = r.tet_mean_abs_dev;
   j["rounds"] = r.rounds;
   j["pinned_vertices"] = r.pinned_vertices;
+  j["anchored_landmarks"] = r.anchored_landmarks;
   return j;
 }
 
@@ -153,7 +154,8 @@ Points check_and_restore(Device& dev, RegistrationResult& res, const Points& bef
   rep.timings.check = seconds_since(t0);
   if (opt.restore_volumes && res.inverted_tets == 0) {
     t0 = Clock::now();
-    rep.restore = restore_volumes(dev, before, tets, after, landmark_vertex, res.landmarks_final);
+    rep.restore = restore_volumes(dev, before, tets, after, landmark_vertex, res.landmarks_final, opt.restore_iterations,
+                                  opt.restore_rounds);
     rep.timings.restore = seconds_since(t0);
   }
   return after;

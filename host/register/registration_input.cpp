@@ -31,6 +31,9 @@ void check_counts(const Points& landmarks, const Points& targets, const Registra
     throw RegistrationInputError(Subject::Option, "steps: must be at least 1", -1, "steps", "must be at least 1");
   if (opt.lambda < 0 || !std::isfinite(opt.lambda))
     throw RegistrationInputError(Subject::Option, "lambda: must be >= 0", -1, "lambda", "must be >= 0");
+  if (opt.restore_iterations < 1 || opt.restore_rounds < 0)
+    throw RegistrationInputError(Subject::Option, "restore-iterations: must be at least 1 (and rounds >= 0)", -1,
+                                 "restore-iterations", "must be at least 1 (and rounds >= 0)");
 }
 
 /// The landmark / target pair at row i on its own: finite, inside the ball, both on the

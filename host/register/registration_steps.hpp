@@ -45,8 +45,11 @@ std::optional<RegistrationUntangle> untangle_flow_folds(Device& device, const Po
                                                         int rings);
 
 /// Gives back the volume lost under the flow (RegistrationOptions::restore_volumes), with the
-/// landmark vertices and the tets holding the moved landmarks pinned.
+/// landmark vertices pinned and each moved landmark held in place (an anchor of the polish, or
+/// its tet's vertices pinned where the tet touches the boundary); `iterations` CGLS iterations
+/// per polish step, at most `rounds` steps.
 RegistrationRestore restore_volumes(Device& device, const Points& before, const Tets& tets, Points& after,
-                                    const std::vector<char>& landmark_vertex, const Points& landmarks_final);
+                                    const std::vector<char>& landmark_vertex, const Points& landmarks_final,
+                                    int iterations, int rounds);
 
 }  // namespace vpm

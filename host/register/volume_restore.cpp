@@ -1,23 +1,65 @@
 // ---- volume restoration after the flow ----
 #include "register/registration_steps.hpp"
+
+#include <algorithm>
+#include <cmath>
+
 #include "vpm/locate.hpp"
+#include "vpm/topology.hpp"
 #include "vpm/volume_map.hpp"
 
 namespace vpm {
 
 RegistrationRestore restore_volumes(Device& dev, const Points& before, const Tets& tets, Points& after,
-                                    const std::vector<char>& landmark_vertex, const Points& landmarks_final) {
+                                    const std::vector<char>& landmark_vertex, const Points& landmarks_final,
+                                    int iterations, int rounds) {
+  const int n = static_cast<int>(after.rows());
   VolumeMapOptions vo;
   vo.polish_only = true;
   vo.boundary = MapBoundary::slide;
   vo.pinned = landmark_vertex;
+  // the same reach in ball units on finer meshes: a CGLS iteration reaches one more ring of tets
+  vo.polish_iterations = static_cast<int>(std::lround(iterations * std::max(1.0, std::cbrt(tets.rows() / 30000.0))));
+  vo.polish_rounds = rounds;
+  // Each landmark inside a tet is held where it is: as an anchor (its barycentric combination of
+  // the tet's vertices fixed) when the tet's vertices are interior and not landmark vertices;
+  // otherwise by pinning the tet's four vertices. Pinned vertices cannot be anchor vertices, so
+  // a tet that shares a vertex with a pinned one is pinned too (repeated until none changes).
   const TetLocator locator(after, tets);
+  std::vector<Location> held;
   for (Eigen::Index i = 0; i < landmarks_final.rows(); ++i) {
     const Location l = locator.locate(landmarks_final.row(i).transpose());
-    if (l.tet >= 0 && l.min_bary >= -1e-9)
-      for (int k = 0; k < 4; ++k) vo.pinned[static_cast<size_t>(tets(l.tet, k))] = 1;
+    if (l.tet >= 0 && l.min_bary >= -1e-9) held.push_back(l);
+  }
+  const std::vector<char> boundary = boundary_vertex_mask(n, boundary_faces(tets));
+  std::vector<char> pin_tet(held.size(), 0);
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (size_t i = 0; i < held.size(); ++i) {
+      if (pin_tet[i]) continue;
+      for (int k = 0; k < 4; ++k) {
+        const auto v = static_cast<size_t>(tets(held[i].tet, k));
+        if (boundary[v] || vo.pinned[v]) pin_tet[i] = 1;
+      }
+      if (pin_tet[i]) {
+        for (int k = 0; k < 4; ++k) vo.pinned[static_cast<size_t>(tets(held[i].tet, k))] = 1;
+        changed = true;
+      }
+    }
   }
   RegistrationRestore r;
+  for (size_t i = 0; i < held.size(); ++i) {
+    const Location& l = held[i];
+    if (!pin_tet[i]) {
+      VolumeAnchor a;
+      for (int k = 0; k < 4; ++k) {
+        a.vertices[static_cast<size_t>(k)] = tets(l.tet, k);
+        a.weights[static_cast<size_t>(k)] = l.bary[k];
+      }
+      vo.anchors.push_back(a);
+    }
+  }
+  r.anchored_landmarks = static_cast<int>(vo.anchors.size());
   for (char c : vo.pinned) r.pinned_vertices += c != 0;
   const VolumeMapResult vm = volume_preserving_map(dev, before, tets, after, vo);
   r.vertex_mean_abs_dev_before = vm.initial_vertex_mean_abs_dev;

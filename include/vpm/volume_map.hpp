@@ -34,6 +34,7 @@
 // `max_step_halvings` times); if it still folds the round is discarded, the previous fold-free
 // map kept and the iteration stops (reported). An input map that is folded and cannot be
 // untangled is NumericalError. The returned map is always fold-free.
+#include <array>
 #include <functional>
 #include <string>
 #include <vector>
@@ -62,6 +63,16 @@ MapBoundary parse_map_boundary(const std::string& name);
 const char* to_string(MapBoundary m);
 
 /// Where a part of a stage runs when the device is an OpenCL device.
+/// A material point the polish keeps in place: p = sum_k weights[k] x_(vertices[k]) (e.g.
+/// barycentric coordinates in a tet). Every polish direction dx satisfies
+/// sum_k weights[k] dx_(vertices[k]) = 0 (the orthogonal projection onto that constraint), the
+/// polish's steps are x + s dx, and untangling leaves the four vertices alone, so p stays where it
+/// is to rounding while its vertices move.
+struct VolumeAnchor {
+  std::array<int, 4> vertices{};
+  std::array<double, 4> weights{};
+};
+
 enum class ExecutionPlace {
   automatic,  ///< the stage's rule (documented at each option)
   host,       ///< the host reference, even with an OpenCL device
@@ -118,6 +129,13 @@ struct VolumeMapOptions {
   /// and the untangling; only with polish_only (InputError otherwise: Moser rounds move every
   /// vertex along the flow).
   std::vector<char> pinned;
+  /// Material points that never move (VolumeAnchor); only with polish_only (InputError
+  /// otherwise, and when an anchor's vertex is out of range, on the boundary or pinned, or its
+  /// weights are all zero). Anchors may share vertices (several points in one tet or in
+  /// neighbouring tets): their constraints are then projected jointly. Registration anchors its
+  /// landmarks this way: 3 constraints per landmark instead of its tet's 4 pinned vertices (12),
+  /// which lets the polish give back more of the volume the flow took.
+  std::vector<VolumeAnchor> anchors;
   /// Where the RK4 advection (point location and field interpolation) runs: automatic = on
   /// the OpenCL device when there is one (kernels/moser.cl), else the host reference.
   ExecutionPlace advection = ExecutionPlace::automatic;
