@@ -255,7 +255,7 @@ TEST_CASE("vpm compare writes z, foci and the patient's native maps, refuses mix
   CHECK(test::run_status("test -e " + dir + "bad.tsv") == 1);
 }
 
-TEST_CASE("statistics: hysteresis grows foci from their core, smoothing averages over adjacent elements") {
+TEST_CASE("statistics: hysteresis grows foci from their core, peaks keep small foci, smoothing averages over adjacent elements") {
   const CanonicalElements el(def());
   std::vector<ElementTable> normals;
   std::vector<std::string> names;
@@ -290,6 +290,15 @@ TEST_CASE("statistics: hysteresis grows foci from their core, smoothing averages
   for (int e : lonely) CHECK(grown.cluster[e] == 0);
   o.min_cluster = 5;  // counts only the core's elements at or beyond the cut
   CHECK(compare_to_reference(el, ref, patient, o).clusters.empty());
+  // peak or extent: the small cluster is a focus when its peak reaches --peak, not below
+  o.peak = 4.5;
+  CHECK(compare_to_reference(el, ref, patient, o).clusters.empty());
+  o.peak = 3.9;
+  const Comparison peaked = compare_to_reference(el, ref, patient, o);
+  REQUIRE(peaked.clusters.size() == 1);
+  CHECK(peaked.clusters[0].elements.size() == both.size());
+  CHECK(peaked.clusters[0].peak_z == Approx(-4));
+  o.peak = 0;
 
   std::vector<double> flat(el.size(), 2.0), spike(el.size(), 0.0);
   flat[5] = std::nan("");

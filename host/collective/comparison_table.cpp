@@ -32,6 +32,7 @@ void write_comparison(const std::string& tsv_path, const CanonicalElements& el, 
   o["fdr_q"] = opt.fdr_q;
   o["min_cluster"] = opt.min_cluster;
   o["extend"] = opt.extend;
+  o["peak"] = opt.peak;
   o["sign"] = opt.sign;
   j["options"] = o;
   j["result"] = to_json(c);

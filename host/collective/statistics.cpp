@@ -152,9 +152,10 @@ double fdr_threshold(const std::vector<double>& z, double q, int sign) {
 }
 
 // Connected components of the elements of one sign with sign * z >= low; a component is a focus
-// when at least min_size of its elements reach `cut` (low == cut: plain clusters of candidates).
+// when at least min_size of its elements reach `cut` (low == cut: plain clusters of candidates),
+// or when one reaches `peak` (> 0; and `cut`).
 std::vector<FocusCluster> clusters_of(const CanonicalElements& el, const std::vector<double>& z, double cut, double low,
-                                      int sign, int min_size) {
+                                      int sign, int min_size, double peak) {
   const int n = el.size();
   std::vector<char> seen(n, 0);
   std::vector<FocusCluster> out;
@@ -166,18 +167,20 @@ std::vector<FocusCluster> clusters_of(const CanonicalElements& el, const std::ve
     std::vector<int> stack{s0};
     seen[s0] = 1;
     int core = 0;
+    double top = 0;
     while (!stack.empty()) {
       const int e = stack.back();
       stack.pop_back();
       c.elements.push_back(e);
       core += z[e] * sign >= cut;
+      top = std::max(top, z[e] * sign);
       for (int nb : el.neighbours(e))
         if (!seen[nb] && in(nb)) {
           seen[nb] = 1;
           stack.push_back(nb);
         }
     }
-    if (core < min_size) continue;
+    if (core < min_size && !(peak > 0 && core > 0 && top >= peak)) continue;
     std::sort(c.elements.begin(), c.elements.end());
     for (int e : c.elements) {
       c.volume += el.volume(e);
@@ -207,7 +210,7 @@ Comparison compare_to_reference(const CanonicalElements& el, const Reference& re
   for (int sign : {1, -1}) {
     if (opt.sign != 0 && opt.sign != sign) continue;
     const double low = opt.extend > 0 ? std::min(opt.extend, c.threshold_used) : c.threshold_used;
-    for (FocusCluster& f : clusters_of(el, c.z, c.threshold_used, low, sign, opt.min_cluster)) c.clusters.push_back(std::move(f));
+    for (FocusCluster& f : clusters_of(el, c.z, c.threshold_used, low, sign, opt.min_cluster, opt.peak)) c.clusters.push_back(std::move(f));
   }
   std::stable_sort(c.clusters.begin(), c.clusters.end(),
                    [](const FocusCluster& a, const FocusCluster& b) { return a.elements.size() > b.elements.size(); });

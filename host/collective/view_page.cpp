@@ -220,6 +220,7 @@ Json manifest(BufferPack& pack, const CohortView& v) {
     j["fdr_q"] = f.compare.fdr_q;
     j["min_cluster"] = f.compare.min_cluster;
     j["extend"] = f.compare.extend;
+    j["peak"] = f.compare.peak;
     j["smoothing"] = f.smoothing;
     j["sign"] = f.compare.sign;
     j["reference_subjects"] = f.reference_subjects;

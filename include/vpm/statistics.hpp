@@ -57,6 +57,9 @@ struct CompareOptions {
   /// > 0: hysteresis: a focus grows from its candidates into the adjacent elements with
   /// |z| >= extend (< the threshold), and needs min_cluster candidates among its elements
   double extend = 0;
+  /// > 0: a cluster with fewer than min_cluster candidates is a focus too when its peak |z|
+  /// reaches this (small but strong losses: peak or extent, as SPM reports both)
+  double peak = 0;
   /// +1: only increases (hyper), -1: only decreases (hypo), 0: both (clusters never mix signs)
   int sign = 0;
 };
