@@ -35,6 +35,7 @@ vpm::CompareOptions compare_options(const vpm::cli::Args& args) {
   o.min_cluster = args.get_int("--min-cluster", o.min_cluster);
   o.extend = args.get_double("--extend", 0);
   if (o.extend < 0) throw vpm::InputError("option --extend: must be positive (or 0: off)");
+  o.test = vpm::cli::parse_option("--test", [&] { return vpm::parse_single_case_test(args.get("--test", "z")); });
   o.peak = args.get_double("--peak", 0);
   if (o.peak < 0) throw vpm::InputError("option --peak: must be positive (or 0: off)");
   if (o.min_cluster < 1) throw vpm::InputError("option --min-cluster: must be >= 1");
@@ -109,6 +110,7 @@ vpm::cli::Registrar reg(
       {"--min-cluster", "C", "foci are clusters of at least C adjacent elements (default 3)"},
       {"--smooth", "R", "average every subject's feature over R rings of adjacent elements first (default 0)"},
       {"--extend", "Z2", "grow each focus into adjacent elements with |z| >= Z2 (hysteresis; default off)"},
+      {"--test", "z|crawford-howell", "plain z, or Crawford-Howell's t for one case against n normals as the equivalent z (default z)"},
       {"--peak", "ZP", "a cluster smaller than --min-cluster is a focus too when its peak |z| >= ZP (default off)"},
       {"--sign", "both|hyper|hypo", "increases, decreases or both (default both)"},
       {"--mesh", "REGISTERED.vtu", "the patient's registered mesh: writes OUT_native.vtu with fields z, focus"},

@@ -8,6 +8,7 @@
 #include <set>
 #include <string>
 
+#include "collective/distributions.hpp"
 #include "support/fixtures.hpp"
 #include "support/process.hpp"
 #include "vpm/error.hpp"
@@ -326,4 +327,60 @@ TEST_CASE("statistics: hysteresis grows foci from their core, peaks keep small f
   for (int e = 0; e < el.size(); ++e) ratio += smooth.std[e] / ref.std[e] / el.size();
   CHECK(ratio < 0.75);
   CHECK_THROWS_AS(build_reference(el, normals, names, "pet", Normalisation::none, -1), InputError);
+}
+
+TEST_CASE("statistics: Crawford-Howell's test gives the z of the same tail probability as t with n - 1 dof") {
+  const CanonicalElements el(def());
+  std::vector<ElementTable> normals;
+  std::vector<std::string> names;
+  for (unsigned i = 0; i < 10; ++i) {
+    normals.push_back(subject(i + 1, 1.0));
+    names.push_back("n" + std::to_string(i));
+  }
+  const Reference ref = build_reference(normals, names, "pet", Normalisation::none);
+  for (int c : ref.count) CHECK(c == 10);
+  // t(9) = -2.262157 has lower tail 0.025 (tables), i.e. z = -1.959964; t(9) = 3.249836 has
+  // upper tail 0.005, z = 2.575829
+  const double inflate = std::sqrt(11.0 / 10.0);
+  ElementTable patient = normals[0];
+  for (int e = 0; e < el.size(); ++e)
+    patient.features[0].mean[e] = ref.mean[e] + (e % 2 ? -2.262157163 : 3.249835542) * inflate * ref.std[e];
+  CompareOptions o;
+  o.test = SingleCaseTest::crawford_howell;
+  const Comparison ch = compare_to_reference(el, ref, patient, o);
+  o.test = SingleCaseTest::z;
+  const Comparison plain = compare_to_reference(el, ref, patient, o);
+  for (int e = 0; e < el.size(); ++e) {
+    CHECK(ch.z[e] == Approx(e % 2 ? -1.959964 : 2.575829).epsilon(1e-5));
+    CHECK(std::abs(plain.z[e]) > std::abs(ch.z[e]));
+  }
+  // far tails stay finite; more normals bring it to the plain z
+  patient.features[0].mean[0] = ref.mean[0] - 1e6 * ref.std[0];
+  o.test = SingleCaseTest::crawford_howell;
+  const double far = compare_to_reference(el, ref, patient, o).z[0];
+  CHECK(std::isfinite(far));
+  CHECK(far == Approx(-14.9958).epsilon(1e-4));  // SciPy: norm.ppf(t.cdf(-1e6 / sqrt(1.1), 9))
+  for (unsigned i = 10; i < 400; ++i) {
+    normals.push_back(subject(i + 1, 1.0));
+    names.push_back("n" + std::to_string(i));
+  }
+  const Reference big = build_reference(normals, names, "pet", Normalisation::none);
+  patient.features[0].mean[1] = big.mean[1] - 3 * big.std[1];
+  CHECK(compare_to_reference(el, big, patient, o).z[1] == Approx(-3).epsilon(0.01));
+  CHECK_THROWS_AS(parse_single_case_test("student"), InputError);
+}
+
+TEST_CASE("statistics: incomplete beta, Student's t tail and the normal quantile against reference values") {
+  // values from SciPy (special.betainc, stats.t.cdf, stats.norm.ppf)
+  CHECK(detail::incomplete_beta(2, 3, 0.5) == Approx(0.6875).epsilon(1e-13));
+  CHECK(detail::incomplete_beta(0.7, 12.5, 0.03) == Approx(0.4784873835616079).epsilon(1e-12));
+  CHECK(detail::student_t_tail(-2.262157163, 9) == Approx(0.024999999991754306).epsilon(1e-11));
+  CHECK(detail::student_t_tail(2.262157163, 9) == Approx(0.024999999991754306).epsilon(1e-11));
+  CHECK(detail::student_t_tail(-50, 3) == Approx(8.808576020635976e-06).epsilon(1e-10));
+  CHECK(detail::student_t_tail(-1, 400) == Approx(0.15895752821875708).epsilon(1e-11));
+  CHECK(detail::normal_lower_quantile(0.025) == Approx(-1.9599639845400545).epsilon(1e-13));
+  CHECK(detail::normal_lower_quantile(8.808576020635976e-06) == Approx(-4.293130332795124).epsilon(1e-12));
+  CHECK(detail::normal_lower_quantile(1e-300) == Approx(-37.0470962993612).epsilon(1e-9));
+  CHECK(detail::normal_lower_quantile(0.5) == Approx(0).margin(1e-15));
+  CHECK(std::isfinite(detail::normal_lower_quantile(0.0)));
 }

@@ -67,6 +67,7 @@ std::vector<ComparisonFile> read_comparisons(const fs::path& results, const std:
     c.options.sign = static_cast<int>(need(*opt, "sign", side).number());
     if (const Json* extend = opt->find("extend")) c.options.extend = extend->number();  // absent before 2026-11-26
     if (const Json* peak = opt->find("peak")) c.options.peak = peak->number();        // absent before 2026-11-25
+    if (const Json* test = opt->find("test")) c.options.test = parse_single_case_test(test->string());
     c.clusters = res->find("clusters") ? res->find("clusters")->size() : 0;
     out.push_back(std::move(c));
   }

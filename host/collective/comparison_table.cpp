@@ -33,6 +33,7 @@ void write_comparison(const std::string& tsv_path, const CanonicalElements& el, 
   o["min_cluster"] = opt.min_cluster;
   o["extend"] = opt.extend;
   o["peak"] = opt.peak;
+  o["test"] = to_string(opt.test);
   o["sign"] = opt.sign;
   j["options"] = o;
   j["result"] = to_json(c);

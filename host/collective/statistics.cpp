@@ -6,6 +6,7 @@
 #include <limits>
 #include <numeric>
 
+#include "collective/distributions.hpp"
 #include "vpm/error.hpp"
 
 namespace vpm {
@@ -21,6 +22,14 @@ Normalisation parse_normalisation(const std::string& name) {
 }
 
 const char* to_string(Normalisation n) { return n == Normalisation::none ? "none" : "proportional"; }
+
+SingleCaseTest parse_single_case_test(const std::string& name) {
+  if (name == "z") return SingleCaseTest::z;
+  if (name == "crawford-howell") return SingleCaseTest::crawford_howell;
+  throw InputError("test '" + name + "' is not one of z, crawford-howell");
+}
+
+const char* to_string(SingleCaseTest t) { return t == SingleCaseTest::z ? "z" : "crawford-howell"; }
 
 std::vector<double> normalised_feature(const ElementTable& t, const std::string& name, Normalisation n) {
   const auto f = std::find_if(t.features.begin(), t.features.end(), [&](const ElementFeature& x) { return x.name == name; });
@@ -97,6 +106,7 @@ Reference reference_of(const CanonicalElements* el, const std::vector<ElementTab
   const size_t n = values[0].size();
   r.mean.assign(n, kNaN);
   r.std.assign(n, kNaN);
+  r.count.assign(n, 0);
   for (size_t e = 0; e < n; ++e) {
     double s = 0, s2 = 0;
     int c = 0;
@@ -105,6 +115,7 @@ Reference reference_of(const CanonicalElements* el, const std::vector<ElementTab
         s += v[e];
         ++c;
       }
+    r.count[e] = c;
     if (c < 2) continue;
     const double mean = s / c;
     for (const auto& v : values)
@@ -130,6 +141,15 @@ Reference build_reference(const CanonicalElements& elements, const std::vector<E
 }
 
 namespace {
+
+// The z with the same tail probability as Crawford and Howell's t of a single case against n
+// normals (n - 1 degrees of freedom); plain z when n is 0 (a reference written before counts).
+double crawford_howell_z(double x, double mean, double std, int n) {
+  if (n < 2) return (x - mean) / std;
+  const double t = (x - mean) / (std * std::sqrt((n + 1.0) / n));
+  const double z = detail::normal_lower_quantile(detail::student_t_tail(t, n - 1.0));  // <= 0
+  return t < 0 ? z : -z;
+}
 
 // Benjamini-Hochberg: the smallest |z| whose two-sided p-value passes at rate q (infinity when
 // none does). Candidates are limited to the requested sign.
@@ -205,7 +225,10 @@ Comparison compare_to_reference(const CanonicalElements& el, const Reference& re
   const std::vector<double>& x = c.patient;
   c.z.assign(x.size(), kNaN);
   for (size_t e = 0; e < x.size(); ++e)
-    if (!std::isnan(x[e]) && !std::isnan(ref.mean[e]) && ref.std[e] > 0) c.z[e] = (x[e] - ref.mean[e]) / ref.std[e];
+    if (!std::isnan(x[e]) && !std::isnan(ref.mean[e]) && ref.std[e] > 0)
+      c.z[e] = opt.test == SingleCaseTest::z ? (x[e] - ref.mean[e]) / ref.std[e]
+                                             : crawford_howell_z(x[e], ref.mean[e], ref.std[e],
+                                                                 ref.count.empty() ? 0 : ref.count[e]);
   c.threshold_used = opt.fdr_q > 0 ? fdr_threshold(c.z, opt.fdr_q, opt.sign) : opt.threshold;
   for (int sign : {1, -1}) {
     if (opt.sign != 0 && opt.sign != sign) continue;

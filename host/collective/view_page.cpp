@@ -221,6 +221,7 @@ Json manifest(BufferPack& pack, const CohortView& v) {
     j["min_cluster"] = f.compare.min_cluster;
     j["extend"] = f.compare.extend;
     j["peak"] = f.compare.peak;
+    j["test"] = to_string(f.compare.test);
     j["smoothing"] = f.smoothing;
     j["sign"] = f.compare.sign;
     j["reference_subjects"] = f.reference_subjects;
