@@ -89,7 +89,7 @@ inline void polish_gather(const int v, __global const int* inc_ptr, __global con
 }
 
 // s = P A^T y; P: flags 0 free, 1 tangent to the sphere at x_v, 2 zero, 3 in an anchor group:
-// anchor[v] = g << 8 | row, the group's vertices group_vertex[group_ptr[g] ..) and its projector
+// anchor[v] = g and anchor_row[v] = its row there, the group's vertices group_vertex[group_ptr[g] ..) and its projector
 // (k x k, row-major at group_matrix[group_offset[g]]): s_v = sum_j P[row][j] (A^T y)_(vertex j);
 // partial[g] = |s|^2, partial[G + g] = |y|^2 over this work item's range of y (used once for
 // |b|^2 and for the final |r|^2).
@@ -97,7 +97,8 @@ __kernel void polish_apply_t(const int n, const int m, __global const int* inc_p
                              __global const int* inc_slot, __global const real* sg,
                              __global const real* y, __global const char* flags,
                              __global const real* x, __global real* s, __global real* partial,
-                             __global const int* anchor, __global const int* group_ptr,
+                             __global const int* anchor, __global const int* anchor_row,
+                             __global const int* group_ptr,
                              __global const int* group_vertex, __global const int* group_offset,
                              __global const real* group_matrix) {
   REDUCE_SCRATCH;
@@ -114,7 +115,7 @@ __kernel void polish_apply_t(const int n, const int m, __global const int* inc_p
       sy -= dn * ny;
       sz -= dn * nz;
     } else if (flags[i] == 3) {
-      const int g = anchor[i] >> 8, row = anchor[i] & 255;
+      const int g = anchor[i], row = anchor_row[i];
       const int b = group_ptr[g], k = group_ptr[g + 1] - b;
       __global const real* P = group_matrix + group_offset[g] + row * k;
       for (int j = 0; j < k; ++j) {

@@ -463,6 +463,18 @@ TEST_CASE("vpm register: bad input exits 2 naming the file and line") {
     CHECK(msg.find(c.expect) != std::string::npos);
     CHECK(!std::filesystem::exists(out));
   }
+  // the restoration's step length: positive, and not without the restoration
+  write_text(tmp("ok.csv"), "0.1,0.2,0.3\n-0.2,0.1,0\n");
+  for (const auto& [extra, expect] : std::vector<std::pair<std::string, std::string>>{
+           {" --restore-iterations 0", "--restore-iterations: must be positive"},
+           {" --no-restore --restore-iterations 5", "the restoration is off"}}) {
+    INFO(extra);
+    std::filesystem::remove(out);
+    CHECK(vpm_register(mesh + " -o " + out + " --landmarks " + tmp("ok.csv") + " --targets " + tmp("ok_dst.csv") + extra,
+                       err) == 2);
+    CHECK(slurp(err).find(expect) != std::string::npos);
+    CHECK(!std::filesystem::exists(out));
+  }
   // a folding registration: exit 3, no output
   TetMesh sliver = test::ball_mesh(8);
   write_mesh(tmp("sliver.vtu"), sliver);

@@ -10,7 +10,6 @@
 
 #include "core/parallel.hpp"
 #include "vpm/device.hpp"
-#include "vpm/error.hpp"
 #include "vpm/geometry.hpp"
 
 namespace vpm::detail {
@@ -32,7 +31,7 @@ AnchorGroups anchor_groups(const std::vector<VolumeAnchor>& anchors) {
   std::vector<int> parent(static_cast<size_t>(a_n));
   for (int a = 0; a < a_n; ++a) parent[static_cast<size_t>(a)] = a;
   auto root = [&](int a) {
-    while (parent[static_cast<size_t>(a)] != a) a = parent[static_cast<size_t>(a)] = parent[static_cast<size_t>(parent[static_cast<size_t>(a)])];
+    while (parent[static_cast<size_t>(a)] != a) a = parent[static_cast<size_t>(a)];
     return a;
   };
   std::map<int, int> owner;  // vertex -> an anchor using it
@@ -181,14 +180,14 @@ struct DevicePolisher::Impl {
   Device& dev;
   int n, m;
   size_t G;  // reduction grid
-  bc::vector<int> tets, inc_ptr, inc_slot, anchor, group_ptr, group_vertex, group_offset;
+  bc::vector<int> tets, inc_ptr, inc_slot, anchor, anchor_row, group_ptr, group_vertex, group_offset;
   bc::vector<double> group_matrix;
   bc::vector<char> freedom;
   bc::vector<double> x, target, sg, b, r, q, dx, p, s, partial, S;
   bc::kernel k_setup, k_apply, k_apply_t, k_scalars, k_update, k_update_p;
   Impl(Device& d, int n_, int m_)
       : dev(d), n(n_), m(m_), tets(d.context()), inc_ptr(d.context()), inc_slot(d.context()),
-        anchor(d.context()), group_ptr(d.context()), group_vertex(d.context()), group_offset(d.context()),
+        anchor(d.context()), anchor_row(d.context()), group_ptr(d.context()), group_vertex(d.context()), group_offset(d.context()),
         group_matrix(d.context()),
         freedom(d.context()), x(d.context()), target(d.context()), sg(d.context()), b(d.context()),
         r(d.context()), q(d.context()), dx(d.context()), p(d.context()), s(d.context()),
@@ -220,18 +219,18 @@ DevicePolisher::DevicePolisher(Device& dev, const Tets& tets, int n, const std::
   I.tets = bc::vector<int>(tets.data(), tets.data() + 4 * static_cast<size_t>(m), queue);
   I.inc_ptr = bc::vector<int>(ptr.begin(), ptr.end(), queue);
   I.inc_slot = bc::vector<int>(slot.begin(), slot.end(), queue);
-  // anchors: flag 3 on their vertices, vertex -> (group, row) packed as group << 8 | row (groups
-  // are small: a few landmarks' tets); every buffer gets at least one entry so that it exists
+  // anchors: flag 3 on their vertices, vertex -> its group and its row there; every buffer gets
+  // at least one entry so that it exists
   const AnchorGroups groups = anchor_groups(anchors);
   std::vector<char> flags = freedom;
-  std::vector<int> anchor_of(static_cast<size_t>(std::max(n, 1)), -1);
+  std::vector<int> anchor_of(static_cast<size_t>(std::max(n, 1)), -1), row_of(anchor_of.size(), 0);
   for (int gi = 0; gi < groups.groups(); ++gi) {
     const int b = groups.ptr[static_cast<size_t>(gi)], k = groups.ptr[static_cast<size_t>(gi) + 1] - b;
-    if (k > 255) throw InputError("polish: an anchor group of " + std::to_string(k) + " vertices (at most 255)");
     for (int i = 0; i < k; ++i) {
       const auto v = static_cast<size_t>(groups.vertices[static_cast<size_t>(b + i)]);
       flags[v] = 3;
-      anchor_of[v] = gi << 8 | i;
+      anchor_of[v] = gi;
+      row_of[v] = i;
     }
   }
   auto at_least_one = [](auto v) {
@@ -240,6 +239,7 @@ DevicePolisher::DevicePolisher(Device& dev, const Tets& tets, int n, const std::
   };
   I.freedom = bc::vector<char>(flags.begin(), flags.end(), queue);
   I.anchor = bc::vector<int>(anchor_of.begin(), anchor_of.end(), queue);
+  I.anchor_row = bc::vector<int>(row_of.begin(), row_of.end(), queue);
   const auto gv = at_least_one(groups.vertices), go = at_least_one(groups.offset);
   const auto gm = at_least_one(groups.matrix);
   I.group_ptr = bc::vector<int>(groups.ptr.begin(), groups.ptr.end(), queue);
@@ -267,7 +267,7 @@ DevicePolisher::DevicePolisher(Device& dev, const Tets& tets, int n, const std::
   I.k_apply.set_args(m, I.tets, I.sg, I.p, I.q, I.partial);
   I.k_apply_t = dev.kernel("polish", "polish_apply_t");
   I.k_apply_t.set_args(n, m, I.inc_ptr, I.inc_slot, I.sg, I.r, I.freedom, I.x, I.s, I.partial, I.anchor,
-                       I.group_ptr, I.group_vertex, I.group_offset, I.group_matrix);
+                       I.anchor_row, I.group_ptr, I.group_vertex, I.group_offset, I.group_matrix);
   I.k_scalars = dev.kernel("polish", "polish_scalars");
   I.k_scalars.set_arg(0, static_cast<int>(dev.reduction_partials(I.G)));
   set_args_at(I.k_scalars, 2, I.partial, I.S);
