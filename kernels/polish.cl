@@ -89,8 +89,9 @@ inline void polish_gather(const int v, __global const int* inc_ptr, __global con
 }
 
 // s = P A^T y; P: flags 0 free, 1 tangent to the sphere at x_v, 2 zero, 3 in an anchor group:
-// anchor[v] = g and anchor_row[v] = its row there, the group's vertices group_vertex[group_ptr[g] ..) and its projector
-// (k x k, row-major at group_matrix[group_offset[g]]): s_v = sum_j P[row][j] (A^T y)_(vertex j);
+// anchor[v] = g and anchor_row[v] = its row there, the group's vertices
+// group_vertex[group_ptr[g] ..) and its projector (k x k, row-major at
+// group_matrix[group_offset[g]]): s_v = sum_j P[row][j] (A^T y)_(vertex j);
 // partial[g] = |s|^2, partial[G + g] = |y|^2 over this work item's range of y (used once for
 // |b|^2 and for the final |r|^2).
 __kernel void polish_apply_t(const int n, const int m, __global const int* inc_ptr,

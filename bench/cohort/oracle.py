@@ -22,7 +22,6 @@ Writes OUT/subjects/sub-X/sub-X_registered.vtu, OUT/tables, OUT/compare, OUT/eva
 """
 import argparse
 import concurrent.futures
-import csv
 import json
 import os
 import shlex
@@ -36,6 +35,8 @@ from vtk.util import numpy_support as ns
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "..", "scripts"))
 from synth_cohort import Deformation  # noqa: E402
+sys.path.insert(0, HERE)
+from evaluate import read_participants  # noqa: E402
 
 
 def fail(path, problem):
@@ -159,7 +160,8 @@ def feature_image(bids, sub, folder, suffix):
 def run(cmd):
     p = subprocess.run(cmd, shell=True, capture_output=True, text=True)
     if p.returncode != 0:
-        fail(cmd.split()[0], f"exit {p.returncode}: {p.stderr.strip().splitlines()[-1:] }")
+        last = p.stderr.strip().splitlines()
+        fail(cmd.split()[0], f"exit {p.returncode}: {last[-1] if last else 'no message'}")
 
 
 def main():
@@ -173,15 +175,11 @@ def main():
     ap.add_argument("--compare", default="--normalisation proportional --threshold 3 --min-cluster 8 "
                                          "--extend 2.5 --smooth 0 --sign hypo")
     a = ap.parse_args()
-    parts = os.path.join(a.bids, "participants.tsv")
-    if not os.path.isfile(parts):
-        fail(parts, "not found")
-    with open(parts) as f:
-        rows = list(csv.DictReader(f, delimiter="\t"))
-    subs = [(r["participant_id"], r["group"]) for r in rows]
+    normals, patients = read_participants(a.bids)
+    subs = normals + patients
     template = TemplateBall(os.path.join(a.results, "template", "template_ball.vtu"))
     outside = {}
-    for sub, _ in subs:
+    for sub in subs:
         outside[sub], _ = ideal_mesh(sub, a.bids, a.results, a.out, template)
     os.makedirs(os.path.join(a.out, "tables"), exist_ok=True)
     os.makedirs(os.path.join(a.out, "compare"), exist_ok=True)
@@ -196,18 +194,18 @@ def main():
             f"{a.elements} -o {table(sub)} --quiet")
 
     with concurrent.futures.ThreadPoolExecutor(a.jobs) as ex:
-        list(ex.map(sample, [s for s, _ in subs]))
-    normals = ",".join(table(s) for s, g in subs if g == "normal")
+        list(ex.map(sample, subs))
+    normal_tables = ",".join(table(s) for s in normals)
 
     def compare(sub):
         mesh = os.path.join(a.out, "subjects", sub, f"{sub}_registered.vtu")
         labels = feature_image(a.bids, sub, "anat", "dseg")
-        run(f"{vpm} compare --normals {normals} --patient {table(sub)} --feature pet {a.compare} --mesh {mesh} "
+        run(f"{vpm} compare --normals {normal_tables} --patient {table(sub)} --feature pet {a.compare} --mesh {mesh} "
             f"--image {feature_image(a.bids, sub, 'pet', 'pet')} --labels {labels} "
             f"-o {os.path.join(a.out, 'compare', sub + '_pet.tsv')} --quiet")
 
     with concurrent.futures.ThreadPoolExecutor(a.jobs) as ex:
-        list(ex.map(compare, [s for s, g in subs if g != "normal"]))
+        list(ex.map(compare, patients))
     run(f"/usr/bin/python3 {os.path.join(HERE, 'evaluate.py')} --bids {a.bids} --results {a.out} "
         f"--out-json {os.path.join(a.out, 'evaluation.json')} --out-md {os.path.join(a.out, 'evaluation.md')}")
     with open(os.path.join(a.out, "oracle.json"), "w") as f:

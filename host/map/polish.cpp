@@ -219,7 +219,7 @@ DevicePolisher::DevicePolisher(Device& dev, const Tets& tets, int n, const std::
   I.tets = bc::vector<int>(tets.data(), tets.data() + 4 * static_cast<size_t>(m), queue);
   I.inc_ptr = bc::vector<int>(ptr.begin(), ptr.end(), queue);
   I.inc_slot = bc::vector<int>(slot.begin(), slot.end(), queue);
-  // anchors: flag 3 on their vertices, vertex -> its group and its row there; every buffer gets
+  // anchors: kPolishAnchored on their vertices, vertex -> its group and its row there; every buffer gets
   // at least one entry so that it exists
   const AnchorGroups groups = anchor_groups(anchors);
   std::vector<char> flags = freedom;
@@ -228,7 +228,7 @@ DevicePolisher::DevicePolisher(Device& dev, const Tets& tets, int n, const std::
     const int b = groups.ptr[static_cast<size_t>(gi)], k = groups.ptr[static_cast<size_t>(gi) + 1] - b;
     for (int i = 0; i < k; ++i) {
       const auto v = static_cast<size_t>(groups.vertices[static_cast<size_t>(b + i)]);
-      flags[v] = 3;
+      flags[v] = kPolishAnchored;
       anchor_of[v] = gi;
       row_of[v] = i;
     }

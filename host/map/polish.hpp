@@ -4,8 +4,8 @@
 //   min |A dx - b|,  A_(t, v) = vol_t grad phi_v / target_t,  b_t = 1 - vol_t / target_t,
 // early-stopped after `iterations` (the minimum-norm start is the regularisation), with each
 // vertex free, tangent to the unit sphere, or fixed, and each anchor's weighted sum of its four
-// vertices' dx zero (VolumeAnchor; the orthogonal projection onto those planes). Host reference and OpenCL
-// (kernels/polish.cl), same arithmetic.
+// vertices' dx zero (VolumeAnchor; the orthogonal projection onto those planes). Host reference
+// and OpenCL (kernels/polish.cl), same arithmetic.
 #include <Eigen/Core>
 #include <memory>
 #include <vector>
@@ -19,8 +19,10 @@ class Device;
 
 namespace vpm::detail {
 
-/// Freedom of each vertex in a polish step.
-enum PolishFreedom : char { kPolishFree = 0, kPolishTangent = 1, kPolishFixed = 2 };
+/// Freedom of each vertex in a polish step (kernels/polish.cl's flags). kPolishAnchored: a free
+/// vertex of an anchor group, projected with its group (set by DevicePolisher from the anchors;
+/// polish_freedom never returns it).
+enum PolishFreedom : char { kPolishFree = 0, kPolishTangent = 1, kPolishFixed = 2, kPolishAnchored = 3 };
 
 /// Per-vertex freedom: pinned -> fixed; boundary -> tangent when sliding, else fixed.
 /// `boundary` n entries, `pinned` n entries or empty.

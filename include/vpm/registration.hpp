@@ -98,11 +98,11 @@ struct RegistrationOptions {
   bool restore_volumes = true;
   /// CGLS iterations per polish step of the restoration (up to 30,000 tets; times
   /// cbrt(tets / 30,000) above, so that a step reaches as far in the ball on finer meshes), and
-  /// at most `restore_rounds` steps. Few
-  /// iterations keep each step local (CGLS reaches the smooth, far-reaching part of the
-  /// correction last), so the restoration drifts the registered regions less: on five demo
-  /// subjects (docs/register.md) 5 / 10 / 20 / 60 iterations gave held-out Dice 0.825 / 0.821 /
-  /// 0.815 / 0.809 (no restoration 0.825) at tet mean |r-1| 1.18 / 1.07 / 1.00 / 0.97 %.
+  /// at most `restore_rounds` steps. Few iterations keep each step local (CGLS reaches the
+  /// smooth, far-reaching part of the correction last), so the restoration drifts the registered
+  /// regions less: on five demo subjects (docs/register.md) 5 / 10 / 20 / 60 iterations gave
+  /// held-out Dice 0.825 / 0.821 / 0.815 / 0.809 (no restoration 0.825) at tet mean |r-1| 1.18 /
+  /// 1.07 / 1.00 / 0.97 %.
   int restore_iterations = 10;
   int restore_rounds = 12;
   /// Throw NumericalError when tets invert (false: return the folded result and count them;

@@ -62,7 +62,6 @@ enum class MapBoundary {
 MapBoundary parse_map_boundary(const std::string& name);
 const char* to_string(MapBoundary m);
 
-/// Where a part of a stage runs when the device is an OpenCL device.
 /// A material point the polish keeps in place: p = sum_k weights[k] x_(vertices[k]) (e.g.
 /// barycentric coordinates in a tet). Every polish direction dx satisfies
 /// sum_k weights[k] dx_(vertices[k]) = 0 (the orthogonal projection onto that constraint), the
@@ -73,6 +72,7 @@ struct VolumeAnchor {
   std::array<double, 4> weights{};
 };
 
+/// Where a part of a stage runs when the device is an OpenCL device.
 enum class ExecutionPlace {
   automatic,  ///< the stage's rule (documented at each option)
   host,       ///< the host reference, even with an OpenCL device
