@@ -5,9 +5,14 @@
 //
 //   vpm_bench_solver [--sizes 25000,100000,400000,1600000] [--quick] [--repeats 5]
 //                    [--json solver.json] [--no-viennacl] [--no-eigen] [--no-amg]
-//                    [--eigen-threads N]
+//                    [--eigen-threads N] [--hypre-ranks 1,2 | --no-hypre]
 // AMG peers (vpm-amg-cg on the device, vpm-amg-cg-host): median_s is the solve without the
 // hierarchy update, reported as setup_update_s (median) and setup_build_s (first build).
+//
+// hypre's BoomerAMG-CG (hypre-boomeramg-cg-<N>rank): vpm_bench_hypre (built where Debian's
+// libhypre-dev is installed) run under `mpirun -np N` for each N of --hypre-ranks (default: 1 and
+// the hardware threads) after the other peers of a size, not interleaved with them; median_s is
+// its solve, setup_update_s its BoomerAMG setup (a full rebuild: hypre cannot reuse a pattern).
 //
 // --eigen-threads N runs Eigen with N threads only (default: all hardware threads and 1 thread,
 // both reported).
@@ -21,6 +26,7 @@
 #include <thread>
 #include <vector>
 
+#include "solver/hypre_run.hpp"
 #include "solver/peers.hpp"
 #include "support/shapes.hpp"
 #include "vpm/device.hpp"
@@ -40,6 +46,7 @@ struct Options {
   std::string json_path = "solver.json";
   bool use_viennacl = true, use_eigen = true, use_amg = true;
   std::vector<int> eigen_threads;  ///< empty: all hardware threads and 1
+  std::vector<int> hypre_ranks;    ///< empty: 1 and the hardware threads; {0}: no hypre
   bool help = false;
 };
 
@@ -63,6 +70,13 @@ Options parse_options(int argc, char** argv) {
     else if (a == "--no-eigen") o.use_eigen = false;
     else if (a == "--no-amg") o.use_amg = false;
     else if (a == "--eigen-threads") o.eigen_threads = {std::max(1, std::stoi(next()))};
+    else if (a == "--no-hypre") o.hypre_ranks = {0};
+    else if (a == "--hypre-ranks") {
+      o.hypre_ranks.clear();
+      std::stringstream ss(next());
+      std::string tok;
+      while (std::getline(ss, tok, ',')) o.hypre_ranks.push_back(std::max(1, std::stoi(tok)));
+    }
     else if (a == "-h" || a == "--help") {
       o.help = true;
       return o;
@@ -70,12 +84,6 @@ Options parse_options(int argc, char** argv) {
     else throw InputError("unknown argument " + a);
   }
   return o;
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 std::string machine_name() {
@@ -204,10 +212,40 @@ std::vector<Run> time_peers(const Problem& p, std::vector<Peer>& peers, int repe
   return runs;
 }
 
+/// hypre's BoomerAMG-CG with `ranks` MPI processes on the same problem (its own program, which
+/// rebuilds the problem: the same mesh and right-hand side), as a row of the table.
+Run run_hypre_peer(const Problem& p, long target, int ranks, int repeats) {
+  Run r;
+  r.mesh = p.name;
+  r.solver = "hypre-boomeramg-cg-" + std::to_string(ranks) + "rank";
+  r.tets = p.mesh.num_tets();
+  r.vertices = p.n;
+  r.nnz = p.nnz;
+  r.threads = ranks;
+  try {
+    const Json j = run_hypre(target, ranks, repeats);
+    if (long(j.find("vertices")->number()) != p.n || long(j.find("nnz")->number()) != p.nnz)
+      throw NumericalError("vpm_bench_hypre built a different problem");
+    const Json& times = *j.find("times_s");
+    const Json& setups = *j.find("setup_times_s");
+    for (size_t k = 0; k < times.size(); ++k) r.times.push_back(times.at(k).number());
+    for (size_t k = 0; k < setups.size(); ++k) r.update_times.push_back(setups.at(k).number());
+    r.median_s = median(r.times);
+    r.build_s = r.update_times.empty() ? 0.0 : r.update_times.front();
+    r.iterations = int(j.find("iterations")->number());
+    r.relative_residual = j.find("relative_residual")->number();
+    r.note = "separate process under mpirun, after the other peers; BoomerAMG rebuilt per solve "
+             "(setup_update_s); " + j.find("settings")->string();
+  } catch (const std::exception& ex) {
+    r.note = std::string("failed: ") + ex.what();
+  }
+  return r;
+}
+
 /// Builds the problem of one size and runs every peer on it. A ViennaCL failure is recorded in
 /// `viennacl_status`, and ViennaCL is not run on the later sizes.
 std::vector<Run> run_size(Device& dev, long target, const Options& o, const Triad& triad,
-                          std::string& viennacl_status) {
+                          std::string& viennacl_status, const std::string& hypre_status) {
   const std::string name = "ellipsoid-" + std::to_string(target / 1000) + "k";
   Problem p(dev, name, test::voxel_ellipsoid_mesh(target));
   std::cerr << "\n" << name << ": " << p.n << " vertices, " << p.mesh.num_tets() << " tets\n";
@@ -227,6 +265,8 @@ std::vector<Run> run_size(Device& dev, long target, const Options& o, const Tria
     }
   }
   std::vector<Run> runs = time_peers(p, peers, o.repeats);
+  if (hypre_status == "ok")
+    for (int ranks : o.hypre_ranks) runs.push_back(run_hypre_peer(p, target, ranks, o.repeats));
   std::cerr << "done " << name << " (load " << loadavg() << ")\n";
   return runs;
 }
@@ -295,7 +335,7 @@ void add_runs(Json& out, const std::vector<Run>& runs) {
   Json arr = Json::array(), extra = Json::array();
   for (const auto& r : runs) {
     const bool contract = r.solver == "vpm-cg" || r.solver == "eigen-cg" || r.solver == "viennacl-cg" ||
-                          r.solver.rfind("vpm-amg", 0) == 0;
+                          r.solver.rfind("vpm-amg", 0) == 0 || r.solver.rfind("hypre", 0) == 0;
     (contract ? arr : extra).push_back(to_json(r));
   }
   out["runs"] = arr;
@@ -313,7 +353,7 @@ int main(int argc, char** argv) try {
   Options o = parse_options(argc, argv);
   if (o.help) {
     std::cout << "vpm_bench_solver [--sizes N,N,...] [--quick] [--repeats R] [--json FILE] "
-                 "[--no-viennacl] [--no-eigen] [--no-amg]\n";
+                 "[--no-viennacl] [--no-eigen] [--no-amg] [--eigen-threads N] [--hypre-ranks N,... | --no-hypre]\n";
     return 0;
   }
   Device& dev = Device::current();
@@ -338,17 +378,24 @@ int main(int argc, char** argv) try {
   std::cerr << "triad: device " << triad.device_gbs << " GB/s, host " << triad.host_gbs << " GB/s\n";
 
   std::string viennacl_status = viennacl_start_status(dev, o.use_viennacl);
+  const std::string hypre = o.hypre_ranks == std::vector<int>{0} ? std::string("not run") : hypre_status();
+  if (o.hypre_ranks.empty()) {
+    o.hypre_ranks = {1};
+    if (std::thread::hardware_concurrency() > 1) o.hypre_ranks.push_back(int(std::thread::hardware_concurrency()));
+  }
+  std::cerr << "hypre: " << hypre << "\n";
   std::vector<Run> runs;
   for (long target : o.sizes)
-    for (Run& r : run_size(dev, target, o, triad, viennacl_status)) runs.push_back(std::move(r));
+    for (Run& r : run_size(dev, target, o, triad, viennacl_status, hypre)) runs.push_back(std::move(r));
 
   print_table(runs);
   add_runs(out, runs);
   out["viennacl"] = viennacl_status;
+  out["hypre"] = hypre;
   out["load_average_end"] = loadavg();
   const Json ratios = speedups(runs);
   out["speedups"] = ratios;
-  std::printf("\nViennaCL: %s\n", viennacl_status.c_str());
+  std::printf("\nViennaCL: %s\nhypre: %s\n", viennacl_status.c_str(), hypre.c_str());
   for (size_t i = 0; i < ratios.size(); ++i) std::printf("%s\n", ratios.at(i).dump(-1).c_str());
   write_json_file(o.json_path, out);
   std::printf("wrote %s\n", o.json_path.c_str());

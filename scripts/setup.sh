@@ -9,6 +9,7 @@ PKGS=(
   libtet1.5-dev tetgen libnifti2-dev zlib1g-dev mricron-data
   libcgal-dev libgmp-dev libmpfr-dev
   libviennacl-dev python3-vtk9 python3-numpy
+  libhypre-dev openmpi-bin  # bench only: hypre BoomerAMG, the solver benchmark's peer, and its mpirun
   snakemake python3-nibabel python3-scipy
   chromium
 )

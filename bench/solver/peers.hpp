@@ -3,6 +3,7 @@
 // Eigen's CG on the host and ViennaCL 1.7.1's CG on the same OpenCL device. Each is a Peer:
 // a set of functions over its own state, so that the repeats can be interleaved round-robin.
 #include <Eigen/Core>
+#include <algorithm>
 #include <functional>
 #include <memory>
 #include <string>
@@ -14,6 +15,13 @@
 #include "vpm/sparse.hpp"
 
 namespace vpm::bench {
+
+/// The median of repeated timings (the mean of the middle two for an even count).
+inline double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
 
 /// CG stopping tolerance (relative residual) of every peer.
 constexpr double kTolerance = 1e-8;
