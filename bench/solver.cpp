@@ -9,13 +9,10 @@
 // AMG peers (vpm-amg-cg on the device, vpm-amg-cg-host): median_s is the solve without the
 // hierarchy update, reported as setup_update_s (median) and setup_build_s (first build).
 //
-// hypre's BoomerAMG-CG (hypre-boomeramg-cg-<N>rank): vpm_bench_hypre (built where Debian's
-// libhypre-dev is installed) run under `mpirun -np N` for each N of --hypre-ranks (default: 1 and
-// the hardware threads) after the other peers of a size, not interleaved with them; median_s is
-// its solve, setup_update_s its BoomerAMG setup (a full rebuild: hypre cannot reuse a pattern).
+// hypre's BoomerAMG-CG (hypre-boomeramg-cg-<N>rank, solver/hypre_run.hpp): median_s is its
+// solve, setup_update_s its BoomerAMG setup (a full rebuild: hypre cannot reuse a pattern).
 //
-// --eigen-threads N runs Eigen with N threads only (default: all hardware threads and 1 thread,
-// both reported).
+// --eigen-threads N: Eigen with N threads only (default: all hardware threads and 1, both run).
 #include <Eigen/Core>
 #include <algorithm>
 #include <cstdio>
@@ -50,6 +47,13 @@ struct Options {
   bool help = false;
 };
 
+std::vector<long> int_list(const std::string& text) {
+  std::vector<long> out;
+  std::stringstream ss(text);
+  for (std::string tok; std::getline(ss, tok, ',');) out.push_back(std::stol(tok));
+  return out;
+}
+
 Options parse_options(int argc, char** argv) {
   Options o;
   for (int i = 1; i < argc; ++i) {
@@ -59,24 +63,15 @@ Options parse_options(int argc, char** argv) {
       return argv[++i];
     };
     if (a == "--quick") o.sizes = {25000, 100000};
-    else if (a == "--sizes") {
-      o.sizes.clear();
-      std::stringstream ss(next());
-      std::string tok;
-      while (std::getline(ss, tok, ',')) o.sizes.push_back(std::stol(tok));
-    } else if (a == "--repeats") o.repeats = std::max(1, std::stoi(next()));
+    else if (a == "--sizes") o.sizes = int_list(next());
+    else if (a == "--repeats") o.repeats = std::max(1, std::stoi(next()));
     else if (a == "--json") o.json_path = next();
     else if (a == "--no-viennacl") o.use_viennacl = false;
     else if (a == "--no-eigen") o.use_eigen = false;
     else if (a == "--no-amg") o.use_amg = false;
     else if (a == "--eigen-threads") o.eigen_threads = {std::max(1, std::stoi(next()))};
     else if (a == "--no-hypre") o.hypre_ranks = {0};
-    else if (a == "--hypre-ranks") {
-      o.hypre_ranks.clear();
-      std::stringstream ss(next());
-      std::string tok;
-      while (std::getline(ss, tok, ',')) o.hypre_ranks.push_back(std::max(1, std::stoi(tok)));
-    }
+    else if (a == "--hypre-ranks") for (long r : int_list(next())) o.hypre_ranks.push_back(int(std::max(1L, r)));
     else if (a == "-h" || a == "--help") {
       o.help = true;
       return o;
@@ -223,19 +218,15 @@ Run run_hypre_peer(const Problem& p, long target, int ranks, int repeats) {
   r.nnz = p.nnz;
   r.threads = ranks;
   try {
-    const Json j = run_hypre(target, ranks, repeats);
-    if (long(j.find("vertices")->number()) != p.n || long(j.find("nnz")->number()) != p.nnz)
-      throw NumericalError("vpm_bench_hypre built a different problem");
-    const Json& times = *j.find("times_s");
-    const Json& setups = *j.find("setup_times_s");
-    for (size_t k = 0; k < times.size(); ++k) r.times.push_back(times.at(k).number());
-    for (size_t k = 0; k < setups.size(); ++k) r.update_times.push_back(setups.at(k).number());
+    const HypreRun h = run_hypre(target, ranks, repeats, p.n, p.nnz);
+    r.times = h.solve_s;
+    r.update_times = h.setup_s;
     r.median_s = median(r.times);
-    r.build_s = r.update_times.empty() ? 0.0 : r.update_times.front();
-    r.iterations = int(j.find("iterations")->number());
-    r.relative_residual = j.find("relative_residual")->number();
+    r.build_s = r.update_times.front();
+    r.iterations = h.iterations;
+    r.relative_residual = h.relative_residual;
     r.note = "separate process under mpirun, after the other peers; BoomerAMG rebuilt per solve "
-             "(setup_update_s); " + j.find("settings")->string();
+             "(setup_update_s); " + h.settings;
   } catch (const std::exception& ex) {
     r.note = std::string("failed: ") + ex.what();
   }
@@ -379,10 +370,7 @@ int main(int argc, char** argv) try {
 
   std::string viennacl_status = viennacl_start_status(dev, o.use_viennacl);
   const std::string hypre = o.hypre_ranks == std::vector<int>{0} ? std::string("not run") : hypre_status();
-  if (o.hypre_ranks.empty()) {
-    o.hypre_ranks = {1};
-    if (std::thread::hardware_concurrency() > 1) o.hypre_ranks.push_back(int(std::thread::hardware_concurrency()));
-  }
+  if (o.hypre_ranks.empty()) o.hypre_ranks = default_hypre_ranks();
   std::cerr << "hypre: " << hypre << "\n";
   std::vector<Run> runs;
   for (long target : o.sizes)

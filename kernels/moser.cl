@@ -160,3 +160,50 @@ __kernel void moser_rk_update(const int n, __global real* x, __global const real
   x[3 * i + 1] = p.y;
   x[3 * i + 2] = p.z;
 }
+
+// ---- The round's field from psi (paper eq. 12-13) -------------------------------------------
+// Must match tet_gradients (host/map/moser_field.cpp) and vertex_gradients
+// (host/map/volume_map_steps.cpp): the same products and sums in the same order.
+
+// Per vertex: grad[v] = the volume-weighted mean of the gradients of psi on its tets (tets in
+// increasing order, the CSR incidence offset / tet_of; each tet's gradient is
+// sum_j (psi_j - psi_0) * row j of Minv, its volume det[b-a, c-a, d-a] / 6 from x, recomputed
+// for each of its 4 vertices rather than stored); at boundary vertices the normal part x/|x|
+// is removed when sliding, the whole vector when the boundary is fixed.
+__kernel void moser_vertex_gradients(const int n, __global const int* offset,
+                                     __global const int* tet_of, __global const int* tets,
+                                     __global const real* inv, __global const real* psi,
+                                     __global const char* boundary, const int slide,
+                                     __global const real* x, __global real* grad) {
+  const int v = get_global_id(0);
+  if (v >= n) return;
+  real w = 0.0, gx = 0.0, gy = 0.0, gz = 0.0;
+  for (int k = offset[v]; k < offset[v + 1]; ++k) {
+    const int t = tet_of[k];
+    __global const int* T = tets + 4 * t;
+    __global const real* q = inv + 12 * t;
+    const real p0 = psi[T[0]];
+    const real d1 = psi[T[1]] - p0, d2 = psi[T[2]] - p0, d3 = psi[T[3]] - p0;
+    const real3 a = load3(x, T[0]);
+    const real3 e1 = load3(x, T[1]) - a, e2 = load3(x, T[2]) - a, e3 = load3(x, T[3]) - a;
+    const real vol = dot(e1, cross(e2, e3)) / 6.0;
+    w += vol;
+    gx += vol * (d1 * q[3] + d2 * q[6] + d3 * q[9]);
+    gy += vol * (d1 * q[4] + d2 * q[7] + d3 * q[10]);
+    gz += vol * (d1 * q[5] + d2 * q[8] + d3 * q[11]);
+  }
+  real3 g = (real3)(gx, gy, gz);
+  if (w > 0.0) g /= w;
+  if (boundary[v]) {
+    if (!slide) {
+      g = (real3)(0.0, 0.0, 0.0);
+    } else {
+      const real3 p = load3(x, v);
+      const real3 nrm = p / sqrt(dot(p, p));
+      g -= dot(g, nrm) * nrm;
+    }
+  }
+  grad[3 * v] = g.x;
+  grad[3 * v + 1] = g.y;
+  grad[3 * v + 2] = g.z;
+}

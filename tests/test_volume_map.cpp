@@ -594,6 +594,56 @@ TEST_CASE("point location: walk, grid fallback and clamping give exact P1 transp
   if (results.size() == 2) CHECK((results[0] - results[1]).cwiseAbs().maxCoeff() < 1e-12);
 }
 
+TEST_CASE("Moser field gradients (eq. 12-13): linear psi reproduced, host == device") {
+  // On a jittered ball a linear psi = a . x has the gradient a on every tet, so every interior
+  // vertex average is a to round-off, boundary vertices keep a's tangential part (sliding) or
+  // 0 (fixed). A nonlinear psi compares the device kernels with the host reference.
+  const TetMesh m = test::jitter_interior(test::ball_mesh(8), 8, 0.2, 3);
+  const int n = m.num_vertices();
+  const auto nbr = detail::tet_neighbors(m.tets);
+  detail::MoserField f;
+  detail::build_background(f, m.vertices, m.tets, nbr);
+  f.rho0.assign(static_cast<size_t>(n), 1.0);
+  const auto boundary = boundary_vertex_mask(n, boundary_faces(m.tets));
+  const Eigen::VectorXd vol = tet_volumes(m.vertices, m.tets);
+  const Eigen::Vector3d a(0.3, -0.7, 0.2);
+  Eigen::VectorXd lin(n), wavy(n);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d p = m.vertices.row(i).transpose();
+    lin(i) = a.dot(p);
+    wavy(i) = std::sin(3 * p.x()) * std::cos(2 * p.y()) + p.z() * p.z();
+  }
+  for (bool slide : {true, false}) {
+    INFO("slide " << slide);
+    const auto g = detail::vertex_gradients(m.tets, m.vertices, detail::tet_gradients(f, lin), vol, boundary, slide);
+    double err = 0;
+    for (int i = 0; i < n; ++i) {
+      Eigen::Vector3d want = a;
+      if (boundary[i]) {
+        const Eigen::Vector3d nrm = m.vertices.row(i).transpose().normalized();
+        want = slide ? Eigen::Vector3d(a - a.dot(nrm) * nrm) : Eigen::Vector3d::Zero();
+      }
+      err = std::max(err, (Eigen::Vector3d(g[3 * i], g[3 * i + 1], g[3 * i + 2]) - want).norm());
+    }
+    CHECK(err < 1e-12);
+    const auto host = detail::vertex_gradients(m.tets, m.vertices, detail::tet_gradients(f, wavy), vol, boundary, slide);
+    double scale = 0;
+    for (double v : host) scale = std::max(scale, std::fabs(v));
+    REQUIRE(scale > 0.5);
+    for (auto& dev : test::devices()) {
+      if (dev->is_host()) continue;
+      INFO("device " << dev->name());
+      detail::DeviceAdvector adv(*dev, m.tets, nbr, boundary);
+      adv.set_field(f, wavy, m.vertices, slide);
+      const std::vector<double> d = adv.gradients();
+      REQUIRE(d.size() == host.size());
+      double diff = 0;
+      for (size_t k = 0; k < d.size(); ++k) diff = std::max(diff, std::fabs(d[k] - host[k]));
+      CHECK(diff < 1e-12 * scale);
+    }
+  }
+}
+
 TEST_CASE("vpm map: an input whose map cannot be made fold-free exits 3 and writes nothing") {
   // bent_mesh(3): a 270-degree C whose conformal boundary map flips triangles (docs/design.md 4.2:
   // appendages defeat the conformal start). If a later version maps it, the output must be

@@ -9,6 +9,7 @@
 #include <unordered_map>
 
 #include "vpm/device.hpp"
+#include "vpm/topology.hpp"
 
 namespace vpm::detail {
 
@@ -29,6 +30,32 @@ Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> tet_gradients(const Mo
   return g;
 }
 
+std::vector<double> vertex_gradients(const Tets& tets, const Points& x,
+                                     const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& G,
+                                     const Eigen::VectorXd& vol, const std::vector<char>& boundary,
+                                     bool slide) {
+  const int n = static_cast<int>(x.rows()), m = static_cast<int>(tets.rows());
+  std::vector<double> g(3 * static_cast<size_t>(n), 0.0), w(static_cast<size_t>(n), 0.0);
+  for (int t = 0; t < m; ++t)
+    for (int k = 0; k < 4; ++k) {
+      const int v = tets(t, k);
+      w[v] += vol(t);
+      for (int d = 0; d < 3; ++d) g[3 * v + d] += vol(t) * G(t, d);
+    }
+  for (int v = 0; v < n; ++v) {
+    Eigen::Map<Eigen::Vector3d> gv(&g[3 * static_cast<size_t>(v)]);
+    if (w[v] > 0) gv /= w[v];
+    if (boundary[v]) {
+      if (!slide) {
+        gv.setZero();
+      } else {
+        const Eigen::Vector3d nrm = x.row(v).transpose().normalized();
+        gv -= gv.dot(nrm) * nrm;
+      }
+    }
+  }
+  return g;
+}
 
 namespace {
 
@@ -99,6 +126,11 @@ struct DeviceAdvector::Impl {
   double lo[3] = {0, 0, 0}, inv_h = 1;
   int dims[3] = {1, 1, 1};
   std::vector<char> bmask;
+  // the field from psi on the device (set_field with psi): built at its first use
+  bc::kernel kvg;
+  bc::vector<int> inc_offset, inc_tet;
+  bc::vector<double> psi;
+  const Tets* host_tets;
 
   Impl(Device& d, const Tets& T, const std::vector<int>& nb, const std::vector<char>& b)
       : dev(d),
@@ -121,7 +153,14 @@ struct DeviceAdvector::Impl {
         k2(3 * static_cast<size_t>(n), d.context()),
         k3(3 * static_cast<size_t>(n), d.context()),
         k4(3 * static_cast<size_t>(n), d.context()),
-        bmask(b) {}
+        bmask(b),
+        inc_offset(d.context()),
+        inc_tet(d.context()),
+        psi(d.context()),
+        host_tets(&T) {}
+
+  // The background of a round without its gradients.
+  void upload_background(const MoserField& f);
 };
 
 DeviceAdvector::DeviceAdvector(Device& device, const Tets& tets, const std::vector<int>& nbr,
@@ -132,9 +171,40 @@ DeviceAdvector::~DeviceAdvector() = default;
 
 void DeviceAdvector::set_field(const MoserField& f) {
   Impl& s = *impl_;
+  s.upload_background(f);
+  bc::copy(f.grad.begin(), f.grad.end(), s.grad.begin(), s.dev.queue());
+}
+
+void DeviceAdvector::set_field(const MoserField& f, const Eigen::VectorXd& psi, const Points& x,
+                               bool slide) {
+  Impl& s = *impl_;
+  auto& q = s.dev.queue();
+  s.upload_background(f);
+  if (s.inc_offset.size() != static_cast<size_t>(s.n) + 1) {
+    const Incidence inc = vertex_tet_incidence(s.n, *s.host_tets);
+    s.inc_offset = bc::vector<int>(inc.offset.begin(), inc.offset.end(), q);
+    s.inc_tet = bc::vector<int>(inc.tet_of.begin(), inc.tet_of.end(), q);
+    s.psi = bc::vector<double>(static_cast<size_t>(s.n), s.dev.context());
+    s.kvg = s.dev.kernel("moser", "moser_vertex_gradients");
+  }
+  bc::copy(psi.data(), psi.data() + psi.size(), s.psi.begin(), q);
+  bc::copy(x.data(), x.data() + x.size(), s.x.begin(), q);
+  s.kvg.set_args(s.n, s.inc_offset, s.inc_tet, s.tets, s.inv, s.psi, s.boundary, static_cast<int>(slide),
+                 s.x, s.grad);
+  s.dev.launch(s.kvg, static_cast<size_t>(s.n));
+}
+
+std::vector<double> DeviceAdvector::gradients() {
+  Impl& s = *impl_;
+  std::vector<double> g(s.grad.size());
+  bc::copy(s.grad.begin(), s.grad.end(), g.begin(), s.dev.queue());
+  return g;
+}
+
+void DeviceAdvector::Impl::upload_background(const MoserField& f) {
+  Impl& s = *this;
   auto& q = s.dev.queue();
   s.inv = bc::vector<double>(f.inv.begin(), f.inv.end(), q);
-  bc::copy(f.grad.begin(), f.grad.end(), s.grad.begin(), q);
   bc::copy(f.rho0.begin(), f.rho0.end(), s.rho0.begin(), q);
   s.cell_start = bc::vector<int>(f.cell_start.begin(), f.cell_start.end(), q);
   if (f.cell_tets.empty()) {

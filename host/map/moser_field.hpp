@@ -26,6 +26,14 @@ struct MoserField : TetGrid {
 Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> tet_gradients(const MoserField& f,
                                                                        const Eigen::VectorXd& psi);
 
+/// Vertex gradients (eq. 13, n x 3): the volume-weighted averages of the per-tet gradients G
+/// (vol: signed tet volumes on x), the normal x/|x| part removed at boundary vertices (the
+/// whole vector when `slide` is false). kernels/moser.cl computes the same on a device.
+std::vector<double> vertex_gradients(const Tets& tets, const Points& x,
+                                     const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& G,
+                                     const Eigen::VectorXd& vol, const std::vector<char>& boundary,
+                                     bool slide);
+
 struct AdvectStats {
   long long locations = 0;
   long long walk_steps = 0;
@@ -52,7 +60,16 @@ class DeviceAdvector {
   DeviceAdvector(Device& device, const Tets& tets, const std::vector<int>& nbr,
                  const std::vector<char>& boundary);
   ~DeviceAdvector();
+  /// The round's background and field from the host: f's inverse matrices, grid, rho0 and grad.
   void set_field(const MoserField& f);
+  /// The same background (f.grad is not read) with the vertex gradients computed on the device
+  /// from psi (paper eq. 12-13): per-tet gradients from f's inverse matrices, their
+  /// volume-weighted vertex averages, the normal part removed at boundary vertices (the whole
+  /// vector when `slide` is false); the same arithmetic as tet_gradients and the volume map's
+  /// host averaging. `x`: the background's positions. Only psi and x go up, nothing comes back.
+  void set_field(const MoserField& f, const Eigen::VectorXd& psi, const Points& x, bool slide);
+  /// The vertex gradients now on the device (n x 3), for tests.
+  std::vector<double> gradients();
   void advect(const AdvectParams& p, Points& x, std::vector<int>& hint, AdvectStats* stats);
 
  private:

@@ -52,32 +52,6 @@ int untangle_folds(MapContext& c, Points& x, double* seconds, const Points* befo
 
 namespace {
 
-// Vertex gradients (eq. 13): volume-weighted averages of the per-tet gradients; normal part
-// removed at boundary vertices (or zero there when the boundary is fixed).
-std::vector<double> vertex_gradients(const MapContext& c, const Points& x,
-                                     const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& G,
-                                     const Eigen::VectorXd& vol) {
-  std::vector<double> g(3 * static_cast<size_t>(c.n), 0.0), w(static_cast<size_t>(c.n), 0.0);
-  for (int t = 0; t < c.m; ++t)
-    for (int k = 0; k < 4; ++k) {
-      const int v = c.tets(t, k);
-      w[v] += vol(t);
-      for (int d = 0; d < 3; ++d) g[3 * v + d] += vol(t) * G(t, d);
-    }
-  for (int v = 0; v < c.n; ++v) {
-    Eigen::Map<Eigen::Vector3d> gv(&g[3 * static_cast<size_t>(v)]);
-    if (w[v] > 0) gv /= w[v];
-    if (c.boundary[v]) {
-      if (!c.slide) {
-        gv.setZero();
-      } else {
-        const Eigen::Vector3d nrm = x.row(v).transpose().normalized();
-        gv -= gv.dot(nrm) * nrm;
-      }
-    }
-  }
-  return g;
-}
 
 // Dual volumes, targets rescaled to the current total, rho0 = m / V, and the Neumann solve
 // K psi = m - V. Returns V and m.
@@ -94,28 +68,33 @@ void solve_round(MapContext& c, const Points& x, Eigen::VectorXd& V, Eigen::Vect
   r.time_solve += seconds_since(t0);
 }
 
-// The solve of a round and its field on the background x: f's grid and vertex gradients.
+// The solve of a round and its field on the background x: f's grid, and the vertex gradients
+// on the host unless `gradients_on_device` (the advector computes them from psi).
 void solve_and_field(MapContext& c, const Points& x, Eigen::VectorXd& V, Eigen::VectorXd& target,
-                     detail::MoserField& f, VolumeMapRound& r) {
+                     detail::MoserField& f, VolumeMapRound& r, bool gradients_on_device = false) {
   solve_round(c, x, V, target, r);
   const auto t1 = Clock::now();
   detail::build_background(f, x, c.tets, c.nbr);
-  const auto G = detail::tet_gradients(f, c.psi);
-  const Eigen::VectorXd vol = tet_volumes(x, c.tets);
-  f.grad = vertex_gradients(c, x, G, vol);
+  if (!gradients_on_device) {
+    const auto G = detail::tet_gradients(f, c.psi);
+    const Eigen::VectorXd vol = tet_volumes(x, c.tets);
+    f.grad = detail::vertex_gradients(c.tets, x, G, vol, c.boundary, c.slide);
+  }
   r.time_field += seconds_since(t1);
 }
 
 }  // namespace
 
-// One Moser round on [0, t_end]: x in/out.
+// One Moser round on [0, t_end]: x in/out. With a device advector the field's gradients are
+// computed where the advection runs, from psi.
 void moser_round(MapContext& c, Points& x, double t_end, VolumeMapRound& r) {
   Eigen::VectorXd V, target;
   detail::MoserField f;
-  solve_and_field(c, x, V, target, f, r);
+  solve_and_field(c, x, V, target, f, r, c.advector != nullptr);
   const auto t1 = Clock::now();
   f.rho0.resize(static_cast<size_t>(c.n));
   for (int i = 0; i < c.n; ++i) f.rho0[i] = V(i) > 0 ? target(i) / V(i) : 1.0;
+  if (c.advector) c.advector->set_field(f, c.psi, x, c.slide);
   r.time_field += seconds_since(t1);
 
   const auto t2 = Clock::now();
@@ -126,7 +105,6 @@ void moser_round(MapContext& c, Points& x, double t_end, VolumeMapRound& r) {
   std::vector<int> hint = c.vertex_tet;
   detail::AdvectStats st;
   if (c.advector) {
-    c.advector->set_field(f);
     c.advector->advect(p, x, hint, &st);
   } else {
     detail::advect_host(f, c.boundary, p, x, hint, &st);
