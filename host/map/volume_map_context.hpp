@@ -38,6 +38,7 @@ struct MapContext {
   std::vector<char> freedom;                          // polish: free / tangent / fixed per vertex
   std::unique_ptr<DevicePolisher> polisher;   // polish on the device, built on first use
   bool polish_on_device = false;                      // VolumeMapOptions::polish resolved
+  bool gradients_on_device = false;                   // the advector computes the field's gradients
 
   MapContext(Device& d, const Points& r, const Tets& t, const VolumeMapOptions& o) : dev(d), ref(r), tets(t), opt(o) {}
   bool pinned(int v) const { return !opt.pinned.empty() && opt.pinned[static_cast<size_t>(v)]; }

@@ -85,16 +85,17 @@ void solve_and_field(MapContext& c, const Points& x, Eigen::VectorXd& V, Eigen::
 
 }  // namespace
 
-// One Moser round on [0, t_end]: x in/out. With a device advector the field's gradients are
+// One Moser round on [0, t_end]: x in/out. With gradients_on_device the field's gradients are
 // computed where the advection runs, from psi.
 void moser_round(MapContext& c, Points& x, double t_end, VolumeMapRound& r) {
   Eigen::VectorXd V, target;
   detail::MoserField f;
-  solve_and_field(c, x, V, target, f, r, c.advector != nullptr);
+  solve_and_field(c, x, V, target, f, r, c.gradients_on_device);
   const auto t1 = Clock::now();
   f.rho0.resize(static_cast<size_t>(c.n));
   for (int i = 0; i < c.n; ++i) f.rho0[i] = V(i) > 0 ? target(i) / V(i) : 1.0;
-  if (c.advector) c.advector->set_field(f, c.psi, x, c.slide);
+  if (c.gradients_on_device) c.advector->set_field(f, c.psi, x, c.slide);
+  else if (c.advector) c.advector->set_field(f);
   r.time_field += seconds_since(t1);
 
   const auto t2 = Clock::now();

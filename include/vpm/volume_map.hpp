@@ -109,7 +109,9 @@ struct VolumeMapOptions {
   /// `polish_iterations` CGLS iterations from dx = 0 (minimum-norm, early-stopped), boundary
   /// vertices moving tangentially (slide) or not at all (fixed); x += dx, halved while it folds.
   /// They target the per-tet distortion that vertex-based Moser rounds cannot see.
-  /// At most this many (they stop when the tet mean |r-1| improves by less than 1 %). With
+  /// At most this many (they stop when the tet mean |r-1| improves by less than 1 %, or by less
+  /// than 3 % once the vertex mean |r-1| is within `tolerance`, except with polish_only: the
+  /// last rounds of large meshes gain 0-1.5 % each for seconds, docs/volume_map.md). With
   /// rounds == -1 the Moser rounds hand over to the polish once a round gains less than half on
   /// the vertex mean |r-1| with it within 5 x tolerance, or gains less than a fifth. A polish
   /// step that folds is untangled locally like a round, then halved.
@@ -137,7 +139,10 @@ struct VolumeMapOptions {
   /// which lets the polish give back more of the volume the flow took.
   std::vector<VolumeAnchor> anchors;
   /// Where the RK4 advection (point location and field interpolation) runs: automatic = on
-  /// the OpenCL device when there is one (kernels/moser.cl), else the host reference.
+  /// the OpenCL device when there is one (kernels/moser.cl), else the host reference. The
+  /// field's vertex gradients (eq. 12-13) are computed next to it on GPUs, or with `device`;
+  /// with automatic on a CPU device they stay on the host (as fast there, and the maps of
+  /// fragile shapes keep the host's round-off: docs/volume_map.md).
   ExecutionPlace advection = ExecutionPlace::automatic;
   /// Where the polish's CGLS runs: automatic = the OpenCL kernels (kernels/polish.cl) on GPUs,
   /// the threaded host loops otherwise (on PoCL the kernels were 2x slower than the host loops
