@@ -1,11 +1,11 @@
 // vpm_bench_solver: our CG on the selected device (VPM_DEVICE) against Eigen's CG on the host
 // and ViennaCL 1.7.1's CG on the same OpenCL device, on cotangent Laplacians of jittered
-// structured tet meshes of an ellipsoid (1.8 : 1 : 0.6). Prints a table and writes JSON
+// structured tet meshes of an ellipsoid (1.8 : 1 : 0.6) and of given meshes. Prints a table and writes JSON
 // (docs/solver.md). The peers are in solver/peers.cpp.
 //
-//   vpm_bench_solver [--sizes 25000,100000,400000,1600000] [--quick] [--repeats 5]
-//                    [--json solver.json] [--no-viennacl] [--no-eigen] [--no-amg]
-//                    [--eigen-threads N] [--hypre-ranks 1,2 | --no-hypre]
+//   vpm_bench_solver [--sizes 25000,100000,400000,1600000] [--meshes A.vtu,B.vtu] [--quick]
+//                    [--repeats 5] [--json solver.json] [--no-viennacl] [--no-eigen] [--no-amg]
+//                    [--eigen-threads N] [--hypre-ranks 1,2 | --no-hypre]   (solver/options.hpp)
 // AMG peers (vpm-amg-cg on the device, vpm-amg-cg-host): median_s is the solve without the
 // hierarchy update, reported as setup_update_s (median) and setup_build_s (first build).
 //
@@ -18,14 +18,13 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
-#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "solver/hypre_run.hpp"
+#include "solver/options.hpp"
 #include "solver/peers.hpp"
-#include "support/shapes.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/json.hpp"
@@ -36,50 +35,6 @@ using namespace vpm::bench;
 namespace bc = boost::compute;
 
 namespace {
-
-struct Options {
-  std::vector<long> sizes = {25000, 100000, 400000, 1600000};  ///< target tet counts
-  int repeats = 5;
-  std::string json_path = "solver.json";
-  bool use_viennacl = true, use_eigen = true, use_amg = true;
-  std::vector<int> eigen_threads;  ///< empty: all hardware threads and 1
-  std::vector<int> hypre_ranks;    ///< empty: 1 and the hardware threads; {0}: no hypre
-  bool help = false;
-};
-
-std::vector<long> int_list(const std::string& text) {
-  std::vector<long> out;
-  std::stringstream ss(text);
-  for (std::string tok; std::getline(ss, tok, ',');) out.push_back(std::stol(tok));
-  return out;
-}
-
-Options parse_options(int argc, char** argv) {
-  Options o;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) throw InputError(a + ": missing value");
-      return argv[++i];
-    };
-    if (a == "--quick") o.sizes = {25000, 100000};
-    else if (a == "--sizes") o.sizes = int_list(next());
-    else if (a == "--repeats") o.repeats = std::max(1, std::stoi(next()));
-    else if (a == "--json") o.json_path = next();
-    else if (a == "--no-viennacl") o.use_viennacl = false;
-    else if (a == "--no-eigen") o.use_eigen = false;
-    else if (a == "--no-amg") o.use_amg = false;
-    else if (a == "--eigen-threads") o.eigen_threads = {std::max(1, std::stoi(next()))};
-    else if (a == "--no-hypre") o.hypre_ranks = {0};
-    else if (a == "--hypre-ranks") for (long r : int_list(next())) o.hypre_ranks.push_back(int(std::max(1L, r)));
-    else if (a == "-h" || a == "--help") {
-      o.help = true;
-      return o;
-    }
-    else throw InputError("unknown argument " + a);
-  }
-  return o;
-}
 
 std::string machine_name() {
   std::ifstream in("/proc/cpuinfo");
@@ -209,7 +164,7 @@ std::vector<Run> time_peers(const Problem& p, std::vector<Peer>& peers, int repe
 
 /// hypre's BoomerAMG-CG with `ranks` MPI processes on the same problem (its own program, which
 /// rebuilds the problem: the same mesh and right-hand side), as a row of the table.
-Run run_hypre_peer(const Problem& p, long target, int ranks, int repeats) {
+Run run_hypre_peer(const Problem& p, const std::string& source, int ranks, int repeats) {
   Run r;
   r.mesh = p.name;
   r.solver = "hypre-boomeramg-cg-" + std::to_string(ranks) + "rank";
@@ -218,7 +173,7 @@ Run run_hypre_peer(const Problem& p, long target, int ranks, int repeats) {
   r.nnz = p.nnz;
   r.threads = ranks;
   try {
-    const HypreRun h = run_hypre(target, ranks, repeats, p.n, p.nnz);
+    const HypreRun h = run_hypre(source, ranks, repeats, p.n, p.nnz);
     r.times = h.solve_s;
     r.update_times = h.setup_s;
     r.median_s = median(r.times);
@@ -235,10 +190,11 @@ Run run_hypre_peer(const Problem& p, long target, int ranks, int repeats) {
 
 /// Builds the problem of one size and runs every peer on it. A ViennaCL failure is recorded in
 /// `viennacl_status`, and ViennaCL is not run on the later sizes.
-std::vector<Run> run_size(Device& dev, long target, const Options& o, const Triad& triad,
+std::vector<Run> run_size(Device& dev, const std::string& source, const SolverBenchOptions& o, const Triad& triad,
                           std::string& viennacl_status, const std::string& hypre_status) {
-  const std::string name = "ellipsoid-" + std::to_string(target / 1000) + "k";
-  Problem p(dev, name, test::voxel_ellipsoid_mesh(target));
+  std::string name;
+  TetMesh mesh = problem_mesh(source, name);
+  Problem p(dev, name, std::move(mesh));
   std::cerr << "\n" << name << ": " << p.n << " vertices, " << p.mesh.num_tets() << " tets\n";
   std::vector<Peer> peers = {vpm_peer(dev, p, triad.device_gbs)};
   if (o.use_amg) {
@@ -257,7 +213,7 @@ std::vector<Run> run_size(Device& dev, long target, const Options& o, const Tria
   }
   std::vector<Run> runs = time_peers(p, peers, o.repeats);
   if (hypre_status == "ok")
-    for (int ranks : o.hypre_ranks) runs.push_back(run_hypre_peer(p, target, ranks, o.repeats));
+    for (int ranks : o.hypre_ranks) runs.push_back(run_hypre_peer(p, source, ranks, o.repeats));
   std::cerr << "done " << name << " (load " << loadavg() << ")\n";
   return runs;
 }
@@ -341,7 +297,7 @@ std::string viennacl_start_status(Device& dev, bool use_viennacl) {
 }  // namespace
 
 int main(int argc, char** argv) try {
-  Options o = parse_options(argc, argv);
+  SolverBenchOptions o = parse_solver_bench_options(argc, argv);
   if (o.help) {
     std::cout << "vpm_bench_solver [--sizes N,N,...] [--quick] [--repeats R] [--json FILE] "
                  "[--no-viennacl] [--no-eigen] [--no-amg] [--eigen-threads N] [--hypre-ranks N,... | --no-hypre]\n";
@@ -373,8 +329,11 @@ int main(int argc, char** argv) try {
   if (o.hypre_ranks.empty()) o.hypre_ranks = default_hypre_ranks();
   std::cerr << "hypre: " << hypre << "\n";
   std::vector<Run> runs;
-  for (long target : o.sizes)
-    for (Run& r : run_size(dev, target, o, triad, viennacl_status, hypre)) runs.push_back(std::move(r));
+  std::vector<std::string> sources;
+  for (long tets : o.sizes) sources.push_back("ellipsoid:" + std::to_string(tets));
+  sources.insert(sources.end(), o.meshes.begin(), o.meshes.end());
+  for (const std::string& source : sources)
+    for (Run& r : run_size(dev, source, o, triad, viennacl_status, hypre)) runs.push_back(std::move(r));
 
   print_table(runs);
   add_runs(out, runs);

@@ -1,10 +1,10 @@
-// vpm_bench_hypre: hypre's BoomerAMG-preconditioned CG (Debian's libhypre-dev 2.26, MPI) on the
-// problem vpm_bench_solver builds for one size: the cotangent Laplacian of the jittered voxel
-// ellipsoid, Neumann, the same right-hand side, relative residual 1e-8. vpm_bench_solver starts
+// vpm_bench_hypre: hypre's BoomerAMG-preconditioned CG (Debian's libhypre-dev 2.26, MPI) on a
+// problem of vpm_bench_solver: the cotangent Laplacian of the jittered voxel ellipsoid or of a
+// mesh file, Neumann, the same right-hand side, relative residual 1e-8. vpm_bench_solver starts
 // it under `mpirun -np N` (hypre in Debian is built without OpenMP, so ranks are its only
 // parallelism) and reads its JSON back as rows of its own table.
 //
-//   mpirun -np N vpm_bench_hypre --size TETS --repeats R --json FILE
+//   mpirun -np N vpm_bench_hypre --problem ellipsoid:TETS|MESH --repeats R --json FILE
 //
 // Every rank builds the whole problem (deterministic, not timed) and owns a contiguous block of
 // rows. Each repeat creates BoomerAMG and PCG anew, times the setup (hypre rebuilds the whole
@@ -25,7 +25,6 @@
 #include <vector>
 
 #include "solver/peers.hpp"
-#include "support/shapes.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/json.hpp"
@@ -36,7 +35,7 @@ using bench::median;
 namespace {
 
 struct Options {
-  long size = 100000;
+  std::string problem = "ellipsoid:100000";  ///< bench::problem_mesh's source
   int repeats = 5;
   std::string json_path = "hypre.json";
 };
@@ -49,7 +48,7 @@ Options parse_options(int argc, char** argv) {
       if (i + 1 >= argc) throw InputError(a + ": missing value");
       return argv[++i];
     };
-    if (a == "--size") o.size = std::stol(next());
+    if (a == "--problem") o.problem = next();
     else if (a == "--repeats") o.repeats = std::max(1, std::stoi(next()));
     else if (a == "--json") o.json_path = next();
     else throw InputError("unknown argument " + a);
@@ -218,8 +217,9 @@ int main(int argc, char** argv) {
     const Options o = parse_options(argc, argv);
     setenv("VPM_DEVICE", "host", 1);  // the problem is assembled on the host; no OpenCL here
     HYPRE_Init();
-    bench::Problem p(Device::current(), "ellipsoid-" + std::to_string(o.size / 1000) + "k",
-                     test::voxel_ellipsoid_mesh(o.size));
+    std::string name;
+    TetMesh mesh = bench::problem_mesh(o.problem, name);
+    bench::Problem p(Device::current(), name, std::move(mesh));
     {
       Distributed d(p, rank, ranks);
       Timing t;

@@ -35,12 +35,12 @@ std::string hypre_status() {
   return "ok";
 }
 
-HypreRun run_hypre(long target_tets, int ranks, int repeats, long vertices, long nnz) {
+HypreRun run_hypre(const std::string& source, int ranks, int repeats, long vertices, long nnz) {
   const fs::path json = fs::temp_directory_path() / ("vpm_bench_hypre_" + std::to_string(getpid()) + ".json");
   // OpenMPI refuses root unless told; the benchmark may run as root in a container
   const std::string root = geteuid() == 0 ? " --allow-run-as-root" : "";
   const std::string cmd = "mpirun" + root + " -np " + std::to_string(ranks) + " '" + hypre_program().string() +
-                          "' --size " + std::to_string(target_tets) + " --repeats " + std::to_string(repeats) +
+                          "' --problem '" + source + "' --repeats " + std::to_string(repeats) +
                           " --json '" + json.string() + "'";
   const int rc = std::system(cmd.c_str());
   if (rc != 0 || !fs::exists(json)) {

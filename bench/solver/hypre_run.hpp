@@ -23,9 +23,9 @@ struct HypreRun {
   std::string settings;          ///< BoomerAMG's settings in words
 };
 
-/// Runs vpm_bench_hypre on the ellipsoid of `target_tets` with `ranks` MPI processes and
-/// `repeats` timed solves. Throws NumericalError naming the command when it fails, or when its
-/// problem is not the caller's (`vertices`, `nnz`).
-HypreRun run_hypre(long target_tets, int ranks, int repeats, long vertices, long nnz);
+/// Runs vpm_bench_hypre on the problem `source` (bench::problem_mesh) with `ranks` MPI processes
+/// and `repeats` timed solves. Throws NumericalError naming the command when it fails, or when
+/// its problem is not the caller's (`vertices`, `nnz`).
+HypreRun run_hypre(const std::string& source, int ranks, int repeats, long vertices, long nnz);
 
 }  // namespace vpm::bench

@@ -9,14 +9,28 @@
 #include <viennacl/vector.hpp>
 
 #include <Eigen/IterativeLinearSolvers>
+#include <filesystem>
 #include <random>
 
 #include "linalg/solver_backend.hpp"
+#include "support/shapes.hpp"
 #include "vpm/error.hpp"
+#include "vpm/io.hpp"
 #include "vpm/laplacian.hpp"
 #include "vpm/timing.hpp"
 
 namespace vpm::bench {
+
+TetMesh problem_mesh(const std::string& source, std::string& name) {
+  const std::string prefix = "ellipsoid:";
+  if (source.rfind(prefix, 0) == 0) {
+    const long target = std::stol(source.substr(prefix.size()));
+    name = "ellipsoid-" + std::to_string(target / 1000) + "k";
+    return test::voxel_ellipsoid_mesh(target);
+  }
+  name = std::filesystem::path(source).filename().string();
+  return read_mesh(source);
+}
 
 Problem::Problem(Device& dev, std::string name_, TetMesh mesh_)
     : name(std::move(name_)),

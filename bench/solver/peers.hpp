@@ -26,6 +26,11 @@ inline double median(std::vector<double> v) {
 /// CG stopping tolerance (relative residual) of every peer.
 constexpr double kTolerance = 1e-8;
 
+/// The mesh of a benchmark problem from its source: "ellipsoid:N" (the jittered voxel ellipsoid
+/// of about N tets, named ellipsoid-<N/1000>k) or a tet mesh file (named by its file name
+/// without the folder). Sets `name`.
+TetMesh problem_mesh(const std::string& source, std::string& name);
+
 /// One benchmark problem: the cotangent Laplacian K of a mesh and a zero-mean right-hand side
 /// b (normal, seed 42); the peers solve the Neumann problem K x = b.
 struct Problem {
