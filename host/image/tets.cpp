@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "image/surface.hpp"
+#include "vpm/mesh_order.hpp"
 #include "vpm/config.hpp"
 #include "vpm/error.hpp"
 #include "vpm/format.hpp"
@@ -88,6 +89,7 @@ TetMesh surface_to_tets(const TriSurface& raw, const Resolution& res, const Mesh
   if (o.progress) o.progress("tetrahedralising (TetGen)");
   TetgenInfo tinfo;
   TetMesh mesh = tetrahedralize_surface(s, to, &tinfo);
+  sort_spatially(mesh);  // TetGen's numbering scatters neighbours in memory (vpm/mesh_order.hpp)
   record(report, "tetgen", t0);
   report.parameters.tetgen_switches = tinfo.switches;
   report.mesh = mesh_stats(mesh, s, tinfo);
