@@ -60,6 +60,9 @@ void check(HYPRE_Int err, const char* what) {
   if (err) throw NumericalError(std::string("hypre: ") + what + " returned error " + std::to_string(err));
 }
 
+/// The first of rank q's rows when n rows are split into `ranks` contiguous blocks.
+int first_row(int n, int q, int ranks) { return int(long(n) * q / ranks); }
+
 /// This rank's rows [lo, hi] (inclusive, hypre's convention) of -K and -b in hypre's IJ form.
 struct Distributed {
   HYPRE_IJMatrix A = nullptr;
@@ -67,10 +70,12 @@ struct Distributed {
   HYPRE_ParCSRMatrix par_A = nullptr;
   HYPRE_ParVector par_b = nullptr, par_x = nullptr;
   int lo = 0, hi = -1;
+  std::vector<HYPRE_Int> rows;  ///< lo .. hi, the indices of this rank's vector entries
 
   Distributed(const bench::Problem& p, int rank, int ranks) {
-    lo = int(long(p.n) * rank / ranks);
-    hi = int(long(p.n) * (rank + 1) / ranks) - 1;
+    lo = first_row(p.n, rank, ranks);
+    hi = first_row(p.n, rank + 1, ranks) - 1;
+    for (int r = lo; r <= hi; ++r) rows.push_back(r);
     check(HYPRE_IJMatrixCreate(MPI_COMM_WORLD, lo, hi, lo, hi, &A), "IJMatrixCreate");
     check(HYPRE_IJMatrixSetObjectType(A, HYPRE_PARCSR), "IJMatrixSetObjectType");
     std::vector<HYPRE_Int> sizes(hi - lo + 1);
@@ -86,14 +91,8 @@ struct Distributed {
     }
     check(HYPRE_IJMatrixAssemble(A), "IJMatrixAssemble");
     check(HYPRE_IJMatrixGetObject(A, reinterpret_cast<void**>(&par_A)), "IJMatrixGetObject");
-    std::vector<HYPRE_Int> idx(hi - lo + 1);
-    std::vector<double> rhs(hi - lo + 1);
-    for (int r = lo; r <= hi; ++r) {
-      idx[r - lo] = r;
-      rhs[r - lo] = p.b_spd[r];
-    }
-    make_vector(b, idx, rhs);
-    make_vector(x, idx, std::vector<double>(idx.size(), 0.0));
+    make_vector(b, std::vector<double>(p.b_spd.data() + lo, p.b_spd.data() + hi + 1));
+    make_vector(x, std::vector<double>(rows.size(), 0.0));
     check(HYPRE_IJVectorGetObject(b, reinterpret_cast<void**>(&par_b)), "IJVectorGetObject");
     check(HYPRE_IJVectorGetObject(x, reinterpret_cast<void**>(&par_x)), "IJVectorGetObject");
   }
@@ -105,31 +104,27 @@ struct Distributed {
   Distributed(const Distributed&) = delete;
   Distributed& operator=(const Distributed&) = delete;
 
-  void make_vector(HYPRE_IJVector& v, const std::vector<HYPRE_Int>& idx, const std::vector<double>& vals) {
+  void make_vector(HYPRE_IJVector& v, const std::vector<double>& vals) {
     check(HYPRE_IJVectorCreate(MPI_COMM_WORLD, lo, hi, &v), "IJVectorCreate");
     check(HYPRE_IJVectorSetObjectType(v, HYPRE_PARCSR), "IJVectorSetObjectType");
     check(HYPRE_IJVectorInitialize(v), "IJVectorInitialize");
-    check(HYPRE_IJVectorSetValues(v, HYPRE_Int(idx.size()), idx.data(), vals.data()), "IJVectorSetValues");
+    check(HYPRE_IJVectorSetValues(v, HYPRE_Int(rows.size()), rows.data(), vals.data()), "IJVectorSetValues");
     check(HYPRE_IJVectorAssemble(v), "IJVectorAssemble");
   }
 
   void zero_x() {
-    std::vector<HYPRE_Int> idx(hi - lo + 1);
-    for (int r = lo; r <= hi; ++r) idx[r - lo] = r;
-    const std::vector<double> zeros(idx.size(), 0.0);
-    check(HYPRE_IJVectorSetValues(x, HYPRE_Int(idx.size()), idx.data(), zeros.data()), "IJVectorSetValues");
+    const std::vector<double> zeros(rows.size(), 0.0);
+    check(HYPRE_IJVectorSetValues(x, HYPRE_Int(rows.size()), rows.data(), zeros.data()), "IJVectorSetValues");
   }
 
   /// The whole solution on rank 0 (empty elsewhere).
   Eigen::VectorXd gather_x(int n, int rank, int ranks) const {
-    std::vector<HYPRE_Int> idx(hi - lo + 1);
-    for (int r = lo; r <= hi; ++r) idx[r - lo] = r;
-    std::vector<double> mine(idx.size());
-    check(HYPRE_IJVectorGetValues(x, HYPRE_Int(idx.size()), idx.data(), mine.data()), "IJVectorGetValues");
+    std::vector<double> mine(rows.size());
+    check(HYPRE_IJVectorGetValues(x, HYPRE_Int(rows.size()), rows.data(), mine.data()), "IJVectorGetValues");
     std::vector<int> counts(ranks), offsets(ranks);
     for (int q = 0; q < ranks; ++q) {
-      offsets[q] = int(long(n) * q / ranks);
-      counts[q] = int(long(n) * (q + 1) / ranks) - offsets[q];
+      offsets[q] = first_row(n, q, ranks);
+      counts[q] = first_row(n, q + 1, ranks) - offsets[q];
     }
     Eigen::VectorXd all;
     if (rank == 0) all.resize(n);

@@ -6,11 +6,11 @@
 #include <cmath>
 
 #include "image/surface.hpp"
-#include "vpm/mesh_order.hpp"
 #include "vpm/config.hpp"
 #include "vpm/error.hpp"
 #include "vpm/format.hpp"
 #include "vpm/geometry.hpp"
+#include "vpm/mesh_order.hpp"
 #include "vpm/topology.hpp"
 
 namespace vpm {

@@ -130,7 +130,6 @@ struct DeviceAdvector::Impl {
   bc::kernel kvg;
   bc::vector<int> inc_offset, inc_tet;
   bc::vector<double> psi;
-  const Tets* host_tets;
 
   Impl(Device& d, const Tets& T, const std::vector<int>& nb, const std::vector<char>& b)
       : dev(d),
@@ -156,8 +155,7 @@ struct DeviceAdvector::Impl {
         bmask(b),
         inc_offset(d.context()),
         inc_tet(d.context()),
-        psi(d.context()),
-        host_tets(&T) {}
+        psi(d.context()) {}
 
   // The background of a round without its gradients.
   void upload_background(const MoserField& f);
@@ -181,7 +179,7 @@ void DeviceAdvector::set_field(const MoserField& f, const Eigen::VectorXd& psi, 
   auto& q = s.dev.queue();
   s.upload_background(f);
   if (s.inc_offset.size() != static_cast<size_t>(s.n) + 1) {
-    const Incidence inc = vertex_tet_incidence(s.n, *s.host_tets);
+    const Incidence inc = vertex_tet_incidence(s.n, *f.tets);
     s.inc_offset = bc::vector<int>(inc.offset.begin(), inc.offset.end(), q);
     s.inc_tet = bc::vector<int>(inc.tet_of.begin(), inc.tet_of.end(), q);
     s.psi = bc::vector<double>(static_cast<size_t>(s.n), s.dev.context());

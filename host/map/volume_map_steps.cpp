@@ -52,7 +52,6 @@ int untangle_folds(MapContext& c, Points& x, double* seconds, const Points* befo
 
 namespace {
 
-
 // Dual volumes, targets rescaled to the current total, rho0 = m / V, and the Neumann solve
 // K psi = m - V. Returns V and m.
 void solve_round(MapContext& c, const Points& x, Eigen::VectorXd& V, Eigen::VectorXd& target,
