@@ -2,10 +2,13 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
+#include <map>
 #include <numeric>
 #include <random>
 
 #include "support/fixtures.hpp"
+#include "mesh/tet_grid.hpp"
 #include "vpm/geometry.hpp"
 #include "vpm/mesh_order.hpp"
 #include "vpm/topology.hpp"
@@ -118,4 +121,74 @@ TEST_CASE("sort_spatially: a permutation that keeps every tet, its orientation a
   CHECK(tet_volumes(sorted.vertices, sorted.tets).minCoeff() > 0);
   INFO("index spread per tet: random " << spread(mixed) << ", sorted " << spread(sorted));
   CHECK(spread(sorted) < 0.2 * spread(mixed));
+}
+
+TEST_CASE("face matching (boundary faces, non-manifold faces, face neighbours) agrees with a map of sorted triples") {
+  // a ball numbered at random (scattered vertex lists, more vertices than one thread's share),
+  // plus one tet glued onto an interior face: that face is then shared by three tets
+  TetMesh mesh = test::ball_mesh(20);
+  const int n0 = mesh.num_vertices();
+  REQUIRE(n0 > 8192);
+  std::vector<int> perm(static_cast<size_t>(n0));
+  std::iota(perm.begin(), perm.end(), 0);
+  std::mt19937 rng(11);
+  std::shuffle(perm.begin(), perm.end(), rng);
+  const Points original = mesh.vertices;
+  for (int i = 0; i < n0; ++i) mesh.vertices.row(perm[static_cast<size_t>(i)]) = original.row(i);
+  for (int t = 0; t < mesh.num_tets(); ++t)
+    for (int k = 0; k < 4; ++k) mesh.tets(t, k) = perm[static_cast<size_t>(mesh.tets(t, k))];
+  const int m0 = mesh.num_tets();
+  mesh.tets.conservativeResize(m0 + 1, 4);
+  mesh.tets.row(m0) << mesh.tets(m0 / 2, 1), mesh.tets(m0 / 2, 2), mesh.tets(m0 / 2, 3), n0;  // vertex n0: new
+  const int m = mesh.num_tets();
+
+  std::map<std::array<int, 3>, std::vector<int>> faces;  // sorted triple -> slots 4 t + k (k: opposite corner)
+  for (int t = 0; t < m; ++t)
+    for (int k = 0; k < 4; ++k) {
+      std::array<int, 3> f;
+      int j = 0;
+      for (int c = 0; c < 4; ++c)
+        if (c != k) f[static_cast<size_t>(j++)] = mesh.tets(t, c);
+      std::sort(f.begin(), f.end());
+      faces[f].push_back(4 * t + k);
+    }
+  int boundary = 0, shared3 = 0;
+  for (const auto& [f, slots] : faces) {
+    boundary += slots.size() == 1;
+    shared3 += slots.size() > 2;
+  }
+  CHECK(shared3 == 1);
+  CHECK(nonmanifold_faces(mesh.tets) == 1);
+
+  std::vector<int> owner;
+  const Triangles bf = boundary_faces(mesh.tets, &owner);
+  REQUIRE(bf.rows() == boundary);
+  std::array<int, 3> last{-1, -1, -1};
+  for (int i = 0; i < bf.rows(); ++i) {
+    std::array<int, 3> f = {bf(i, 0), bf(i, 1), bf(i, 2)};
+    std::sort(f.begin(), f.end());
+    const auto it = faces.find(f);
+    REQUIRE(it != faces.end());
+    REQUIRE(it->second.size() == 1);
+    CHECK(it->second[0] / 4 == owner[static_cast<size_t>(i)]);
+    CHECK(last < f);  // in increasing order of the sorted triple
+    last = f;
+    // oriented as the owner's face: the opposite corner on the negative side
+    const int t = owner[static_cast<size_t>(i)], k = it->second[0] % 4;
+    const Eigen::Vector3d a = mesh.vertices.row(bf(i, 0)), b = mesh.vertices.row(bf(i, 1)), c = mesh.vertices.row(bf(i, 2));
+    if (t != m0) {  // the glued tet has no orientation to check
+      const Eigen::Vector3d o = mesh.vertices.row(mesh.tets(t, k));
+      CHECK((b - a).cross(c - a).dot(o - a) < 0);
+    }
+  }
+
+  const std::vector<int> nbr = detail::tet_neighbors(mesh.tets);
+  for (const auto& [f, slots] : faces) {
+    if (slots.size() == 2) {
+      CHECK(nbr[static_cast<size_t>(slots[0])] == slots[1] / 4);
+      CHECK(nbr[static_cast<size_t>(slots[1])] == slots[0] / 4);
+    } else {
+      for (int s : slots) CHECK(nbr[static_cast<size_t>(s)] == -1);
+    }
+  }
 }

@@ -7,35 +7,19 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "mesh/face_table.hpp"
+
 namespace vpm::detail {
 
 std::vector<int> tet_neighbors(const Tets& tets) {
-  const int m = static_cast<int>(tets.rows());
-  std::vector<int> nbr(4 * static_cast<size_t>(m), -1);
-  struct Face {
-    std::array<int, 3> v;
-    int slot;
-  };
-  std::vector<Face> faces;
-  faces.reserve(4 * static_cast<size_t>(m));
-  for (int t = 0; t < m; ++t)
-    for (int k = 0; k < 4; ++k) {
-      std::array<int, 3> f;
-      int j = 0;
-      for (int c = 0; c < 4; ++c)
-        if (c != k) f[j++] = tets(t, c);
-      std::sort(f.begin(), f.end());
-      faces.push_back({f, 4 * t + k});
-    }
-  std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) {
-    return a.v != b.v ? a.v < b.v : a.slot < b.slot;
+  std::vector<int> nbr(4 * static_cast<size_t>(tets.rows()), -1);
+  const FaceTable ft = face_table(tets);
+  ft.for_each_group([&](int first, int count) {
+    if (count != 2) return;  // boundary, or non-manifold (no single neighbour)
+    const int a = ft.entries[static_cast<size_t>(first)].slot, b = ft.entries[static_cast<size_t>(first) + 1].slot;
+    nbr[static_cast<size_t>(a)] = b / 4;
+    nbr[static_cast<size_t>(b)] = a / 4;
   });
-  for (size_t i = 0; i + 1 < faces.size(); ++i)
-    if (faces[i].v == faces[i + 1].v) {
-      nbr[faces[i].slot] = faces[i + 1].slot / 4;
-      nbr[faces[i + 1].slot] = faces[i].slot / 4;
-      ++i;
-    }
   return nbr;
 }
 

@@ -5,36 +5,13 @@
 #include <numeric>
 #include <unordered_map>
 
+#include "mesh/face_table.hpp"
+
 namespace vpm {
 
 namespace {
 // Faces of tet (a,b,c,d) with outward orientation for a positive tet.
 constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-
-struct FaceKey {
-  std::array<int, 3> v;
-  bool operator<(const FaceKey& o) const { return v < o.v; }
-  bool operator==(const FaceKey& o) const { return v == o.v; }
-};
-
-struct FaceRec {
-  std::array<int, 3> sorted;
-  int tet;
-  int local;
-};
-
-std::vector<FaceRec> sorted_faces(const Tets& tets) {
-  std::vector<FaceRec> f;
-  f.reserve(static_cast<size_t>(tets.rows()) * 4);
-  for (int t = 0; t < tets.rows(); ++t)
-    for (int k = 0; k < 4; ++k) {
-      std::array<int, 3> s = {tets(t, kFace[k][0]), tets(t, kFace[k][1]), tets(t, kFace[k][2])};
-      std::sort(s.begin(), s.end());
-      f.push_back({s, t, k});
-    }
-  std::sort(f.begin(), f.end(), [](const FaceRec& a, const FaceRec& b) { return a.sorted < b.sorted; });
-  return f;
-}
 
 int find_root(std::vector<int>& p, int x) {
   while (p[x] != x) {
@@ -46,35 +23,24 @@ int find_root(std::vector<int>& p, int x) {
 }  // namespace
 
 Triangles boundary_faces(const Tets& tets, std::vector<int>* face_tet) {
-  auto f = sorted_faces(tets);
-  std::vector<std::array<int, 3>> out;
+  const detail::FaceTable ft = detail::face_table(tets);
   std::vector<int> owner;
-  for (size_t i = 0; i < f.size();) {
-    size_t j = i;
-    while (j < f.size() && f[j].sorted == f[i].sorted) ++j;
-    if (j - i == 1) {
-      const int t = f[i].tet, k = f[i].local;
-      out.push_back({tets(t, kFace[k][0]), tets(t, kFace[k][1]), tets(t, kFace[k][2])});
-      owner.push_back(t);
-    }
-    i = j;
+  ft.for_each_group([&](int first, int count) {
+    if (count == 1) owner.push_back(ft.entries[static_cast<size_t>(first)].slot);
+  });
+  Triangles tri(static_cast<Eigen::Index>(owner.size()), 3);
+  for (size_t i = 0; i < owner.size(); ++i) {
+    const int t = owner[i] / 4, k = owner[i] % 4;
+    for (int c = 0; c < 3; ++c) tri(static_cast<Eigen::Index>(i), c) = tets(t, kFace[k][c]);
+    owner[i] = t;
   }
-  Triangles tri(static_cast<Eigen::Index>(out.size()), 3);
-  for (size_t i = 0; i < out.size(); ++i)
-    for (int c = 0; c < 3; ++c) tri(static_cast<Eigen::Index>(i), c) = out[i][c];
   if (face_tet) *face_tet = std::move(owner);
   return tri;
 }
 
 int nonmanifold_faces(const Tets& tets) {
-  auto f = sorted_faces(tets);
   int bad = 0;
-  for (size_t i = 0; i < f.size();) {
-    size_t j = i;
-    while (j < f.size() && f[j].sorted == f[i].sorted) ++j;
-    if (j - i > 2) ++bad;
-    i = j;
-  }
+  detail::face_table(tets).for_each_group([&](int, int count) { bad += count > 2; });
   return bad;
 }
 
