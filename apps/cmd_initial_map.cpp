@@ -27,6 +27,8 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   opt.area_correction = args.has("--area-correction");
   opt.sphere_density = vpm::cli::parse_option(
       "--sphere", [&] { return vpm::parse_sphere_density(args.get("--sphere", "area")); });
+  opt.sphere_start = vpm::cli::parse_option(
+      "--sphere-start", [&] { return vpm::parse_sphere_start(args.get("--sphere-start", "auto")); });
   opt.split_edges = !args.has("--no-split");
   const auto report_path = args.get("--report");
 
@@ -62,6 +64,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
 vpm::cli::Registrar reg({"initial-map", "MESH -o OUT", "the fold-free initial map to the unit ball (paper 4.1)",
                          {{"--untangle", "never|if-folded|always", "untangle the harmonic map (default if-folded)"},
                           {"--sphere", "area|conformal", "boundary map to the sphere: equal-area (default) or conformal only"},
+                          {"--sphere-start", "auto|progressive", "start of the sphere map: conformal, progressive where it flips (auto, default), or progressive"},
                           {"--area-correction", "", "equalise areas on the sphere before the interior map"},
                           {"--no-split", "", "do not split interior edges between boundary vertices"},
                           {"--report", "REPORT.json", "write the report (stages, metrics, timings)"}},

@@ -62,6 +62,8 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   bo.initial.preconditioner = vo.preconditioner;
   bo.initial.sphere_density = vpm::cli::parse_option(
       "--sphere", [&] { return vpm::parse_sphere_density(args.get("--sphere", "area")); });
+  bo.initial.sphere_start = vpm::cli::parse_option(
+      "--sphere-start", [&] { return vpm::parse_sphere_start(args.get("--sphere-start", "auto")); });
   vpm::BallMap bm = vpm::map_to_ball(dev, mesh, vr, in, bo);
 
   t0 = Clock::now();
@@ -88,6 +90,7 @@ vpm::cli::Registrar reg({"map", "MESH -o OUT", "map a tet mesh to the unit ball,
                           {"--allow-partial", "", "exit 0 even when the map misses --tolerance by over 2x (the warning stays)"},
                           {"--method", "moser|paper|vsem", "moser (default) or a peer method for comparison"},
                           {"--sphere", "area|conformal", "boundary map to the sphere: equal-area (default) or conformal only"},
+                          {"--sphere-start", "auto|progressive", "start of the sphere map: conformal, progressive where it flips (auto, default), or progressive"},
                           {"--boundary", "slide|fixed", "boundary vertices slide on the sphere (moser default) or stay"},
                           {"--solver", "cg|paper", "Jacobi CG (default) or the paper's BiCGSTAB on the normal equations"},
                           {"--preconditioner", "jacobi|amg", "of CG: Jacobi (default) or smoothed-aggregation AMG"},

@@ -671,8 +671,8 @@ TEST_CASE("volume map: the field's gradients on the device give the host-gradien
 
 TEST_CASE("vpm map: an input whose map cannot be made fold-free exits 3 and writes nothing") {
   // bent_mesh(3): a 270-degree C whose conformal boundary map flips triangles (docs/design.md 4.2:
-  // appendages defeat the conformal start). If a later version maps it, the output must be
-  // fold-free.
+  // appendages defeat the conformal start); since the progressive sphere start it is mapped, and
+  // the output must then be fold-free.
   const std::string vpm = VPM_BINARY;
   write_mesh(tmp("bent.vtu"), test::bent_mesh(3));
   fs::remove(tmp("bent_out.vtu"));

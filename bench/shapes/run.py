@@ -3,10 +3,14 @@
 `vpm mesh-image` and mapped by `vpm map`, one row per shape and size, with the map's outcome as
 a user sees it (exit status, converged, distortion, folds, time).
 
-Usage: run.py OUT_DIR [--sizes 30k,300k] [--shapes limbs,hand,...] [--vpm build/vpm]
-       [--timeout 600]
+Usage: run.py OUT_DIR [--sizes 30k,300k] [--shapes limbs,hand,...] [--models cgal-hand,...]
+       [--vpm build/vpm] [--timeout 600]
 Writes OUT_DIR/shapes.json and OUT_DIR/shapes.md (and prints the table). Sizes: 30k (mesh-image's
 default density, 25-30k tets) and 300k (--max-volume chosen for about 300k tets).
+
+--models adds public surface models that Debian's libcgal-demo ships (data.tar.gz, meshes/*.off;
+only the closed genus-0 ones are listed in MODELS), meshed by `vpm mesh-image MODEL.off`;
+--shapes none runs the models alone.
 """
 import argparse
 import json
@@ -16,6 +20,25 @@ import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+CGAL_DATA = "/usr/share/doc/libcgal-dev/data.tar.gz"  # Debian package libcgal-demo
+# closed genus-0 surfaces of CGAL's data (Euler characteristic 2), name -> what it is
+MODELS = {"hand": "a hand, fingers spread", "man": "a standing human figure", "camel": "a camel",
+          "cow": "a cow", "triceratops": "a triceratops (horns, legs, tail)", "armadillo": "the Stanford armadillo",
+          "bull": "a bull", "dino": "a dinosaur", "diplodocus": "a diplodocus (long neck and tail)",
+          "homer": "a cartoon figure"}
+
+
+def extract_models(out, names):
+    """Writes OUT/cgal-NAME.off for each model name from libcgal-demo's data archive."""
+    import tarfile
+    if not os.path.exists(CGAL_DATA):
+        sys.exit(f"run.py: {CGAL_DATA} not found: install Debian's libcgal-demo (scripts/setup.sh does)")
+    with tarfile.open(CGAL_DATA) as tar:
+        for n in names:
+            if n not in MODELS:
+                sys.exit(f"run.py: unknown model {n!r}: one of {', '.join(MODELS)}")
+            data = tar.extractfile(f"data/meshes/{n}.off").read()
+            open(os.path.join(out, f"cgal-{n}.off"), "wb").write(data)
 
 
 def run(cmd, timeout):
@@ -28,7 +51,7 @@ def run(cmd, timeout):
 
 
 def one(vpm, out, shape, size, timeout):
-    mask = os.path.join(out, f"{shape}.nii.gz")
+    mask = os.path.join(out, f"{shape}.off" if shape.startswith("cgal-") else f"{shape}.nii.gz")
     base = os.path.join(out, f"{shape}_{size}")
     density = [] if size == "30k" else ["--max-volume", "__V__"]
     if density:
@@ -76,14 +99,19 @@ def main():
     ap.add_argument("out")
     ap.add_argument("--sizes", default="30k")
     ap.add_argument("--shapes", default="limbs,hand,slab,coil,kidney")
+    ap.add_argument("--models", default="", help="libcgal-demo models: " + ",".join(MODELS) + " or all")
     ap.add_argument("--vpm", default=os.path.join(HERE, "..", "..", "build", "vpm"))
     ap.add_argument("--timeout", type=int, default=600)
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
-    shapes = a.shapes.split(",")
+    shapes = [] if a.shapes == "none" else a.shapes.split(",")
     missing = [s for s in shapes if not os.path.exists(os.path.join(a.out, f"{s}.nii.gz"))]
     if missing:
         subprocess.run(["/usr/bin/python3", os.path.join(HERE, "make_shapes.py"), a.out] + missing, check=True)
+    models = list(MODELS) if a.models == "all" else [m for m in a.models.split(",") if m]
+    if models:
+        extract_models(a.out, models)
+        shapes += ["cgal-" + m for m in models]
     rows = []
     for size in a.sizes.split(","):
         for s in shapes:

@@ -152,7 +152,10 @@ int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boun
     if (folds == 0) ball = std::move(trial);
   }
   if (!local || folds > 0) {
-    const UntangleResult ur = untangle(device, m.vertices, m.tets, ball, boundary, opt.untangle_options);
+    UntangleOptions global = opt.untangle_options;
+    global.max_outer_iterations = std::max(global.max_outer_iterations, opt.global_untangle_max_outer_iterations);
+    global.max_lbfgs_iterations = std::max(global.max_lbfgs_iterations, opt.global_untangle_max_lbfgs_iterations);
+    const UntangleResult ur = untangle(device, m.vertices, m.tets, ball, boundary, global);
     if (local) rep.untangle_local_failed = rep.untangle;
     rep.untangle = InitialUntangle{ur, false, 0};
     folds = ur.inverted_after;

@@ -248,17 +248,31 @@ SphereMapResult sphere_map(const TriSurface& surf, const InitialMapOptions& opt)
   rep.vertices = static_cast<int>(in.rows());
   rep.faces = static_cast<int>(f.rows());
   int flips = 0;
-  Points s = conformal_sphere(in, f, rep, &flips);
-  if (opt.south_pole_correction && s.allFinite()) correct_south_pole(in, f, s, &flips, rep);
-  normalize_rows(s);
-  // 3. orientation: outward faces must have det > 0 in the majority (total signed volume > 0)
-  double vol = 0;
-  for (Eigen::Index i = 0; i < f.rows(); ++i)
-    vol += Eigen::Vector3d(s.row(f(i, 0))).dot(Eigen::Vector3d(s.row(f(i, 1))).cross(Eigen::Vector3d(s.row(f(i, 2)))));
-  rep.mirrored = vol < 0;
-  if (vol < 0) s.col(0) *= -1;
-  rep.area_distortion_conformal = area_distortion(in, s, f);
-  if (opt.moebius_balance) balance(in, f, opt, s, &flips, rep);
+  Points s;
+  if (opt.sphere_start == InitialMapOptions::SphereStart::automatic) {
+    s = conformal_sphere(in, f, rep, &flips);
+    if (opt.south_pole_correction && s.allFinite()) correct_south_pole(in, f, s, &flips, rep);
+    normalize_rows(s);
+    // 3. orientation: outward faces must have det > 0 in the majority (total signed volume > 0)
+    double vol = 0;
+    for (Eigen::Index i = 0; i < f.rows(); ++i)
+      vol += Eigen::Vector3d(s.row(f(i, 0))).dot(Eigen::Vector3d(s.row(f(i, 1))).cross(Eigen::Vector3d(s.row(f(i, 2)))));
+    rep.mirrored = vol < 0;
+    if (vol < 0) s.col(0) *= -1;
+    rep.area_distortion_conformal = area_distortion(in, s, f);
+    if (opt.moebius_balance) balance(in, f, opt, s, &flips, rep);
+    flips = flipped_sphere_triangles(s, f);
+  }
+  if (opt.sphere_start == InitialMapOptions::SphereStart::progressive || flips > 0) {
+    ProgressiveStats ps;
+    s = progressive_sphere(in, f, &ps);
+    flips = flipped_sphere_triangles(s, f);
+    rep.start = "progressive";
+    rep.progressive_passes = ps.passes;
+    rep.progressive_collapses = ps.collapses;
+    rep.progressive_sweeps = ps.sweeps;
+    rep.progressive_seconds = ps.seconds;
+  }
   if (opt.sphere_density != InitialMapOptions::SphereDensity::conformal && flips == 0)
     equalise(in, f, opt, s, rep);
   if (opt.area_correction) rep.area_correction_steps = area_flow(in, f, s, opt.area_correction_steps, false);
@@ -284,6 +298,13 @@ InitialMapOptions::SphereDensity parse_sphere_density(const std::string& name) {
   if (name == "conformal") return D::conformal;
   if (name == "area") return D::area;
   throw InputError("sphere density '" + name + "' is not one of conformal, area");
+}
+
+InitialMapOptions::SphereStart parse_sphere_start(const std::string& name) {
+  using S = InitialMapOptions::SphereStart;
+  if (name == "auto") return S::automatic;
+  if (name == "progressive") return S::progressive;
+  throw InputError("sphere start '" + name + "' is not one of auto, progressive");
 }
 
 const char* to_string(InitialMapOptions::SphereDensity d) {
@@ -317,6 +338,15 @@ Json to_json(const SphereMapReport& r) {
     e["area_distortion"] = r.area_distortion_density;
     e["kept"] = r.density_kept;
     j["density"] = e;
+  }
+  j["start"] = r.start;
+  if (r.progressive_passes) {
+    Json p = Json::object();
+    p["passes"] = *r.progressive_passes;
+    p["collapses"] = r.progressive_collapses;
+    p["sweeps"] = r.progressive_sweeps;
+    p["seconds"] = r.progressive_seconds;
+    j["progressive"] = p;
   }
   if (r.flipped_before_repair) j["flipped_before_repair"] = *r.flipped_before_repair;
   if (r.repair_steps) j["repair_steps"] = *r.repair_steps;

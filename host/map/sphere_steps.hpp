@@ -56,6 +56,22 @@ struct EquiarealStats {
 /// most `tolerance`, or when it stalls.
 EquiarealStats equalise_density(const Points& in, const Triangles& f, const Eigen::VectorXd& target, Points& s,
                                 int max_steps, double tolerance);
+/// What progressive_sphere did.
+struct ProgressiveStats {
+  int passes = 0, collapses = 0, sweeps = 0;
+  double seconds = 0;
+};
+/// A sphere embedding (k x 3, unit rows) of the closed genus-0 surface (in, f) over all k
+/// vertices, f outward, with every chord triangle facing outwards (map/sphere_progressive.cpp):
+/// half-edge collapses (link condition; independent sets, shortest input edge first) down to a
+/// tetrahedron, which goes on a regular tetrahedron of the sphere; then the collapses undone in
+/// reverse, each restored vertex put next to its partner inside the kernel of its ring, and
+/// the vertices relaxed toward their neighbours' centroid by moves that keep every triangle
+/// valid (2 sweeps a level, 10 at the end). No precision loss can fold it, unlike the conformal
+/// map of a long tube. InputError if f is not a closed genus-0 triangulation of k vertices;
+/// NumericalError if no valid position exists (not seen).
+Points progressive_sphere(const Points& in, const Triangles& f, ProgressiveStats* stats = nullptr);
+
 /// Each vertex's share of the surface's area (a third of its triangles' areas), summing to 1.
 Eigen::VectorXd vertex_area_shares(const Points& in, const Triangles& f);
 

@@ -65,6 +65,14 @@ struct InitialMapOptions {
   SphereDensity sphere_density = SphereDensity::area;
   int density_max_steps = 300;
   double density_tolerance = 0.02;  ///< stop at this area distortion (mean |area ratio - 1|)
+  /// Where the sphere map starts. automatic: the conformal map, and when that leaves chord
+  /// triangles facing inwards (long tubes and limbs shrink by e^(-length / radius) in a
+  /// conformal map, below double precision) a progressive embedding instead: the surface
+  /// simplified to a tetrahedron by edge collapses and rebuilt on the sphere vertex by vertex,
+  /// every move checked to keep each triangle facing outwards (flip-free by construction);
+  /// the area equalisation then runs from it. progressive: that embedding always.
+  enum class SphereStart { automatic, progressive };
+  SphereStart sphere_start = SphereStart::automatic;
   // ---- step 3: harmonic interior
   /// Preconditioner of the harmonic solve's CG: "jacobi" or "amg" (vpm/amg.hpp).
   std::string preconditioner = "jacobi";
@@ -75,6 +83,12 @@ struct InitialMapOptions {
   /// (lower distortion, docs/design.md 4.1 table: 0.363 -> 0.318 on Colin27).
   Untangle untangle = Untangle::IfFolded;
   UntangleOptions untangle_options{};   ///< theta = 1/128 by default
+  /// Caps of the global run (the last resort before NumericalError), above those of
+  /// untangle_options: harmonic maps of coiled or long-limbed shapes from a progressive sphere
+  /// map start as tangled as min det J = -70 and needed 170-400 eps rounds of up to 300 L-BFGS
+  /// iterations (docs/shapes.md). A map that converges sooner stops sooner.
+  int global_untangle_max_outer_iterations = 200;
+  int global_untangle_max_lbfgs_iterations = 300;
   /// IfFolded: first untangle locally (the folded tets and this many rings of neighbours free,
   /// boundary fixed, same energy and theta), then globally if folds remain. 0: global only.
   int local_untangle_rings = 3;
@@ -108,6 +122,12 @@ struct SphereMapReport {
   std::optional<int> density_steps;
   double density_misfit_before = 0, density_misfit_after = 0, area_distortion_density = 0;
   bool density_kept = false;
+  // the progressive embedding (InitialMapOptions::sphere_start), when it ran: edge-collapse
+  // passes, collapses, relaxation sweeps, seconds
+  std::string start = "conformal";  ///< what the map started from: "conformal" or "progressive"
+  std::optional<int> progressive_passes;
+  int progressive_collapses = 0, progressive_sweeps = 0;
+  double progressive_seconds = 0;
   std::optional<int> flipped_before_repair;  ///< chord triangles facing inwards, repaired by
   std::optional<int> repair_steps;           ///< ... this many area-flow steps
   double area_distortion_final = 0;
@@ -117,7 +137,8 @@ struct SphereMapReport {
 ///  "south_pole_correction"?, "mirrored", "area_distortion_conformal", "moebius_iterations"?,
 ///  "moebius_centroid_norm"?, "area_distortion_balanced"?, "moebius_kept"?,
 ///  "area_correction_steps"?, "density"? {"target","steps","log_misfit_before",
-///  "log_misfit_after","area_distortion","kept"}, "flipped_before_repair"?, "repair_steps"?, "area_distortion_final",
+///  "log_misfit_after","area_distortion","kept"}, "start", "progressive"? {"passes","collapses",
+///  "sweeps","seconds"}, "flipped_before_repair"?, "repair_steps"?, "area_distortion_final",
 ///  "flipped_triangles"} (? = only when present)
 Json to_json(const SphereMapReport& report);
 
@@ -215,6 +236,8 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
 /// "conformal", "area" (InitialMapOptions::SphereDensity); InputError otherwise.
 InitialMapOptions::SphereDensity parse_sphere_density(const std::string& name);
 const char* to_string(InitialMapOptions::SphereDensity d);
+/// "auto", "progressive" (InitialMapOptions::SphereStart); InputError otherwise.
+InitialMapOptions::SphereStart parse_sphere_start(const std::string& name);
 
 /// Result of step 1.
 struct SplitResult {
