@@ -19,6 +19,8 @@ std::string cli_message(const vpm::MeshImageError& e) {
     case P::kMaskTouchesBorder:
       return e.context() + " (pad the image, raise --threshold, or pass --close-at-border to close it with a flat cap there)";
     case P::kMaskVanishes: return e.context() + "; lower --smooth or raise --target-vertices";
+    case P::kSurfaceSelfIntersects:
+      return e.context() + "; --voxelize MM meshes the solid it encloses from a mask of MM voxels instead";
   }
   return e.what();
 }
@@ -55,6 +57,8 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   o.min_dihedral_deg = args.get_double("--min-dihedral", o.min_dihedral_deg);
   o.max_closing_radius = args.get_int("--max-closing-radius", o.max_closing_radius);
   o.close_at_border = args.has("--close-at-border");
+  o.voxelize_mm = args.get_double("--voxelize", 0.0);
+  if (args.has("--voxelize") && !(o.voxelize_mm > 0)) throw vpm::InputError("--voxelize must be > 0");
   o.progress = [](const std::string& s) { vpm::cli::progress("mesh-image: " + s); };
   vpm::MeshImageReport report;
   vpm::TetMesh mesh;
@@ -84,6 +88,7 @@ vpm::cli::Registrar reg(
       {"--max-volume", "V", "largest tet volume in mm^3 (sets the density instead)", false, 2},
       {"--smooth", "S", "Gaussian smoothing of the mask in mm (default: from the density)"},
       {"--close-at-border", "", "cap a mask that touches the image border"},
+      {"--voxelize", "MM", "surface input: mesh the solid it encloses from a mask of MM voxels (crossing triangles allowed)"},
       {"--radius-edge", "Q", "TetGen radius-edge bound (default 1.5)"},
       {"--min-dihedral", "D", "TetGen smallest dihedral angle bound, degrees (default 12)"},
       {"--max-closing-radius", "R", "largest morphological closing tried for genus 0, grid cells (default 6)"},

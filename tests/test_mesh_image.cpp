@@ -17,6 +17,7 @@
 #include "vpm/geometry.hpp"
 #include "vpm/image.hpp"
 #include "vpm/mesh_image.hpp"
+#include "vpm/voxelize.hpp"
 #include "vpm/topology.hpp"
 
 using namespace vpm;
@@ -336,6 +337,37 @@ TEST_CASE("a closed surface file is meshed, an open one is refused") {
   const std::string msg = input_error_of([&] { mesh_surface(crossed, o, nullptr, "crossed.off"); });
   CHECK(msg.find("crossed.off: the surface self-intersects") != std::string::npos);
   CHECK(msg.find("pairs of triangles cross (e.g. triangles") != std::string::npos);
+  CHECK(msg.find("voxelize_mm") != std::string::npos);
+
+  // ... meshed through a voxel mask instead: the solid it encloses, genus 0, voxelize stage timed
+  MeshImageOptions vo = o;
+  vo.voxelize_mm = 0.5;
+  MeshImageReport vrep;
+  const TetMesh vm = mesh_surface(crossed, vo, &vrep, "crossed.off");
+  CHECK(euler_of_boundary(vm) == 2);
+  CHECK(vrep.parameters.voxelize_mm == 0.5);
+  CHECK(to_json(vrep).find("parameters")->find("voxelize_mm")->number() == 0.5);
+  CHECK(vrep.timings.front().stage == "voxelize");
+  // and on the command line: the refusal names the remedy, which works
+  const std::string crossed_path = kTmp + "/crossed.off", cout = kTmp + "/crossed.vtu", cerr = kTmp + "/crossed.txt";
+  {
+    std::ofstream f(crossed_path);
+    f << "OFF\n" << crossed.vertices.rows() << ' ' << crossed.triangles.rows() << " 0\n";
+    for (Eigen::Index i = 0; i < crossed.vertices.rows(); ++i)
+      f << crossed.vertices(i, 0) << ' ' << crossed.vertices(i, 1) << ' ' << crossed.vertices(i, 2) << '\n';
+    for (Eigen::Index i = 0; i < crossed.triangles.rows(); ++i)
+      f << "3 " << crossed.triangles(i, 0) << ' ' << crossed.triangles(i, 1) << ' ' << crossed.triangles(i, 2) << '\n';
+  }
+  std::filesystem::remove(cout);
+  CHECK(test::run_status(std::string(VPM_BINARY) + " mesh-image " + crossed_path + " -o " + cout +
+                         " --target-vertices 600 2> " + cerr) == 2);
+  CHECK(test::slurp(cerr).find("--voxelize MM meshes the solid") != std::string::npos);
+  CHECK(!std::filesystem::exists(cout));
+  CHECK(test::run_status(std::string(VPM_BINARY) + " mesh-image " + crossed_path + " -o " + cout +
+                         " --target-vertices 600 --voxelize 0.5 2> " + cerr) == 0);
+  CHECK(std::filesystem::exists(cout));
+  CHECK(test::run_status(std::string(VPM_BINARY) + " mesh-image " + crossed_path + " -o " + cout +
+                         " --voxelize 0 2> " + cerr) == 2);
 
   // TetGen runs in a child process: a crash there (forced by the test hook) is exit 2 with a
   // message, not a crash of vpm, and nothing is written
@@ -405,4 +437,44 @@ TEST_CASE("mesh-image --label meshes one structure of a label image: AAL thalamu
     CHECK(WEXITSTATUS(rc) == 2);
   }
   CHECK(!fs::exists(out));
+}
+
+TEST_CASE("voxelize_surface: the enclosed solid by winding numbers, overlaps as a union, orientation free") {
+  // a closed box as 12 triangles, outward
+  auto box = [](Eigen::Vector3d lo, Eigen::Vector3d hi, TriSurface& s) {
+    const int base = static_cast<int>(s.vertices.rows());
+    s.vertices.conservativeResize(base + 8, 3);
+    for (int k = 0; k < 8; ++k)
+      s.vertices.row(base + k) << (k & 1 ? hi.x() : lo.x()), (k & 2 ? hi.y() : lo.y()), (k & 4 ? hi.z() : lo.z());
+    const int F[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                          {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+    const int t0 = static_cast<int>(s.triangles.rows());
+    s.triangles.conservativeResize(t0 + 12, 3);
+    for (int t = 0; t < 12; ++t)
+      for (int c = 0; c < 3; ++c) s.triangles(t0 + t, c) = base + F[t][c];
+  };
+  auto volume = [](const Image& img) {
+    double n = 0;
+    for (float v : img.data) n += v;
+    return n * img.spacing[0] * img.spacing[1] * img.spacing[2];
+  };
+  TriSurface one;
+  box({0.1, 0.1, 0.1}, {10.1, 10.1, 10.1}, one);
+  CHECK(volume(voxelize_surface(one, 0.25)) == Approx(1000).epsilon(0.03));
+  // two boxes passing through each other: the union (1500), not the symmetric difference
+  TriSurface two = one;
+  box({5.1, 0.1, 0.1}, {15.1, 10.1, 10.1}, two);
+  const Image u = voxelize_surface(two, 0.25);
+  CHECK(volume(u) == Approx(1500).epsilon(0.03));
+  // the same with every triangle reversed: the same mask
+  TriSurface rev = two;
+  rev.triangles.col(1).swap(rev.triangles.col(2));
+  CHECK(voxelize_surface(rev, 0.25).data == u.data);
+  // world positions: a voxel at the box centre is inside, one beyond the box is not
+  const Eigen::Vector3d c = u.to_voxel(Eigen::Vector3d(7.6, 5.1, 5.1)).array().round();
+  CHECK(u.at(int(c.x()), int(c.y()), int(c.z())) == 1.0f);
+  const Eigen::Vector3d o = u.to_voxel(Eigen::Vector3d(16.0, 5.1, 5.1)).array().round();
+  CHECK(u.at(int(o.x()), int(o.y()), int(o.z())) == 0.0f);
+  CHECK_THROWS_AS(voxelize_surface(one, 0), InputError);
+  CHECK_THROWS_AS(voxelize_surface(one, 1e-3), InputError);  // 10^4 per side: too many voxels
 }

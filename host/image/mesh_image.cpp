@@ -2,6 +2,7 @@
 // remeshing (host/with_cgal) -> TetGen (host/with_tetgen) -> labels. The steps live in
 // mask_grid, surface, tets and label_mesh; this file strings them together.
 #include "vpm/mesh_image.hpp"
+#include "vpm/voxelize.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -332,6 +333,21 @@ TetMesh mesh_image(const Image& img, const MeshImageOptions& o, MeshImageReport*
 
 TetMesh mesh_surface(const TriSurface& surface, const MeshImageOptions& o, MeshImageReport* report_out,
                      const std::string& source) {
+  if (o.voxelize_mm > 0) {
+    detail::check_closed_genus0(surface, source, "the input surface");
+    const Stopwatch t0;
+    Image mask = voxelize_surface(surface, o.voxelize_mm);
+    mask.path = source + " (voxelized at " + format_sig(o.voxelize_mm) + ")";
+    MeshImageOptions mo = o;
+    mo.threshold = 0.5;
+    mo.select_labels.clear();
+    MeshImageReport r;
+    TetMesh mesh = mesh_image(mask, mo, &r, nullptr);
+    r.parameters.voxelize_mm = o.voxelize_mm;
+    r.timings.insert(r.timings.begin(), StageTime{"voxelize", t0.seconds(), t0.cpu_seconds()});
+    if (report_out) *report_out = r;
+    return mesh;
+  }
   const Stopwatch t_total;
   MeshImageReport report;
   report.image_input = false;

@@ -47,6 +47,7 @@ Json parameters_json(const MeshImageReport& r) {
   }
   j["max_volume_mm3"] = p.max_volume_mm3;
   j["tetgen_switches"] = p.tetgen_switches;
+  if (p.voxelize_mm > 0) j["voxelize_mm"] = p.voxelize_mm;
   return j;
 }
 

@@ -74,6 +74,8 @@ TetMesh surface_to_tets(const TriSurface& raw, const Resolution& res, const Mesh
   TriSurface s;
   try {
     s = remesh_surface(raw, res.edge, o.remesh_iterations);
+  } catch (const MeshImageError& e) {
+    throw MeshImageError(e.problem(), source + ": " + e.context(), source + ": " + e.what());
   } catch (const InputError& e) {
     throw InputError(source + ": " + e.what());
   }

@@ -21,6 +21,7 @@
 #include "vpm/untangle.hpp"
 #include "vpm/timing.hpp"
 #include "vpm/format.hpp"
+#include "map/initial_untangle.hpp"
 
 namespace vpm {
 
@@ -125,56 +126,9 @@ Points harmonic_interior(Device& device, const TetMesh& m, const std::vector<cha
   return ball;
 }
 
-// Step 4: untangling (InitialMapOptions::untangle): locally first when only folds are to be
-// repaired (rings, then 2x and 4x the rings around what is left, while each run leaves fewer
-// folds), globally if folds remain, then locally again with twice the rings if the global run
-// left a few (at most kCleanupMaxFolds). Returns the folds left.
-constexpr int kLocalWidenings = 3;
-constexpr int kCleanupMaxFolds = 64;
-int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boundary, const InitialMapOptions& opt,
-                 Points& ball, InitialMapReport& rep) {
-  int folds = rep.folds_before_untangle;
-  const bool run = opt.untangle == InitialMapOptions::Untangle::Always ||
-                   (opt.untangle == InitialMapOptions::Untangle::IfFolded && folds > 0);
-  if (!run) return folds;
-  const bool local = opt.untangle == InitialMapOptions::Untangle::IfFolded && opt.local_untangle_rings > 0;
-  if (local) {  // few folds: free only their neighbourhood (fast), widening it while that helps
-    Points trial = ball;
-    int left = folds;
-    for (int k = 0, rings = opt.local_untangle_rings; k < kLocalWidenings && left > 0; ++k, rings *= 2) {
-      const UntangleResult ul = untangle_local(device, m.vertices, m.tets, trial, boundary,
-                                               inverted_tets(trial, m.tets), rings, opt.untangle_options);
-      rep.untangle = InitialUntangle{ul, true, rings};
-      if (ul.inverted_after >= left) break;  // no progress: the global run takes over
-      left = ul.inverted_after;
-    }
-    folds = left;
-    if (folds == 0) ball = std::move(trial);
-  }
-  if (!local || folds > 0) {
-    UntangleOptions global = opt.untangle_options;
-    global.max_outer_iterations = std::max(global.max_outer_iterations, opt.global_untangle_max_outer_iterations);
-    global.max_lbfgs_iterations = std::max(global.max_lbfgs_iterations, opt.global_untangle_max_lbfgs_iterations);
-    const UntangleResult ur = untangle(device, m.vertices, m.tets, ball, boundary, global);
-    if (local) rep.untangle_local_failed = rep.untangle;
-    rep.untangle = InitialUntangle{ur, false, 0};
-    folds = ur.inverted_after;
-    if (folds > 0 && folds <= kCleanupMaxFolds && opt.local_untangle_rings > 0) {
-      // a few folds left by the global run: free a wider neighbourhood of each (the global
-      // run's small theta keeps shape, the local one's reference is the input there)
-      const int rings = 2 * opt.local_untangle_rings;
-      Points trial = ball;
-      const UntangleResult uc = untangle_local(device, m.vertices, m.tets, trial, boundary,
-                                               inverted_tets(ball, m.tets), rings, opt.untangle_options);
-      rep.untangle_cleanup = InitialUntangle{uc, true, rings};
-      if (uc.inverted_after < folds) {
-        ball = std::move(trial);
-        folds = uc.inverted_after;
-      }
-    }
-  }
-  return folds;
-}
+using detail::kCleanupMaxFolds;
+using detail::slide_cleanup;
+using detail::untangle_map;
 
 // Steps 2-4 on the refined mesh m (boundary surface surf, mask res.boundary): sphere map,
 // harmonic interior, untangling; fills res.ball and rep. False when the sphere map flipped a
@@ -194,6 +148,9 @@ bool map_through_sphere(Device& device, const TetMesh& m, const TriSurface& surf
 
   t0 = Clock::now();
   rep.folds_after_untangle = untangle_map(device, m, res.boundary, opt, res.ball, rep);
+  if (rep.folds_after_untangle > 0 && rep.folds_after_untangle <= kCleanupMaxFolds &&
+      opt.untangle != InitialMapOptions::Untangle::Never)
+    rep.folds_after_untangle = slide_cleanup(device, m, res.boundary, opt, res.ball, rep.folds_after_untangle, rep);
   rep.timings.untangle = seconds_since(t0);
   rep.boundary_max_radius_error = 0;
   for (int i = 0; i < m.num_vertices(); ++i)  // boundary exactly on the sphere
@@ -262,6 +219,7 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
     rep.untangle.reset();
     rep.untangle_local_failed.reset();
     rep.untangle_cleanup.reset();
+    rep.untangle_slide.reset();
     map_through_sphere(device, m, surf, conformal, note, res, rep);
     rep.fallback = fb;
   }
@@ -325,6 +283,7 @@ Json to_json(const InitialMapReport& r) {
   if (r.untangle) rep["untangle"] = untangle_json(*r.untangle);
   if (r.untangle_local_failed) rep["untangle_local_failed"] = untangle_json(*r.untangle_local_failed);
   if (r.untangle_cleanup) rep["untangle_cleanup"] = untangle_json(*r.untangle_cleanup);
+  if (r.untangle_slide) rep["untangle_slide"] = untangle_json(*r.untangle_slide);
   rep["folds_after_untangle"] = r.folds_after_untangle;
   rep["boundary_max_radius_error"] = r.boundary_max_radius_error;
   rep["metrics"] = to_json(r.metrics);

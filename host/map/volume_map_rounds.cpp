@@ -39,10 +39,17 @@ Points vsem_target(MapContext& c, const Points& x, Eigen::VectorXd& w, VolumeMap
   return target;
 }
 
+// A step that folds more than this fraction of the tets is not untangled but shortened first
+// (untangling thousands of folds takes tens of seconds at 30k tets and gives the step's gain
+// back: the coil of bench/shapes folded 12 % per polish step, docs/shapes.md).
+constexpr double kUntangleMaxFoldFraction = 0.05;
+
 // Moves x from `saved` by move(attempt, step) and checks it: a move that folds is untangled
-// locally, and if folds remain it is tried again with the step halved, up to `max_attempts`
-// more times. r.folds_before_untangle counts the folds of every attempt (`each_attempt`) or of
-// the first; r.t_end is the step used. Returns the folds left (0: accepted).
+// locally (unless it folds more than kUntangleMaxFoldFraction), and if folds remain it is tried
+// again with the step halved, up to `max_attempts` more times. r.folds_before_untangle counts
+// the folds of every attempt (`each_attempt`) or of the first; r.t_end is the step used.
+// Returns the folds left (0: accepted).
+
 template <class Move>
 int fold_free(MapContext& c, Points& x, const Points& saved, double step, int max_attempts, bool each_attempt,
               VolumeMapRound& r, Move move) {
@@ -51,6 +58,11 @@ int fold_free(MapContext& c, Points& x, const Points& saved, double step, int ma
     move(attempt, step);
     folds = count_folds(c, x);
     if (each_attempt || attempt == 0) r.folds_before_untangle = folds;
+    r.t_end = step;
+    if (folds > kUntangleMaxFoldFraction * c.m) {  // left as folded: counts as not repaired
+      step *= 0.5;
+      continue;
+    }
     if (folds > 0) {
       r.untangled = c.opt.local_untangle;
       folds = untangle_folds(c, x, &r.time_untangle, &saved);

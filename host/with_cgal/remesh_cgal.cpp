@@ -19,7 +19,7 @@ using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Mesh = CGAL::Surface_mesh<K::Point_3>;
 namespace PMP = CGAL::Polygon_mesh_processing;
 
-// InputError when triangles of `mesh` cross each other: how many pairs, and the first pair with
+// MeshImageError (kSurfaceSelfIntersects) when triangles of `mesh` cross each other: how many pairs, and the first pair with
 // a point of it (TetGen cannot mesh such a surface, and has crashed on one).
 void refuse_self_intersections(const Mesh& mesh, const std::string& what) {
   if (!PMP::does_self_intersect(mesh)) return;
@@ -32,7 +32,9 @@ void refuse_self_intersections(const Mesh& mesh, const std::string& what) {
             std::to_string(pairs[0].second.idx()) + ", near " + std::to_string(p.x()) + ", " + std::to_string(p.y()) +
             ", " + std::to_string(p.z()) + ")";
   }
-  throw InputError(what + " self-intersects: " + std::to_string(pairs.size()) + " pairs of triangles cross" + where);
+  const std::string fact = what + " self-intersects: " + std::to_string(pairs.size()) + " pairs of triangles cross" + where;
+  throw MeshImageError(MeshImageError::Problem::kSurfaceSelfIntersects, fact,
+                       fact + "; MeshImageOptions::voxelize_mm > 0 meshes the solid it encloses instead");
 }
 }  // namespace
 

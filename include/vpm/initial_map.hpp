@@ -181,6 +181,9 @@ struct InitialMapReport {
   /// a local run (twice the rings) on the few folds a global run left; its result is kept
   /// only if it has fewer folds
   std::optional<InitialUntangle> untangle_cleanup;
+  /// The last resort for at most 64 folds left: the boundary vertices near them free too, then
+  /// put back on the sphere (inverted_after: the folds after that projection); the last attempt.
+  std::optional<InitialUntangle> untangle_slide;
   int folds_after_untangle = 0;
   /// Set when steps 2-4 with the equal-area sphere map left a fold after untangling and were
   /// redone with the conformal one (the report's other fields are of the redo).
@@ -204,7 +207,7 @@ struct InitialMapReport {
 ///  "refined": {"vertices","tets"}, "boundary": to_json(SphereMapReport),
 ///  "harmonic": {"solver","iterations","relative_residual","inverted_tets"},
 ///  "folds_before_untangle", "untangle"? (to_json(UntangleResult) + "scope", "rings"),
-///  "untangle_local_failed"?, "untangle_cleanup"?, "folds_after_untangle", "fallback"? {"from","to",
+///  "untangle_local_failed"?, "untangle_cleanup"?, "untangle_slide"?, "folds_after_untangle", "fallback"? {"from","to",
 ///  "flipped_triangles","folds_after_untangle","seconds"}, "boundary_max_radius_error",
 ///  "metrics": to_json(MapMetrics), "timings_s": {"input_quality","metrics","split","boundary",
 ///  "harmonic","untangle","total"}}

@@ -54,6 +54,11 @@ struct MeshImageOptions {
   /// surface is closed just outside the image (a flat cap), e.g. a brainstem cut by the field
   /// of view.
   bool close_at_border = false;
+  /// Surface inputs only: when > 0, the surface is not remeshed itself; the solid it encloses
+  /// is rasterised on voxels of this size (vpm/voxelize.hpp: winding numbers, so triangles that
+  /// cross each other are fine) and that mask is meshed like an image. For surfaces that
+  /// self-intersect (many public models do) or are too detailed to remesh.
+  double voxelize_mm = 0;
   /// Progress messages (stage names); may be empty.
   std::function<void(const std::string&)> progress;
 };
@@ -70,6 +75,8 @@ class MeshImageError : public InputError {
                             ///< message up to the remedy (image, voxel, world position)
     kMaskVanishes,          ///< smoothing removed the whole mask; context: the message up to the
                             ///< remedy (image, sigma)
+    kSurfaceSelfIntersects, ///< triangles of the input (or remeshed) surface cross; context: the
+                            ///< message up to the remedy (how many pairs, where)
   };
   MeshImageError(Problem problem, std::string context, const std::string& message);
   Problem problem() const { return problem_; }

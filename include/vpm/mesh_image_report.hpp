@@ -39,7 +39,7 @@ struct LabelVolume {
 
 /// Wall and process CPU seconds of one pipeline stage.
 struct StageTime {
-  std::string stage;  ///< read, mask, grid, topology, extract, remesh, tetgen, labels, total
+  std::string stage;  ///< read, (voxelize,) mask, grid, topology, extract, remesh, tetgen, labels, total
   double wall_s = 0;
   double cpu_s = 0;
 };
@@ -71,6 +71,7 @@ struct MeshImageReport {
     double smooth_sigma_mm = 0;    ///< Gaussian sigma used (image input)
     double max_volume_mm3 = 0;     ///< TetGen volume bound
     std::string tetgen_switches;
+    double voxelize_mm = 0;        ///< surface input meshed through a voxel mask of this size (0: no)
   } parameters;
 
   /// Topology of the extracted mask surface and the closings that made it genus 0 (image input).

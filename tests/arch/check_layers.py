@@ -15,7 +15,7 @@ PUBLIC = {
     "mesh": ["mesh", "topology", "geometry", "validate", "metrics", "locate", "icosphere", "mesh_stats", "labels", "mesh_order"],
     "io": ["io", "landmarks"],
     "linalg": ["sparse", "laplacian", "solver", "amg"],
-    "image": ["image", "mesh_image", "mesh_image_report"],
+    "image": ["image", "mesh_image", "mesh_image_report", "voxelize"],
     "map": ["initial_map", "untangle", "volume_map", "ball_map"],
     "register": ["rbf", "registration", "dense_registration"],
     "collective": ["collective", "elements", "sampling", "statistics", "map_back", "cohort_view", "view_page"],

@@ -1,0 +1,99 @@
+// Step 4 of the initial map: untangling the harmonic map (map/initial_untangle.hpp).
+#include "map/initial_untangle.hpp"
+
+#include <algorithm>
+#include <vector>
+
+#include "vpm/device.hpp"
+#include "vpm/topology.hpp"
+#include "vpm/untangle.hpp"
+
+namespace vpm::detail {
+
+// Step 4: untangling (InitialMapOptions::untangle): locally first when only folds are to be
+// repaired (rings, then 2x and 4x the rings around what is left, while each run leaves fewer
+// folds), globally if folds remain, then locally again with twice the rings if the global run
+// left a few (at most kCleanupMaxFolds). Returns the folds left.
+constexpr int kLocalWidenings = 3;
+int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boundary, const InitialMapOptions& opt,
+                 Points& ball, InitialMapReport& rep) {
+  int folds = rep.folds_before_untangle;
+  const bool run = opt.untangle == InitialMapOptions::Untangle::Always ||
+                   (opt.untangle == InitialMapOptions::Untangle::IfFolded && folds > 0);
+  if (!run) return folds;
+  const bool local = opt.untangle == InitialMapOptions::Untangle::IfFolded && opt.local_untangle_rings > 0;
+  if (local) {  // few folds: free only their neighbourhood (fast), widening it while that helps
+    Points trial = ball;
+    int left = folds;
+    for (int k = 0, rings = opt.local_untangle_rings; k < kLocalWidenings && left > 0; ++k, rings *= 2) {
+      const UntangleResult ul = untangle_local(device, m.vertices, m.tets, trial, boundary,
+                                               inverted_tets(trial, m.tets), rings, opt.untangle_options);
+      rep.untangle = InitialUntangle{ul, true, rings};
+      if (ul.inverted_after >= left) break;  // no progress: the global run takes over
+      left = ul.inverted_after;
+    }
+    folds = left;
+    if (folds == 0) ball = std::move(trial);
+  }
+  if (!local || folds > 0) {
+    UntangleOptions global = opt.untangle_options;
+    global.max_outer_iterations = std::max(global.max_outer_iterations, opt.global_untangle_max_outer_iterations);
+    global.max_lbfgs_iterations = std::max(global.max_lbfgs_iterations, opt.global_untangle_max_lbfgs_iterations);
+    const UntangleResult ur = untangle(device, m.vertices, m.tets, ball, boundary, global);
+    if (local) rep.untangle_local_failed = rep.untangle;
+    rep.untangle = InitialUntangle{ur, false, 0};
+    folds = ur.inverted_after;
+    if (folds > 0 && folds <= kCleanupMaxFolds && opt.local_untangle_rings > 0) {
+      // a few folds left by the global run: free a wider neighbourhood of each (the global
+      // run's small theta keeps shape, the local one's reference is the input there)
+      const int rings = 2 * opt.local_untangle_rings;
+      Points trial = ball;
+      const UntangleResult uc = untangle_local(device, m.vertices, m.tets, trial, boundary,
+                                               inverted_tets(ball, m.tets), rings, opt.untangle_options);
+      rep.untangle_cleanup = InitialUntangle{uc, true, rings};
+      if (uc.inverted_after < folds) {
+        ball = std::move(trial);
+        folds = uc.inverted_after;
+      }
+    }
+  }
+  return folds;
+}
+
+// See the header; seen on the feet of a humanoid model, whose last fold was a tet on the
+// boundary whose chord triangle left no room for its fourth vertex.
+int slide_cleanup(Device& device, const TetMesh& m, const std::vector<char>& boundary, const InitialMapOptions& opt,
+                  Points& ball, int folds, InitialMapReport& rep) {
+  const int n = m.num_vertices();
+  const Triangles bfaces = boundary_faces(m.tets);
+  const int rings = 2 * opt.local_untangle_rings;
+  for (int attempt = 0; attempt < 3 && folds > 0; ++attempt) {
+    const std::vector<int> bad = inverted_tets(ball, m.tets);
+    std::vector<char> fixed = boundary, slid(static_cast<size_t>(n), 0);
+    for (int t : bad)
+      for (int c = 0; c < 4; ++c) {
+        const auto v = static_cast<size_t>(m.tets(t, c));
+        slid[v] = boundary[v];
+        fixed[v] = 0;
+      }
+    Points trial = ball;
+    const UntangleResult r = untangle_local(device, m.vertices, m.tets, trial, fixed, bad, rings, opt.untangle_options);
+    for (int v = 0; v < n; ++v)
+      if (slid[static_cast<size_t>(v)]) trial.row(v).normalize();
+    // the projection can flip boundary triangles and fold tets: unflip along the sphere (the
+    // previous state as the shape to keep), then untangle with the boundary fixed again
+    unflip_sphere_faces(ball, bfaces, trial, {});
+    const std::vector<int> again = inverted_tets(trial, m.tets);
+    if (!again.empty())
+      untangle_local(device, m.vertices, m.tets, trial, boundary, again, rings, opt.untangle_options);
+    const int left = static_cast<int>(inverted_tets(trial, m.tets).size());
+    rep.untangle_slide = InitialUntangle{r, true, rings};
+    rep.untangle_slide->result.inverted_after = left;
+    if (left >= folds || flipped_sphere_triangles(trial, bfaces) > 0) break;
+    ball = std::move(trial);
+    folds = left;
+  }
+  return folds;
+}
+
+}  // namespace vpm::detail
