@@ -64,7 +64,7 @@ def one(vpm, out, shape, size, timeout):
     density = [] if size == "30k" else ["--max-volume", "__V__"]
     if density:
         volume = json.load(open(os.path.join(out, f"{shape}_30k_mesh.json")))["mesh"]["volume_mm3"]
-        density[1] = f"{volume / 300000 * 2.2:.4f}"  # TetGen's tets average ~1/2.2 of the bound (measured)
+        density[1] = f"{volume / 300000 * 2.2:.6g}"  # TetGen's tets average ~1/2.2 of the bound (measured)
     rc, secs, last = run([vpm, "mesh-image", mask, "-o", base + ".vtu", "--report", base + "_mesh.json"] + density, timeout)
     row = {"shape": shape, "size": size, "mesh_exit": rc, "mesh_s": round(secs, 2)}
     if rc == 2 and "self-intersects" in last and mask.endswith(".off"):
