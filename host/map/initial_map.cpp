@@ -126,8 +126,6 @@ Points harmonic_interior(Device& device, const TetMesh& m, const std::vector<cha
   return ball;
 }
 
-using detail::kCleanupMaxFolds;
-using detail::slide_cleanup;
 using detail::untangle_map;
 
 // Steps 2-4 on the refined mesh m (boundary surface surf, mask res.boundary): sphere map,
@@ -148,9 +146,6 @@ bool map_through_sphere(Device& device, const TetMesh& m, const TriSurface& surf
 
   t0 = Clock::now();
   rep.folds_after_untangle = untangle_map(device, m, res.boundary, opt, res.ball, rep);
-  if (rep.folds_after_untangle > 0 && rep.folds_after_untangle <= kCleanupMaxFolds &&
-      opt.untangle != InitialMapOptions::Untangle::Never)
-    rep.folds_after_untangle = slide_cleanup(device, m, res.boundary, opt, res.ball, rep.folds_after_untangle, rep);
   rep.timings.untangle = seconds_since(t0);
   rep.boundary_max_radius_error = 0;
   for (int i = 0; i < m.num_vertices(); ++i)  // boundary exactly on the sphere

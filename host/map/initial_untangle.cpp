@@ -10,10 +10,51 @@
 
 namespace vpm::detail {
 
-// Step 4: untangling (InitialMapOptions::untangle): locally first when only folds are to be
-// repaired (rings, then 2x and 4x the rings around what is left, while each run leaves fewer
-// folds), globally if folds remain, then locally again with twice the rings if the global run
-// left a few (at most kCleanupMaxFolds). Returns the folds left.
+namespace {
+
+// The last resort for a few folds the fixed boundary leaves (seen on the feet of a humanoid
+// model: a tet on the boundary whose chord triangle left no room for its fourth vertex): the
+// boundary vertices of the folded tets may move too, then go back onto the sphere along their
+// radius, flipped sphere triangles are unflipped along the sphere and the tets untangled with
+// the boundary fixed; kept when it leaves fewer folds and flips no boundary triangle, up to 3
+// times. Fills rep.untangle_slide; returns the folds left.
+int slide_cleanup(Device& device, const TetMesh& m, const std::vector<char>& boundary, const InitialMapOptions& opt,
+                  Points& ball, int folds, InitialMapReport& rep) {
+  const int n = m.num_vertices();
+  const Triangles bfaces = boundary_faces(m.tets);
+  const int rings = 2 * opt.local_untangle_rings;
+  for (int attempt = 0; attempt < 3 && folds > 0; ++attempt) {
+    const std::vector<int> bad = inverted_tets(ball, m.tets);
+    std::vector<char> fixed = boundary, slid(static_cast<size_t>(n), 0);
+    for (int t : bad)
+      for (int c = 0; c < 4; ++c) {
+        const auto v = static_cast<size_t>(m.tets(t, c));
+        slid[v] = boundary[v];
+        fixed[v] = 0;
+      }
+    Points trial = ball;
+    const UntangleResult r = untangle_local(device, m.vertices, m.tets, trial, fixed, bad, rings, opt.untangle_options);
+    for (int v = 0; v < n; ++v)
+      if (slid[static_cast<size_t>(v)]) trial.row(v).normalize();
+    // the projection can flip boundary triangles and fold tets: unflip along the sphere (the
+    // previous state as the shape to keep), then untangle with the boundary fixed again
+    unflip_sphere_faces(ball, bfaces, trial, {});
+    const std::vector<int> again = inverted_tets(trial, m.tets);
+    if (!again.empty())
+      untangle_local(device, m.vertices, m.tets, trial, boundary, again, rings, opt.untangle_options);
+    const int left = static_cast<int>(inverted_tets(trial, m.tets).size());
+    rep.untangle_slide = InitialUntangle{r, true, rings};
+    rep.untangle_slide->result.inverted_after = left;
+    if (left >= folds || flipped_sphere_triangles(trial, bfaces) > 0) break;
+    ball = std::move(trial);
+    folds = left;
+  }
+  return folds;
+}
+
+}  // namespace
+
+// Local runs widen the rings this many times (x2 each) while each leaves fewer folds.
 constexpr int kLocalWidenings = 3;
 int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boundary, const InitialMapOptions& opt,
                  Points& ball, InitialMapReport& rep) {
@@ -57,42 +98,7 @@ int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boun
       }
     }
   }
-  return folds;
-}
-
-// See the header; seen on the feet of a humanoid model, whose last fold was a tet on the
-// boundary whose chord triangle left no room for its fourth vertex.
-int slide_cleanup(Device& device, const TetMesh& m, const std::vector<char>& boundary, const InitialMapOptions& opt,
-                  Points& ball, int folds, InitialMapReport& rep) {
-  const int n = m.num_vertices();
-  const Triangles bfaces = boundary_faces(m.tets);
-  const int rings = 2 * opt.local_untangle_rings;
-  for (int attempt = 0; attempt < 3 && folds > 0; ++attempt) {
-    const std::vector<int> bad = inverted_tets(ball, m.tets);
-    std::vector<char> fixed = boundary, slid(static_cast<size_t>(n), 0);
-    for (int t : bad)
-      for (int c = 0; c < 4; ++c) {
-        const auto v = static_cast<size_t>(m.tets(t, c));
-        slid[v] = boundary[v];
-        fixed[v] = 0;
-      }
-    Points trial = ball;
-    const UntangleResult r = untangle_local(device, m.vertices, m.tets, trial, fixed, bad, rings, opt.untangle_options);
-    for (int v = 0; v < n; ++v)
-      if (slid[static_cast<size_t>(v)]) trial.row(v).normalize();
-    // the projection can flip boundary triangles and fold tets: unflip along the sphere (the
-    // previous state as the shape to keep), then untangle with the boundary fixed again
-    unflip_sphere_faces(ball, bfaces, trial, {});
-    const std::vector<int> again = inverted_tets(trial, m.tets);
-    if (!again.empty())
-      untangle_local(device, m.vertices, m.tets, trial, boundary, again, rings, opt.untangle_options);
-    const int left = static_cast<int>(inverted_tets(trial, m.tets).size());
-    rep.untangle_slide = InitialUntangle{r, true, rings};
-    rep.untangle_slide->result.inverted_after = left;
-    if (left >= folds || flipped_sphere_triangles(trial, bfaces) > 0) break;
-    ball = std::move(trial);
-    folds = left;
-  }
+  if (folds > 0 && folds <= kCleanupMaxFolds) folds = slide_cleanup(device, m, boundary, opt, ball, folds, rep);
   return folds;
 }
 

@@ -10,23 +10,17 @@ class Device;
 
 namespace vpm::detail {
 
-/// Folds left by the global run up to which a local cleanup (and the sliding one) are tried.
+/// Folds left by the global run up to which a local cleanup (and then the sliding one) is tried.
 constexpr int kCleanupMaxFolds = 64;
 
 /// InitialMapOptions::untangle on `ball` (boundary fixed): locally first when only folds are to
 /// be repaired (rings, then 2x and 4x the rings around what is left, while each run leaves
 /// fewer folds), globally if folds remain (InitialMapOptions::global_untangle_max_*), then
-/// locally again with twice the rings if the global run left at most kCleanupMaxFolds. Fills
-/// rep.untangle*, starts from rep.folds_before_untangle; returns the folds left.
+/// locally again with twice the rings if the global run left at most kCleanupMaxFolds, and for
+/// what is still left (at most kCleanupMaxFolds) with the boundary vertices of the folded tets
+/// sliding on the sphere. Fills rep.untangle*, starts from rep.folds_before_untangle; returns
+/// the folds left.
 int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boundary, const InitialMapOptions& opt,
                  Points& ball, InitialMapReport& rep);
-
-/// The last resort for a few folds the fixed boundary leaves: the boundary vertices of the
-/// folded tets may move too (then go back onto the sphere along their radius, flipped sphere
-/// triangles are unflipped along the sphere and the tets untangled with the boundary fixed);
-/// kept when it leaves fewer folds and flips no boundary triangle, up to 3 times. Fills
-/// rep.untangle_slide; returns the folds left.
-int slide_cleanup(Device& device, const TetMesh& m, const std::vector<char>& boundary, const InitialMapOptions& opt,
-                  Points& ball, int folds, InitialMapReport& rep);
 
 }  // namespace vpm::detail

@@ -10,10 +10,8 @@
 // double precision, and flips triangles there.
 #include <Eigen/Geometry>
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
-#include <numeric>
 #include <string>
 #include <vector>
 
@@ -179,10 +177,10 @@ class Embedding {
   double star_energy(int w) const {
     double e = 0;
     for (int t : s_.vf[static_cast<size_t>(w)]) {
-      if (!(face_quality(t) > 0)) return std::numeric_limits<double>::infinity();
       const Vec a = P.row(s_.F(t, 0)).transpose(), b = P.row(s_.F(t, 1)).transpose(), c = P.row(s_.F(t, 2)).transpose();
       const double A = 0.5 * a.dot(b.cross(c));
       const double S = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
+      if (!(2 * A / S > kThin)) return std::numeric_limits<double>::infinity();  // face_quality 0
       const double T = area_per_weight_ * corner_weight(t);
       e += kShape * S / (4 * std::sqrt(3.0) * A) + A / T + T / A;
     }
@@ -221,10 +219,10 @@ class Embedding {
     const Vec a = P.row(s_.F(t, 0)).transpose(), b = P.row(s_.F(t, 1)).transpose(), c = P.row(s_.F(t, 2)).transpose();
     const double e = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
     const double q = a.dot(b.cross(c)) / e;
-    return q > 1e-10 ? q : 0.0;
+    return q > kThin ? q : 0.0;
   }
 
-  static constexpr double kShape = 1.0;
+  static constexpr double kShape = 1.0, kThin = 1e-10;
 
  private:
   CollapsibleSurface& s_;
@@ -245,11 +243,9 @@ Points progressive_sphere(const Points& in, const Triangles& f, ProgressiveStats
                      std::to_string(f.rows()) + " triangles) is not a closed genus-0 surface");
   CollapsibleSurface s(f, n);
   const Eigen::VectorXd share = vertex_area_shares(in, f);
-  std::vector<double> weight(share.data(), share.data() + n);
-  const int passes = simplify(s, in, weight);
   Embedding e(s, n);
-  e.weight = weight;
-  for (const Collapse& c : s.log) e.weight[static_cast<size_t>(c.v)] += e.weight[static_cast<size_t>(c.u)];
+  e.weight.assign(share.data(), share.data() + n);
+  const int passes = simplify(s, in, e.weight);
   e.base();
   constexpr int kSweepsPerLevel = 3, kFinalSweeps = 20;
   size_t next = s.log.size();

@@ -2,6 +2,7 @@
 // (map/surface_collapse.hpp).
 #include "map/surface_collapse.hpp"
 
+#include <algorithm>
 #include <limits>
 #include <string>
 
@@ -9,12 +10,89 @@
 
 namespace vpm::detail {
 
+std::vector<int> CollapsibleSurface::neighbours(int u) const {
+  std::vector<int> out;
+  for (int t : vf[static_cast<size_t>(u)])
+    for (int c = 0; c < 3; ++c)
+      if (F(t, c) != u) out.push_back(F(t, c));
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+bool CollapsibleSurface::collapsible(int u, int v, const std::vector<int>& nu) const {
+  int shared = 0;
+  std::array<int, 2> wing{-1, -1};
+  for (int t : vf[static_cast<size_t>(u)])
+    if (has(t, v)) {
+      if (shared == 2) return false;
+      wing[static_cast<size_t>(shared++)] = F(t, 0) + F(t, 1) + F(t, 2) - u - v;
+    }
+  if (shared != 2 || wing[0] == wing[1]) return false;
+  const std::vector<int> nv = neighbours(v);
+  int common = 0;
+  for (int w : nu)
+    if (std::binary_search(nv.begin(), nv.end(), w)) {
+      if (w != wing[0] && w != wing[1]) return false;
+      ++common;
+    }
+  return common == 2;
+}
+
+void CollapsibleSurface::collapse(int u, int v, int pass) {
+  Collapse c;
+  c.u = u;
+  c.v = v;
+  c.pass = pass;
+  c.first_moved = static_cast<int>(moved_faces.size());
+  int k = 0;
+  for (int t : vf[static_cast<size_t>(u)]) {
+    if (has(t, v)) {
+      c.dead[static_cast<size_t>(k++)] = t;
+      face_alive[static_cast<size_t>(t)] = 0;
+      for (int j = 0; j < 3; ++j)
+        if (F(t, j) != u) erase(F(t, j), t);
+    } else {
+      for (int j = 0; j < 3; ++j)
+        if (F(t, j) == u) F(t, j) = v;
+      vf[static_cast<size_t>(v)].push_back(t);
+      moved_faces.push_back(t);
+    }
+  }
+  c.moved = static_cast<int>(moved_faces.size()) - c.first_moved;
+  vf[static_cast<size_t>(u)].clear();
+  alive[static_cast<size_t>(u)] = 0;
+  --alive_count;
+  log.push_back(c);
+}
+
+void CollapsibleSurface::restore(const Collapse& c) {
+  for (int i = c.first_moved; i < c.first_moved + c.moved; ++i) {
+    const int t = moved_faces[static_cast<size_t>(i)];
+    for (int j = 0; j < 3; ++j)
+      if (F(t, j) == c.v) F(t, j) = c.u;
+    erase(c.v, t);
+    vf[static_cast<size_t>(c.u)].push_back(t);
+  }
+  for (int t : c.dead) {
+    face_alive[static_cast<size_t>(t)] = 1;
+    for (int j = 0; j < 3; ++j) vf[static_cast<size_t>(F(t, j))].push_back(t);
+  }
+  alive[static_cast<size_t>(c.u)] = 1;
+  ++alive_count;
+}
+
+void CollapsibleSurface::erase(int v, int t) {
+  auto& l = vf[static_cast<size_t>(v)];
+  l.erase(std::find(l.begin(), l.end(), t));
+}
+
 // Half-edge collapses in passes over an independent set (no two collapses of a pass touch the
 // same ring) until 4 vertices are left, lightest first: each vertex carries the input area of
 // the vertices collapsed into it (`weight`), and a vertex goes into its lightest neighbour, so
 // the clusters grow evenly and every level's triangles can be both well shaped and of their
 // share of the area. Returns the passes run.
-int simplify(CollapsibleSurface& s, const Points& in, std::vector<double> weight) {
+int simplify(CollapsibleSurface& s, const Points& in, std::vector<double>& weight) {
   const int n = static_cast<int>(in.rows());
   std::vector<char> touched(static_cast<size_t>(n));
   std::vector<int> order;
