@@ -38,6 +38,13 @@ DenseRegistrationOptions dense_options(const Args& args, DenseRegistrationOption
       throw InputError(std::string("--dense-force: ") + e.what());
     }
   }
+  if (const auto f = args.get("--dense-fit")) {
+    try {
+      o.fit = dense_fit_from_string(*f);
+    } catch (const InputError& e) {
+      throw InputError(std::string("--dense-fit: ") + e.what());
+    }
+  }
   o.image_grid = args.get_int("--dense-image-grid", o.image_grid);
   if (o.image_grid < 8 || o.image_grid > 256) throw InputError("--dense-image-grid: expected 8 to 256 cells");
   o.image_smoothing = args.get_double("--dense-image-smoothing", o.image_smoothing);
@@ -62,6 +69,9 @@ Command with_dense_options(Command command, const std::string& after, int defaul
           {"--dense-force", "labels|image|both",
            std::string("what the dense flows pull: region boundaries, image intensities, or both (default ") +
                to_string(default_force) + ")", false, 0, true},
+          {"--dense-fit", "systems|translations",
+           std::string("how the force becomes a field: every centre's local least-squares system fitted at once, "
+                       "or one translation per centre (default ") + to_string(d.fit) + ")", false, 0, true},
           {"--dense-image-grid", "N", "cells across the ball of the image force's grid (default " +
                                           std::to_string(d.image_grid) + ")", false, 0, true},
           {"--dense-image-smoothing", "F", "Gaussian smoothing of the images before the image force, x the level's width (default " +

@@ -6,14 +6,16 @@
 # bench/forces/summary.py writes bench/results/forces/{forces.json,forces.md}: medians over the
 # seeds of the held-out Dice (labels through the maps), the volume bounds, the landmark regions'
 # Dice, the registration's distortion and time.
-# Usage: bash bench/forces/run.sh   (env: SEEDS=5, FORCES="labels image both", BUILD_DIR=build;
-# about 5 minutes on 2 cores)
+# Usage: bash bench/forces/run.sh   (env: SEEDS=5, FORCES="labels image both", BUILD_DIR=build,
+# EXTRA="more demo options", e.g. "--dense-fit translations", OUT=bench/results/forces;
+# about 6 minutes on 2 cores)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 BUILD=${BUILD_DIR:-build}
 SEEDS=${SEEDS:-5}
 FORCES=${FORCES:-"labels image both"}
-OUT=bench/results/forces
+OUT=${OUT:-bench/results/forces}
+EXTRA=${EXTRA:-}
 WORK=${WORK:-$BUILD/forces-bench}
 export POCL_CACHE_DIR=${POCL_CACHE_DIR:-$PWD/$BUILD/pocl-cache}
 mkdir -p "$OUT" "$WORK"
@@ -24,7 +26,7 @@ for inc in "" "--incompressible"; do
       rot=10
       [ "$seed" = 0 ] && rot=0
       dir="$WORK/${force}${inc:+_incompressible}_seed${seed}"
-      if "$BUILD/vpm" demo --quiet --out "$dir" --seed "$seed" --max-rotation "$rot" --dense-force "$force" $inc \
+      if "$BUILD/vpm" demo --quiet --out "$dir" --seed "$seed" --max-rotation "$rot" --dense-force "$force" $inc $EXTRA \
         > "$dir.txt" 2>&1; then
         echo "forces: $force${inc:+ $inc} seed $seed done"
       else  # counted in the summary, never dropped silently

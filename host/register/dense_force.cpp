@@ -148,8 +148,9 @@ Points ball_grid(double h) {
   return out;
 }
 
-Points smooth_matches(const BoundaryMatches& m, const Points& centres, double sigma) {
+Points smooth_matches(const BoundaryMatches& m, const Points& centres, double sigma, Eigen::VectorXd* mass) {
   Points out = Points::Zero(centres.rows(), 3);
+  if (mass) mass->resize(centres.rows());
   const double cut2 = 9 * sigma * sigma, inv = 1 / (sigma * sigma);
   for (Eigen::Index c = 0; c < centres.rows(); ++c) {
     const Eigen::Vector3d x = centres.row(c).transpose();
@@ -163,6 +164,7 @@ Points smooth_matches(const BoundaryMatches& m, const Points& centres, double si
       wsum += g;
     }
     out.row(c) = (sum / (wsum + 1)).transpose();
+    if (mass) (*mass)(c) = wsum / (wsum + 1);
   }
   return out;
 }

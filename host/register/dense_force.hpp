@@ -45,8 +45,10 @@ BoundaryMatches closest_matches(const RegionSurface& subject, const RegionSurfac
 Points ball_grid(double spacing);
 
 /// The matches averaged at `centres` with a Gaussian of width `sigma`:
-/// sum w_i g_i d_i / (sum w_i g_i + 1) (c x 3).
-Points smooth_matches(const BoundaryMatches& matches, const Points& centres, double sigma);
+/// sum w_i g_i d_i / (sum w_i g_i + 1) (c x 3); `mass` (optional) gets each centre's
+/// sum w_i g_i / (sum w_i g_i + 1), in [0, 1): how much data the centre saw.
+Points smooth_matches(const BoundaryMatches& matches, const Points& centres, double sigma,
+                      Eigen::VectorXd* mass = nullptr);
 
 /// Mean Dice over `regions` of two label samplings of the same points (vpm/labels.hpp); 0 when
 /// there are no regions.

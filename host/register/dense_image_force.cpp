@@ -151,8 +151,8 @@ std::vector<double> ImageForce::smoothed(const std::vector<double>& f, double si
   return g;
 }
 
-Points ImageForce::local_translations(const std::vector<double>& subject_raw, const Points& centres, double sigma,
-                                      double image_sigma, double cap, double* mean_length) const {
+LocalSystems ImageForce::local_systems(const std::vector<double>& subject_raw, const Points& centres, double sigma,
+                                      double image_sigma) const {
   const std::vector<double> subject = smoothed(subject_raw, image_sigma);
   const std::vector<double> templ = image_sigma > 0 ? smoothed(templ_, image_sigma) : templ_;
   const Eigen::Index n = grid_.rows(), nc = centres.rows();
@@ -164,8 +164,9 @@ Points ImageForce::local_translations(const std::vector<double>& subject_raw, co
       diff(p) = subject[static_cast<size_t>(p)] - templ[static_cast<size_t>(p)];
     }
   });
-  std::vector<Eigen::Matrix3d> a(static_cast<size_t>(nc));
-  Points b(nc, 3);
+  LocalSystems sys;
+  sys.a.resize(static_cast<size_t>(nc));
+  sys.b.resize(nc, 3);
   const double cut2 = 9 * sigma * sigma, inv = 1 / (2 * sigma * sigma);
   detail::parallel_for(static_cast<int>(nc), 8, [&](int begin, int end) {
     for (int c = begin; c < end; ++c) {
@@ -190,10 +191,19 @@ Points ImageForce::local_translations(const std::vector<double>& subject_raw, co
             m += w * gp * gp.transpose();
             r += w * diff(p) * gp;
           }
-      a[static_cast<size_t>(c)] = m;
-      b.row(c) = r.transpose();
+      sys.a[static_cast<size_t>(c)] = m;
+      sys.b.row(c) = r.transpose();
     }
   });
+  return sys;
+}
+
+Points ImageForce::local_translations(const std::vector<double>& subject, const Points& centres, double sigma,
+                                      double image_sigma, double cap, double* mean_length) const {
+  const LocalSystems sys = local_systems(subject, centres, sigma, image_sigma);
+  const std::vector<Eigen::Matrix3d>& a = sys.a;
+  const Points& b = sys.b;
+  const Eigen::Index nc = centres.rows();
   double trace = 0;
   for (const Eigen::Matrix3d& m : a) trace += m.trace();
   const double eps = kTextureFloor * trace / std::max<double>(1.0, static_cast<double>(nc));

@@ -38,6 +38,11 @@ class ImageForce {
   Points local_translations(const std::vector<double>& subject, const Points& centres, double sigma,
                             double image_sigma, double cap, double* mean_length = nullptr) const;
 
+  /// The local least-squares systems behind local_translations, without eps and cap: at each
+  /// centre a = sum w_i g_i g_i^T, b = sum w_i g_i (S_i - T_i) (for fit_divfree_weighted).
+  LocalSystems local_systems(const std::vector<double>& subject, const Points& centres, double sigma,
+                             double image_sigma) const;
+
   /// eps of local_translations relative to the mean texture (0.01 and 0.2 measured no better on
   /// the demo; docs/register.md).
   static constexpr double kTextureFloor = 0.05;

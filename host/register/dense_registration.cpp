@@ -1,6 +1,6 @@
 // Dense registration (vpm/dense_registration.hpp): the landmark registration, then flows that
 // pull region boundaries onto the template's, then the exact landmark correction and the
-// volume restoration; the report's JSON.
+// volume restoration (the report's JSON: dense_report.cpp).
 #include "vpm/dense_registration.hpp"
 
 #include <algorithm>
@@ -19,74 +19,6 @@
 #include "vpm/topology.hpp"
 
 namespace vpm {
-
-const char* to_string(DenseForce f) {
-  switch (f) {
-    case DenseForce::labels: return "labels";
-    case DenseForce::image: return "image";
-    case DenseForce::both: return "both";
-  }
-  return "labels";
-}
-
-DenseForce dense_force_from_string(const std::string& w) {
-  for (DenseForce f : {DenseForce::labels, DenseForce::image, DenseForce::both})
-    if (w == to_string(f)) return f;
-  throw InputError("dense force '" + w + "': expected labels, image or both");
-}
-
-Json to_json(const DenseIteration& it) {
-  Json j = Json::object();
-  j["width"] = it.width;
-  j["matches"] = it.matches;
-  j["centres"] = it.centres;
-  j["mean_match_distance"] = it.mean_match_distance;
-  j["max_move"] = it.max_move;
-  j["agreement"] = it.agreement;
-  if (it.mismatch >= 0) {
-    j["mismatch"] = it.mismatch;
-    j["image_points"] = it.image_points;
-    j["mean_translation"] = it.mean_translation;
-  }
-  j["folded"] = it.folded;
-  j["accepted"] = it.accepted;
-  j["seconds"] = it.seconds;
-  return j;
-}
-
-Json to_json(const DenseRegistrationResult& r) {
-  Json j = Json::object();
-  j["landmark"] = to_json(r.landmark);
-  if (r.correction) j["correction"] = to_json(*r.correction);
-  if (r.restore) j["restore"] = to_json(*r.restore);
-  Json its = Json::array();
-  for (const DenseIteration& it : r.iterations) its.push_back(to_json(it));
-  j["iterations"] = its;
-  Json regions = Json::array();
-  for (int l : r.regions) regions.push_back(l);
-  j["regions"] = regions;
-  j["agreement_before"] = r.agreement_before;
-  j["agreement_landmarks"] = r.agreement_landmarks;
-  j["agreement_after"] = r.agreement_after;
-  j["force"] = to_string(r.force);
-  if (r.mismatch_before >= 0) {
-    j["mismatch_before"] = r.mismatch_before;
-    j["mismatch_landmarks"] = r.mismatch_landmarks;
-    j["mismatch_after"] = r.mismatch_after;
-  }
-  j["landmark_rms_error"] = r.landmark_rms_error;
-  j["landmark_max_error"] = r.landmark_max_error;
-  j["max_normal_velocity"] = r.max_normal_velocity;
-  j["inverted_tets"] = r.inverted_tets;
-  Json t = Json::object();
-  t["landmark"] = r.seconds_landmark;
-  t["dense"] = r.seconds_dense;
-  t["correction"] = r.seconds_correction;
-  t["restore"] = r.seconds_restore;
-  t["total"] = r.seconds_total;
-  j["timings_s"] = t;
-  return j;
-}
 
 namespace {
 
@@ -178,6 +110,45 @@ Points dense_force(const DenseState& st, const Points& ball, const Fit& fit, con
   return 0.5 * (labels + image);
 }
 
+/// The force as local least-squares systems at `centres` (DenseFit::systems, fit_divfree_weighted):
+/// the image's structure tensors and mismatch vectors scaled to a mean trace of 3 (so a centre of
+/// average texture weighs as much as one full of boundary matches), the boundary matches as
+/// isotropic systems of their mass (smooth_matches); `both` averages the two.
+LocalSystems dense_systems(const DenseState& st, const Points& ball, const Fit& fit, const Points& centres,
+                           double width, const DenseRegistrationOptions& o, DenseIteration& it) {
+  const Eigen::Index nc = centres.rows();
+  LocalSystems labels, image;
+  if (st.force != DenseForce::image) {
+    const BoundaryMatches m = closest_matches(region_surface(ball, st.faces), st.templ);
+    it.matches = static_cast<long>(m.at.rows());
+    it.mean_match_distance = m.mean_distance;
+    Eigen::VectorXd mass;
+    labels.b = smooth_matches(m, centres, o.smoothing * width, &mass);
+    for (Eigen::Index c = 0; c < nc; ++c) labels.a.push_back(mass(c) * Eigen::Matrix3d::Identity());
+  }
+  if (st.force != DenseForce::labels) {
+    image = st.image->local_systems(fit.values, centres, o.smoothing * width, o.image_smoothing * width);
+    it.image_points = static_cast<long>(st.image->grid().rows());
+    double trace = 0;
+    for (const Eigen::Matrix3d& a : image.a) trace += a.trace();
+    const double scale = trace > 0 ? 3.0 * static_cast<double>(nc) / trace : 0.0;
+    for (Eigen::Matrix3d& a : image.a) a *= scale;
+    image.b *= scale;
+    // reported: the mean length of the translations the centres ask for on their own (as with
+    // DenseFit::translations, before its cap)
+    double length = 0;
+    for (Eigen::Index c = 0; c < nc; ++c)
+      length += (image.a[static_cast<size_t>(c)] + ImageForce::kTextureFloor * Eigen::Matrix3d::Identity())
+                    .ldlt().solve(image.b.row(c).transpose()).norm();
+    it.mean_translation = nc > 0 ? length / static_cast<double>(nc) : 0.0;
+  }
+  if (st.force == DenseForce::labels) return labels;
+  if (st.force == DenseForce::image) return image;
+  for (Eigen::Index c = 0; c < nc; ++c) image.a[static_cast<size_t>(c)] = 0.5 * (image.a[static_cast<size_t>(c)] + labels.a[static_cast<size_t>(c)]);
+  image.b = 0.5 * (image.b + labels.b);
+  return image;
+}
+
 /// One dense iteration at `width` on `x` (the vertices, then the tracked landmarks): kept in `x`
 /// and `fit` when it improves the fit without leaving a fold.
 DenseIteration dense_step(Device& dev, const DenseState& st, Points& x, double width,
@@ -192,7 +163,10 @@ DenseIteration dense_step(Device& dev, const DenseState& st, Points& x, double w
   fo.kernel = RbfKernel::Tangent;
   fo.lambda = 1 / (width * width);
   fo.ridge = o.ridge;
-  DivFreeField field = fit_divfree(centres, dense_force(st, x.topRows(nv), fit, centres, width, o, it), fo);
+  const Points ball = x.topRows(nv);
+  DivFreeField field = o.fit == DenseFit::systems
+                           ? fit_divfree_weighted(centres, dense_systems(st, ball, fit, centres, width, o, it), fo)
+                           : fit_divfree(centres, dense_force(st, ball, fit, centres, width, o, it), fo);
   field.coefficients *= o.step;
   max_normal = std::max(max_normal, max_normal_velocity(dev, {field}, 1000));
   Points y = x;
@@ -204,7 +178,14 @@ DenseIteration dense_step(Device& dev, const DenseState& st, Points& x, double w
     if (std::abs(x.row(l).norm() - 1) <= 1e-9) y.row(l).normalize();
   Eigen::VectorXd v1 = tet_volumes(dev, after, st.tets);
   it.folded = newly_inverted(st.v0, v1);
-  if (it.folded > 0) untangle_flow_folds(dev, st.reference, st.tets, after, st.boundary, st.v0, v1, 2);
+  // Untangled against the positions before this step, not the map before registration: the
+  // latter pulls the freed rings back towards the unregistered shape, which undid whole patches
+  // of the registration (moves of 0.06 ball units around one folded tet) and ended the finest
+  // level at its second iteration (docs/register.md, "Untangling inside the dense steps").
+  if (it.folded > 0) {
+    const Points before = x.topRows(nv);
+    untangle_flow_folds(dev, before, st.tets, after, st.boundary, st.v0, v1, 2);
+  }
   it.max_move = (after - x.topRows(nv)).rowwise().norm().maxCoeff();
   Fit now(st, after);
   it.agreement = now.agreement;
@@ -287,6 +268,7 @@ DenseRegistrationResult register_dense(Device& dev, Points& ball, const Tets& te
   const DenseState st = dense_state(dev, ball, tets, labels, tball, ttets, tlabels, o, images);
   r.regions = st.regions;
   r.force = o.force;
+  r.fit = o.fit;
   const Fit before(st, ball);
   r.agreement_before = before.agreement;
   r.mismatch_before = before.mismatch;

@@ -8,6 +8,7 @@
 #include <limits>
 #include <sstream>
 
+#include "register/rbf_gram.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 
@@ -59,11 +60,6 @@ inline Eigen::Vector3d apply_tangent(const Eigen::Vector3d& x, const Eigen::Vect
   const Eigen::Vector3d htc = 4 * xc * y - 4 * lambda * py * xc * r + 4 * lambda * px * rc * y -
                               px * py * (4 * lambda * lambda * rc * r - 2 * lambda * c);
   return psi * (tr * c - htc);
-}
-
-Eigen::Matrix3d kernel_block(RbfKernel kind, const Eigen::Vector3d& x, const Eigen::Vector3d& y,
-                             double lambda) {
-  return kind == RbfKernel::Free ? divfree_kernel(x - y, lambda) : tangent_kernel(x, y, lambda);
 }
 
 // Gram matrix of point samples only (3N x 3N).
@@ -218,44 +214,13 @@ Eigen::VectorXd solve_ridge_cg(const Eigen::MatrixXd& a, const Eigen::VectorXd& 
                    a.diagonal().cwiseInverse(), rhs);
 }
 
-/// The ridge-regularised Gram system of many samples, sparse: blocks of pairs farther apart than
-/// 5 widths (lambda r^2 > 25, where psi < 1.4e-11) are left out, then Jacobi CG. For
+/// The ridge-regularised Gram system of many samples, sparse (rbf_gram.hpp), by Jacobi CG. For
 /// fits with thousands of centres, whose dense Gram matrix would not fit in memory.
 Eigen::VectorXd solve_ridge_sparse(const Points& p, RbfKernel kind, double lambda, double ridge,
                                    const Eigen::VectorXd& rhs, double& max_residual) {
   const Eigen::Index n = p.rows();
-  const double cut = 5 / std::sqrt(lambda);
-  // bin the points into cells of size `cut`: neighbours lie in the 27 cells around
-  const Eigen::Vector3d lo = p.colwise().minCoeff().transpose();
-  const Eigen::Array3i dims = (((p.colwise().maxCoeff().transpose() - lo) / cut).array().floor().cast<int>() + 1);
-  auto cell_of = [&](Eigen::Index i) -> Eigen::Array3i {
-    return ((p.row(i).transpose() - lo) / cut).array().floor().cast<int>().min(dims - 1);
-  };
-  std::vector<std::vector<int>> cells(static_cast<size_t>(dims.prod()));
-  auto flat = [&](const Eigen::Array3i& c) { return static_cast<size_t>(c(0) + dims(0) * (c(1) + dims(1) * c(2))); };
-  for (Eigen::Index i = 0; i < n; ++i) cells[flat(cell_of(i))].push_back(static_cast<int>(i));
-  std::vector<Eigen::Triplet<double>> t;
-  double diag_sum = 0;
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const Eigen::Array3i c = cell_of(i);
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const Eigen::Array3i d = c + Eigen::Array3i(dx, dy, dz);
-          if ((d < 0).any() || (d >= dims).any()) continue;
-          for (int j : cells[flat(d)]) {
-            if ((p.row(i) - p.row(j)).squaredNorm() * lambda > 25) continue;
-            const Eigen::Matrix3d k = kernel_block(kind, p.row(i).transpose(), p.row(j).transpose(), lambda);
-            for (int a = 0; a < 3; ++a)
-              for (int b = 0; b < 3; ++b)
-                t.emplace_back(static_cast<int>(3 * i + a), 3 * j + b, k(a, b));
-            if (j == i) diag_sum += k.trace();
-          }
-        }
-  }
-  Eigen::SparseMatrix<double, Eigen::RowMajor> a(3 * n, 3 * n);
-  a.setFromTriplets(t.begin(), t.end());
-  const double shift = ridge * diag_sum / static_cast<double>(3 * n);
+  const SparseGram a = sparse_gram(p, kind, lambda);
+  const double shift = ridge * a.diagonal().mean();
   const Eigen::VectorXd x = jacobi_cg([&](const Eigen::VectorXd& d) { return Eigen::VectorXd(a * d + shift * d); },
                                       (a.diagonal().array() + shift).inverse().matrix(), rhs);
   const Eigen::VectorXd u = a * x - rhs;  // the field at the samples minus the samples

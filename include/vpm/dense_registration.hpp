@@ -19,6 +19,13 @@
 //      least-squares sense over the grid points around it (Gaussian weights of width
 //      `smoothing` x w; Lucas-Kanade with the mean gradient of the two images), capped at w / 2.
 //    * both: the mean of the two at each centre.
+//    With DenseFit::systems (the default) the force is not reduced to one translation per centre:
+//    each centre keeps its local least-squares system (the image's structure tensor sum w g g^T
+//    and sum w g (S - T); the matches' mass and mean) and the field is fitted to all of them at
+//    once (vpm/rbf.hpp, fit_divfree_weighted), so an edge constrains only the motion across it and
+//    flat white matter nothing: the field there follows from its neighbours instead of being held
+//    still. DenseFit::translations (before 2026-11-25) solves each centre alone (+ eps I, capped)
+//    and fits the field to those translations (steps 2-3).
 // 2. Smoothing (labels): the matches are averaged with a Gaussian of width `smoothing` x w at centres on
 //    a grid of spacing `centre_spacing` x w in the ball (sum w_i g_i d_i / (sum w_i g_i + 1), so
 //    centres without data ask for no motion).
@@ -27,7 +34,7 @@
 //    sphere, whatever the force was.
 // 4. Step: every vertex (and every landmark) is advected through `step` x the field with RK4;
 //    boundary vertices are put back on the sphere; tets the flow inverted are untangled locally
-//    (the map before registration as reference). The iteration is kept only when it leaves no
+//    (the positions before the step as reference). The iteration is kept only when it leaves no
 //    inverted tet and improves the force's own measure: the label agreement (mean Dice of the
 //    force's regions, tet labels at ball grid points) for `labels`, the image mismatch (mean
 //    squared difference on the image grid / the template's variance) for `image` and `both`;
@@ -56,6 +63,15 @@ enum class DenseForce { labels, image, both };
 const char* to_string(DenseForce force);
 DenseForce dense_force_from_string(const std::string& word);
 
+/// How the force becomes a field (see the top of this header): every centre's local
+/// least-squares system fitted at once (systems), or one translation per centre, then fitted
+/// (translations, the method before 2026-11-25).
+enum class DenseFit { systems, translations };
+
+/// "systems", "translations"; and back (InputError naming the accepted words otherwise).
+const char* to_string(DenseFit fit);
+DenseFit dense_fit_from_string(const std::string& word);
+
 /// The images of an intensity-driven dense registration (DenseForce::image or both): each
 /// subject's image in its own native space (world mm), and the native positions of its ball
 /// mesh's vertices (the mesh field original_position), row for row.
@@ -68,6 +84,7 @@ struct DenseImages {
 
 struct DenseRegistrationOptions {
   DenseForce force = DenseForce::labels;  ///< what pulls (images required for image and both)
+  DenseFit fit = DenseFit::systems;       ///< how the force becomes a field
   int image_grid = 48;          ///< cells across the ball of the image force's grid
   /// Gaussian smoothing of both images' grid values before the image force, x the level's width
   /// (coarse levels see coarse features: a larger capture range).
@@ -118,6 +135,7 @@ struct DenseRegistrationResult {
   /// The image mismatch at the same three stages (-1: no image force).
   double mismatch_before = -1, mismatch_landmarks = -1, mismatch_after = -1;
   DenseForce force = DenseForce::labels;
+  DenseFit fit = DenseFit::systems;
   double landmark_rms_error = 0, landmark_max_error = 0;  ///< at the end (ball units)
   double max_normal_velocity = 0; ///< largest max |u . n| of all flows
   int inverted_tets = 0;          ///< at the end
@@ -126,7 +144,7 @@ struct DenseRegistrationResult {
 };
 /// {"landmark": to_json(RegistrationResult), "correction" (when run), "restore" (when run),
 ///  "iterations": [...], "regions", "agreement_before", "agreement_landmarks", "agreement_after",
-///  "force", "mismatch_before", "mismatch_landmarks", "mismatch_after" (with the image force),
+///  "force", "fit", "mismatch_before", "mismatch_landmarks", "mismatch_after" (with the image force),
 ///  "landmark_rms_error", "landmark_max_error", "max_normal_velocity", "inverted_tets",
 ///  "timings_s": {"landmark", "dense", "correction", "restore", "total"}}
 Json to_json(const DenseRegistrationResult& result);

@@ -87,6 +87,29 @@ struct RbfFitInfo {
 DivFreeField fit_divfree(const Points& points, const Points& velocities,
                          const RbfFitOptions& options, RbfFitInfo* info = nullptr);
 
+/// Local least-squares data at the centres of a field: u(c_j) should minimise
+/// u^T a_j u - 2 u^T b_j (a_j symmetric positive semidefinite 3 x 3, b_j a 3-vector): a_j says
+/// how firmly and in which directions the data constrain the field there (an image edge constrains
+/// only the component across it, a flat region nothing).
+struct LocalSystems {
+  std::vector<Eigen::Matrix3d> a;
+  Points b;  ///< c x 3
+};
+
+/// The field with centres `centres` (c x 3) that best satisfies `local` (one system per centre)
+/// under a smoothness penalty: it minimises sum_j (u_j^T a_j u_j - 2 u_j^T b_j) + mu a^T K a
+/// (u_j = u(c_j), K the Gram matrix of the centres, a the coefficients: the field's RKHS norm),
+/// mu = options.ridge x the mean Gram diagonal x the mean trace(a_j) / 3. Where a_j = alpha I
+/// for every centre this is fit_divfree with the same ridge to the samples b_j / alpha; where the
+/// data constrain a direction weakly or not at all, the field there follows from its neighbours
+/// (and, being divergence-free, from what moves around it) instead of being pulled to zero.
+/// Solves (A K + mu I) a = b by conjugate gradients in the K inner product (self-adjoint there),
+/// with the sparse Gram matrix of fit_divfree (pairs beyond 5 widths left out), relative
+/// residual 1e-10. options.kernel and lambda are used; boundary samples are not supported
+/// (InputError), nor a ridge <= 0.
+DivFreeField fit_divfree_weighted(const Points& centres, const LocalSystems& local, const RbfFitOptions& options,
+                                  RbfFitInfo* info = nullptr);
+
 /// Leave-one-out errors |u_{-j}(x_j) - v_j| of the interpolant without boundary samples, from
 /// one inverse: e_j = (block j of A^-1)^-1 (A^-1 v)_j. Length N.
 Eigen::VectorXd loo_errors(const Points& points, const Points& velocities, RbfKernel kernel,

@@ -1,0 +1,19 @@
+#pragma once
+// Gram matrices of the divergence-free kernels (vpm/rbf.hpp) shared by the fits: one 3 x 3 block
+// per pair of centres.
+#include <Eigen/Sparse>
+
+#include "vpm/rbf.hpp"
+
+namespace vpm {
+
+/// K(x, y) of `kind` (3 x 3).
+Eigen::Matrix3d kernel_block(RbfKernel kind, const Eigen::Vector3d& x, const Eigen::Vector3d& y, double lambda);
+
+using SparseGram = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+
+/// The Gram matrix of the points `p` (3n x 3n, block (i, j) = K(p_i, p_j)) without the blocks of
+/// pairs farther apart than 5 widths (lambda r^2 > 25, where psi < 1.4e-11).
+SparseGram sparse_gram(const Points& p, RbfKernel kind, double lambda);
+
+}  // namespace vpm
