@@ -149,6 +149,9 @@ Settings parse_settings(const vpm::cli::Command& self, const std::vector<std::st
   if (s.grid < 8 || s.grid > 512) throw vpm::InputError("--grid: expected 8 to 512 cells a side");
   s.registration.width_factor = args.get_double("--width-factor", s.registration.width_factor);
   if (!(s.registration.width_factor > 0)) throw vpm::InputError("--width-factor: must be positive");
+  s.registration.restore_iterations = args.get_int("--restore-iterations", s.registration.restore_iterations);
+  if (s.registration.restore_iterations < 1 || s.registration.restore_iterations > 10000)
+    throw vpm::InputError("--restore-iterations: expected 1 to 10000");
   s.ceiling = args.has("--ceiling");
   s.incompressible = args.has("--incompressible");
   const int seed = args.get_int("--seed", 0);
@@ -357,6 +360,9 @@ vpm::cli::Registrar reg(vpm::cli::with_dense_options(
       {"--target-vertices", "N", "mesh density (default 5200, the paper's size)"},
       {"--grid", "N", "ball grid for the Dice overlap, N^3 points (default 96)"},
       {"--width-factor", "F", "registration kernel width factor (default 0.5)"},
+      {"--restore-iterations", "N",
+       "CGLS iterations per step of the registration's volume restoration (default 10; more: lower volume "
+       "distortion, the regions drift more)", false, 0, true},
       {"--seed", "S", "the subject's deformation: 0 (default) the fixed one, S > 0 drawn from seed S"},
       {"--max-rotation", "DEG", "rotate the subject by up to DEG degrees about the brain centre (default 0)"},
       {"--incompressible", "", "the subject's deformation keeps local volumes (the default one changes them by up to 20 %)"},

@@ -10,6 +10,7 @@
 
 #include "register/dense_force.hpp"
 #include "register/dense_image_force.hpp"
+#include "register/rbf_gram.hpp"
 #include "register/registration_steps.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
@@ -149,24 +150,37 @@ LocalSystems dense_systems(const DenseState& st, const Points& ball, const Fit& 
   return image;
 }
 
-/// One dense iteration at `width` on `x` (the vertices, then the tracked landmarks): kept in `x`
+/// What the iterations of one level share: the width, the field's centres and (DenseFit::systems)
+/// their Gram matrix.
+struct Level {
+  double width = 0;
+  Points centres;
+  SparseGram gram;
+  Level(double w, const DenseRegistrationOptions& o) : width(w), centres(ball_grid(o.centre_spacing * w)) {
+    if (o.fit == DenseFit::systems) gram = sparse_gram(centres, RbfKernel::Tangent, 1 / (w * w));
+  }
+};
+
+/// One dense iteration at `level` on `x` (the vertices, then the tracked landmarks): kept in `x`
 /// and `fit` when it improves the fit without leaving a fold.
-DenseIteration dense_step(Device& dev, const DenseState& st, Points& x, double width,
+DenseIteration dense_step(Device& dev, const DenseState& st, Points& x, const Level& level,
                           const DenseRegistrationOptions& o, Fit& fit, double& max_normal) {
   const auto t0 = Clock::now();
   const Eigen::Index nv = st.reference.rows();
+  const double width = level.width;
+  const Points& centres = level.centres;
   DenseIteration it;
   it.width = width;
-  const Points centres = ball_grid(o.centre_spacing * width);
   it.centres = static_cast<int>(centres.rows());
   RbfFitOptions fo;
   fo.kernel = RbfKernel::Tangent;
   fo.lambda = 1 / (width * width);
   fo.ridge = o.ridge;
   const Points ball = x.topRows(nv);
-  DivFreeField field = o.fit == DenseFit::systems
-                           ? fit_divfree_weighted(centres, dense_systems(st, ball, fit, centres, width, o, it), fo)
-                           : fit_divfree(centres, dense_force(st, ball, fit, centres, width, o, it), fo);
+  DivFreeField field =
+      o.fit == DenseFit::systems
+          ? fit_divfree_weighted(centres, level.gram, dense_systems(st, ball, fit, centres, width, o, it), fo)
+          : fit_divfree(centres, dense_force(st, ball, fit, centres, width, o, it), fo);
   field.coefficients *= o.step;
   max_normal = std::max(max_normal, max_normal_velocity(dev, {field}, 1000));
   Points y = x;
@@ -207,9 +221,10 @@ void dense_iterations(Device& dev, const DenseState& st, Points& x, const DenseR
   const int levels = static_cast<int>(o.widths.size());
   for (int l = 0; l < levels; ++l) {
     const int n = o.iterations / levels + (l < o.iterations % levels ? 1 : 0);
+    if (n == 0) continue;
+    const Level level(o.widths[static_cast<size_t>(l)], o);
     for (int i = 0; i < n; ++i) {
-      r.iterations.push_back(dense_step(dev, st, x, o.widths[static_cast<size_t>(l)], o, fit,
-                                        r.max_normal_velocity));
+      r.iterations.push_back(dense_step(dev, st, x, level, o, fit, r.max_normal_velocity));
       if (!r.iterations.back().accepted) break;
     }
   }

@@ -221,7 +221,7 @@ Eigen::VectorXd solve_ridge_sparse(const Points& p, RbfKernel kind, double lambd
   const Eigen::Index n = p.rows();
   const SparseGram a = sparse_gram(p, kind, lambda);
   const double shift = ridge * a.diagonal().mean();
-  const Eigen::VectorXd x = jacobi_cg([&](const Eigen::VectorXd& d) { return Eigen::VectorXd(a * d + shift * d); },
+  const Eigen::VectorXd x = jacobi_cg([&](const Eigen::VectorXd& d) { return Eigen::VectorXd(multiply(a, d) + shift * d); },
                                       (a.diagonal().array() + shift).inverse().matrix(), rhs);
   const Eigen::VectorXd u = a * x - rhs;  // the field at the samples minus the samples
   max_residual = 0;

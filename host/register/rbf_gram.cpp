@@ -3,6 +3,8 @@
 #include <cmath>
 #include <vector>
 
+#include "core/parallel.hpp"
+
 namespace vpm {
 
 Eigen::Matrix3d kernel_block(RbfKernel kind, const Eigen::Vector3d& x, const Eigen::Vector3d& y, double lambda) {
@@ -41,6 +43,18 @@ SparseGram sparse_gram(const Points& p, RbfKernel kind, double lambda) {
   }
   a.setFromTriplets(t.begin(), t.end());
   return a;
+}
+
+Eigen::VectorXd multiply(const SparseGram& a, const Eigen::VectorXd& x) {
+  Eigen::VectorXd y(a.rows());
+  detail::parallel_for(static_cast<int>(a.rows()), 3000, [&](int begin, int end) {
+    for (int r = begin; r < end; ++r) {
+      double s = 0;
+      for (SparseGram::InnerIterator it(a, r); it; ++it) s += it.value() * x(it.col());
+      y(r) = s;
+    }
+  });
+  return y;
 }
 
 }  // namespace vpm

@@ -16,4 +16,12 @@ using SparseGram = Eigen::SparseMatrix<double, Eigen::RowMajor>;
 /// pairs farther apart than 5 widths (lambda r^2 > 25, where psi < 1.4e-11).
 SparseGram sparse_gram(const Points& p, RbfKernel kind, double lambda);
 
+/// a x on the host threads (row blocks in parallel).
+Eigen::VectorXd multiply(const SparseGram& a, const Eigen::VectorXd& x);
+
+/// fit_divfree_weighted (vpm/rbf.hpp) with the centres' Gram matrix given (sparse_gram of
+/// `centres` with options.kernel and lambda): fits at fixed centres share one.
+DivFreeField fit_divfree_weighted(const Points& centres, const SparseGram& gram, const LocalSystems& local,
+                                  const RbfFitOptions& options);
+
 }  // namespace vpm

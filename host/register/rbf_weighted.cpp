@@ -8,7 +8,19 @@ namespace vpm {
 
 DivFreeField fit_divfree_weighted(const Points& centres, const LocalSystems& local, const RbfFitOptions& opt,
                                   RbfFitInfo* info) {
+  if (!(opt.lambda > 0)) throw InputError("fit_divfree_weighted: lambda must be positive");
+  const DivFreeField f = fit_divfree_weighted(centres, sparse_gram(centres, opt.kernel, opt.lambda), local, opt);
+  if (info) {
+    *info = RbfFitInfo{};
+    info->samples = static_cast<int>(centres.rows());
+  }
+  return f;
+}
+
+DivFreeField fit_divfree_weighted(const Points& centres, const SparseGram& k, const LocalSystems& local,
+                                  const RbfFitOptions& opt) {
   const Eigen::Index n = centres.rows();
+  if (k.rows() != 3 * n) throw InputError("fit_divfree_weighted: the Gram matrix does not match the centres");
   if (static_cast<Eigen::Index>(local.a.size()) != n || local.b.rows() != n)
     throw InputError("fit_divfree_weighted: " + std::to_string(n) + " centres but " +
                      std::to_string(local.a.size()) + " local systems");
@@ -19,9 +31,7 @@ DivFreeField fit_divfree_weighted(const Points& centres, const LocalSystems& loc
   f.lambda = opt.lambda;
   f.centres = centres;
   f.coefficients = Points::Zero(n, 3);
-  if (info) *info = RbfFitInfo{};
   if (n == 0) return f;
-  const SparseGram k = sparse_gram(centres, opt.kernel, opt.lambda);
   double trace = 0;
   for (const Eigen::Matrix3d& a : local.a) trace += a.trace();
   const double mu = opt.ridge * k.diagonal().mean() * trace / (3.0 * static_cast<double>(n));
@@ -35,7 +45,7 @@ DivFreeField fit_divfree_weighted(const Points& centres, const LocalSystems& loc
   for (Eigen::Index j = 0; j < n; ++j) rhs.segment<3>(3 * j) = local.b.row(j).transpose();
   // CG for T x = rhs, T = A K + mu I, in the inner product <x, y> = x^T K y where T is
   // self-adjoint and positive definite; K p is carried along, so one Gram product per iteration.
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(3 * n), r = rhs, kr = k * r, p = r, kp = kr;
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(3 * n), r = rhs, kr = multiply(k, r), p = r, kp = kr;
   double rr = r.dot(kr);
   const double stop = 1e-20 * rr;
   for (Eigen::Index it = 0; it < 3 * n + 100 && rr > stop; ++it) {
@@ -43,14 +53,13 @@ DivFreeField fit_divfree_weighted(const Points& centres, const LocalSystems& loc
     const double alpha = rr / kp.dot(tp);
     x += alpha * p;
     r -= alpha * tp;
-    kr = k * r;
+    kr = multiply(k, r);
     const double next = r.dot(kr);
     p = r + (next / rr) * p;
     kp = kr + (next / rr) * kp;
     rr = next;
   }
   for (Eigen::Index j = 0; j < n; ++j) f.coefficients.row(j) = x.segment<3>(3 * j).transpose();
-  if (info) info->samples = static_cast<int>(n);
   return f;
 }
 
