@@ -317,8 +317,15 @@ TEST_CASE("vpm register --dense-force image: the image force from the command li
   const Json* d = j.find("dense");
   REQUIRE(d != nullptr);
   CHECK(d->find("force")->string() == "image");
+  CHECK(d->find("fit")->string() == "systems");
   CHECK(d->find("mismatch_after")->number() < d->find("mismatch_landmarks")->number());
   CHECK(j.find("inverted_tets")->number() == 0);
+  // the earlier fit on request
+  REQUIRE(test::run_status(vpm + images + "--dense-force image --dense-fit translations --dense-iterations 6 "
+                           "--dense-image-grid 32 --report " + dir + "r2.json 2>" + dir + "err.txt") == 0);
+  const Json j2 = Json::parse(test::slurp(dir + "r2.json"));
+  CHECK(j2.find("dense")->find("fit")->string() == "translations");
+  CHECK(j2.find("dense")->find("mismatch_after")->number() < j2.find("dense")->find("mismatch_landmarks")->number());
   // refused: an image force without images, one image alone, a mesh without native positions
   auto refused = [&](const std::string& args, const std::string& message) {
     CHECK(test::run_status(vpm + args + " 2>" + dir + "err.txt") == 2);
@@ -329,6 +336,7 @@ TEST_CASE("vpm register --dense-force image: the image force from the command li
   refused("--dense-iterations 2 --dense-force image", "--dense-force image needs --image");
   refused("--dense-iterations 2 --image " + dir + "image.nii.gz", "--image needs --template-image");
   refused("--dense-iterations 2 --dense-force intensity", "expected labels, image or both");
+  refused("--dense-iterations 2 --dense-fit samples", "--dense-fit: dense fit 'samples': expected systems or translations");
   refused("--dense-iterations 2 " + images, "--image and --template-image need --dense-force image or both");
   Image blank = native_image();
   std::fill(blank.data.begin(), blank.data.end(), 0.0f);
