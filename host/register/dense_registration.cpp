@@ -136,10 +136,10 @@ LocalSystems dense_systems(const DenseState& st, const Points& ball, const Fit& 
     for (Eigen::Matrix3d& a : image.a) a *= scale;
     image.b *= scale;
     // reported: the mean length of the translations the centres ask for on their own (as with
-    // DenseFit::translations, before its cap)
+    // DenseFit::translations: eps = kTextureFloor x the mean trace, here 3; before its cap)
     double length = 0;
     for (Eigen::Index c = 0; c < nc; ++c)
-      length += (image.a[static_cast<size_t>(c)] + ImageForce::kTextureFloor * Eigen::Matrix3d::Identity())
+      length += (image.a[static_cast<size_t>(c)] + 3 * ImageForce::kTextureFloor * Eigen::Matrix3d::Identity())
                     .ldlt().solve(image.b.row(c).transpose()).norm();
     it.mean_translation = nc > 0 ? length / static_cast<double>(nc) : 0.0;
   }
