@@ -45,6 +45,9 @@ DenseRegistrationOptions dense_options(const Args& args, DenseRegistrationOption
       throw InputError(std::string("--dense-fit: ") + e.what());
     }
   }
+  o.restore_image_weight = args.get_double("--dense-restore-image-weight", o.restore_image_weight);
+  if (!(o.restore_image_weight >= 0 && o.restore_image_weight <= 1e6))
+    throw InputError("--dense-restore-image-weight: expected 0 to 1e6");
   o.image_grid = args.get_int("--dense-image-grid", o.image_grid);
   if (o.image_grid < 8 || o.image_grid > 256) throw InputError("--dense-image-grid: expected 8 to 256 cells");
   o.image_smoothing = args.get_double("--dense-image-smoothing", o.image_smoothing);
@@ -72,6 +75,9 @@ Command with_dense_options(Command command, const std::string& after, int defaul
           {"--dense-fit", "systems|translations",
            std::string("how the force becomes a field: every centre's local least-squares system fitted at once, "
                        "or one translation per centre (default ") + to_string(d.fit) + ")", false, 0, true},
+          {"--dense-restore-image-weight", "W",
+           "with an image force, how firmly the final volume restoration holds the image's edges (0: not; default " +
+               format_sig(d.restore_image_weight, 6) + ")", false, 0, true},
           {"--dense-image-grid", "N", "cells across the ball of the image force's grid (default " +
                                           std::to_string(d.image_grid) + ")", false, 0, true},
           {"--dense-image-smoothing", "F", "Gaussian smoothing of the images before the image force, x the level's width (default " +

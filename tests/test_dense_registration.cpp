@@ -154,6 +154,7 @@ TEST_CASE("dense registration undoes a known incompressible flow that landmarks 
     for (Eigen::Index v = 0; v < dense.rows(); ++v)
       if (std::abs(c.subject.vertices.row(v).norm() - 1) < 1e-9) CHECK(std::abs(dense.row(v).norm() - 1) < 1e-9);
     const Json j = to_json(r);
+    CHECK(r.restore->held_points == 0);  // no image, no holds
     for (const char* key : {"landmark", "correction", "restore", "iterations", "agreement_after", "timings_s"})
       CHECK(j.find(key) != nullptr);
     // host and device flows agree (the volume restoration's CGLS runs differently on each, so
@@ -189,6 +190,7 @@ TEST_CASE("dense registration by the image force undoes the known flow without l
     const Json j = to_json(r);
     CHECK(j.find("force")->string() == "image");
     CHECK(j.find("fit")->string() == "systems");
+    CHECK(r.restore->held_points > 100);  // the restoration holds the image's edges
     CHECK(j.find("mismatch_after") != nullptr);
     Points flow_only;
     run_dense(*dev, c, flow_only, 3, {}, false, DenseForce::image, &images);

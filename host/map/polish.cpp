@@ -73,7 +73,7 @@ AnchorGroups anchor_groups(const std::vector<VolumeAnchor>& anchors) {
 
 PolishDirection polish_direction_host(const Points& x, const Tets& tets, const Eigen::VectorXd& target,
                                       const std::vector<char>& freedom, const std::vector<VolumeAnchor>& anchors,
-                                      int iterations) {
+                                      int iterations, const std::vector<VolumeHold>& holds) {
   const int n = static_cast<int>(x.rows()), m = static_cast<int>(tets.rows());
   const Eigen::VectorXd vol = tet_volumes(x, tets);
   // per-tet scaled gradients sg_{t,k} = vol_t grad phi_k / target_t
@@ -144,21 +144,45 @@ PolishDirection polish_direction_host(const Points& x, const Tets& tets, const E
     for (int j = 1; j < chunks; ++j) out += part[static_cast<size_t>(j)];
     project(out);
   };
+  // the holds' rows: h . sum_k w_k d_(v_k), right-hand side 0
+  const int nr = static_cast<int>(holds.size());
+  auto apply_rows = [&](const Points& d, Eigen::VectorXd& out) {
+    for (int r = 0; r < nr; ++r) {
+      const VolumeHold& h = holds[static_cast<size_t>(r)];
+      Eigen::Vector3d acc = Eigen::Vector3d::Zero();
+      for (int k = 0; k < 4; ++k) acc += h.weights[static_cast<size_t>(k)] * d.row(h.vertices[static_cast<size_t>(k)]).transpose();
+      out(r) = h.direction.dot(acc);
+    }
+  };
+  auto apply_t_all = [&](const Eigen::VectorXd& y, const Eigen::VectorXd& yh, Points& out) {  // P [A; H]^T [y; yh]
+    apply_t(y, out);
+    if (nr == 0) return;
+    Points extra = Points::Zero(n, 3);
+    for (int r = 0; r < nr; ++r) {
+      const VolumeHold& h = holds[static_cast<size_t>(r)];
+      for (int k = 0; k < 4; ++k)
+        extra.row(h.vertices[static_cast<size_t>(k)]) += (yh(r) * h.weights[static_cast<size_t>(k)]) * h.direction.transpose();
+    }
+    project(extra);
+    out += extra;
+  };
   PolishDirection res;
   Points dx = Points::Zero(n, 3), s(n, 3), p(n, 3);
-  Eigen::VectorXd rr = b, q(m);
-  apply_t(rr, s);
+  Eigen::VectorXd rr = b, q(m), rre = Eigen::VectorXd::Zero(nr), qe(nr);  // volume and hold residuals
+  apply_t_all(rr, rre, s);
   p = s;
   double gamma = s.squaredNorm();
   int it = 0;
   for (; it < iterations && gamma > 0; ++it) {
     apply(p, q);
-    const double qq = q.squaredNorm();
+    if (nr) apply_rows(p, qe);
+    const double qq = q.squaredNorm() + (nr ? qe.squaredNorm() : 0.0);
     if (qq <= 0) break;
     const double alpha = gamma / qq;
     dx += alpha * p;
     rr -= alpha * q;
-    apply_t(rr, s);
+    if (nr) rre -= alpha * qe;
+    apply_t_all(rr, rre, s);
     const double g2 = s.squaredNorm();
     p = s + (g2 / gamma) * p;
     gamma = g2;

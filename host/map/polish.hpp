@@ -46,10 +46,11 @@ struct PolishDirection {
 };
 
 /// Host reference. `x` n x 3 positions, `tets` m x 4, `target` m target volumes (same total as
-/// x's), `freedom` n entries (polish_freedom), `anchors` on free vertices.
+/// x's), `freedom` n entries (polish_freedom), `anchors` on free vertices; `holds` (VolumeHold)
+/// add their rows (right-hand side 0) to the least squares.
 PolishDirection polish_direction_host(const Points& x, const Tets& tets, const Eigen::VectorXd& target,
                                       const std::vector<char>& freedom, const std::vector<VolumeAnchor>& anchors,
-                                      int iterations);
+                                      int iterations, const std::vector<VolumeHold>& holds = {});
 
 /// OpenCL: connectivity (vertex -> tet-corner incidence) and freedom uploaded once; each call
 /// uploads x and target, runs the iterations without a host synchronisation, reads dx back.

@@ -137,6 +137,11 @@ void check_inputs(const Points& reference, const Tets& tets, const Points& ball,
     throw InputError("volume map: pinned vertices need polish_only (Moser rounds move every vertex)");
   if (!opt.anchors.empty() && !opt.polish_only)
     throw InputError("volume map: anchors need polish_only (Moser rounds move every vertex)");
+  if (!opt.holds.empty() && !opt.polish_only)
+    throw InputError("volume map: holds need polish_only (Moser rounds move every vertex)");
+  for (const VolumeHold& h : opt.holds)
+    for (int v : h.vertices)
+      if (v < 0 || v >= reference.rows()) throw InputError("volume map: a hold's vertex is out of range");
   check_anchors(reference, tets, opt);
   if (opt.polish_only && opt.method != VolumeMapMethod::moser)
     throw InputError("volume map: polish_only needs the moser method");

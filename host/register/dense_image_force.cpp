@@ -108,6 +108,13 @@ Eigen::Vector3d ImageForce::gradient(const std::vector<double>& f, long p) const
   return g;
 }
 
+Points ImageForce::gradients(const std::vector<double>& values) const {
+  Points g(grid_.rows(), 3);
+  const double inv = 1 / std::sqrt(templ_var_);
+  for (Eigen::Index p = 0; p < grid_.rows(); ++p) g.row(p) = inv * gradient(values, p).transpose();
+  return g;
+}
+
 std::vector<double> ImageForce::smoothed(const std::vector<double>& f, double sigma) const {
   const double s = sigma / h_;  // in cells
   if (s < 0.25) return f;

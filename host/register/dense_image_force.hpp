@@ -48,6 +48,9 @@ class ImageForce {
   static constexpr double kTextureFloor = 0.05;
 
   const Points& grid() const { return grid_; }
+  /// The gradient of `values` (grid values, e.g. subject_values) at every grid point (central
+  /// differences, ball units), in template standard deviations per ball unit (n x 3).
+  Points gradients(const std::vector<double>& values) const;
 
  private:
   Eigen::Vector3d gradient(const std::vector<double>& values, long point) const;

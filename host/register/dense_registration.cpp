@@ -16,6 +16,7 @@
 #include "vpm/error.hpp"
 #include "vpm/geometry.hpp"
 #include "vpm/labels.hpp"
+#include "vpm/locate.hpp"
 #include "vpm/timing.hpp"
 #include "vpm/topology.hpp"
 
@@ -253,6 +254,34 @@ DenseState dense_state(Device& dev, const Points& ball, const Tets& tets, const 
   return st;
 }
 
+/// The image grid points as holds of the final restoration (VolumeHold): each point inside the
+/// subject's ball mesh at `ball` is held across its image edge (the subject's gradient there,
+/// in template standard deviations per ball unit), all scaled so that the holds' rows weigh
+/// `weight` x the number of tets against the tets' volume rows (sum |direction|^2 = weight x tets).
+std::vector<VolumeHold> image_holds(const DenseState& st, const Points& ball, double weight) {
+  const Points g = st.image->gradients(st.image->subject_values(ball));
+  const Points& grid = st.image->grid();
+  const TetLocator locator(ball, st.tets);
+  std::vector<VolumeHold> holds;
+  double sum = 0;
+  for (Eigen::Index p = 0; p < grid.rows(); ++p) {
+    if (g.row(p).squaredNorm() == 0) continue;
+    const Location l = locator.locate(grid.row(p).transpose());
+    if (l.tet < 0 || !l.inside()) continue;
+    VolumeHold h;
+    for (int k = 0; k < 4; ++k) {
+      h.vertices[static_cast<size_t>(k)] = st.tets(l.tet, k);
+      h.weights[static_cast<size_t>(k)] = l.bary[k];
+    }
+    h.direction = g.row(p).transpose();
+    sum += h.direction.squaredNorm();
+    holds.push_back(h);
+  }
+  const double scale = sum > 0 ? std::sqrt(weight * static_cast<double>(st.tets.rows()) / sum) : 0.0;
+  for (VolumeHold& h : holds) h.direction *= scale;
+  return holds;
+}
+
 /// The final numbers: landmark errors against `targets`, inverted tets against the reference.
 void finish(Device& dev, DenseRegistrationResult& r, const DenseState& st, const Points& work,
             const Points& landmarks_final, const Points& targets, bool refuse_folds) {
@@ -318,8 +347,10 @@ DenseRegistrationResult register_dense(Device& dev, Points& ball, const Tets& te
     }
     if (lo.restore_volumes) {
       t0 = Clock::now();
+      const std::vector<VolumeHold> holds =
+          st.image && o.restore_image_weight > 0 ? image_holds(st, work, o.restore_image_weight) : std::vector<VolumeHold>{};
       r.restore = restore_volumes(dev, ball, tets, work, landmark_vertices(ball, landmarks), lm, lo.restore_iterations,
-                                  lo.restore_rounds);
+                                  lo.restore_rounds, holds);
       r.seconds_restore = seconds_since(t0);
     }
   }

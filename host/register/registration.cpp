@@ -68,6 +68,7 @@ Json to_json(const RegistrationRestore& r) {
   j["rounds"] = r.rounds;
   j["pinned_vertices"] = r.pinned_vertices;
   j["anchored_landmarks"] = r.anchored_landmarks;
+  j["held_points"] = r.held_points;
   return j;
 }
 

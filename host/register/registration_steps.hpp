@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "vpm/registration.hpp"
+#include "vpm/volume_map.hpp"
 
 namespace vpm {
 
@@ -47,9 +48,11 @@ std::optional<RegistrationUntangle> untangle_flow_folds(Device& device, const Po
 /// Gives back the volume lost under the flow (RegistrationOptions::restore_volumes), with the
 /// landmark vertices pinned and each moved landmark held in place (an anchor of the polish, or
 /// its tet's vertices pinned where the tet touches the boundary); `iterations` CGLS iterations
-/// per polish step, at most `rounds` steps.
+/// per polish step, at most `rounds` steps; `holds` (VolumeHold) keep points from sliding across
+/// image edges (dense registration with an image force).
 RegistrationRestore restore_volumes(Device& device, const Points& before, const Tets& tets, Points& after,
                                     const std::vector<char>& landmark_vertex, const Points& landmarks_final,
-                                    int iterations, int rounds);
+                                    int iterations, int rounds,
+                                    const std::vector<VolumeHold>& holds = {});
 
 }  // namespace vpm

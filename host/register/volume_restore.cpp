@@ -12,12 +12,13 @@ namespace vpm {
 
 RegistrationRestore restore_volumes(Device& dev, const Points& before, const Tets& tets, Points& after,
                                     const std::vector<char>& landmark_vertex, const Points& landmarks_final,
-                                    int iterations, int rounds) {
+                                    int iterations, int rounds, const std::vector<VolumeHold>& holds) {
   const int n = static_cast<int>(after.rows());
   VolumeMapOptions vo;
   vo.polish_only = true;
   vo.boundary = MapBoundary::slide;
   vo.pinned = landmark_vertex;
+  vo.holds = holds;
   // the same reach in ball units on finer meshes: a CGLS iteration reaches one more ring of tets
   vo.polish_iterations = static_cast<int>(std::lround(iterations * std::max(1.0, std::cbrt(tets.rows() / 30000.0))));
   vo.polish_rounds = rounds;
@@ -60,6 +61,7 @@ RegistrationRestore restore_volumes(Device& dev, const Points& before, const Tet
     }
   }
   r.anchored_landmarks = static_cast<int>(vo.anchors.size());
+  r.held_points = static_cast<int>(holds.size());
   for (char c : vo.pinned) r.pinned_vertices += c != 0;
   const VolumeMapResult vm = volume_preserving_map(dev, before, tets, after, vo);
   r.vertex_mean_abs_dev_before = vm.initial_vertex_mean_abs_dev;

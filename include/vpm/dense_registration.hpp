@@ -41,7 +41,8 @@
 //    otherwise it is undone and the level ends.
 // After the iterations, a landmark flow (register_landmarks without rotation) takes the landmarks
 // from where the dense flows left them back exactly onto their targets, and the volume
-// restoration of the landmark registration runs once against the map before registration.
+// restoration of the landmark registration runs once against the map before registration
+// (with an image force: holding the image's edges, `restore_image_weight`).
 #include <Eigen/Core>
 #include <optional>
 #include <string>
@@ -102,6 +103,10 @@ struct DenseRegistrationOptions {
   int agreement_grid = 40;      ///< cells per axis of the ball grid for the label agreement
   /// Move the landmarks back exactly onto their targets after the dense iterations.
   bool exact_landmarks = true;
+  /// With an image force: the final volume restoration holds the image grid points across
+  /// their edges (VolumeHold rows weighing this x the number of tets against the volume rows),
+  /// so restoring volumes does not slide structures off what the images aligned; 0 = off.
+  double restore_image_weight = 300;
 };
 
 /// One dense iteration.

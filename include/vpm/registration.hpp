@@ -151,9 +151,10 @@ struct RegistrationRestore {
   long rounds = 0;                        ///< polish rounds run
   int pinned_vertices = 0;                ///< vertices held in place
   int anchored_landmarks = 0;             ///< landmarks held as material points (VolumeAnchor)
+  int held_points = 0;                    ///< image grid points held across their edges (VolumeHold)
 };
 /// {"vertex_mean_abs_dev_before", "tet_mean_abs_dev_before", "vertex_mean_abs_dev",
-///  "tet_mean_abs_dev", "rounds", "pinned_vertices", "anchored_landmarks"}
+///  "tet_mean_abs_dev", "rounds", "pinned_vertices", "anchored_landmarks", "held_points"}
 Json to_json(const RegistrationRestore& restore);
 
 /// Seconds spent in each registration step.

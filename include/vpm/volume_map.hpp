@@ -72,6 +72,17 @@ struct VolumeAnchor {
   std::array<double, 4> weights{};
 };
 
+/// A material point p = sum_k weights[k] x_(vertices[k]) that the polish should not move along
+/// `direction` (registration: an image edge at p, its gradient scaled by the hold's weight): the
+/// least-squares row direction . sum_k weights[k] dx_(vertices[k]) = 0 joins the polish's
+/// tet-volume rows, so a step that slides p across the edge costs |direction|^2 |move|^2, and
+/// motion along the edge or where nothing is held stays free.
+struct VolumeHold {
+  std::array<int, 4> vertices{};
+  std::array<double, 4> weights{};
+  Eigen::Vector3d direction = Eigen::Vector3d::Zero();
+};
+
 /// Where a part of a stage runs when the device is an OpenCL device.
 enum class ExecutionPlace {
   automatic,  ///< the stage's rule (documented at each option)
@@ -138,6 +149,10 @@ struct VolumeMapOptions {
   /// landmarks this way: 3 constraints per landmark instead of its tet's 4 pinned vertices (12),
   /// which lets the polish give back more of the volume the flow took.
   std::vector<VolumeAnchor> anchors;
+  /// Soft holds (VolumeHold) added to the polish's least squares; only with polish_only
+  /// (InputError otherwise, and for vertices out of range). With holds the polish directions are
+  /// computed on the host threads (the OpenCL polisher has no such rows).
+  std::vector<VolumeHold> holds;
   /// Where the RK4 advection (point location and field interpolation) runs: automatic = on
   /// the OpenCL device when there is one (kernels/moser.cl), else the host reference. The
   /// field's vertex gradients (eq. 12-13) are computed next to it on GPUs, or with `device`;
