@@ -340,13 +340,19 @@ TEST_CASE("volume map: anchors (sharing vertices or not) stay in place while the
   refused(bad, "no weight");
 }
 
+// The polish's target volumes for the ellipsoid's initial map: the native tet volumes scaled to
+// the ball's total.
+Eigen::VectorXd polish_target(const InitialMapResult& im) {
+  const Eigen::VectorXd v0 = tet_volumes(im.mesh.vertices, im.mesh.tets);
+  return v0 / v0.sum() * tet_volumes(im.ball, im.mesh.tets).sum();
+}
+
 TEST_CASE("polish direction: host and device agree, fixed vertices stay, sphere vertices move tangentially, anchors hold") {
   const InitialMapResult& im = ellipsoid_start();
   const Points& x = im.ball;
   const Tets& T = im.mesh.tets;
   const int n = static_cast<int>(x.rows());
-  const Eigen::VectorXd v0 = tet_volumes(im.mesh.vertices, T);
-  const Eigen::VectorXd target = v0 / v0.sum() * tet_volumes(x, T).sum();
+  const Eigen::VectorXd target = polish_target(im);
   const auto boundary = boundary_vertex_mask(n, boundary_faces(T));
   std::vector<char> pinned(static_cast<size_t>(n), 0);
   for (int v = 0; v < n; v += 11) pinned[static_cast<size_t>(v)] = 1;
@@ -401,8 +407,7 @@ TEST_CASE("polish direction: holds keep their points from moving along their dir
   const Points& x = im.ball;
   const Tets& T = im.mesh.tets;
   const int n = static_cast<int>(x.rows());
-  const Eigen::VectorXd v0 = tet_volumes(im.mesh.vertices, T);
-  const Eigen::VectorXd target = v0 / v0.sum() * tet_volumes(x, T).sum();
+  const Eigen::VectorXd target = polish_target(im);
   const std::vector<char> freedom =
       detail::polish_freedom(boundary_vertex_mask(n, boundary_faces(T)), true, std::vector<char>{});
   // a hold at the centroid of every 7th tet, each along its own direction

@@ -117,7 +117,10 @@ PolishDirection polish_direction_host(const Points& x, const Tets& tets, const E
       }
     }
   };
-  auto apply = [&](const Points& d, Eigen::VectorXd& out) {  // out = A d (d already projected)
+  // The holds' rows h . sum_k w_k d_(v_k) (right-hand side 0) stacked under A: residuals
+  // (volume rows, hold rows).
+  const int nr = static_cast<int>(holds.size());
+  auto apply = [&](const Points& d, Eigen::VectorXd& out, Eigen::VectorXd& out_h) {  // A d, H d (d projected)
     parallel_for(m, 8192, [&](int t0, int t1) {
       for (int t = t0; t < t1; ++t) {
         double s = 0;
@@ -125,12 +128,18 @@ PolishDirection polish_direction_host(const Points& x, const Tets& tets, const E
         out(t) = s;
       }
     });
+    for (int r = 0; r < nr; ++r) {
+      const VolumeHold& h = holds[static_cast<size_t>(r)];
+      Eigen::Vector3d acc = Eigen::Vector3d::Zero();
+      for (int k = 0; k < 4; ++k) acc += h.weights[static_cast<size_t>(k)] * d.row(h.vertices[static_cast<size_t>(k)]).transpose();
+      out_h(r) = h.direction.dot(acc);
+    }
   };
-  // out = P A^T y: tets split into two fixed chunks, each scattering into its own buffer (no
-  // races, and the result does not depend on the number of threads), then summed.
+  // out = P (A^T y + H^T y_h): tets split into two fixed chunks, each scattering into its own
+  // buffer (no races, and the result does not depend on the number of threads), then summed.
   const int chunks = m >= 8192 ? 2 : 1;
   std::vector<Points> part(static_cast<size_t>(chunks));
-  auto apply_t = [&](const Eigen::VectorXd& y, Points& out) {
+  auto apply_t = [&](const Eigen::VectorXd& y, const Eigen::VectorXd& y_h, Points& out) {
     const int per = (m + chunks - 1) / chunks;
     parallel_for(chunks, 2, [&](int k0, int k1) {
       for (int j = k0; j < k1; ++j) {
@@ -142,47 +151,29 @@ PolishDirection polish_direction_host(const Points& x, const Tets& tets, const E
     });
     out = part[0];
     for (int j = 1; j < chunks; ++j) out += part[static_cast<size_t>(j)];
-    project(out);
-  };
-  // the holds' rows: h . sum_k w_k d_(v_k), right-hand side 0
-  const int nr = static_cast<int>(holds.size());
-  auto apply_rows = [&](const Points& d, Eigen::VectorXd& out) {
-    for (int r = 0; r < nr; ++r) {
-      const VolumeHold& h = holds[static_cast<size_t>(r)];
-      Eigen::Vector3d acc = Eigen::Vector3d::Zero();
-      for (int k = 0; k < 4; ++k) acc += h.weights[static_cast<size_t>(k)] * d.row(h.vertices[static_cast<size_t>(k)]).transpose();
-      out(r) = h.direction.dot(acc);
-    }
-  };
-  auto apply_t_all = [&](const Eigen::VectorXd& y, const Eigen::VectorXd& yh, Points& out) {  // P [A; H]^T [y; yh]
-    apply_t(y, out);
-    if (nr == 0) return;
-    Points extra = Points::Zero(n, 3);
     for (int r = 0; r < nr; ++r) {
       const VolumeHold& h = holds[static_cast<size_t>(r)];
       for (int k = 0; k < 4; ++k)
-        extra.row(h.vertices[static_cast<size_t>(k)]) += (yh(r) * h.weights[static_cast<size_t>(k)]) * h.direction.transpose();
+        out.row(h.vertices[static_cast<size_t>(k)]) += (y_h(r) * h.weights[static_cast<size_t>(k)]) * h.direction.transpose();
     }
-    project(extra);
-    out += extra;
+    project(out);
   };
   PolishDirection res;
   Points dx = Points::Zero(n, 3), s(n, 3), p(n, 3);
-  Eigen::VectorXd rr = b, q(m), rre = Eigen::VectorXd::Zero(nr), qe(nr);  // volume and hold residuals
-  apply_t_all(rr, rre, s);
+  Eigen::VectorXd rr = b, q(m), rr_h = Eigen::VectorXd::Zero(nr), q_h(nr);
+  apply_t(rr, rr_h, s);
   p = s;
   double gamma = s.squaredNorm();
   int it = 0;
   for (; it < iterations && gamma > 0; ++it) {
-    apply(p, q);
-    if (nr) apply_rows(p, qe);
-    const double qq = q.squaredNorm() + (nr ? qe.squaredNorm() : 0.0);
+    apply(p, q, q_h);
+    const double qq = q.squaredNorm() + q_h.squaredNorm();
     if (qq <= 0) break;
     const double alpha = gamma / qq;
     dx += alpha * p;
     rr -= alpha * q;
-    if (nr) rre -= alpha * qe;
-    apply_t_all(rr, rre, s);
+    rr_h -= alpha * q_h;
+    apply_t(rr, rr_h, s);
     const double g2 = s.squaredNorm();
     p = s + (g2 / gamma) * p;
     gamma = g2;

@@ -89,17 +89,21 @@ int newly_inverted(const Eigen::VectorXd& v0, const Eigen::VectorXd& v1) {
   return n;
 }
 
+/// The symmetric closest-point matches of the region boundaries with the subject at `ball`;
+/// their count and mean length go to `it`.
+BoundaryMatches boundary_matches(const DenseState& st, const Points& ball, DenseIteration& it) {
+  BoundaryMatches m = closest_matches(region_surface(ball, st.faces), st.templ);
+  it.matches = static_cast<long>(m.at.rows());
+  it.mean_match_distance = m.mean_distance;
+  return m;
+}
+
 /// The displacements the force asks for at `centres` with the subject at `ball` (c x 3; `fit`
 /// holds its image values there); the matches and their mean length go to `it`.
 Points dense_force(const DenseState& st, const Points& ball, const Fit& fit, const Points& centres, double width,
                    const DenseRegistrationOptions& o, DenseIteration& it) {
   Points labels, image;
-  if (st.force != DenseForce::image) {
-    const BoundaryMatches m = closest_matches(region_surface(ball, st.faces), st.templ);
-    it.matches = static_cast<long>(m.at.rows());
-    it.mean_match_distance = m.mean_distance;
-    labels = smooth_matches(m, centres, o.smoothing * width);
-  }
+  if (st.force != DenseForce::image) labels = smooth_matches(boundary_matches(st, ball, it), centres, o.smoothing * width);
   if (st.force != DenseForce::labels) {
     double mean = 0;
     image = st.image->local_translations(fit.values, centres, o.smoothing * width,
@@ -121,11 +125,8 @@ LocalSystems dense_systems(const DenseState& st, const Points& ball, const Fit& 
   const Eigen::Index nc = centres.rows();
   LocalSystems labels, image;
   if (st.force != DenseForce::image) {
-    const BoundaryMatches m = closest_matches(region_surface(ball, st.faces), st.templ);
-    it.matches = static_cast<long>(m.at.rows());
-    it.mean_match_distance = m.mean_distance;
     Eigen::VectorXd mass;
-    labels.b = smooth_matches(m, centres, o.smoothing * width, &mass);
+    labels.b = smooth_matches(boundary_matches(st, ball, it), centres, o.smoothing * width, &mass);
     for (Eigen::Index c = 0; c < nc; ++c) labels.a.push_back(mass(c) * Eigen::Matrix3d::Identity());
   }
   if (st.force != DenseForce::labels) {
