@@ -50,6 +50,12 @@ FieldValues permuted(const FieldValues& values, const std::vector<int>& old_of_n
 
 }  // namespace
 
+std::vector<int> spatial_order(const Points& points) {
+  if (points.rows() == 0) return {};
+  const Eigen::RowVector3d lo = points.colwise().minCoeff();
+  return order_by(morton_codes(points, lo, (points.colwise().maxCoeff() - lo).maxCoeff()));
+}
+
 std::vector<int> sort_spatially(TetMesh& mesh) {
   const int n = mesh.num_vertices(), m = mesh.num_tets();
   if (n == 0) return {};

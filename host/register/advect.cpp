@@ -4,6 +4,7 @@
 #include "register/registration_steps.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
+#include "vpm/mesh_order.hpp"
 
 namespace vpm {
 
@@ -59,14 +60,17 @@ PackedFields pack_fields(const std::vector<DivFreeField>& f, int steps) {
 
 void advect_device(Device& dev, Points& x, const std::vector<DivFreeField>& f, int steps) {
   const PackedFields pk = pack_fields(f, steps);
-  // Structure-of-arrays positions, padded to a multiple of the SIMD width (8 lanes of double
-  // on CPU devices, 1 elsewhere); padding points sit at the origin and are discarded.
+  // Structure-of-arrays positions in Z-order, padded to a multiple of the SIMD width (8 lanes
+  // of double on CPU devices, 1 elsewhere); padding points sit at the origin and are discarded.
+  // The Z-order puts close points in one work item, so the kernel skips the centres far from
+  // all of them (FIELD_CUT) whatever the caller's numbering.
   const int lanes = dev.description().type == "cpu" ? 8 : 1;
   const size_t n = static_cast<size_t>(x.rows());
   const size_t nv = (n + lanes - 1) / lanes, np = nv * lanes;
+  const std::vector<int> order = spatial_order(x);
   std::vector<double> soa(3 * np, 0.0);
   for (size_t i = 0; i < n; ++i)
-    for (int c = 0; c < 3; ++c) soa[c * np + i] = x(static_cast<Eigen::Index>(i), c);
+    for (int c = 0; c < 3; ++c) soa[c * np + i] = x(order[i], c);
   auto& q = dev.queue();
   bc::vector<double> dxs(soa.begin(), soa.begin() + np, q);
   bc::vector<double> dys(soa.begin() + np, soa.begin() + 2 * np, q);
@@ -82,7 +86,7 @@ void advect_device(Device& dev, Points& x, const std::vector<DivFreeField>& f, i
   bc::copy(dys.begin(), dys.end(), soa.begin() + np, q);
   bc::copy(dzs.begin(), dzs.end(), soa.begin() + 2 * np, q);
   for (size_t i = 0; i < n; ++i)
-    for (int c = 0; c < 3; ++c) x(static_cast<Eigen::Index>(i), c) = soa[c * np + i];
+    for (int c = 0; c < 3; ++c) x(order[i], c) = soa[c * np + i];
 }
 
 }  // namespace

@@ -16,4 +16,8 @@ namespace vpm {
 /// permuted along. Returns the old index of each new vertex (`old_of_new[new] = old`).
 std::vector<int> sort_spatially(TetMesh& mesh);
 
+/// The rows of `points` in the Z-order of their positions over their bounding box (indices into
+/// `points`; ties keep the old order): neighbours in space become neighbours in the list.
+std::vector<int> spatial_order(const Points& points);
+
 }  // namespace vpm
