@@ -16,6 +16,7 @@
 
 #include "cli.hpp"
 #include "demo_deformation.hpp"
+#include "demo_ideal.hpp"
 #include "demo_overlap.hpp"
 #include "dense_options.hpp"
 #include "vpm/ball_map.hpp"
@@ -272,7 +273,8 @@ std::string two_pcts(const char* f, const vpm::MapMetrics& m) {
 
 // The summary table (stdout).
 void print_summary(const std::string& device, const Settings& st, const Subject& t, const Subject& s,
-                   const Registration& reg, const Overlap& ov, const Names& names, double total) {
+                   const Registration& reg, const Overlap& ov, const Names& names, double total,
+                   const std::string& ideal) {
   std::ostringstream out;
   auto row = [&](const std::string& what, const std::string& a, const std::string& b, const std::string& c = "") {
     std::string line = strprintf("  %-34s %14s %14s %8s", what.c_str(), a.c_str(), b.c_str(), c.c_str());
@@ -307,6 +309,7 @@ void print_summary(const std::string& device, const Settings& st, const Subject&
   row("mean of the landmark regions",
       strprintf("%.3f", ov.image_landmark_before) + " (" + strprintf("%.3f", ov.landmark_before) + ")",
       strprintf("%.3f", ov.image_landmark_after) + " (" + strprintf("%.3f", ov.landmark_after) + ")");
+  out << ideal;
   out << "total " << strprintf("%.1f", total) << " s; wrote " << (st.out / "demo.json").string()
       << " and the meshes (.vtu, open in ParaView) in " << st.out.string() << "\n";
   std::cout << out.str();
@@ -344,12 +347,22 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   const Overlap ov = vpm::cli::measure_overlap(tmpl.map.mesh, subj.map.mesh, reg.registered, reg.tmpl_labels,
                                                reg.subj_labels, reg.landmark_labels, kEvaluated, st.grid, atlas, atlas_b);
   timings["overlap"] = ov.seconds;
+  t0 = Clock::now();
+  const vpm::cli::IdealReport ideal = vpm::cli::measure_ideal(
+      dev, subj.map.mesh, tmpl.map.mesh, reg.registered,
+      st.ceiling ? [](const Eigen::Vector3d& y) { return y; } : pull, [&](const Points& ball) {
+        return vpm::cli::measure_overlap(tmpl.map.mesh, subj.map.mesh, ball, reg.tmpl_labels, reg.subj_labels,
+                                         reg.landmark_labels, kEvaluated, st.grid, atlas, atlas_b);
+      });
+  timings["ideal"] = seconds_since(t0);
   const double total = seconds_since(t_start);
   timings["total"] = total;
 
   const Names names = aal_names((st.data / "aal.nii.txt").string());
-  vpm::write_json_file((st.out / "demo.json").string(), demo_json(dev.name(), st, tmpl, subj, reg, ov, names, timings));
-  print_summary(dev.name(), st, tmpl, subj, reg, ov, names, total);
+  vpm::Json report = demo_json(dev.name(), st, tmpl, subj, reg, ov, names, timings);
+  report["ideal"] = vpm::cli::to_json(ideal, kEvaluated);
+  vpm::write_json_file((st.out / "demo.json").string(), report);
+  print_summary(dev.name(), st, tmpl, subj, reg, ov, names, total, vpm::cli::ideal_summary(ideal));
   return 0;
 }
 
