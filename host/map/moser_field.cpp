@@ -8,6 +8,7 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "core/parallel.hpp"
 #include "vpm/device.hpp"
 #include "vpm/topology.hpp"
 
@@ -20,40 +21,49 @@ Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> tet_gradients(const Mo
                                                                        const Eigen::VectorXd& psi) {
   Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> g(f.m, 3);
   const Tets& T = *f.tets;
-  for (int t = 0; t < f.m; ++t) {
-    const double* q = &f.inv[12 * static_cast<size_t>(t)];
-    const double d1 = psi(T(t, 1)) - psi(T(t, 0)), d2 = psi(T(t, 2)) - psi(T(t, 0)),
-                 d3 = psi(T(t, 3)) - psi(T(t, 0));
-    // grad psi = sum_j (psi_j - psi_0) grad lambda_j, grad lambda_j = row j of Minv
-    for (int c = 0; c < 3; ++c) g(t, c) = d1 * q[3 + c] + d2 * q[6 + c] + d3 * q[9 + c];
-  }
+  parallel_for(f.m, 8192, [&](int t0, int t1) {
+    for (int t = t0; t < t1; ++t) {
+      const double* q = &f.inv[12 * static_cast<size_t>(t)];
+      const double d1 = psi(T(t, 1)) - psi(T(t, 0)), d2 = psi(T(t, 2)) - psi(T(t, 0)),
+                   d3 = psi(T(t, 3)) - psi(T(t, 0));
+      // grad psi = sum_j (psi_j - psi_0) grad lambda_j, grad lambda_j = row j of Minv
+      for (int c = 0; c < 3; ++c) g(t, c) = d1 * q[3 + c] + d2 * q[6 + c] + d3 * q[9 + c];
+    }
+  });
   return g;
 }
 
 std::vector<double> vertex_gradients(const Tets& tets, const Points& x,
                                      const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& G,
                                      const Eigen::VectorXd& vol, const std::vector<char>& boundary,
-                                     bool slide) {
-  const int n = static_cast<int>(x.rows()), m = static_cast<int>(tets.rows());
-  std::vector<double> g(3 * static_cast<size_t>(n), 0.0), w(static_cast<size_t>(n), 0.0);
-  for (int t = 0; t < m; ++t)
-    for (int k = 0; k < 4; ++k) {
-      const int v = tets(t, k);
-      w[v] += vol(t);
-      for (int d = 0; d < 3; ++d) g[3 * v + d] += vol(t) * G(t, d);
-    }
-  for (int v = 0; v < n; ++v) {
-    Eigen::Map<Eigen::Vector3d> gv(&g[3 * static_cast<size_t>(v)]);
-    if (w[v] > 0) gv /= w[v];
-    if (boundary[v]) {
-      if (!slide) {
-        gv.setZero();
-      } else {
-        const Eigen::Vector3d nrm = x.row(v).transpose().normalized();
-        gv -= gv.dot(nrm) * nrm;
+                                     bool slide, const Incidence* incidence) {
+  const int n = static_cast<int>(x.rows());
+  Incidence own;
+  if (!incidence) own = vertex_tet_incidence(n, tets);
+  const Incidence& inc = incidence ? *incidence : own;
+  std::vector<double> g(3 * static_cast<size_t>(n), 0.0);
+  // gathered per vertex over its tets in increasing order: the sums of a sequential scatter
+  // over the tets, bit for bit, on any number of threads
+  parallel_for(n, 4096, [&](int v0, int v1) {
+    for (int v = v0; v < v1; ++v) {
+      Eigen::Map<Eigen::Vector3d> gv(&g[3 * static_cast<size_t>(v)]);
+      double w = 0;
+      for (int j = inc.offset[static_cast<size_t>(v)]; j < inc.offset[static_cast<size_t>(v) + 1]; ++j) {
+        const int t = inc.tet_of[static_cast<size_t>(j)];
+        w += vol(t);
+        for (int d = 0; d < 3; ++d) gv(d) += vol(t) * G(t, d);
+      }
+      if (w > 0) gv /= w;
+      if (boundary[v]) {
+        if (!slide) {
+          gv.setZero();
+        } else {
+          const Eigen::Vector3d nrm = x.row(v).transpose().normalized();
+          gv -= gv.dot(nrm) * nrm;
+        }
       }
     }
-  }
+  });
   return g;
 }
 

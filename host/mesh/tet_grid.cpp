@@ -7,6 +7,7 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "core/parallel.hpp"
 #include "mesh/face_table.hpp"
 
 namespace vpm::detail {
@@ -29,18 +30,20 @@ void build_background(TetGrid& f, const Points& x, const Tets& tets, const std::
   f.tets = &tets;
   f.nbr = &nbr;
   f.inv.assign(12 * static_cast<size_t>(f.m), 0.0);
-  for (int t = 0; t < f.m; ++t) {
-    const Eigen::Vector3d a = x.row(tets(t, 0)).transpose();
-    Eigen::Matrix3d M;
-    for (int c = 0; c < 3; ++c) M.col(c) = x.row(tets(t, c + 1)).transpose() - a;
-    const Eigen::Matrix3d Mi = M.inverse();
-    double* q = &f.inv[12 * static_cast<size_t>(t)];
-    q[0] = a.x();
-    q[1] = a.y();
-    q[2] = a.z();
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) q[3 + 3 * r + c] = Mi(r, c);
-  }
+  parallel_for(f.m, 8192, [&](int t0, int t1) {
+    for (int t = t0; t < t1; ++t) {
+      const Eigen::Vector3d a = x.row(tets(t, 0)).transpose();
+      Eigen::Matrix3d M;
+      for (int c = 0; c < 3; ++c) M.col(c) = x.row(tets(t, c + 1)).transpose() - a;
+      const Eigen::Matrix3d Mi = M.inverse();
+      double* q = &f.inv[12 * static_cast<size_t>(t)];
+      q[0] = a.x();
+      q[1] = a.y();
+      q[2] = a.z();
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) q[3 + 3 * r + c] = Mi(r, c);
+    }
+  });
   // Uniform grid: about one cell per tet over the bounding box (cells capped at 128 a side);
   // each tet is listed in every cell its bounding box (grown by a quarter cell) overlaps.
   Eigen::RowVector3d lo = x.colwise().minCoeff(), hi = x.colwise().maxCoeff();
