@@ -37,7 +37,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   vo.preconditioner = vpm::cli::parse_option("--preconditioner", [&] {
     return std::string(vpm::to_string(vpm::parse_preconditioner(args.get("--preconditioner", "jacobi"))));
   });
-  vo.rk_steps = args.get_int("--rk-steps", 40);
+  vo.rk_steps = args.get_int("--rk-steps", vo.rk_steps);
   if (vo.rk_steps < 1) throw vpm::InputError("option --rk-steps: must be >= 1");
   vo.progress = [](const std::string& line) { vpm::cli::progress(line); };
   const auto report_path = args.get("--report");
@@ -94,7 +94,7 @@ vpm::cli::Registrar reg({"map", "MESH -o OUT", "map a tet mesh to the unit ball,
                           {"--boundary", "slide|fixed", "boundary vertices slide on the sphere (moser default) or stay"},
                           {"--solver", "cg|paper", "Jacobi CG (default) or the paper's BiCGSTAB on the normal equations"},
                           {"--preconditioner", "jacobi|amg", "of CG: Jacobi (default) or smoothed-aggregation AMG"},
-                          {"--rk-steps", "N", "RK4 steps per Moser round (default 40)"},
+                          {"--rk-steps", "N", "RK4 steps per Moser round (default " + std::to_string(vpm::VolumeMapOptions{}.rk_steps) + ")"},
                           {"--report", "REPORT.json", "write the report (metrics, rounds, timings)"}},
                          run});
 }  // namespace

@@ -99,8 +99,10 @@ struct VolumeMapOptions {
   int max_rounds = 0;
   /// Stop when the vertex mean |r - 1| (normalised dual volumes) is at or below this.
   double tolerance = 0.01;
-  /// RK4 steps per Moser round (t from 0 to 1).
-  int rk_steps = 40;
+  /// RK4 steps per Moser round (t from 0 to 1). 10 since 2026-11-26 (40 before): the same maps
+  /// to 3-4 digits on brains from 26k to 1.1M tets and on the shapes benchmark, at a quarter of
+  /// the advection's time (docs/volume_map.md).
+  int rk_steps = 10;
   /// Explicit steps K of the paper's loop (dt = 1/K).
   int paper_steps = 50;
   MapBoundary boundary = MapBoundary::automatic;
@@ -210,7 +212,7 @@ struct VolumeMapResult {
   bool slide = true;          ///< boundary vertices slid on the sphere (else fixed)
   std::string solver = "cg";  ///< VolumeMapOptions::solver
   std::string preconditioner = "jacobi";  ///< VolumeMapOptions::preconditioner
-  int rk_steps = 40;
+  int rk_steps = 10;
   bool device_advection = false;  ///< the advection ran on the OpenCL device
   VolumeMapTimings timings;
 };
