@@ -3,7 +3,7 @@
 # with CORES cores, score the foci against the truth and summarise time and memory per rule.
 # Usage: bench/cohort/run.sh OUT_DIR [NORMALS=50] [PATIENTS=10] [SEED=1]; env MORE_FEATURES (default
 # "{t1w: anat/T1w}"), REGISTER (the workflow's register settings, e.g. "{extra: '--dense-iterations 12',
-# force: labels}"; default the config's), CORES (2),
+# force: labels}"; default the config's), MESH (the meshes, e.g. "{target_vertices: 15000}"), CORES (2),
 # BUILD_DIR (build). Writes OUT_DIR/summary.json and OUT_DIR/summary.md (and prints the latter).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -25,7 +25,7 @@ fi
 synth_s=$SECONDS
 snakemake -s workflow/Snakefile --cores "$cores" --directory "$out" \
   --config bids="$out/bids" out="$out/results" "more_features=$more_features" vpm="$build/vpm" \
-  ${REGISTER:+"register=$REGISTER"}
+  ${REGISTER:+"register=$REGISTER"} ${MESH:+"mesh=$MESH"}
 workflow_s=$((SECONDS - synth_s))
 /usr/bin/python3 bench/cohort/summary.py --results "$out/results" --synth-seconds "$synth_s" \
   --workflow-seconds "$workflow_s" --cores "$cores" --out-json "$out/summary.json" --out-md "$out/summary.md"

@@ -162,7 +162,7 @@ Points smooth_matches(const BoundaryMatches& m, const Points& centres, double si
   if (nm > 0) {
     lo = m.at.colwise().minCoeff().transpose().array();
     const Eigen::Array3d span = m.at.colwise().maxCoeff().transpose().array() - lo;
-    h = std::max(cut, span.maxCoeff() / 1000);
+    h = std::max(cut, span.maxCoeff() / 128);  // at most 129^3 cells, whatever the width
     dims = (span / h).floor().cast<int>() + 1;
   }
   auto cell_of = [&](const Eigen::Vector3d& x) {  // -1 and dims: outside the box
