@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <string>
 
+#include "core/parallel.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/topology.hpp"
@@ -84,32 +85,43 @@ CotanLaplacian::CotanLaplacian(int n, const Tets& tets) : tets_(tets) {
   if (n < 0) throw InputError("CotanLaplacian: negative vertex count");
   check_tets(n, tets, "CotanLaplacian");
   const Incidence inc = vertex_tet_incidence(n, tets);
-  // Pattern: each row holds itself and every vertex sharing a tet with it, sorted.
+  // Pattern: each row holds itself and every vertex sharing a tet with it, sorted. Rows are
+  // built in a fixed number of contiguous blocks on the host threads and joined in order.
   pattern_.rows = pattern_.cols = n;
   pattern_.row_ptr.assign(n + 1, 0);
-  std::vector<int> nb;
-  pattern_.col.reserve(static_cast<size_t>(n) * 16);
-  for (int i = 0; i < n; ++i) {
-    nb.clear();
-    nb.push_back(i);
-    for (int k = inc.offset[i]; k < inc.offset[i + 1]; ++k)
-      for (int c = 0; c < 4; ++c) nb.push_back(tets(inc.tet_of[k], c));
-    std::sort(nb.begin(), nb.end());
-    nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
-    pattern_.col.insert(pattern_.col.end(), nb.begin(), nb.end());
-    pattern_.row_ptr[i + 1] = static_cast<int>(pattern_.col.size());
-  }
+  constexpr int kBlocks = 16;
+  const int per = (n + kBlocks - 1) / kBlocks;
+  std::vector<std::vector<int>> block_cols(kBlocks);
+  detail::parallel_for(kBlocks, 2, [&](int b0, int b1) {
+    std::vector<int> nb;
+    for (int b = b0; b < b1; ++b)
+      for (int i = b * per; i < std::min(n, (b + 1) * per); ++i) {
+        nb.clear();
+        nb.push_back(i);
+        for (int k = inc.offset[i]; k < inc.offset[i + 1]; ++k)
+          for (int c = 0; c < 4; ++c) nb.push_back(tets(inc.tet_of[k], c));
+        std::sort(nb.begin(), nb.end());
+        nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
+        block_cols[static_cast<size_t>(b)].insert(block_cols[static_cast<size_t>(b)].end(), nb.begin(), nb.end());
+        pattern_.row_ptr[i + 1] = static_cast<int>(nb.size());  // the row's length for now
+      }
+  });
+  for (int i = 0; i < n; ++i) pattern_.row_ptr[i + 1] += pattern_.row_ptr[i];
+  pattern_.col.reserve(static_cast<size_t>(pattern_.row_ptr[n]));
+  for (const std::vector<int>& c : block_cols) pattern_.col.insert(pattern_.col.end(), c.begin(), c.end());
   pattern_.val.assign(pattern_.col.size(), 0.0);
   mass_ = Eigen::VectorXd::Zero(n);
   diag_.resize(n);
   for (int i = 0; i < n; ++i) diag_[i] = pattern_.find(i, i);
   slot_.resize(static_cast<size_t>(tets.rows()) * 12);
-  for (Eigen::Index t = 0; t < tets.rows(); ++t)
-    for (int a = 0; a < 4; ++a)
-      for (int q = 0; q < 3; ++q) {
-        const int b = q < a ? q : q + 1;
-        slot_[12 * t + 3 * a + q] = pattern_.find(tets(t, a), tets(t, b));
-      }
+  detail::parallel_for(static_cast<int>(tets.rows()), 8192, [&](int t0, int t1) {
+    for (int t = t0; t < t1; ++t)
+      for (int a = 0; a < 4; ++a)
+        for (int q = 0; q < 3; ++q) {
+          const int b = q < a ? q : q + 1;
+          slot_[12 * static_cast<size_t>(t) + 3 * a + q] = pattern_.find(tets(t, a), tets(t, b));
+        }
+  });
 }
 
 void CotanLaplacian::assemble(Device& device, const Points& x) {
