@@ -96,7 +96,8 @@ typedef VCAT(double, LANES) vreal;
 //   tangent: psi [(tr - 2l px py) c - (4 x.c + 4l px r.c) y + (4l py x.c + 4l^2 px py r.c) r]
 // A centre whose Gaussian is below exp(-FIELD_CUT) at every lane's point is skipped: its terms
 // are at most about FIELD_CUT exp(-FIELD_CUT) = 4e-13 of a near centre's, far below what the
-// integration resolves, and at the finest dense level (width 0.14) most centres are that far.
+// integration resolves; at the finest dense level (width 0.14) about half the centres are that
+// far from a point in the middle of the ball (more near its surface; estimated, not counted).
 #define FIELD_CUT 32.0
 #if LANES == 1
 #define ALL_FAR(e) ((e) > FIELD_CUT)
