@@ -25,6 +25,10 @@ vpm::TetMesh cube(int n) {
 
 int main(int argc, char** argv) {
   const int n = argc > 1 ? std::atoi(argv[1]) : 55;
+  if (n < 2 || argc > 3) {
+    std::fprintf(stderr, "usage: vpm_bench_io [N (cubes a side, >= 2; default 55)] [DIR]\n");
+    return 2;
+  }
   const std::string dir = argc > 2 ? argv[2] : std::filesystem::temp_directory_path().string();
   const vpm::TetMesh m = cube(n);
   std::printf("cube mesh: %d vertices, %d tets\n%-6s %10s %10s %10s\n", m.num_vertices(),

@@ -260,13 +260,14 @@ vpm::Json bench_mesh(vpm::Device& dev, const NamedMesh& named, int runs, const s
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   int runs = 3;
   std::string out_dir = "bench/results";
   std::vector<std::string> paths;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--runs") && i + 1 < argc) runs = std::max(1, std::atoi(argv[++i]));
     else if (!std::strcmp(argv[i], "--out") && i + 1 < argc) out_dir = argv[++i];
+    else if (argv[i][0] == '-') throw vpm::InputError(std::string("unknown option ") + argv[i]);
     else paths.push_back(argv[i]);
   }
   std::filesystem::create_directories(out_dir);
@@ -286,4 +287,16 @@ int main(int argc, char** argv) {
   vpm::write_json_file(out_dir + "/volume_map.json", results);
   std::printf("wrote %s/volume_map.json and %s/histogram.svg\n", out_dir.c_str(), out_dir.c_str());
   return 0;
+}
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const vpm::InputError& e) {
+    std::fprintf(stderr, "vpm_bench_volume_map: %s\nusage: vpm_bench_volume_map [--runs R] [--out DIR] [MESH ...]\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "vpm_bench_volume_map: %s\n", e.what());
+    return 3;
+  }
 }
