@@ -19,8 +19,12 @@ IdealRegistration ideal_registration(const TetMesh& subject, const TetMesh& tmpl
   int hint = -1;
   for (Eigen::Index i = 0; i < native.rows(); ++i) {
     const Location l = locator.locate(pull(native.row(i).transpose()), hint);
-    hint = l.tet;
     r.outside += !l.inside();
+    if (l.tet < 0) {  // not located at all (cannot happen on a valid mesh): left where it is
+      r.ball.row(i) = subject.vertices.row(i);
+      continue;
+    }
+    hint = l.tet;
     double sum = 0;
     Eigen::RowVector3d x = Eigen::RowVector3d::Zero();
     for (int k = 0; k < 4; ++k) {  // outside: the nearest tet's clamped coordinates, renormalised
