@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "vpm/format.hpp"
+#include "vpm/io.hpp"
 #include "vpm/locate.hpp"
 #include "vpm/topology.hpp"
 
@@ -50,8 +51,8 @@ IdealReport measure_ideal(Device& device, const TetMesh& subject, const TetMesh&
   r.ideal = ideal_registration(subject, tmpl, pull);
   r.overlap = overlap_of(r.ideal.ball);
   r.metrics = map_metrics(device, subject.vertices, r.ideal.ball, subject.tets);
-  std::vector<double> e(static_cast<size_t>(registered.rows()));
-  for (Eigen::Index i = 0; i < registered.rows(); ++i) e[static_cast<size_t>(i)] = (registered.row(i) - r.ideal.ball.row(i)).norm();
+  r.error = (registered - r.ideal.ball).rowwise().norm();
+  std::vector<double> e(r.error.data(), r.error.data() + r.error.size());
   if (!e.empty()) {
     for (double x : e) r.error_mean += x / static_cast<double>(e.size());
     std::sort(e.begin(), e.end());
@@ -83,6 +84,16 @@ Json to_json(const IdealReport& r, const std::vector<int>& evaluated) {
   e["max"] = r.error_max;
   j["error_to_ideal"] = e;
   return j;
+}
+
+void write_registered(const std::string& path, const TetMesh& subject, const Points& registered,
+                      const MapMetrics& metrics, const IdealReport& report) {
+  TetMesh mesh = subject;
+  mesh.vertices = registered;
+  mesh.set_point_field("registration_vertex_volume_ratio", metrics.vertex_ratio);
+  mesh.set_cell_field("registration_tet_volume_ratio", metrics.tet_ratio);
+  mesh.set_point_field("error_to_ideal", report.error);
+  write_mesh(path, mesh);
 }
 
 std::string ideal_summary(const IdealReport& r) {

@@ -38,6 +38,7 @@ struct IdealReport {
   MapMetrics metrics;  ///< its volume distortion against the subject's map before registration
   /// |actual - ideal| over the subject's vertices (ball units): the registration's error
   double error_mean = 0, error_p90 = 0, error_max = 0;
+  Eigen::VectorXd error;  ///< per subject vertex
 };
 
 /// Builds the ideal registration and measures it: `overlap_of(ball)` is the demo's overlap of
@@ -49,6 +50,11 @@ IdealReport measure_ideal(Device& device, const TetMesh& subject, const TetMesh&
 /// {"held_out": [{"label", "dice_image"}], "landmark_regions_mean_dice_image", "vertex_volume_ratio",
 ///  "tet_volume_ratio", "inverted_tets", "outside_vertices", "error_to_ideal": {"mean", "p90", "max"}}
 Json to_json(const IdealReport& report, const std::vector<int>& evaluated);
+
+/// Writes the registered subject (`subject` at `registered`) to `path` with the point field
+/// `error_to_ideal` (ball units) beside the registration's volume ratios.
+void write_registered(const std::string& path, const TetMesh& subject, const Points& registered,
+                      const MapMetrics& metrics, const IdealReport& report);
 
 /// Two summary lines for the demo's table.
 std::string ideal_summary(const IdealReport& report);

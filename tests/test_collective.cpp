@@ -262,9 +262,13 @@ TEST_CASE("vpm demo: meshes, maps and registers Colin27 and a deformed copy, Dic
   const double off = ideal.find("error_to_ideal")->find("mean")->number();
   CHECK(off > 0.005);
   CHECK(off < 0.05);
-  // the registered mesh is the subject's ball mesh moved, fold-free
+  // the registered mesh is the subject's ball mesh moved, fold-free, with each vertex's distance
+  // to the ideal registration (whose mean the report gives)
   const TetMesh r = read_mesh(out + "/subject_registered.vtu");
   CHECK(inverted_tets(r.vertices, r.tets).empty());
+  const Field* err = r.find_point_field("error_to_ideal");
+  REQUIRE(err != nullptr);
+  CHECK(err->values.mean() == Approx(off).epsilon(1e-6));
   // bad option: exit 2
   CHECK(run_status(std::string(VPM_BINARY) + " demo --out " + out + " --grid 2 2>/dev/null") == 2);
   CHECK(run_status(std::string(VPM_BINARY) + " demo --out " + out + " --data " + tmp("nothing") + " 2>/dev/null") == 2);
