@@ -36,34 +36,27 @@ Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> tet_gradients(const Mo
 std::vector<double> vertex_gradients(const Tets& tets, const Points& x,
                                      const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& G,
                                      const Eigen::VectorXd& vol, const std::vector<char>& boundary,
-                                     bool slide, const Incidence* incidence) {
-  const int n = static_cast<int>(x.rows());
-  Incidence own;
-  if (!incidence) own = vertex_tet_incidence(n, tets);
-  const Incidence& inc = incidence ? *incidence : own;
-  std::vector<double> g(3 * static_cast<size_t>(n), 0.0);
-  // gathered per vertex over its tets in increasing order: the sums of a sequential scatter
-  // over the tets, bit for bit, on any number of threads
-  parallel_for(n, 4096, [&](int v0, int v1) {
-    for (int v = v0; v < v1; ++v) {
-      Eigen::Map<Eigen::Vector3d> gv(&g[3 * static_cast<size_t>(v)]);
-      double w = 0;
-      for (int j = inc.offset[static_cast<size_t>(v)]; j < inc.offset[static_cast<size_t>(v) + 1]; ++j) {
-        const int t = inc.tet_of[static_cast<size_t>(j)];
-        w += vol(t);
-        for (int d = 0; d < 3; ++d) gv(d) += vol(t) * G(t, d);
-      }
-      if (w > 0) gv /= w;
-      if (boundary[v]) {
-        if (!slide) {
-          gv.setZero();
-        } else {
-          const Eigen::Vector3d nrm = x.row(v).transpose().normalized();
-          gv -= gv.dot(nrm) * nrm;
-        }
+                                     bool slide) {
+  const int n = static_cast<int>(x.rows()), m = static_cast<int>(tets.rows());
+  std::vector<double> g(3 * static_cast<size_t>(n), 0.0), w(static_cast<size_t>(n), 0.0);
+  for (int t = 0; t < m; ++t)
+    for (int k = 0; k < 4; ++k) {
+      const int v = tets(t, k);
+      w[v] += vol(t);
+      for (int d = 0; d < 3; ++d) g[3 * v + d] += vol(t) * G(t, d);
+    }
+  for (int v = 0; v < n; ++v) {
+    Eigen::Map<Eigen::Vector3d> gv(&g[3 * static_cast<size_t>(v)]);
+    if (w[v] > 0) gv /= w[v];
+    if (boundary[v]) {
+      if (!slide) {
+        gv.setZero();
+      } else {
+        const Eigen::Vector3d nrm = x.row(v).transpose().normalized();
+        gv -= gv.dot(nrm) * nrm;
       }
     }
-  });
+  }
   return g;
 }
 

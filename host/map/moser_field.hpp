@@ -8,7 +8,6 @@
 
 #include "mesh/tet_grid.hpp"
 #include "vpm/mesh.hpp"
-#include "vpm/topology.hpp"
 
 namespace vpm {
 class Device;
@@ -30,11 +29,10 @@ Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> tet_gradients(const Mo
 /// Vertex gradients (eq. 13, n x 3): the volume-weighted averages of the per-tet gradients G
 /// (vol: signed tet volumes on x), the normal x/|x| part removed at boundary vertices (the
 /// whole vector when `slide` is false). kernels/moser.cl computes the same on a device.
-/// `incidence`: vertex_tet_incidence(n, tets) when the caller keeps one (built here otherwise).
 std::vector<double> vertex_gradients(const Tets& tets, const Points& x,
                                      const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& G,
                                      const Eigen::VectorXd& vol, const std::vector<char>& boundary,
-                                     bool slide, const Incidence* incidence = nullptr);
+                                     bool slide);
 
 struct AdvectStats {
   long long locations = 0;

@@ -29,7 +29,6 @@ struct MapContext {
   std::vector<char> frozen;       // never moved by untangling: boundary or pinned
   std::vector<int> nbr;
   std::vector<int> vertex_tet;    // one tet incident to each vertex
-  Incidence incidence;            // vertex -> tets (the host's vertex gradients), built on first use
   Eigen::VectorXd ref_dual;       // input dual volumes / input total volume
   Eigen::VectorXd ref_tet;        // input tet volumes / input total volume
   std::unique_ptr<MapSolver> solver;

@@ -77,8 +77,7 @@ void solve_and_field(MapContext& c, const Points& x, Eigen::VectorXd& V, Eigen::
   if (!gradients_on_device) {
     const auto G = detail::tet_gradients(f, c.psi);
     const Eigen::VectorXd vol = tet_volumes(x, c.tets);
-    if (c.incidence.offset.empty()) c.incidence = vertex_tet_incidence(c.n, c.tets);
-    f.grad = detail::vertex_gradients(c.tets, x, G, vol, c.boundary, c.slide, &c.incidence);
+    f.grad = detail::vertex_gradients(c.tets, x, G, vol, c.boundary, c.slide);
   }
   r.time_field += seconds_since(t1);
 }
