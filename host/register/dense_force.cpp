@@ -10,6 +10,7 @@
 #include <unordered_set>
 
 #include "core/parallel.hpp"
+#include "register/point_bins.hpp"
 #include "vpm/labels.hpp"
 
 namespace vpm {
@@ -153,55 +154,19 @@ Points smooth_matches(const BoundaryMatches& m, const Points& centres, double si
   Points out = Points::Zero(centres.rows(), 3);
   if (mass) mass->resize(centres.rows());
   const double cut = 3 * sigma, cut2 = cut * cut, inv = 1 / (sigma * sigma);
-  // The matches binned in cubes of side h >= `cut` over their bounding box (counting sort, so
-  // each cube lists its matches in index order): a centre visits the 27 cubes around its own.
-  const Eigen::Index nm = m.at.rows();
-  Eigen::Array3d lo = Eigen::Array3d::Zero();
-  Eigen::Array3i dims = Eigen::Array3i::Ones();
-  double h = cut;
-  if (nm > 0) {
-    lo = m.at.colwise().minCoeff().transpose().array();
-    const Eigen::Array3d span = m.at.colwise().maxCoeff().transpose().array() - lo;
-    h = std::max(cut, span.maxCoeff() / 128);  // at most 129^3 cells, whatever the width
-    dims = (span / h).floor().cast<int>() + 1;
-  }
-  auto cell_of = [&](const Eigen::Vector3d& x) {  // -1 and dims: outside the box
-    return ((x.array() - lo) / h).floor().max(-1.0).min(dims.cast<double>()).cast<int>().eval();
-  };
-  const long cells = static_cast<long>(dims(0)) * dims(1) * dims(2);
-  std::vector<int> start(static_cast<size_t>(cells) + 1, 0), order(static_cast<size_t>(nm));
-  std::vector<long> cell(static_cast<size_t>(nm));
-  for (Eigen::Index i = 0; i < nm; ++i) {
-    const Eigen::Array3i c = cell_of(m.at.row(i).transpose());
-    cell[static_cast<size_t>(i)] = c(0) + dims(0) * (c(1) + static_cast<long>(dims(1)) * c(2));
-    ++start[static_cast<size_t>(cell[static_cast<size_t>(i)]) + 1];
-  }
-  for (long c = 0; c < cells; ++c) start[static_cast<size_t>(c) + 1] += start[static_cast<size_t>(c)];
-  {
-    std::vector<int> fill(start.begin(), start.end() - 1);
-    for (Eigen::Index i = 0; i < nm; ++i) order[static_cast<size_t>(fill[static_cast<size_t>(cell[static_cast<size_t>(i)])]++)] = static_cast<int>(i);
-  }
+  const PointBins bins(m.at, cut);
   detail::parallel_for(static_cast<int>(centres.rows()), 64, [&](int c0, int c1) {
     for (int c = c0; c < c1; ++c) {
       const Eigen::Vector3d x = centres.row(c).transpose();
-      const Eigen::Array3i k = cell_of(x);
       Eigen::Vector3d sum = Eigen::Vector3d::Zero();
       double wsum = 0;
-      for (int dz = -1; dz <= 1; ++dz)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) {
-            const int a = k(0) + dx, b = k(1) + dy, d = k(2) + dz;
-            if (a < 0 || b < 0 || d < 0 || a >= dims(0) || b >= dims(1) || d >= dims(2)) continue;
-            const long q = a + dims(0) * (b + static_cast<long>(dims(1)) * d);
-            for (int j = start[static_cast<size_t>(q)]; j < start[static_cast<size_t>(q) + 1]; ++j) {
-              const int i = order[static_cast<size_t>(j)];
-              const double d2 = (m.at.row(i).transpose() - x).squaredNorm();
-              if (d2 > cut2) continue;
-              const double g = m.weight(i) * std::exp(-d2 * inv);
-              sum += g * m.displacement.row(i).transpose();
-              wsum += g;
-            }
-          }
+      bins.visit(x, [&](int i) {
+        const double d2 = (m.at.row(i).transpose() - x).squaredNorm();
+        if (d2 > cut2) return;
+        const double g = m.weight(i) * std::exp(-d2 * inv);
+        sum += g * m.displacement.row(i).transpose();
+        wsum += g;
+      });
       out.row(c) = (sum / (wsum + 1)).transpose();
       if (mass) (*mass)(c) = wsum / (wsum + 1);
     }
