@@ -30,7 +30,7 @@ BallMap map_to_ball(Device& device, const TetMesh& input, const ValidationReport
   auto t0 = Clock::now();
   InitialMapResult im = initial_map(device, input, options.initial);  // its errors name the quality
   out.timings.initial_map = seconds_since(t0);
-  out.initial = map_metrics(device, im.mesh.vertices, im.ball, im.mesh.tets);
+  out.initial = im.report.metrics;  // the initial map measured its result already
   say("initial map: vertex mean |r-1| " + pct(out.initial.vertex_volume_ratio.mean_abs_dev) + ", tet " +
       pct(out.initial.tet_volume_ratio.mean_abs_dev) + ", " + std::to_string(out.initial.inverted_tets) +
       " folds");
@@ -46,7 +46,7 @@ BallMap map_to_ball(Device& device, const TetMesh& input, const ValidationReport
     out.timings.volume_map = seconds_since(t0);
   }
   t0 = Clock::now();
-  out.final = map_metrics(device, im.mesh.vertices, ball, im.mesh.tets);
+  out.final = map_metrics(device, im.mesh.vertices, ball, im.mesh.tets, &im.boundary);
   out.timings.metrics = seconds_since(t0);
   if (out.final.inverted_tets > 0)  // never hand on a folded map
     throw NumericalError(source + ": the map has " + std::to_string(out.final.inverted_tets) +

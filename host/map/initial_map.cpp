@@ -225,7 +225,7 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
   if (rep.folds_after_untangle > 0 && opt.throw_on_folds) throw_folded(m, res.ball, rep, note);
 
   t0 = Clock::now();
-  rep.metrics = map_metrics(device, m.vertices, res.ball, m.tets);
+  rep.metrics = map_metrics(device, m.vertices, res.ball, m.tets, &res.boundary);
   rep.timings.metrics = seconds_since(t0);
   rep.timings.total = seconds_since(t_total);
   return res;

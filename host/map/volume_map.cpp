@@ -166,13 +166,13 @@ void set_up(detail::MapContext& c) {
                              ? opt.boundary
                              : (opt.method == VolumeMapMethod::moser ? MapBoundary::slide : MapBoundary::fixed);
   c.slide = bm == MapBoundary::slide && opt.method != VolumeMapMethod::vsem;  // vsem: boundary frozen
-  c.boundary = boundary_vertex_mask(c.n, boundary_faces(tets));
+  c.nbr = detail::tet_neighbors(tets, &c.bfaces);
+  c.boundary = boundary_vertex_mask(c.n, c.bfaces);
   c.frozen = c.boundary;
   for (size_t v = 0; v < opt.pinned.size(); ++v)
     if (opt.pinned[v]) c.frozen[v] = 1;
   for (const VolumeAnchor& a : opt.anchors)
     for (int v : a.vertices) c.frozen[static_cast<size_t>(v)] = 1;
-  c.nbr = detail::tet_neighbors(tets);
   c.vertex_tet.assign(static_cast<size_t>(c.n), 0);
   for (int t = c.m - 1; t >= 0; --t)
     for (int k = 0; k < 4; ++k) c.vertex_tet[tets(t, k)] = t;

@@ -34,7 +34,7 @@ struct MapContext {
   std::unique_ptr<MapSolver> solver;
   std::unique_ptr<DeviceAdvector> advector;
   Eigen::VectorXd psi;
-  Triangles bfaces;  // boundary faces (outward), built on first use
+  Triangles bfaces;  // boundary faces (outward), from the same face sort as nbr
   std::vector<char> freedom;                          // polish: free / tangent / fixed per vertex
   std::unique_ptr<DevicePolisher> polisher;   // polish on the device, built on first use
   bool polish_on_device = false;                      // VolumeMapOptions::polish resolved

@@ -36,7 +36,6 @@ int untangle_folds(MapContext& c, Points& x, double* seconds, const Points* befo
   std::vector<int> folded = folded_list(x, c.tets);
   if (folded.empty()) return 0;
   if (c.opt.local_untangle && c.slide && before) {
-    if (c.bfaces.rows() == 0) c.bfaces = boundary_faces(c.tets);
     unflip_sphere_faces(*before, c.bfaces, x, c.opt.pinned);
     folded = folded_list(x, c.tets);
   }

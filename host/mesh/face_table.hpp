@@ -36,4 +36,9 @@ struct FaceTable {
 
 FaceTable face_table(const Tets& tets);
 
+/// vpm::boundary_faces and vpm::nonmanifold_faces (vpm/topology.hpp) from a table already built,
+/// for callers that need more than one answer from the same tets (one sort instead of several).
+Triangles boundary_faces(const FaceTable& table, const Tets& tets, std::vector<int>* face_tet = nullptr);
+int nonmanifold_faces(const FaceTable& table);
+
 }  // namespace vpm::detail

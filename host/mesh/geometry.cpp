@@ -4,6 +4,7 @@
 #include <boost/compute/container/vector.hpp>
 #include <cmath>
 
+#include "core/parallel.hpp"
 #include "vpm/device.hpp"
 #include "vpm/topology.hpp"
 
@@ -74,7 +75,7 @@ Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> dihedral_angles_deg(co
                                                                              const Tets& t) {
   static constexpr int kEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
   Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> out(t.rows(), 6);
-  for (Eigen::Index i = 0; i < t.rows(); ++i) {
+  auto angles = [&](Eigen::Index i) {
     Eigen::Vector3d p[4];
     for (int c = 0; c < 4; ++c) p[c] = x.row(t(i, c)).transpose();
     for (int e = 0; e < 6; ++e) {
@@ -91,7 +92,10 @@ Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> dihedral_angles_deg(co
       if (nu > 0 && nw > 0) ang = std::acos(std::clamp(u.dot(w) / (nu * nw), -1.0, 1.0));
       out(i, e) = ang * 180.0 / M_PI;
     }
-  }
+  };
+  detail::parallel_for(static_cast<int>(t.rows()), 16384, [&](int i0, int i1) {
+    for (int i = i0; i < i1; ++i) angles(i);
+  });
   return out;
 }
 

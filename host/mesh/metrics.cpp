@@ -28,10 +28,10 @@ RatioStats ratio_stats(const Eigen::VectorXd& r) {
   s.mean_abs_dev = sum_abs / static_cast<double>(n);
   const double mean = sum_log / static_cast<double>(n);
   s.std_log = std::sqrt(std::max(0.0, sum_log2 / static_cast<double>(n) - mean * mean));
-  std::sort(abslog.begin(), abslog.end());
-  const size_t k = static_cast<size_t>(std::ceil(0.99 * static_cast<double>(n))) - 1;
-  s.p99_abs_log = abslog[std::min(k, abslog.size() - 1)];
-  s.max_abs_log = abslog.back();
+  const size_t k = std::min(static_cast<size_t>(std::ceil(0.99 * static_cast<double>(n))) - 1, abslog.size() - 1);
+  std::nth_element(abslog.begin(), abslog.begin() + static_cast<std::ptrdiff_t>(k), abslog.end());
+  s.p99_abs_log = abslog[k];  // the k-th smallest, as a full sort would place it
+  s.max_abs_log = *std::max_element(abslog.begin() + static_cast<std::ptrdiff_t>(k), abslog.end());
   return s;
 }
 
@@ -68,7 +68,8 @@ DistortionPair volume_distortion(const Points& ref, const Points& x, const Tets&
   return d;
 }
 
-MapMetrics map_metrics(Device& dev, const Points& ref, const Points& mapped, const Tets& tets) {
+MapMetrics map_metrics(Device& dev, const Points& ref, const Points& mapped, const Tets& tets,
+                       const std::vector<char>* boundary_mask) {
   MapMetrics m;
   const Eigen::VectorXd v0 = tet_volumes(dev, ref, tets);
   const Eigen::VectorXd v1 = tet_volumes(dev, mapped, tets);
@@ -76,8 +77,10 @@ MapMetrics map_metrics(Device& dev, const Points& ref, const Points& mapped, con
   volume_ratios(v0, v1, tets, ref.rows(), m.tet_ratio, m.vertex_ratio);
   m.tet_volume_ratio = ratio_stats(m.tet_ratio);
   m.vertex_volume_ratio = ratio_stats(m.vertex_ratio);
-  const Triangles bf = boundary_faces(tets);
-  const auto mask = boundary_vertex_mask(static_cast<int>(mapped.rows()), bf);
+  std::vector<char> own;
+  if (!boundary_mask || boundary_mask->size() != static_cast<size_t>(mapped.rows()))
+    own = boundary_vertex_mask(static_cast<int>(mapped.rows()), boundary_faces(tets));
+  const std::vector<char>& mask = own.empty() ? *boundary_mask : own;
   for (Eigen::Index i = 0; i < mapped.rows(); ++i)
     if (mask[static_cast<size_t>(i)])
       m.boundary_max_radius_error =

@@ -12,9 +12,10 @@
 
 namespace vpm::detail {
 
-std::vector<int> tet_neighbors(const Tets& tets) {
+std::vector<int> tet_neighbors(const Tets& tets, Triangles* boundary) {
   std::vector<int> nbr(4 * static_cast<size_t>(tets.rows()), -1);
   const FaceTable ft = face_table(tets);
+  if (boundary) *boundary = boundary_faces(ft, tets);
   ft.for_each_group([&](int first, int count) {
     if (count != 2) return;  // boundary, or non-manifold (no single neighbour)
     const int a = ft.entries[static_cast<size_t>(first)].slot, b = ft.entries[static_cast<size_t>(first) + 1].slot;

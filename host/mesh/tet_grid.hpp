@@ -11,7 +11,8 @@
 namespace vpm::detail {
 
 /// nbr[4 t + k] = the tet sharing the face of tet t opposite its corner k, or -1 (boundary).
-std::vector<int> tet_neighbors(const Tets& tets);
+/// `boundary`, when given, receives vpm::boundary_faces(tets) from the same face sort.
+std::vector<int> tet_neighbors(const Tets& tets, Triangles* boundary = nullptr);
 
 /// A tet mesh prepared for point location: per-tet affine maps for barycentric coordinates,
 /// face neighbours for walks, and a uniform grid of tets for the fallback search.

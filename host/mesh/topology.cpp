@@ -22,8 +22,8 @@ int find_root(std::vector<int>& p, int x) {
 }
 }  // namespace
 
-Triangles boundary_faces(const Tets& tets, std::vector<int>* face_tet) {
-  const detail::FaceTable ft = detail::face_table(tets);
+namespace detail {
+Triangles boundary_faces(const FaceTable& ft, const Tets& tets, std::vector<int>* face_tet) {
   std::vector<int> owner;
   ft.for_each_group([&](int first, int count) {
     if (count == 1) owner.push_back(ft.entries[static_cast<size_t>(first)].slot);
@@ -38,11 +38,18 @@ Triangles boundary_faces(const Tets& tets, std::vector<int>* face_tet) {
   return tri;
 }
 
-int nonmanifold_faces(const Tets& tets) {
+int nonmanifold_faces(const FaceTable& ft) {
   int bad = 0;
-  detail::face_table(tets).for_each_group([&](int, int count) { bad += count > 2; });
+  ft.for_each_group([&](int, int count) { bad += count > 2; });
   return bad;
 }
+}  // namespace detail
+
+Triangles boundary_faces(const Tets& tets, std::vector<int>* face_tet) {
+  return detail::boundary_faces(detail::face_table(tets), tets, face_tet);
+}
+
+int nonmanifold_faces(const Tets& tets) { return detail::nonmanifold_faces(detail::face_table(tets)); }
 
 std::vector<char> boundary_vertex_mask(int num_vertices, const Triangles& faces) {
   std::vector<char> m(static_cast<size_t>(num_vertices), 0);

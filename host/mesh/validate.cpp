@@ -5,6 +5,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "mesh/face_table.hpp"
 #include "vpm/error.hpp"
 #include "vpm/geometry.hpp"
 #include "vpm/topology.hpp"
@@ -48,19 +49,17 @@ void check_indices(const TetMesh& mesh, const std::string& source) {
     if (!used[static_cast<size_t>(v)]) fail(source, "vertex " + std::to_string(v), "isolated (in no tet)");
 }
 
-// No two tets on the same four vertices.
-void check_duplicates(const Tets& tets, const std::string& source) {
-  const int m = static_cast<int>(tets.rows());
-  std::vector<std::pair<std::array<int, 4>, int>> keys(static_cast<size_t>(m));
-  for (int t = 0; t < m; ++t) {
-    std::array<int, 4> k = {tets(t, 0), tets(t, 1), tets(t, 2), tets(t, 3)};
-    std::sort(k.begin(), k.end());
-    keys[static_cast<size_t>(t)] = {k, t};
-  }
-  std::sort(keys.begin(), keys.end());
-  for (size_t i = 1; i < keys.size(); ++i)
-    if (keys[i].first == keys[i - 1].first)
-      fail(source, tet_text(tets, keys[i].second), "duplicate of tet " + std::to_string(keys[i - 1].second));
+// No two tets on the same four vertices: two such tets share each face with the same vertex
+// opposite it.
+void check_duplicates(const detail::FaceTable& ft, const Tets& tets, const std::string& source) {
+  ft.for_each_group([&](int first, int count) {
+    for (int i = first; i < first + count; ++i)
+      for (int j = i + 1; j < first + count; ++j) {
+        const int a = ft.entries[static_cast<size_t>(i)].slot, b = ft.entries[static_cast<size_t>(j)].slot;
+        if (tets(a / 4, a % 4) == tets(b / 4, b % 4))
+          fail(source, tet_text(tets, std::max(a, b) / 4), "duplicate of tet " + std::to_string(std::min(a, b) / 4));
+      }
+  });
 }
 
 // Rejects zero-volume tets and makes every tet positively oriented (swapping its last two
@@ -84,8 +83,8 @@ void check_volumes_and_orient(TetMesh& mesh, const std::string& source, const Va
 }
 
 // Manifold tet complex, one connected component.
-void check_manifold(const TetMesh& mesh, const std::string& source) {
-  if (int bad = nonmanifold_faces(mesh.tets))
+void check_manifold(const detail::FaceTable& ft, const TetMesh& mesh, const std::string& source) {
+  if (int bad = detail::nonmanifold_faces(ft))
     fail(source, "mesh", std::to_string(bad) + " triangles are shared by more than two tets (non-manifold)");
   int comps = 0;
   vertex_components(mesh.num_vertices(), mesh.tets, &comps);
@@ -93,9 +92,9 @@ void check_manifold(const TetMesh& mesh, const std::string& source) {
 }
 
 // Manifold boundary surface (and, if asked, one genus-0 surface); its counts go to `rep`.
-void check_boundary(const TetMesh& mesh, const std::string& source, const ValidateOptions& opt,
-                    ValidationReport& rep) {
-  const Triangles bf = boundary_faces(mesh.tets);
+void check_boundary(const detail::FaceTable& ft, const TetMesh& mesh, const std::string& source,
+                    const ValidateOptions& opt, ValidationReport& rep) {
+  const Triangles bf = detail::boundary_faces(ft, mesh.tets);
   const SurfaceTopology st = surface_topology(mesh.num_vertices(), bf);
   rep.boundary_faces = st.faces;
   rep.boundary_vertices = st.vertices;
@@ -132,10 +131,11 @@ void measure_quality(const TetMesh& mesh, ValidationReport& rep) {
 ValidationReport validate_mesh(TetMesh& mesh, const std::string& source, const ValidateOptions& opt) {
   ValidationReport rep;
   check_indices(mesh, source);
-  check_duplicates(mesh.tets, source);
   check_volumes_and_orient(mesh, source, opt, rep);
-  check_manifold(mesh, source);
-  check_boundary(mesh, source, opt, rep);
+  const detail::FaceTable ft = detail::face_table(mesh.tets);  // of the oriented tets
+  check_duplicates(ft, mesh.tets, source);
+  check_manifold(ft, mesh, source);
+  check_boundary(ft, mesh, source, opt, rep);
   measure_quality(mesh, rep);
   return rep;
 }

@@ -47,9 +47,11 @@ struct DistortionPair {
 DistortionPair volume_distortion(const Points& reference, const Points& mapped, const Tets& tets);
 
 /// Computes MapMetrics. `reference_vertices` and `mapped_vertices` are n x 3 with the same
-/// `tets` (m x 4). Volumes come from `device` (host or OpenCL).
-MapMetrics map_metrics(Device& device, const Points& reference_vertices,
-                       const Points& mapped_vertices, const Tets& tets);
+/// `tets` (m x 4). Volumes come from `device` (host or OpenCL). `boundary_mask` (n; nonzero on
+/// the boundary vertices, as boundary_vertex_mask gives), when the caller has it, saves finding
+/// the boundary again; it must be the mask of `tets`.
+MapMetrics map_metrics(Device& device, const Points& reference_vertices, const Points& mapped_vertices,
+                       const Tets& tets, const std::vector<char>* boundary_mask = nullptr);
 
 /// The report object {"inverted_tets", "vertex_volume_ratio": {...}, "tet_volume_ratio": {...},
 /// "boundary_max_radius_error"}.
