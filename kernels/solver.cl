@@ -40,6 +40,31 @@ __kernel void spmv(const int n, __global const int* row_ptr, __global const int*
   y[i] = s;
 }
 
+// spmv for up to three vectors at once (the columns of a block solve): the matrix is read once;
+// each y_c is summed in the same order as spmv, so it equals spmv's bit for bit. Columns c >= k
+// are not touched (their arguments may repeat column 0's).
+__kernel void spmv_block(const int n, __global const int* row_ptr, __global const int* col,
+                         __global const real* val, __global const char* mask, const int k,
+                         __global const real* x0, __global const real* x1, __global const real* x2,
+                         __global real* y0, __global real* y1, __global real* y2) {
+  const int i = get_global_id(0);
+  if (i >= n) return;
+  real s0 = 0.0, s1 = 0.0, s2 = 0.0;
+  if (!mask[i]) {
+    const int e = row_ptr[i + 1];
+    for (int q = row_ptr[i]; q < e; ++q) {
+      const real a = val[q];
+      const int j = col[q];
+      s0 += a * x0[j];
+      if (k > 1) s1 += a * x1[j];
+      if (k > 2) s2 += a * x2[j];
+    }
+  }
+  y0[i] = s0;
+  if (k > 1) y1[i] = s1;
+  if (k > 2) y2[i] = s2;
+}
+
 // y = A diag(d) x (right Jacobi preconditioning fused into the product).
 __kernel void spmv_scaled(const int n, __global const int* row_ptr, __global const int* col,
                           __global const real* val, __global const char* mask,

@@ -108,15 +108,35 @@ int krylov(BK& bk, SolverMethod method, double tol2, int max_iterations, double*
   }
 }
 
-// Solves A x = b on the backend (matrix, mask set). `b`, `x` length n; x in: start (fixed rows
-// hold the Dirichlet values), out: solution. Fixed rows of x are not changed.
+// One right-hand side's solve, split in steps so that a block solve (linalg/krylov_block.hpp)
+// can run the first Krylov run of several columns together: begin(), runs(), end().
+struct SolveState {
+  bool normal = false;
+  double borig2 = 0, bnorm2 = 0, tol = 0, tol2 = 0, rr_true = 0;
+  SolverStats stats;
+};
+
+// VR = the true residual (of the normal equations for `paper`); returns its squared norm.
 template <class BK>
-SolverStats solve_system(BK& bk, const SolverOptions& opt, const std::vector<char>& mask,
-                         const double* b, double* x) {
+double true_residual(BK& bk, const SolveState& s) {
+  if (s.normal) {
+    bk.residual(VTMP, VB, VX);
+    bk.spmv(VR, VTMP, true);
+  } else {
+    bk.residual(VR, VB, VX);
+  }
+  bk.dot(VR, VR, OP_NORM);
+  return bk.read_rr_now();
+}
+
+// Uploads b and the start x, measures the right side and sets VR to the start's residual.
+// False when the effective right side is 0: x then holds the solution (x_fixed, 0 elsewhere).
+template <class BK>
+bool solve_begin(BK& bk, const SolverOptions& opt, const std::vector<char>& mask, const double* b,
+                 double* x, SolveState& s) {
   const int n = bk.size();
-  const bool normal = opt.method == SolverMethod::paper;
-  SolverStats st;
-  bk.set_preconditioner(normal);
+  s.normal = opt.method == SolverMethod::paper;
+  bk.set_preconditioner(s.normal);
   bk.upload(VB, b);
   // b_eff = b - A x_fixed on free rows
   std::vector<double> xc(x, x + n);
@@ -125,51 +145,67 @@ SolverStats solve_system(BK& bk, const SolverOptions& opt, const std::vector<cha
   bk.upload(VX, xc.data());
   bk.residual(VTMP, VB, VX);
   bk.dot(VTMP, VTMP, OP_NORM);
-  const double borig2 = bk.read_rr_now();
-  double bnorm2 = borig2;
-  if (normal) {
+  s.borig2 = bk.read_rr_now();
+  s.bnorm2 = s.borig2;
+  if (s.normal) {
     bk.spmv(VR, VTMP, true);
     bk.dot(VR, VR, OP_NORM);
-    bnorm2 = bk.read_rr_now();
+    s.bnorm2 = bk.read_rr_now();
   }
-  if (!std::isfinite(bnorm2))
+  if (!std::isfinite(s.bnorm2))
     throw NumericalError("solver: the right-hand side (or the matrix) is not finite");
-  if (bnorm2 == 0) {  // the solution is x_fixed and zero elsewhere
+  if (s.bnorm2 == 0) {
     std::copy(xc.begin(), xc.end(), x);
-    return st;
+    return false;
   }
-  const double tol = opt.relative_tolerance;
-  const double tol2 = tol * tol * bnorm2;
+  s.tol = opt.relative_tolerance;
+  s.tol2 = s.tol * s.tol * s.bnorm2;
   bk.upload(VX, x);
-  auto true_residual = [&] {  // VR = residual (normal eqs for paper); returns its squared norm
-    if (normal) {
-      bk.residual(VTMP, VB, VX);
-      bk.spmv(VR, VTMP, true);
-    } else {
-      bk.residual(VR, VB, VX);
+  s.rr_true = true_residual(bk, s);
+  return true;
+}
+
+// Krylov runs until the true residual meets the tolerance (the recursive one can drift from
+// it), restarting from the true residual at most 4 runs in all; `done` runs were made already.
+template <class BK>
+void solve_runs(BK& bk, const SolverOptions& opt, SolveState& s, int done) {
+  for (;; ++done) {
+    if (done > 0) {
+      s.rr_true = true_residual(bk, s);
+      if (s.rr_true <= s.tol2) return;
+      if (done == 4 || s.stats.iterations >= opt.max_iterations)
+        not_converged(opt.method, std::sqrt(s.rr_true / s.bnorm2), s.stats.iterations, s.tol, bk.size(),
+                      "did not converge (true residual above tolerance after restarts)");
     }
-    bk.dot(VR, VR, OP_NORM);
-    return bk.read_rr_now();
-  };
-  double rr_true = true_residual();
-  for (int attempt = 0;; ++attempt) {
     double rr = 0;
-    st.iterations += krylov(bk, opt.method, tol2, opt.max_iterations - st.iterations, &rr, bnorm2, tol);
-    rr_true = true_residual();  // the recursive residual can drift from the true one
-    if (rr_true <= tol2) break;
-    if (attempt == 3 || st.iterations >= opt.max_iterations)
-      not_converged(opt.method, std::sqrt(rr_true / bnorm2), st.iterations, tol, n,
-                    "did not converge (true residual above tolerance after restarts)");
+    s.stats.iterations +=
+        krylov(bk, opt.method, s.tol2, opt.max_iterations - s.stats.iterations, &rr, s.bnorm2, s.tol);
   }
+}
+
+// Downloads x and sets the relative residual.
+template <class BK>
+void solve_end(BK& bk, double* x, SolveState& s) {
   bk.download(VX, x);
-  if (normal) {
+  if (s.normal) {
     bk.residual(VTMP, VB, VX);
     bk.dot(VTMP, VTMP, OP_NORM);
-    st.relative_residual = std::sqrt(bk.read_rr_now() / borig2);
+    s.stats.relative_residual = std::sqrt(bk.read_rr_now() / s.borig2);
   } else {
-    st.relative_residual = std::sqrt(rr_true / bnorm2);
+    s.stats.relative_residual = std::sqrt(s.rr_true / s.bnorm2);
   }
-  return st;
+}
+
+// Solves A x = b on the backend (matrix, mask set). `b`, `x` length n; x in: start (fixed rows
+// hold the Dirichlet values), out: solution. Fixed rows of x are not changed.
+template <class BK>
+SolverStats solve_system(BK& bk, const SolverOptions& opt, const std::vector<char>& mask,
+                         const double* b, double* x) {
+  SolveState s;
+  if (!solve_begin(bk, opt, mask, b, x, s)) return s.stats;
+  solve_runs(bk, opt, s, 0);
+  solve_end(bk, x, s);
+  return s.stats;
 }
 
 }  // namespace vpm::detail

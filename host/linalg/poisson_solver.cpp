@@ -3,9 +3,11 @@
 #include "vpm/solver.hpp"
 
 #include <cmath>
+#include <type_traits>
 
 #include "linalg/amg_state.hpp"
 #include "linalg/krylov.hpp"
+#include "linalg/krylov_block.hpp"
 #include "linalg/solver_backend.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
@@ -35,6 +37,11 @@ struct PoissonSolver::Impl {
     else cl->set_amg(use ? st.device.get() : nullptr);
     return t;
   }
+  // the further columns of block solves (solve_dirichlet with several columns): backends on the
+  // same matrix and mask, made on first use
+  std::vector<std::unique_ptr<HostBackend>> host_more;
+  std::vector<std::unique_ptr<ClBackend>> cl_more;
+  CotanLaplacian* matrix = nullptr;  // what set_positions gave the backends
   template <class F>
   auto with(F&& f) {
     return host ? f(*host) : f(*cl);
@@ -44,6 +51,48 @@ struct PoissonSolver::Impl {
     mask = m;
     if (host) host->set_mask(mask);
     else cl->set_mask(mask);
+    for (auto& b : host_more) b->set_mask(mask);
+    for (auto& b : cl_more) b->set_mask(mask);
+  }
+  static void give_matrix(HostBackend& b, CotanLaplacian& lap) { b.set_matrix(&lap.matrix(), nullptr); }
+  static void give_matrix(ClBackend& b, CotanLaplacian& lap) {
+    b.set_matrix(&lap.device_row_ptr(), &lap.device_col(), &lap.device_values(), nullptr, nullptr, nullptr);
+  }
+  void set_matrix(CotanLaplacian& lap) {
+    matrix = &lap;
+    if (host) give_matrix(*host, lap);
+    else give_matrix(*cl, lap);
+    for (auto& b : host_more) give_matrix(*b, lap);
+    for (auto& b : cl_more) give_matrix(*b, lap);
+  }
+  // The k backends of a block solve (the main one first).
+  template <class BK>
+  std::vector<BK*> columns(Device& dev, int n, int k, std::unique_ptr<BK>& first,
+                           std::vector<std::unique_ptr<BK>>& more) {
+    while (static_cast<int>(more.size()) < k - 1) {
+      if constexpr (std::is_same_v<BK, HostBackend>) more.push_back(std::make_unique<BK>(n));
+      else more.push_back(std::make_unique<BK>(dev, n));
+      more.back()->set_mask(mask);
+      give_matrix(*more.back(), *matrix);
+    }
+    std::vector<BK*> out = {first.get()};
+    for (int c = 0; c + 1 < k; ++c) out.push_back(more[static_cast<size_t>(c)].get());
+    return out;
+  }
+  // Solves the columns of b into those of x (start in, solution out): one column alone, more
+  // as a block.
+  std::vector<SolverStats> solve_columns(Device& dev, const SolverOptions& o, const Eigen::MatrixXd& b,
+                                         Eigen::MatrixXd& x) {
+    const int n = static_cast<int>(b.rows()), k = static_cast<int>(b.cols());
+    if (k == 1) return {with([&](auto& bk) { return solve_system(bk, o, mask, b.data(), x.data()); })};
+    std::vector<const double*> bp;
+    std::vector<double*> xp;
+    for (int c = 0; c < k; ++c) {
+      bp.push_back(b.col(c).data());
+      xp.push_back(x.col(c).data());
+    }
+    if (host) return detail::solve_system_block(columns(dev, n, k, host, host_more), o, mask, bp, xp);
+    return detail::solve_system_block(columns(dev, n, k, cl, cl_more), o, mask, bp, xp);
   }
 };
 
@@ -62,12 +111,7 @@ PoissonSolver::~PoissonSolver() = default;
 
 void PoissonSolver::set_positions(const Points& vertices) {
   laplacian_.assemble(device_, vertices);
-  if (impl_->host) {
-    impl_->host->set_matrix(&laplacian_.matrix(), nullptr);
-  } else {
-    impl_->cl->set_matrix(&laplacian_.device_row_ptr(), &laplacian_.device_col(),
-                          &laplacian_.device_values(), nullptr, nullptr, nullptr);
-  }
+  impl_->set_matrix(laplacian_);
   impl_->assembled = true;
   impl_->amg_neumann.stale = impl_->amg_dirichlet.stale = true;
 }
@@ -127,17 +171,24 @@ SolverStats PoissonSolver::solve_dirichlet(const std::vector<char>& fixed, const
   impl_->set_mask(mask);
   SolverStats total;
   total.setup_seconds = impl_->prepare(device_, laplacian_, options_, true);
-  Eigen::VectorXd b(n), xc(n);
-  for (Eigen::Index c = 0; c < k; ++c) {
-    for (int i = 0; i < n; ++i) {
-      b[i] = rhs ? (*rhs)(i, c) : 0.0;
-      xc[i] = mask[i] ? values(i, c) : x(i, c);
+  // with Jacobi CG, up to kMaxBlock columns at once (one pass over the matrix per iteration for
+  // all): the same result, column by column, as solving them one at a time
+  const bool block = options_.method == SolverMethod::cg && options_.preconditioner == Preconditioner::jacobi;
+  const Eigen::Index step = block ? detail::kMaxBlock : 1;
+  for (Eigen::Index c0 = 0; c0 < k; c0 += step) {
+    const int kb = static_cast<int>(std::min(step, k - c0));
+    Eigen::MatrixXd b(n, kb), xc(n, kb);
+    for (int c = 0; c < kb; ++c)
+      for (int i = 0; i < n; ++i) {
+        b(i, c) = rhs ? (*rhs)(i, c0 + c) : 0.0;
+        xc(i, c) = mask[i] ? values(i, c0 + c) : x(i, c0 + c);
+      }
+    const std::vector<SolverStats> st = impl_->solve_columns(device_, options_, b, xc);
+    for (int c = 0; c < kb; ++c) {
+      total.iterations += st[static_cast<size_t>(c)].iterations;
+      total.relative_residual = std::max(total.relative_residual, st[static_cast<size_t>(c)].relative_residual);
+      x.col(c0 + c) = xc.col(c);
     }
-    const SolverStats st =
-        impl_->with([&](auto& bk) { return solve_system(bk, options_, mask, b.data(), xc.data()); });
-    total.iterations += st.iterations;
-    total.relative_residual = std::max(total.relative_residual, st.relative_residual);
-    x.col(c) = xc;
   }
   total.seconds = seconds_since(t0);
   last_ = total;

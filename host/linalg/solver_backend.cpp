@@ -220,6 +220,7 @@ ClBackend::ClBackend(Device& dev, int n)
   k_bicg_p_ = K("bicg_p");
   k_pcg_xr_ = K("pcg_update_xr");
   k_pcg_p_ = K("pcg_update_p");
+  k_spmv_block_ = K("spmv_block");
   const size_t nn = std::max(1, n);
   auto& q = dev.queue();
   const std::vector<double> zeros(std::max(nn, 2 * groups_), 0.0);
@@ -264,6 +265,7 @@ void ClBackend::set_matrix(bc::vector<int>* row_ptr, bc::vector<int>* col, bc::v
   set_csr_args(k_spmv_, false);
   set_csr_args(k_spmv_t_, true);
   set_csr_args(k_spmv_scaled_, false);
+  set_csr_args(k_spmv_block_, false);
   k_spmv_scaled_.set_arg(5, d_);
   set_csr_args(k_residual_, false);
   set_csr_args(k_inv_diag_, false);

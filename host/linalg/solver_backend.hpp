@@ -16,6 +16,7 @@ namespace vpm::detail {
 class ClAmg;
 
 enum Vec { VX, VB, VR, VP, VQ, VR0, VS, VT, VTMP, VZ, kNumVecs };  // VZ: z = M^-1 r (AMG-PCG)
+constexpr int kMaxBlock = 3;  // columns of spmv_block (kernels/solver.cl)
 // scalar slots and finalize ops: keep in sync with kernels/solver.cl
 enum Slot { S_RZ = 0, S_RR = 1, S_ALPHA = 2, S_BETA = 3, S_RHO = 4, S_OMEGA = 5, kNumSlots = 8 };
 enum Op { OP_CG_INIT, OP_CG_ALPHA, OP_CG_BETA, OP_BI_INIT, OP_BI_ALPHA, OP_BI_OMEGA, OP_BI_BETA,
@@ -56,6 +57,9 @@ class HostBackend {
   double wait_rr(int ring);   // the value read
   double read_rr_now();       // blocking read of S[RR]
   int lookahead() const { return 1; }
+  /// y = A x on each of the k backends (k <= kMaxBlock) that share one matrix and mask: the
+  /// columns of a block solve (linalg/krylov_block.hpp); equal to k spmv calls bit for bit.
+  static void spmv_block(HostBackend* const* columns, int k, Vec y, Vec x);
 
  private:
   void finalize(Op op, double p0, double p1);
@@ -105,6 +109,8 @@ class ClBackend {
   double wait_rr(int ring);
   double read_rr_now();
   int lookahead() const { return 2; }
+  /// As HostBackend::spmv_block: one kernel reads the matrix once for the k columns.
+  static void spmv_block(ClBackend* const* columns, int k, Vec y, Vec x);
 
  private:
   void finalize(Op op);
@@ -120,7 +126,7 @@ class ClBackend {
   boost::compute::vector<char> mask_;
   boost::compute::kernel k_spmv_, k_spmv_t_, k_spmv_scaled_, k_residual_, k_inv_diag_,
       k_inv_rowsq_, k_dot_, k_dot2_, k_finalize_, k_cg_init_, k_cg_xr_, k_cg_p_, k_bicg_s_,
-      k_bicg_update_, k_bicg_p_, k_pcg_xr_, k_pcg_p_;
+      k_bicg_update_, k_bicg_p_, k_pcg_xr_, k_pcg_p_, k_spmv_block_;
   ClAmg* amg_ = nullptr;
   std::array<double, 2> ring_{};
   std::array<boost::compute::event, 2> events_;
