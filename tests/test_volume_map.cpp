@@ -20,6 +20,7 @@
 #include "vpm/initial_map.hpp"
 #include "vpm/io.hpp"
 #include "vpm/json.hpp"
+#include "vpm/solver.hpp"
 #include "vpm/topology.hpp"
 #include "vpm/volume_map.hpp"
 
@@ -739,5 +740,29 @@ TEST_CASE("vpm map: an input whose map cannot be made fold-free exits 3 and writ
     REQUIRE(rc == 0);
     const TetMesh out = read_mesh(tmp("bent_out.vtu"));
     CHECK(inverted_tets(out.vertices, out.tets).empty());
+  }
+}
+
+TEST_CASE("volume map: the initial map's Poisson solver, handed on, gives the same map; one of other tets is ignored") {
+  for (auto& dev : test::devices()) {
+    INFO("device " << dev->name());
+    InitialMapOptions io;
+    io.sphere_density = InitialMapOptions::SphereDensity::conformal;
+    const InitialMapResult im = initial_map(*dev, test::ellipsoid_mesh(5), io);
+    REQUIRE(im.poisson);
+    CHECK(im.poisson->laplacian().tets() == im.mesh.tets);
+    VolumeMapOptions o;
+    o.max_rounds = 2;
+    o.polish_rounds = 1;
+    Points own = im.ball, reused = im.ball, other = im.ball;
+    volume_preserving_map(*dev, im.mesh.vertices, im.mesh.tets, own, o);
+    o.poisson = im.poisson;
+    volume_preserving_map(*dev, im.mesh.vertices, im.mesh.tets, reused, o);
+    CHECK((reused - own).cwiseAbs().maxCoeff() == 0.0);
+    const TetMesh small = test::ellipsoid_mesh(4);
+    o.poisson = std::make_shared<PoissonSolver>(*dev, small.num_vertices(), small.tets);
+    volume_preserving_map(*dev, im.mesh.vertices, im.mesh.tets, other, o);
+    CHECK((other - own).cwiseAbs().maxCoeff() == 0.0);
+    CHECK(o.poisson->laplacian().num_tets() == small.num_tets());
   }
 }

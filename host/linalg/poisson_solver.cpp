@@ -109,6 +109,15 @@ PoissonSolver::PoissonSolver(Device& device, int num_vertices, const Tets& tets,
 
 PoissonSolver::~PoissonSolver() = default;
 
+void PoissonSolver::release_work_memory() {
+  impl_->host_more.clear();
+  impl_->cl_more.clear();
+  impl_->amg_neumann = detail::AmgState{};
+  impl_->amg_dirichlet = detail::AmgState{};
+  if (impl_->host) impl_->host->set_amg(nullptr);
+  else impl_->cl->set_amg(nullptr);
+}
+
 void PoissonSolver::set_positions(const Points& vertices) {
   laplacian_.assemble(device_, vertices);
   impl_->set_matrix(laplacian_);

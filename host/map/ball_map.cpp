@@ -39,7 +39,9 @@ BallMap map_to_ball(Device& device, const TetMesh& input, const ValidationReport
   if (options.volume.rounds != 0) {
     t0 = Clock::now();
     try {
-      out.volume_map = volume_preserving_map(device, im.mesh.vertices, im.mesh.tets, ball, options.volume);
+      VolumeMapOptions vo = options.volume;
+      vo.poisson = std::move(im.poisson);  // the harmonic step's solver: its pattern is built
+      out.volume_map = volume_preserving_map(device, im.mesh.vertices, im.mesh.tets, ball, vo);
     } catch (const NumericalError& e) {
       throw NumericalError(source + ": " + e.what() + quality(validation) + "; nothing written");
     }

@@ -93,9 +93,11 @@ SplitResult split(const TetMesh& input, const InitialMapOptions& opt, InitialMap
 }
 
 // Step 3: the harmonic interior with the boundary on `sphere`, on the shared Poisson solver
-// (Jacobi CG on the host or the OpenCL device). Returns the ball positions.
+// (Jacobi CG on the host or the OpenCL device; made on first use into `ps`, kept for the volume
+// map). Returns the ball positions.
 Points harmonic_interior(Device& device, const TetMesh& m, const std::vector<char>& boundary, const Points& sphere,
-                         const InitialMapOptions& opt, const std::string& note, InitialMapReport& rep) {
+                         const InitialMapOptions& opt, const std::string& note, InitialMapReport& rep,
+                         std::shared_ptr<PoissonSolver>& ps) {
   const int n = m.num_vertices();
   // warm start: interior vertices at their input position mapped to the ball's scale
   FieldValues u = FieldValues::Zero(n, 3);
@@ -109,10 +111,13 @@ Points harmonic_interior(Device& device, const TetMesh& m, const std::vector<cha
   so.preconditioner = parse_preconditioner(opt.preconditioner);
   SolverStats st;
   try {
-    PoissonSolver ps(device, n, m.tets, so);
-    ps.set_positions(m.vertices);
+    if (!ps) {
+      ps = std::make_shared<PoissonSolver>(device, n, m.tets, so);
+      ps->set_positions(m.vertices);
+    }
+    ps->options() = so;
     const FieldValues values = u;
-    st = ps.solve_dirichlet(boundary, values, u);
+    st = ps->solve_dirichlet(boundary, values, u);
   } catch (const NumericalError& e) {
     throw NumericalError(std::string("initial_map: the harmonic solve failed: ") + e.what() + "; " + note);
   }
@@ -140,7 +145,7 @@ bool map_through_sphere(Device& device, const TetMesh& m, const TriSurface& surf
   if (sm.flipped_triangles > 0) return false;
 
   t0 = Clock::now();
-  res.ball = harmonic_interior(device, m, res.boundary, sm.sphere, opt, note, rep);
+  res.ball = harmonic_interior(device, m, res.boundary, sm.sphere, opt, note, rep, res.poisson);
   rep.folds_before_untangle = static_cast<int>(inverted_tets(res.ball, m.tets).size());
   rep.timings.harmonic = seconds_since(t0);
 

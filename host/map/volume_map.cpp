@@ -184,7 +184,7 @@ void set_up(detail::MapContext& c) {
   for (int t = 0; t < c.m; ++t)
     for (int k = 0; k < 4; ++k) c.ref_dual(tets(t, k)) += 0.25 * c.ref_tet(t);
   c.solver = std::make_unique<detail::MapSolver>(c.dev, c.n, tets, opt.solver, opt.solver_tolerance,
-                                                   opt.preconditioner);
+                                                   opt.preconditioner, opt.poisson);
   if (advection_on_device(c.dev, opt)) {
     c.advector = std::make_unique<detail::DeviceAdvector>(c.dev, tets, c.nbr, c.boundary);
     c.gradients_on_device = opt.advection == ExecutionPlace::device || c.dev.description().type == "gpu";

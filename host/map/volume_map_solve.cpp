@@ -47,11 +47,11 @@ struct MapSolver::Impl {
   int n;
   Tets tets;
   SolverOptions options;
-  std::unique_ptr<PoissonSolver> poisson;
+  std::shared_ptr<PoissonSolver> poisson;
 };
 
 MapSolver::MapSolver(Device& device, int n, const Tets& tets, const std::string& method, double tol,
-                     const std::string& preconditioner)
+                     const std::string& preconditioner, std::shared_ptr<PoissonSolver> reuse)
     : impl_(new Impl{device, n, tets, SolverOptions{}, nullptr}) {
   if (method != "cg" && method != "paper")
     throw InputError("--solver: '" + method + "' is not one of cg, paper");
@@ -59,6 +59,12 @@ MapSolver::MapSolver(Device& device, int n, const Tets& tets, const std::string&
   impl_->options.relative_tolerance = tol;
   impl_->options.preconditioner = parse_preconditioner(preconditioner);
   impl_->options.neumann_tolerance = 1e-8;
+  if (reuse && &reuse->device() == &device && reuse->laplacian().num_vertices() == n &&
+      reuse->laplacian().num_tets() == tets.rows() && reuse->laplacian().tets() == tets) {
+    impl_->poisson = std::move(reuse);
+    impl_->poisson->release_work_memory();
+    impl_->poisson->options() = impl_->options;
+  }
 }
 MapSolver::~MapSolver() = default;
 

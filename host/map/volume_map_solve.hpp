@@ -13,6 +13,7 @@
 
 namespace vpm {
 class Device;
+class PoissonSolver;
 }
 
 namespace vpm::detail {
@@ -32,9 +33,11 @@ Eigen::SparseMatrix<double> weighted_stiffness(const Points& x, const Tets& tets
 class MapSolver {
  public:
   /// `method`: "cg" or "paper" (normal equations, BiCGSTAB). `tolerance`: relative residual.
-  /// `preconditioner`: "jacobi" or "amg" (of cg).
+  /// `preconditioner`: "jacobi" or "amg" (of cg). `reuse`: a PoissonSolver built on the same
+  /// tets and device to use for the Neumann solves (ignored otherwise; nullptr: one is built).
   MapSolver(Device& device, int num_vertices, const Tets& tets, const std::string& method,
-            double tolerance, const std::string& preconditioner = "jacobi");
+            double tolerance, const std::string& preconditioner = "jacobi",
+            std::shared_ptr<PoissonSolver> reuse = nullptr);
   ~MapSolver();
   /// Neumann: K(x) psi = b (b sums to zero); psi in: warm start, out: zero-mean solution.
   SolveStats neumann(const Points& x, const Eigen::VectorXd& b, Eigen::VectorXd& psi);

@@ -28,6 +28,7 @@
 // number of folded tets, where they are, and the smallest dihedral angle of the input (meshes
 // with slivers of 0.01-0.05 degrees are known to defeat this pipeline, docs/design.md 4.2).
 #include <array>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -40,6 +41,7 @@
 namespace vpm {
 
 class Device;
+class PoissonSolver;
 
 struct InitialMapOptions {
   // ---- step 1: edge split
@@ -224,6 +226,10 @@ struct InitialMapResult {
   Points ball;
   /// Boundary vertex mask of `mesh` (1 = on the sphere), n entries.
   std::vector<char> boundary;
+  /// The Poisson solver of the harmonic step, built on mesh.tets and the map's device: the
+  /// volume map reuses it (VolumeMapOptions::poisson) instead of building the Laplacian's
+  /// pattern again. Drop it when not needed (it holds the pattern and device buffers).
+  std::shared_ptr<PoissonSolver> poisson;
   InitialMapReport report;
 };
 

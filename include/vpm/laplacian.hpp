@@ -42,6 +42,7 @@ class CotanLaplacian {
   int num_vertices() const { return pattern_.rows; }
   int num_tets() const { return static_cast<int>(tets_.rows()); }
   int nnz() const { return pattern_.nnz(); }
+  const Tets& tets() const { return tets_; }
 
   /// Recomputes K and the lumped mass for `vertices` (n x 3, same length unit throughout) on
   /// `device`. Host device: fills the host values. OpenCL device: the values and mass stay on

@@ -114,13 +114,20 @@ class PoissonSolver {
   /// `values`: n x k, only the fixed rows are read (e.g. sphere positions, k = 3).
   /// `x`: n x k, in: warm start for the free rows (resized and zero-filled if its shape is
   /// wrong), out: the solution (fixed rows = values). `rhs`: n x k or nullptr for zero (the
-  /// harmonic map). The k columns are solved one after another; the stats give the summed
+  /// harmonic map). With Jacobi CG the columns are solved in blocks of up to three (one pass
+  /// over the matrix per iteration for all), otherwise one after another; either way each
+  /// column's result is that of solving it alone, bit for bit. The stats give the summed
   /// iterations and the worst residual. Throws InputError if no vertex is fixed.
   SolverStats solve_dirichlet(const std::vector<char>& fixed, const FieldValues& values,
                               FieldValues& x, const FieldValues* rhs = nullptr);
 
   const CotanLaplacian& laplacian() const { return laplacian_; }
   SolverOptions& options() { return options_; }
+  Device& device() const { return device_; }
+  /// Frees what later solves would rebuild on demand: the block solves' extra vectors and the
+  /// multigrid hierarchies (for a solver handed on to another stage, e.g. the initial map's to
+  /// the volume map).
+  void release_work_memory();
   const SolverStats& last_stats() const { return last_; }
 
  private:
