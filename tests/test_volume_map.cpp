@@ -743,7 +743,7 @@ TEST_CASE("vpm map: an input whose map cannot be made fold-free exits 3 and writ
   }
 }
 
-TEST_CASE("volume map: the initial map's Poisson solver, handed on, gives the same map; one of other tets is ignored") {
+TEST_CASE("volume map: the initial map's Poisson solver handed on gives the same map and one built on other tets is ignored") {
   for (auto& dev : test::devices()) {
     INFO("device " << dev->name());
     InitialMapOptions io;
