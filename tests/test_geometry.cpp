@@ -137,3 +137,20 @@ TEST_CASE("the paper benchmark's deformation is divergence-free and keeps volume
     CHECK(std::abs(e1.determinant() / e0.determinant() - 1) < 1e-4);
   }
 }
+
+TEST_CASE("the smallest dihedral angle per tet equals the row minima of the six angles") {
+  // jittered tets of every shape, slivers and caps included, both orientations
+  TetMesh m = test::jitter_interior(test::ball_mesh(5), 5, 0.45, 11);
+  std::swap(m.tets(0, 2), m.tets(0, 3));  // one negatively oriented tet
+  const auto all = dihedral_angles_deg(m.vertices, m.tets);
+  const Eigen::VectorXd mins = min_dihedral_angles_deg(m.vertices, m.tets);
+  REQUIRE(mins.size() == m.num_tets());
+  double worst = 0;
+  for (int t = 0; t < m.num_tets(); ++t) worst = std::max(worst, std::abs(mins(t) - all.row(t).minCoeff()));
+  CHECK(worst <= 1e-9);
+  CHECK(mins.minCoeff() < 20);  // the jitter made thin tets: the comparison covers them
+  // a flat tet (zero-area face) has angle 0
+  TetMesh flat = test::single_tet();
+  flat.vertices.row(3) = flat.vertices.row(2);
+  CHECK(min_dihedral_angles_deg(flat.vertices, flat.tets)(0) == 0.0);
+}

@@ -49,8 +49,7 @@ void check_input(const TetMesh& input) {
 
 // Input quality: smallest dihedral angles, counts below 1 and 5 degrees, the worst tets.
 void measure_quality(const TetMesh& input, int worst_count, InitialMapReport& rep) {
-  const auto dih = dihedral_angles_deg(input.vertices, input.tets);
-  const Eigen::VectorXd tmin = dih.rowwise().minCoeff();
+  const Eigen::VectorXd tmin = min_dihedral_angles_deg(input.vertices, input.tets);
   Eigen::Index worst = 0;
   rep.min_dihedral_deg = tmin.minCoeff(&worst);
   rep.min_dihedral_tet = static_cast<int>(worst);

@@ -99,4 +99,33 @@ Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> dihedral_angles_deg(co
   return out;
 }
 
+Eigen::VectorXd min_dihedral_angles_deg(const Points& x, const Tets& t) {
+  // the dihedral angle at edge (a, b) is the angle between the inward normals of the two faces
+  // opposite c and d (the other two corners), turned: cos = -n_c . n_d; the inward normals are
+  // the barycentric gradients, up to one common factor 1 / (6 V) that the cosine cancels
+  static constexpr int kOther[6][2] = {{2, 3}, {1, 3}, {1, 2}, {0, 3}, {0, 2}, {0, 1}};
+  Eigen::VectorXd out(t.rows());
+  detail::parallel_for(static_cast<int>(t.rows()), 16384, [&](int i0, int i1) {
+    for (int i = i0; i < i1; ++i) {
+      const Eigen::Vector3d p0 = x.row(t(i, 0)).transpose();
+      const Eigen::Vector3d e1 = x.row(t(i, 1)).transpose() - p0, e2 = x.row(t(i, 2)).transpose() - p0,
+                            e3 = x.row(t(i, 3)).transpose() - p0;
+      Eigen::Vector3d g[4];
+      g[1] = e2.cross(e3);
+      g[2] = e3.cross(e1);
+      g[3] = e1.cross(e2);
+      g[0] = -(g[1] + g[2] + g[3]);
+      double len[4], worst = -1;  // the largest cosine: the smallest angle
+      for (int k = 0; k < 4; ++k) len[k] = g[k].norm();
+      bool flat = false;
+      for (const auto& o : kOther) {
+        if (len[o[0]] == 0 || len[o[1]] == 0) flat = true;
+        else worst = std::max(worst, -g[o[0]].dot(g[o[1]]) / (len[o[0]] * len[o[1]]));
+      }
+      out(i) = flat ? 0.0 : std::acos(std::clamp(worst, -1.0, 1.0)) * 180.0 / M_PI;
+    }
+  });
+  return out;
+}
+
 }  // namespace vpm

@@ -119,11 +119,11 @@ void check_boundary(const detail::FaceTable& ft, const TetMesh& mesh, const std:
 
 // The smallest dihedral angle and its tet.
 void measure_quality(const TetMesh& mesh, ValidationReport& rep) {
-  const auto dih = dihedral_angles_deg(mesh.vertices, mesh.tets);
-  Eigen::Index r = 0, c = 0;
-  rep.min_dihedral_deg = dih.minCoeff(&r, &c);
+  const Eigen::VectorXd dih = min_dihedral_angles_deg(mesh.vertices, mesh.tets);
+  Eigen::Index r = 0;
+  rep.min_dihedral_deg = dih.minCoeff(&r);
   rep.min_dihedral_tet = static_cast<int>(r);
-  rep.sliver_tets = static_cast<int>((dih.array() < kSliverDihedralDeg).rowwise().any().count());
+  rep.sliver_tets = static_cast<int>((dih.array() < kSliverDihedralDeg).count());
 }
 
 }  // namespace
