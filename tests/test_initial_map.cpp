@@ -44,8 +44,10 @@ void check_map(const InitialMapResult& r, const TetMesh& input) {
 }  // namespace
 
 TEST_CASE("edge split leaves no four-boundary-vertex tet and keeps the volume") {
-  for (const TetMesh& in : {test::cube_mesh(3), test::ball_mesh(4), test::bent_mesh(2)}) {
+  int centroid_splits = 0;
+  for (const TetMesh& in : {test::cube_mesh(3), test::ball_mesh(4), test::bent_mesh(2), test::single_tet()}) {
     const SplitResult s = split_boundary_edges(in);
+    centroid_splits += s.centroid_splits;
     const auto b = boundary_vertex_mask(s.mesh.num_vertices(), boundary_faces(s.mesh.tets));
     CHECK(s.four_boundary_tets_before > 0);
     CHECK(s.four_boundary_tets_after == 0);
@@ -54,8 +56,10 @@ TEST_CASE("edge split leaves no four-boundary-vertex tet and keeps the volume") 
     CHECK(v.minCoeff() > 0);
     CHECK(v.sum() == Approx(tet_volumes(in.vertices, in.tets).sum()).epsilon(1e-13));
     CHECK(s.mesh.num_vertices() == in.num_vertices() + s.inserted_vertices);
-    // the boundary surface is unchanged: same faces on the input vertices
-    CHECK(boundary_faces(s.mesh.tets).rows() == boundary_faces(in.tets).rows());
+    // the boundary surface is unchanged: the same triangles, in the same order and orientation,
+    // as the input's, which the result hands on
+    CHECK(boundary_faces(s.mesh.tets) == boundary_faces(in.tets));
+    CHECK(s.boundary == boundary_faces(s.mesh.tets));
     // inserted vertices are midpoints of their parents
     for (int i = in.num_vertices(); i < s.mesh.num_vertices(); ++i) {
       const auto p = s.parents[i];
@@ -65,6 +69,7 @@ TEST_CASE("edge split leaves no four-boundary-vertex tet and keeps the volume") 
       CHECK((s.mesh.vertices.row(i) - 0.5 * (s.mesh.vertices.row(p[0]) + s.mesh.vertices.row(p[1]))).norm() < 1e-15);
     }
   }
+  CHECK(centroid_splits > 0);  // both kinds of split were exercised
 }
 
 TEST_CASE("edge split carries cell and point fields") {

@@ -48,7 +48,8 @@ namespace {
 // tet each tet lies in, and the boundary mask (inserted vertices are interior).
 struct Refinement {
   std::vector<Eigen::Vector3d> X;
-  std::vector<std::vector<int>> sources;  // 1, 2 or 4 vertices whose average the vertex is
+  int n0 = 0;                              // the input's vertices, each its own source
+  std::vector<std::vector<int>> sources;  // per inserted vertex (n0 + i): the 2 or 4 it averages
   std::vector<std::array<int, 4>> T;
   std::vector<int> parent_tet;
   std::vector<char> bnd;
@@ -63,12 +64,9 @@ struct Refinement {
 Refinement start(const TetMesh& input, std::vector<char> bnd) {
   Refinement f;
   const int n0 = input.num_vertices();
+  f.n0 = n0;
   f.X.resize(n0);
-  f.sources.resize(n0);
-  for (int i = 0; i < n0; ++i) {
-    f.X[i] = input.vertices.row(i).transpose();
-    f.sources[i] = {i};
-  }
+  for (int i = 0; i < n0; ++i) f.X[i] = input.vertices.row(i).transpose();
   f.T.resize(input.tets.rows());
   for (Eigen::Index i = 0; i < input.tets.rows(); ++i)
     for (int c = 0; c < 4; ++c) f.T[i][c] = input.tets(i, c);
@@ -93,12 +91,17 @@ std::vector<std::pair<int, int>> candidate_edges(const Refinement& f, const std:
   return cand;
 }
 
-// Splits every candidate edge at its midpoint: each tet around it becomes two.
+// Splits every candidate edge at its midpoint: each tet around it becomes two. The tets around
+// a vertex are kept only for the candidates' ends (the only ones asked), in the order a full
+// incidence would list them.
 void split_edges(Refinement& f, const std::vector<std::pair<int, int>>& cand) {
   auto& T = f.T;
+  std::vector<char> tracked(f.X.size(), 0);
+  for (const auto& [a, b] : cand) tracked[a] = tracked[b] = 1;
   std::vector<std::vector<int>> inc(f.X.size());
   for (size_t i = 0; i < T.size(); ++i)
-    for (int c = 0; c < 4; ++c) inc[T[i][c]].push_back(static_cast<int>(i));
+    for (int c = 0; c < 4; ++c)
+      if (tracked[T[i][c]]) inc[T[i][c]].push_back(static_cast<int>(i));
   for (const auto& [a, b] : cand) {
     std::vector<int> around;
     for (int t : inc[a])
@@ -106,6 +109,7 @@ void split_edges(Refinement& f, const std::vector<std::pair<int, int>>& cand) {
     if (around.empty()) continue;
     const int m = f.add_vertex(0.5 * (f.X[a] + f.X[b]), {a, b});
     inc.emplace_back();
+    tracked.push_back(0);
     for (int t : around) {
       std::array<int, 4> child = T[t];
       for (int c = 0; c < 4; ++c) {
@@ -118,9 +122,7 @@ void split_edges(Refinement& f, const std::vector<std::pair<int, int>>& cand) {
       auto& ib = inc[b];
       ib.erase(std::find(ib.begin(), ib.end(), t));
       for (int c = 0; c < 4; ++c)
-        if (child[c] != m) inc[child[c]].push_back(tn);
-      inc[m].push_back(t);
-      inc[m].push_back(tn);
+        if (child[c] != m && tracked[child[c]]) inc[child[c]].push_back(tn);
     }
   }
 }
@@ -161,21 +163,25 @@ void build_mesh(const Refinement& f, const TetMesh& input, SplitResult& r) {
     for (int c = 0; c < 4; ++c) m.tets(static_cast<Eigen::Index>(i), c) = f.T[i][c];
   r.parents.resize(n);
   for (int i = 0; i < n; ++i) {
-    const auto& s = f.sources[i];
-    r.parents[i] = s.size() == 1 ? std::array<int, 2>{i, i} : s.size() == 2 ? std::array<int, 2>{s[0], s[1]}
-                                                                          : std::array<int, 2>{-1, -1};
+    if (i < n0) {
+      r.parents[i] = {i, i};
+      continue;
+    }
+    const auto& s = f.sources[static_cast<size_t>(i - n0)];
+    r.parents[i] = s.size() == 2 ? std::array<int, 2>{s[0], s[1]} : std::array<int, 2>{-1, -1};
   }
   for (const Field& fd : input.point_data) {
     if (fd.name == "original_position") continue;
     FieldValues v(n, fd.values.cols());
     v.topRows(n0) = fd.values;
     for (int i = n0; i < n; ++i) {
+      const auto& src = f.sources[static_cast<size_t>(i - n0)];
       if (fd.integer) {
-        v.row(i) = v.row(f.sources[i][0]);
+        v.row(i) = v.row(src[0]);
       } else {
         v.row(i).setZero();
-        for (int s : f.sources[i]) v.row(i) += v.row(s);
-        v.row(i) /= static_cast<double>(f.sources[i].size());
+        for (int s : src) v.row(i) += v.row(s);
+        v.row(i) /= static_cast<double>(src.size());
       }
     }
     m.set_point_field(fd.name, std::move(v), fd.integer);
@@ -208,6 +214,7 @@ SplitResult split_boundary_edges(const TetMesh& input, int max_rounds) {
   r.parent_tet = f.parent_tet;
   build_mesh(f, input, r);
   r.four_boundary_tets_after = count_four_boundary_tets(r.mesh.tets, f.bnd);
+  r.boundary = bf;
   return r;
 }
 

@@ -81,6 +81,7 @@ SplitResult split(const TetMesh& input, const InitialMapOptions& opt, InitialMap
     sp.mesh.set_point_field("original_position", FieldValues(input.vertices));
     sp.parent_tet.resize(input.num_tets());
     std::iota(sp.parent_tet.begin(), sp.parent_tet.end(), 0);
+    sp.boundary = boundary_faces(input.tets);
   }
   rep.split_rounds = sp.rounds;
   rep.inserted_vertices = sp.inserted_vertices;
@@ -210,13 +211,14 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
   rep.timings.input_quality = seconds_since(t0);
 
   t0 = Clock::now();
-  res.mesh = split(input, opt, rep).mesh;
+  SplitResult sp = split(input, opt, rep);
+  res.mesh = std::move(sp.mesh);
   const TetMesh& m = res.mesh;
   rep.timings.split = seconds_since(t0);
 
   TriSurface surf;
   surf.vertices = m.vertices;
-  surf.triangles = boundary_faces(m.tets);
+  surf.triangles = std::move(sp.boundary);
   res.boundary = boundary_vertex_mask(m.num_vertices(), surf.triangles);
   std::future<std::shared_ptr<PoissonSolver>> solver = start_harmonic_solver(device, m, opt);
   const bool done = map_through_sphere(device, m, surf, opt, note, res, rep, solver);

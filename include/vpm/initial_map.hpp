@@ -255,6 +255,9 @@ struct SplitResult {
   /// For each refined vertex: the two input-or-earlier vertices whose midpoint it is
   /// ({v, v} for input vertices; {a, b} with a, b < v, or {-1, -1} for a centroid).
   std::vector<std::array<int, 2>> parents;
+  /// boundary_faces(mesh.tets): the input's boundary triangles, which the splits do not change
+  /// (they insert interior vertices; each split tet keeps its boundary face at the same corner).
+  Triangles boundary;
   int rounds = 0;
   int inserted_vertices = 0;
   int four_boundary_tets_before = 0;
