@@ -205,6 +205,9 @@ std::vector<double> DeviceAdvector::gradients() {
 void DeviceAdvector::Impl::upload_background(const MoserField& f) {
   Impl& s = *this;
   auto& q = s.dev.queue();
+  // the last round's buffers go first: the new ones are not made beside them (12 doubles a tet)
+  s.inv = bc::vector<double>(s.dev.context());
+  s.cell_tets = bc::vector<int>(s.dev.context());
   s.inv = bc::vector<double>(f.inv.begin(), f.inv.end(), q);
   bc::copy(f.rho0.begin(), f.rho0.end(), s.rho0.begin(), q);
   s.cell_start = bc::vector<int>(f.cell_start.begin(), f.cell_start.end(), q);
