@@ -546,3 +546,36 @@ TEST_CASE("io: our .vtu opens in VTK's own reader (scripts/check_vtu.py)") {
   CHECK(run_status(python + " " + script + " " + tmp("vtk.vtu") + " no_such_field > " + out + " 2>&1") == 1);
   CHECK(run_status(python + " " + script + " " + bad("vtu_truncated.vtu") + " > " + out + " 2>&1") == 1);
 }
+
+TEST_CASE("io: large ASCII .vtu arrays (read on the host threads) round trip exactly and name a bad token's line") {
+  // cube_mesh(24): 15,625 vertices (46,875 coordinates) and 82,944 tets (331,776 connectivity
+  // values), so the connectivity, offsets and types and a wide point field take the threaded path
+  TetMesh m = test::cube_mesh(24);
+  FieldValues wide(m.num_vertices(), 6);
+  for (int i = 0; i < m.num_vertices(); ++i)
+    for (int c = 0; c < 6; ++c) wide(i, c) = std::sin(0.37 * i + c) * std::pow(10.0, (i % 9) - 4);
+  m.set_point_field("wide", wide);
+  const std::string path = tmp("large.vtu");
+  write_mesh(path, m);
+  const TetMesh r = read_mesh(path);
+  require_same_geometry(m, r);
+  require_same_field(m.find_point_field("wide"), r.find_point_field("wide"));
+  // a bad token in the middle of the connectivity: the message names its line, as the
+  // sequential reader does
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string s = text.str();
+  const size_t conn = s.find("Name=\"connectivity\"");
+  REQUIRE(conn != std::string::npos);
+  size_t at = conn;
+  for (int lines = 0; lines < 40000; ++lines) at = s.find('\n', at + 1);
+  const size_t line = static_cast<size_t>(std::count(s.begin(), s.begin() + static_cast<long>(at) + 1, '\n')) + 1;
+  s.insert(at + 1, "x7 ");
+  const std::string bad_path = tmp("large_bad.vtu");
+  std::ofstream(bad_path) << s;
+  const std::string msg = read_error(bad_path);
+  INFO(msg);
+  CHECK_THAT(msg, Catch::Contains(bad_path + ":" + std::to_string(line) + ":"));
+  CHECK_THAT(msg, Catch::Contains("x7"));
+}

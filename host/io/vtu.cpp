@@ -185,11 +185,7 @@ void VtuReader::read_connectivity(const Tag& tag) {
     conn_ = read_array(path_, w_, tag, -1, layout_);  // its length is checked against the offsets later
   } else if (!have_offsets_) {
     const size_t close = array_close(w_, tag, "DataArray 'connectivity'");
-    Scanner c(path_, array_text(w_, tag, close), '\0');
-    std::string_view tok;
-    long long k = 0;
-    while (c.next(tok)) ++k;
-    conn_ = read_array(path_, w_, tag, k, layout_);
+    conn_ = read_array(path_, w_, tag, ascii_pieces(array_text(w_, tag, close)).total(), layout_);
   } else {
     const double last = m_ > 0 ? offsets_.values.back() : 0.0;
     if (!(last >= 0 && last < 4.0e9))

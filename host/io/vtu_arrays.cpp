@@ -1,11 +1,72 @@
 #include "io/vtu_arrays.hpp"
 
+#include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <cstdlib>
 
+#include "core/parallel.hpp"
 #include "io/text.hpp"
+#include "vpm/error.hpp"
 
 namespace vpm::detail {
+
+namespace {
+bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
+}  // namespace
+
+AsciiPieces ascii_pieces(std::string_view text) {
+  constexpr int kPieces = 16;
+  AsciiPieces p;
+  p.cut.assign(kPieces + 1, text.size());
+  p.cut[0] = 0;
+  for (int j = 1; j < kPieces; ++j) {
+    size_t c = std::max(p.cut[j - 1], text.size() * static_cast<size_t>(j) / kPieces);
+    while (c < text.size() && !is_blank(text[c])) ++c;
+    p.cut[j] = c;
+  }
+  p.first.assign(kPieces + 1, 0);
+  parallel_for(kPieces, 2, [&](int j0, int j1) {
+    for (int j = j0; j < j1; ++j) {
+      long long k = 0;
+      bool in = false;
+      for (size_t i = p.cut[j]; i < p.cut[j + 1]; ++i) {
+        const bool b = is_blank(text[i]);
+        k += !b && !in;
+        in = !b;
+      }
+      p.first[j + 1] = k;
+    }
+  });
+  for (int j = 0; j < kPieces; ++j) p.first[j + 1] += p.first[j];
+  return p;
+}
+
+namespace {
+// The ASCII values of a large array parsed on the host threads, each piece of ascii_pieces into
+// its place with the same conversions as the sequential reader (so the same values). False,
+// with `out` unspecified, when anything is off (a bad token, a wrong count): the caller then
+// reads it sequentially, which names the line of the problem.
+bool parse_ascii_parallel(const std::string& path, std::string_view text, long long count, bool integer,
+                          const std::string& what, std::vector<double>& out) {
+  const AsciiPieces p = ascii_pieces(text);
+  if (p.total() != count) return false;
+  std::atomic<bool> ok{true};
+  parallel_for(p.pieces(), 2, [&](int j0, int j1) {
+    try {
+      for (int j = j0; j < j1; ++j) {
+        Scanner s(path, text.substr(p.cut[j], p.cut[j + 1] - p.cut[j]), '\0', 1);
+        std::string_view tok;
+        for (long long i = p.first[j]; s.next(tok); ++i)
+          out[static_cast<size_t>(i)] = integer ? static_cast<double>(s.to_int(tok, what)) : s.to_real(tok, what);
+      }
+    } catch (const InputError&) {
+      ok = false;
+    }
+  });
+  return ok;
+}
+}  // namespace
 
 // A DataArray's binary values into `a` (rows >= 0: exactly rows tuples).
 void set_binary_values(const XmlWalker& w, VtuArray& a, const std::vector<unsigned char>& bytes) {
@@ -98,6 +159,10 @@ VtuArray read_array(const std::string& path, XmlWalker& w, const Tag& tag, long 
   const bool integer = is_integer_type(a.type);
   std::string_view tok;
   const std::string what = "DataArray '" + shown + "'";
+  if (count >= (1 << 16) && parse_ascii_parallel(path, array_text(w, tag, close), count, integer, what, a.values)) {
+    w.set_pos(close);
+    return a;
+  }
   for (long long i = 0; i < count; ++i) {
     if (!s.next(tok))
       s.fail("DataArray '" + shown + "' has " + std::to_string(i) + " values, expected " +

@@ -34,6 +34,17 @@ std::string_view array_text(const XmlWalker& w, const Tag& tag, size_t close);
 /// Binary values into `a` (a.rows >= 0: exactly that many tuples).
 void set_binary_values(const XmlWalker& w, VtuArray& a, const std::vector<unsigned char>& bytes);
 
+/// ASCII text cut at whitespace into pieces (for the host threads): piece j is
+/// [cut[j], cut[j+1]) and holds the tokens first[j] .. first[j+1]-1 (tokens: runs of
+/// non-whitespace, as Scanner without comments reads them).
+struct AsciiPieces {
+  std::vector<size_t> cut;
+  std::vector<long long> first;
+  int pieces() const { return static_cast<int>(cut.size()) - 1; }
+  long long total() const { return first.back(); }
+};
+AsciiPieces ascii_pieces(std::string_view text);
+
 /// Reads a DataArray: exactly `rows` tuples of its components (rows < 0: any number, binary forms
 /// only). ASCII and inline binary now; an appended array gets its offset and no values yet.
 VtuArray read_array(const std::string& path, XmlWalker& w, const Tag& tag, long long rows, const VtkBinaryLayout& layout,
