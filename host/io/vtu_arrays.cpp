@@ -1,6 +1,7 @@
 #include "io/vtu_arrays.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cerrno>
 #include <cstdlib>
@@ -26,14 +27,19 @@ AsciiPieces ascii_pieces(std::string_view text) {
     p.cut[j] = c;
   }
   p.first.assign(kPieces + 1, 0);
+  static const std::array<unsigned char, 256> blank = [] {
+    std::array<unsigned char, 256> t{};
+    for (int c = 0; c < 256; ++c) t[static_cast<size_t>(c)] = is_blank(static_cast<char>(c));
+    return t;
+  }();
   parallel_for(kPieces, 2, [&](int j0, int j1) {
     for (int j = j0; j < j1; ++j) {
       long long k = 0;
-      bool in = false;
+      unsigned prev = 1;  // a piece starts after whitespace (or at the start)
       for (size_t i = p.cut[j]; i < p.cut[j + 1]; ++i) {
-        const bool b = is_blank(text[i]);
-        k += !b && !in;
-        in = !b;
+        const unsigned b = blank[static_cast<unsigned char>(text[i])];
+        k += prev & (b ^ 1u);  // a token starts where a blank is followed by a non-blank
+        prev = b;
       }
       p.first[j + 1] = k;
     }

@@ -1,6 +1,7 @@
 #pragma once
 // Private helper of the .vtu reader/writer: a minimal XML tag walker (elements, attributes,
 // comments, declarations; no DTDs, no namespaces) that keeps line numbers for messages.
+#include <algorithm>
 #include <cstring>
 #include <map>
 #include <string>
@@ -63,8 +64,10 @@ class XmlWalker {
   }
   size_t line_at(size_t pos) {  // incremental: pos never decreases between calls
     if (pos < counted_) counted_ = 0, line_ = 1;
-    for (; counted_ < pos && counted_ < d_.size(); ++counted_)
-      if (d_[counted_] == '\n') ++line_;
+    const size_t end = std::max(counted_, std::min(pos, d_.size()));
+    line_ += static_cast<size_t>(std::count(d_.begin() + static_cast<std::ptrdiff_t>(counted_),
+                                            d_.begin() + static_cast<std::ptrdiff_t>(end), '\n'));
+    counted_ = end;
     return line_;
   }
   // Next element tag from `pos_`; false at the end of the text.
