@@ -14,13 +14,15 @@ namespace bc = boost::compute;
 
 Eigen::VectorXd tet_volumes(const Points& x, const Tets& t) {
   Eigen::VectorXd vol(t.rows());
-  for (Eigen::Index i = 0; i < t.rows(); ++i) {
-    const Eigen::Vector3d a = x.row(t(i, 0));
-    const Eigen::Vector3d e1 = x.row(t(i, 1)).transpose() - a;
-    const Eigen::Vector3d e2 = x.row(t(i, 2)).transpose() - a;
-    const Eigen::Vector3d e3 = x.row(t(i, 3)).transpose() - a;
-    vol(i) = e1.dot(e2.cross(e3)) / 6.0;
-  }
+  detail::parallel_for(static_cast<int>(t.rows()), 32768, [&](int i0, int i1) {
+    for (int i = i0; i < i1; ++i) {
+      const Eigen::Vector3d a = x.row(t(i, 0));
+      const Eigen::Vector3d e1 = x.row(t(i, 1)).transpose() - a;
+      const Eigen::Vector3d e2 = x.row(t(i, 2)).transpose() - a;
+      const Eigen::Vector3d e3 = x.row(t(i, 3)).transpose() - a;
+      vol(i) = e1.dot(e2.cross(e3)) / 6.0;
+    }
+  });
   return vol;
 }
 

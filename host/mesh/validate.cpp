@@ -33,17 +33,19 @@ void check_indices(const TetMesh& mesh, const std::string& source) {
         fail(source, "vertex " + std::to_string(v), "coordinate " + std::to_string(c) + " is not finite");
   std::vector<char> used(static_cast<size_t>(n), 0);
   for (int t = 0; t < m; ++t) {
-    for (int c = 0; c < 4; ++c) {
-      const int v = mesh.tets(t, c);
-      if (v < 0 || v >= n)
-        fail(source, "tet " + std::to_string(t),
-             "vertex index " + std::to_string(v) + " out of range [0, " + std::to_string(n) + ")");
-      used[static_cast<size_t>(v)] = 1;
+    const int* q = &mesh.tets(t, 0);
+    const bool in_range = q[0] >= 0 && q[0] < n && q[1] >= 0 && q[1] < n && q[2] >= 0 && q[2] < n &&
+                          q[3] >= 0 && q[3] < n;
+    const bool distinct = q[0] != q[1] && q[0] != q[2] && q[0] != q[3] && q[1] != q[2] && q[1] != q[3] &&
+                          q[2] != q[3];
+    if (!in_range || !distinct) {  // the first problem of this tet, in corner order
+      for (int c = 0; c < 4; ++c)
+        if (q[c] < 0 || q[c] >= n)
+          fail(source, "tet " + std::to_string(t),
+               "vertex index " + std::to_string(q[c]) + " out of range [0, " + std::to_string(n) + ")");
+      fail(source, tet_text(mesh.tets, t), "degenerate: vertex repeated");
     }
-    for (int a = 0; a < 4; ++a)
-      for (int b = a + 1; b < 4; ++b)
-        if (mesh.tets(t, a) == mesh.tets(t, b))
-          fail(source, tet_text(mesh.tets, t), "degenerate: vertex repeated");
+    for (int c = 0; c < 4; ++c) used[static_cast<size_t>(q[c])] = 1;
   }
   for (int v = 0; v < n; ++v)
     if (!used[static_cast<size_t>(v)]) fail(source, "vertex " + std::to_string(v), "isolated (in no tet)");
