@@ -323,41 +323,34 @@ UntangleResult untangle_local(Device& device, const Points& reference, const Tet
   const int n = static_cast<int>(x.rows());
   Problem p;
   p.var.assign(n, -1);
-  std::vector<char> in(n, 0);
-  std::vector<int> layer;
+  // the folded tets' vertices (ring 0), then `rings` rings of tets around them: pass r takes
+  // every tet with a vertex found before it (so a pass adds one ring, as a breadth-first search
+  // over the tets around each vertex would, without building that incidence for the whole mesh)
+  std::vector<int> level(static_cast<size_t>(n), -1);
   for (int t : folded) {
     if (t < 0 || t >= tets.rows())
       throw InputError("untangle_local: folded tet index " + std::to_string(t) + " out of range");
-    for (int c = 0; c < 4; ++c)
-      if (!in[tets(t, c)]) {
-        in[tets(t, c)] = 1;
-        layer.push_back(tets(t, c));
-      }
+    for (int c = 0; c < 4; ++c) level[static_cast<size_t>(tets(t, c))] = 0;
   }
-  const Incidence inc = vertex_tet_incidence(n, tets);
-  for (int r = 0; r < rings; ++r) {
-    std::vector<int> next;
-    for (int v : layer)
-      for (int k = inc.offset[v]; k < inc.offset[v + 1]; ++k) {
-        const int t = inc.tet_of[k];
+  for (int r = 1; r <= rings; ++r)
+    for (Eigen::Index t = 0; t < tets.rows(); ++t) {
+      const int* q = &tets(t, 0);
+      bool touches = false;
+      for (int c = 0; c < 4; ++c) touches = touches || (level[q[c]] >= 0 && level[q[c]] < r);
+      if (touches)
         for (int c = 0; c < 4; ++c)
-          if (!in[tets(t, c)]) {
-            in[tets(t, c)] = 1;
-            next.push_back(tets(t, c));
-          }
-      }
-    layer.swap(next);
-  }
+          if (level[q[c]] < 0) level[q[c]] = r;
+    }
   for (int v = 0; v < n; ++v)
-    if (in[v] && !fixed[v]) {
+    if (level[static_cast<size_t>(v)] >= 0 && !fixed[v]) {
       p.var[v] = static_cast<int>(3 * p.free_vertices.size());
       p.free_vertices.push_back(v);
     }
-  std::vector<char> act(tets.rows(), 0);
-  for (int v : p.free_vertices)
-    for (int k = inc.offset[v]; k < inc.offset[v + 1]; ++k) act[inc.tet_of[k]] = 1;
-  for (Eigen::Index i = 0; i < tets.rows(); ++i)
-    if (act[i]) p.active.push_back(static_cast<int>(i));
+  for (Eigen::Index i = 0; i < tets.rows(); ++i) {
+    bool any = false;
+    for (int c = 0; c < 4; ++c) any = any || p.var[tets(i, c)] >= 0;
+    if (any) p.active.push_back(static_cast<int>(i));
+  }
   return run(p, reference, tets, x, options, &device);
 }
 
