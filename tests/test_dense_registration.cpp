@@ -313,7 +313,8 @@ TEST_CASE("dense registration of a subject to itself is the identity") {
 
 TEST_CASE("dense registration: held-out regions stay out of the force and bad options are refused") {
   const Case c = make_case();
-  Device& dev = *Device::host();
+  const auto host = Device::host();  // kept: Device::host() makes a new device each call
+  Device& dev = *host;
   Points ball;
   const DenseRegistrationResult r = run_dense(dev, c, ball, 1, {2});
   CHECK(r.regions == std::vector<int>{1, 3, 4, 5});

@@ -54,7 +54,9 @@ class Device {
   static Device& current();
   /// Selects by the VPM_DEVICE grammar above ("" = the default rule).
   static std::shared_ptr<Device> select(const std::string& spec);
-  /// The host device (always available).
+  /// The host device (always available). A new device each call: keep the pointer while the
+  /// device is used (`Device& d = *Device::host();` would dangle at the end of the statement;
+  /// passing `*Device::host()` straight to a call is fine).
   static std::shared_ptr<Device> host();
 
   Device(const Device&) = delete;
