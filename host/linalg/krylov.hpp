@@ -33,6 +33,50 @@ void apply_scaled(BK& bk, Vec y, Vec x, bool normal) {
   }
 }
 
+// The host's side of one Krylov run: the device runs up to `lookahead` iterations ahead of the
+// residual the host reads (one read per iteration), and the run ends at the first residual
+// within tol2, the iteration already queued after it included. krylov() keeps one; a block
+// solve (linalg/krylov_block.hpp) keeps one per column, so each column takes exactly the
+// iterations of a lone run. Throws NumericalError on breakdown or at `max_iterations`.
+struct KrylovPace {
+  SolverMethod method;
+  double tol2, bnorm2, tol;
+  int n, max_iterations, lookahead;
+  int enqueued = 0, done = 0;
+  bool stop = false, finished = false;
+
+  /// The start's residual; true when it meets tol2 already (no iteration to run).
+  bool start(double rr) {
+    if (!std::isfinite(rr)) not_converged(method, rr, 0, tol, n, "started from a non-finite residual");
+    finished = rr <= tol2;
+    if (!finished && max_iterations <= 0)
+      not_converged(method, std::sqrt(rr / bnorm2), 0, tol, n, "did not converge");
+    return finished;
+  }
+  /// Whether another iteration may be queued now.
+  bool may_enqueue() const {
+    return !finished && !stop && enqueued < max_iterations && enqueued < done + lookahead;
+  }
+  /// An iteration is queued: the residual slot (0/1) its read goes to.
+  int enqueue() { return enqueued++ % 2; }
+  /// The slot of the next residual to read.
+  int next_read() const { return done % 2; }
+  /// Takes that residual; true when the run is over (after `done` iterations).
+  bool read(double rr) {
+    ++done;
+    if (!std::isfinite(rr)) not_converged(method, rr, done, tol, n, "broke down (non-finite residual)");
+    if (rr <= tol2) {
+      if (done == enqueued) return finished = true;
+      stop = true;  // the iteration already queued gives the result
+    } else if (done == enqueued) {
+      stop = false;
+      if (done >= max_iterations)
+        not_converged(method, std::sqrt(rr / bnorm2), done, tol, n, "did not converge");
+    }
+    return false;
+  }
+};
+
 // The Krylov loop, written once for both backends. Precondition: VX holds the start, VR its
 // residual (of the normal equations for `paper`). Runs until the recursive residual satisfies
 // rr <= tol2 (one read of it per iteration; the device runs `lookahead` iterations ahead of
@@ -55,12 +99,10 @@ int krylov(BK& bk, SolverMethod method, double tol2, int max_iterations, double*
     bk.copy(VP, VR);
     bk.dot2(VR0, VR, VR, VR, OP_BI_INIT);
   }
+  KrylovPace pace{method, tol2, bnorm2, tol, bk.size(), max_iterations, bk.lookahead()};
   double rr = bk.read_rr_now();
-  if (!std::isfinite(rr))
-    not_converged(method, rr, 0, tol, bk.size(), "started from a non-finite residual");
   *rr_out = rr;
-  if (rr <= tol2) return 0;
-  if (max_iterations <= 0) not_converged(method, std::sqrt(rr / bnorm2), 0, tol, bk.size(), "did not converge");
+  if (pace.start(rr)) return 0;
   auto step = [&] {
     if (pcg) {
       bk.spmv(VQ, VP, false);
@@ -84,27 +126,14 @@ int krylov(BK& bk, SolverMethod method, double tol2, int max_iterations, double*
       bk.bicg_p();
     }
   };
-  int enqueued = 0, done = 0;
-  bool stop = false;
   while (true) {
-    while (!stop && enqueued < max_iterations && enqueued < done + bk.lookahead()) {
+    while (pace.may_enqueue()) {
       step();
-      bk.request_rr(enqueued % 2);
-      ++enqueued;
+      bk.request_rr(pace.enqueue());
     }
-    rr = bk.wait_rr(done % 2);
-    ++done;
+    rr = bk.wait_rr(pace.next_read());
     *rr_out = rr;
-    if (!std::isfinite(rr))
-      not_converged(method, rr, done, tol, bk.size(), "broke down (non-finite residual)");
-    if (rr <= tol2) {
-      if (done == enqueued) return done;
-      stop = true;  // the iteration already queued gives the result
-    } else if (done == enqueued) {
-      stop = false;
-      if (done >= max_iterations)
-        not_converged(method, std::sqrt(rr / bnorm2), done, tol, bk.size(), "did not converge");
-    }
+    if (pace.read(rr)) return pace.done;
   }
 }
 
