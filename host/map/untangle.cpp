@@ -293,18 +293,14 @@ UntangleResult untangle_local(const Points& reference, const Tets& tets, Points&
   return untangle_local(*Device::host(), reference, tets, x, fixed, folded, rings, options);
 }
 
-UntangleResult untangle(Device& device, const Points& reference, const Tets& tets, Points& x,
-                        const std::vector<char>& fixed, const UntangleOptions& options) {
-  check_sizes(reference, tets, x, fixed);
+namespace {
+// The unknowns of a run: the vertices with `chosen` set and not fixed (in vertex order), and the
+// tets that have one of them (in tet order).
+Problem problem_of(const Tets& tets, int n, const std::vector<char>& fixed, const std::vector<char>& chosen) {
   Problem p;
-  const int n = static_cast<int>(x.rows());
   p.var.assign(n, -1);
-  // only vertices used by some tet are unknowns
-  std::vector<char> used(n, 0);
-  for (Eigen::Index i = 0; i < tets.rows(); ++i)
-    for (int c = 0; c < 4; ++c) used[tets(i, c)] = 1;
   for (int v = 0; v < n; ++v)
-    if (!fixed[v] && used[v]) {
+    if (chosen[static_cast<size_t>(v)] && !fixed[v]) {
       p.var[v] = static_cast<int>(3 * p.free_vertices.size());
       p.free_vertices.push_back(v);
     }
@@ -313,6 +309,19 @@ UntangleResult untangle(Device& device, const Points& reference, const Tets& tet
     for (int c = 0; c < 4; ++c) any = any || p.var[tets(i, c)] >= 0;
     if (any) p.active.push_back(static_cast<int>(i));
   }
+  return p;
+}
+}  // namespace
+
+UntangleResult untangle(Device& device, const Points& reference, const Tets& tets, Points& x,
+                        const std::vector<char>& fixed, const UntangleOptions& options) {
+  check_sizes(reference, tets, x, fixed);
+  const int n = static_cast<int>(x.rows());
+  // only vertices used by some tet are unknowns
+  std::vector<char> used(n, 0);
+  for (Eigen::Index i = 0; i < tets.rows(); ++i)
+    for (int c = 0; c < 4; ++c) used[tets(i, c)] = 1;
+  Problem p = problem_of(tets, n, fixed, used);
   return run(p, reference, tets, x, options, &device);
 }
 
@@ -321,8 +330,6 @@ UntangleResult untangle_local(Device& device, const Points& reference, const Tet
                               int rings, const UntangleOptions& options) {
   check_sizes(reference, tets, x, fixed);
   const int n = static_cast<int>(x.rows());
-  Problem p;
-  p.var.assign(n, -1);
   // the folded tets' vertices (ring 0), then `rings` rings of tets around them: pass r takes
   // every tet with a vertex found before it (so a pass adds one ring, as a breadth-first search
   // over the tets around each vertex would, without building that incidence for the whole mesh)
@@ -341,16 +348,9 @@ UntangleResult untangle_local(Device& device, const Points& reference, const Tet
         for (int c = 0; c < 4; ++c)
           if (level[q[c]] < 0) level[q[c]] = r;
     }
-  for (int v = 0; v < n; ++v)
-    if (level[static_cast<size_t>(v)] >= 0 && !fixed[v]) {
-      p.var[v] = static_cast<int>(3 * p.free_vertices.size());
-      p.free_vertices.push_back(v);
-    }
-  for (Eigen::Index i = 0; i < tets.rows(); ++i) {
-    bool any = false;
-    for (int c = 0; c < 4; ++c) any = any || p.var[tets(i, c)] >= 0;
-    if (any) p.active.push_back(static_cast<int>(i));
-  }
+  std::vector<char> near(static_cast<size_t>(n));
+  for (int v = 0; v < n; ++v) near[static_cast<size_t>(v)] = level[static_cast<size_t>(v)] >= 0;
+  Problem p = problem_of(tets, n, fixed, near);
   return run(p, reference, tets, x, options, &device);
 }
 
