@@ -60,10 +60,6 @@ void Scanner::fail_at(size_t line, const std::string& what) const {
   throw InputError(path_ + ":" + std::to_string(line) + ": " + what);
 }
 
-static inline bool is_space(char c) {
-  return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v';
-}
-
 void Scanner::skip_space() {
   const size_t n = data_.size();
   while (pos_ < n) {
@@ -71,7 +67,7 @@ void Scanner::skip_space() {
     if (c == '\n') {
       ++line_;
       ++pos_;
-    } else if (is_space(c)) {
+    } else if (is_token_space(c)) {
       ++pos_;
     } else if (comment_ && c == comment_) {
       const void* nl = std::memchr(data_.data() + pos_, '\n', n - pos_);
@@ -106,7 +102,7 @@ bool Scanner::next(std::string_view& tok) {
     return false;
   }
   const size_t start = pos_;
-  while (pos_ < n && !is_space(data_[pos_]) && !(comment_ && data_[pos_] == comment_)) ++pos_;
+  while (pos_ < n && !is_token_space(data_[pos_]) && !(comment_ && data_[pos_] == comment_)) ++pos_;
   tok = data_.substr(start, pos_ - start);
   tok_line_ = line_;
   return true;
@@ -130,14 +126,14 @@ bool Scanner::next_line(std::vector<std::string_view>& toks) {
     size_t line_start_line = line_;
     while (pos_ < n && data_[pos_] != '\n') {
       char c = data_[pos_];
-      if (is_space(c)) {
+      if (is_token_space(c)) {
         ++pos_;
       } else if (comment_ && c == comment_) {
         const void* nl = std::memchr(data_.data() + pos_, '\n', n - pos_);
         pos_ = nl ? static_cast<size_t>(static_cast<const char*>(nl) - data_.data()) : n;
       } else {
         const size_t start = pos_;
-        while (pos_ < n && !is_space(data_[pos_]) && !(comment_ && data_[pos_] == comment_))
+        while (pos_ < n && !is_token_space(data_[pos_]) && !(comment_ && data_[pos_] == comment_))
           ++pos_;
         toks.push_back(data_.substr(start, pos_ - start));
       }

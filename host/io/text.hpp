@@ -20,6 +20,11 @@ std::string extension_of(const std::string& path);
 /// `tok` quoted for messages: at most 24 characters, non-printable bytes as '?'.
 std::string show(std::string_view tok);
 
+/// The whitespace that separates tokens (Scanner's, and the threaded .vtu array reader's).
+inline bool is_token_space(char c) {
+  return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v';
+}
+
 /// Tokenizer over a file's contents. Whitespace (including '\r') separates tokens, `comment`
 /// (if not '\0') starts a comment running to the end of the line.
 class Scanner {

@@ -185,7 +185,8 @@ void VtuReader::read_connectivity(const Tag& tag) {
     conn_ = read_array(path_, w_, tag, -1, layout_);  // its length is checked against the offsets later
   } else if (!have_offsets_) {
     const size_t close = array_close(w_, tag, "DataArray 'connectivity'");
-    conn_ = read_array(path_, w_, tag, ascii_pieces(array_text(w_, tag, close)).total(), layout_);
+    const AsciiPieces pieces = ascii_pieces(array_text(w_, tag, close));  // counted once, read with them
+    conn_ = read_array(path_, w_, tag, pieces.total(), layout_, "(unnamed)", &pieces);
   } else {
     const double last = m_ > 0 ? offsets_.values.back() : 0.0;
     if (!(last >= 0 && last < 4.0e9))

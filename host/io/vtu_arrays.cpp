@@ -12,10 +12,6 @@
 
 namespace vpm::detail {
 
-namespace {
-bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
-}  // namespace
-
 AsciiPieces ascii_pieces(std::string_view text) {
   constexpr int kPieces = 16;
   AsciiPieces p;
@@ -23,13 +19,13 @@ AsciiPieces ascii_pieces(std::string_view text) {
   p.cut[0] = 0;
   for (int j = 1; j < kPieces; ++j) {
     size_t c = std::max(p.cut[j - 1], text.size() * static_cast<size_t>(j) / kPieces);
-    while (c < text.size() && !is_blank(text[c])) ++c;
+    while (c < text.size() && !is_token_space(text[c])) ++c;
     p.cut[j] = c;
   }
   p.first.assign(kPieces + 1, 0);
   static const std::array<unsigned char, 256> blank = [] {
     std::array<unsigned char, 256> t{};
-    for (int c = 0; c < 256; ++c) t[static_cast<size_t>(c)] = is_blank(static_cast<char>(c));
+    for (int c = 0; c < 256; ++c) t[static_cast<size_t>(c)] = is_token_space(static_cast<char>(c));
     return t;
   }();
   parallel_for(kPieces, 2, [&](int j0, int j1) {
@@ -53,9 +49,8 @@ namespace {
 // its place with the same conversions as the sequential reader (so the same values). False,
 // with `out` unspecified, when anything is off (a bad token, a wrong count): the caller then
 // reads it sequentially, which names the line of the problem.
-bool parse_ascii_parallel(const std::string& path, std::string_view text, long long count, bool integer,
-                          const std::string& what, std::vector<double>& out) {
-  const AsciiPieces p = ascii_pieces(text);
+bool parse_ascii_parallel(const std::string& path, std::string_view text, const AsciiPieces& p, long long count,
+                          bool integer, const std::string& what, std::vector<double>& out) {
   if (p.total() != count) return false;
   std::atomic<bool> ok{true};
   parallel_for(p.pieces(), 2, [&](int j0, int j1) {
@@ -125,7 +120,7 @@ std::string_view array_text(const XmlWalker& w, const Tag& tag, size_t close) {
 // forms only). ASCII and inline binary now; appended arrays get their offset, and their values
 // when <AppendedData> is read.
 VtuArray read_array(const std::string& path, XmlWalker& w, const Tag& tag, long long rows, const VtkBinaryLayout& layout,
-                    const char* unnamed) {
+                    const char* unnamed, const AsciiPieces* pieces) {
   VtuArray a;
   a.line = tag.line;
   a.name = tag.attrs.count("Name") ? tag.attrs.at("Name") : "";
@@ -158,14 +153,16 @@ VtuArray read_array(const std::string& path, XmlWalker& w, const Tag& tag, long 
     return a;
   }
   const size_t close = array_close(w, tag, "DataArray '" + shown + "'");
-  Scanner s(path, array_text(w, tag, close), '\0', w.line_at(tag.end));
+  const std::string_view text = array_text(w, tag, close);
+  Scanner s(path, text, '\0', w.line_at(tag.end));
   const long long count = rows * a.comps;
   s.check_fits(count, 1, "values in DataArray '" + shown + "'");
   a.values.resize(static_cast<size_t>(count));
   const bool integer = is_integer_type(a.type);
   std::string_view tok;
   const std::string what = "DataArray '" + shown + "'";
-  if (count >= (1 << 16) && parse_ascii_parallel(path, array_text(w, tag, close), count, integer, what, a.values)) {
+  if (count >= (1 << 16) &&
+      parse_ascii_parallel(path, text, pieces ? *pieces : ascii_pieces(text), count, integer, what, a.values)) {
     w.set_pos(close);
     return a;
   }

@@ -47,7 +47,8 @@ AsciiPieces ascii_pieces(std::string_view text);
 
 /// Reads a DataArray: exactly `rows` tuples of its components (rows < 0: any number, binary forms
 /// only). ASCII and inline binary now; an appended array gets its offset and no values yet.
+/// `pieces`: the ASCII text's ascii_pieces when the caller has them (counting its tokens).
 VtuArray read_array(const std::string& path, XmlWalker& w, const Tag& tag, long long rows, const VtkBinaryLayout& layout,
-                    const char* unnamed = "(unnamed)");
+                    const char* unnamed = "(unnamed)", const AsciiPieces* pieces = nullptr);
 
 }  // namespace vpm::detail
