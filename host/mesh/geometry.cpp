@@ -73,58 +73,53 @@ Eigen::VectorXd dual_volumes(Device& dev, const Points& x, const Tets& t) {
   return out;
 }
 
+namespace {
+// The cosines of tet i's six dihedral angles, edges in dihedral_angles_deg's order. The angle at
+// edge (a, b) is the one between the inward normals of the two faces opposite c and d (the
+// other two corners), turned: cos = -n_c . n_d; the inward normals are the barycentric
+// gradients, up to one common factor 1 / (6 V) that the cosine cancels. An edge with a
+// zero-area face beside it gets cosine 1 (angle 0).
+void dihedral_cosines(const Points& x, const Tets& t, Eigen::Index i, double cosine[6]) {
+  static constexpr int kOther[6][2] = {{2, 3}, {1, 3}, {1, 2}, {0, 3}, {0, 2}, {0, 1}};
+  const Eigen::Vector3d p0 = x.row(t(i, 0)).transpose();
+  const Eigen::Vector3d e1 = x.row(t(i, 1)).transpose() - p0, e2 = x.row(t(i, 2)).transpose() - p0,
+                        e3 = x.row(t(i, 3)).transpose() - p0;
+  Eigen::Vector3d g[4];
+  g[1] = e2.cross(e3);
+  g[2] = e3.cross(e1);
+  g[3] = e1.cross(e2);
+  g[0] = -(g[1] + g[2] + g[3]);
+  double len[4];
+  for (int k = 0; k < 4; ++k) len[k] = g[k].norm();
+  for (int e = 0; e < 6; ++e) {
+    const int c = kOther[e][0], d = kOther[e][1];
+    cosine[e] = len[c] == 0 || len[d] == 0 ? 1.0 : -g[c].dot(g[d]) / (len[c] * len[d]);
+  }
+}
+
+double angle_deg(double cosine) { return std::acos(std::clamp(cosine, -1.0, 1.0)) * 180.0 / M_PI; }
+}  // namespace
+
 Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> dihedral_angles_deg(const Points& x,
                                                                              const Tets& t) {
-  static constexpr int kEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
   Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> out(t.rows(), 6);
-  auto angles = [&](Eigen::Index i) {
-    Eigen::Vector3d p[4];
-    for (int c = 0; c < 4; ++c) p[c] = x.row(t(i, c)).transpose();
-    for (int e = 0; e < 6; ++e) {
-      const int a = kEdge[e][0], b = kEdge[e][1];
-      int o[2], k = 0;
-      for (int c = 0; c < 4; ++c)
-        if (c != a && c != b) o[k++] = c;
-      const Eigen::Vector3d axis = (p[b] - p[a]).normalized();
-      Eigen::Vector3d u = p[o[0]] - p[a], w = p[o[1]] - p[a];
-      u -= u.dot(axis) * axis;
-      w -= w.dot(axis) * axis;
-      const double nu = u.norm(), nw = w.norm();
-      double ang = 0;
-      if (nu > 0 && nw > 0) ang = std::acos(std::clamp(u.dot(w) / (nu * nw), -1.0, 1.0));
-      out(i, e) = ang * 180.0 / M_PI;
-    }
-  };
   detail::parallel_for(static_cast<int>(t.rows()), 16384, [&](int i0, int i1) {
-    for (int i = i0; i < i1; ++i) angles(i);
+    double c[6];
+    for (int i = i0; i < i1; ++i) {
+      dihedral_cosines(x, t, i, c);
+      for (int e = 0; e < 6; ++e) out(i, e) = angle_deg(c[e]);
+    }
   });
   return out;
 }
 
 Eigen::VectorXd min_dihedral_angles_deg(const Points& x, const Tets& t) {
-  // the dihedral angle at edge (a, b) is the angle between the inward normals of the two faces
-  // opposite c and d (the other two corners), turned: cos = -n_c . n_d; the inward normals are
-  // the barycentric gradients, up to one common factor 1 / (6 V) that the cosine cancels
-  static constexpr int kOther[6][2] = {{2, 3}, {1, 3}, {1, 2}, {0, 3}, {0, 2}, {0, 1}};
   Eigen::VectorXd out(t.rows());
   detail::parallel_for(static_cast<int>(t.rows()), 16384, [&](int i0, int i1) {
+    double c[6];
     for (int i = i0; i < i1; ++i) {
-      const Eigen::Vector3d p0 = x.row(t(i, 0)).transpose();
-      const Eigen::Vector3d e1 = x.row(t(i, 1)).transpose() - p0, e2 = x.row(t(i, 2)).transpose() - p0,
-                            e3 = x.row(t(i, 3)).transpose() - p0;
-      Eigen::Vector3d g[4];
-      g[1] = e2.cross(e3);
-      g[2] = e3.cross(e1);
-      g[3] = e1.cross(e2);
-      g[0] = -(g[1] + g[2] + g[3]);
-      double len[4], worst = -1;  // the largest cosine: the smallest angle
-      for (int k = 0; k < 4; ++k) len[k] = g[k].norm();
-      bool flat = false;
-      for (const auto& o : kOther) {
-        if (len[o[0]] == 0 || len[o[1]] == 0) flat = true;
-        else worst = std::max(worst, -g[o[0]].dot(g[o[1]]) / (len[o[0]] * len[o[1]]));
-      }
-      out(i) = flat ? 0.0 : std::acos(std::clamp(worst, -1.0, 1.0)) * 180.0 / M_PI;
+      dihedral_cosines(x, t, i, c);
+      out(i) = angle_deg(*std::max_element(c, c + 6));  // the largest cosine: the smallest angle
     }
   });
   return out;

@@ -19,13 +19,13 @@ Eigen::VectorXd dual_volumes(const Points& vertices, const Tets& tets);
 Eigen::VectorXd dual_volumes(Device& device, const Points& vertices, const Tets& tets);
 
 /// The six dihedral angles of each tet in degrees, m x 6, for edges
-/// (0,1),(0,2),(0,3),(1,2),(1,3),(2,3).
+/// (0,1),(0,2),(0,3),(1,2),(1,3),(2,3); an angle beside a zero-area face is 0.
 Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> dihedral_angles_deg(const Points& vertices,
                                                                              const Tets& tets);
 
 /// The smallest of each tet's six dihedral angles in degrees, length m: the row minima of
-/// dihedral_angles_deg to round-off (about 1e-12 degrees), from the four face normals and one
-/// arccosine per tet (a third of the time). 0 for a tet with a zero-area face.
+/// dihedral_angles_deg (the same face-normal cosines), with one arccosine per tet instead of six.
+/// 0 for a tet with a zero-area face.
 Eigen::VectorXd min_dihedral_angles_deg(const Points& vertices, const Tets& tets);
 
 }  // namespace vpm
