@@ -117,7 +117,7 @@ std::future<std::shared_ptr<PoissonSolver>> start_harmonic_solver(Device& device
 // positions.
 Points harmonic_interior(const TetMesh& m, const std::vector<char>& boundary, const Points& sphere,
                          const InitialMapOptions& opt, const std::string& note, InitialMapReport& rep,
-                         Device& device, PoissonSolver& ps) {
+                         PoissonSolver& ps) {
   const int n = m.num_vertices();
   // warm start: interior vertices at their input position mapped to the ball's scale
   FieldValues u = FieldValues::Zero(n, 3);
@@ -135,7 +135,7 @@ Points harmonic_interior(const TetMesh& m, const std::vector<char>& boundary, co
     throw NumericalError(std::string("initial_map: the harmonic solve failed: ") + e.what() + "; " + note);
   }
   if (!u.allFinite()) throw NumericalError("initial_map: the harmonic solve gave non-finite positions; " + note);
-  rep.harmonic_on_device = !device.is_host();
+  rep.harmonic_on_device = !ps.device().is_host();
   rep.harmonic_iterations = st.iterations;
   rep.harmonic_relative_residual = st.relative_residual;
   Points ball = u;
@@ -160,7 +160,7 @@ bool map_through_sphere(Device& device, const TetMesh& m, const TriSurface& surf
 
   t0 = Clock::now();
   if (!res.poisson) res.poisson = solver.get();
-  res.ball = harmonic_interior(m, res.boundary, sm.sphere, opt, note, rep, device, *res.poisson);
+  res.ball = harmonic_interior(m, res.boundary, sm.sphere, opt, note, rep, *res.poisson);
   rep.folds_before_untangle = static_cast<int>(inverted_tets(res.ball, m.tets).size());
   rep.timings.harmonic = seconds_since(t0);
 

@@ -78,11 +78,12 @@ MapMetrics map_metrics(Device& dev, const Points& ref, const Points& mapped, con
   m.tet_volume_ratio = ratio_stats(m.tet_ratio);
   m.vertex_volume_ratio = ratio_stats(m.vertex_ratio);
   std::vector<char> own;
-  if (!boundary_mask || boundary_mask->size() != static_cast<size_t>(mapped.rows()))
+  if (!boundary_mask || boundary_mask->size() != static_cast<size_t>(mapped.rows())) {
     own = boundary_vertex_mask(static_cast<int>(mapped.rows()), boundary_faces(tets));
-  const std::vector<char>& mask = own.empty() ? *boundary_mask : own;
+    boundary_mask = &own;
+  }
   for (Eigen::Index i = 0; i < mapped.rows(); ++i)
-    if (mask[static_cast<size_t>(i)])
+    if ((*boundary_mask)[static_cast<size_t>(i)])
       m.boundary_max_radius_error =
           std::max(m.boundary_max_radius_error, std::fabs(mapped.row(i).norm() - 1.0));
   return m;
