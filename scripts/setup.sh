@@ -8,6 +8,7 @@ PKGS=(
   libeigen3-dev libboost-dev catch2
   libtet1.5-dev tetgen libnifti2-dev zlib1g-dev mricron-data
   libcgal-dev libgmp-dev libmpfr-dev
+  libsuitesparse-dev libopenblas0-pthread  # CHOLMOD's supernodal Cholesky for the sphere map, on OpenBLAS
   libcgal-demo  # bench only: the public surface models of bench/shapes (--models)
   libviennacl-dev python3-vtk9 python3-numpy
   libhypre-dev openmpi-bin  # bench only: hypre BoomerAMG, the solver benchmark's peer, and its mpirun

@@ -10,10 +10,10 @@
 #include <set>
 #include <string>
 #include <utility>
-#include <Eigen/SparseCholesky>
 #include <Eigen/IterativeLinearSolvers>
 #include <complex>
 
+#include "linalg/sparse_cholesky.hpp"
 #include "vpm/error.hpp"
 #include "vpm/initial_map.hpp"
 #include "vpm/topology.hpp"
@@ -94,10 +94,10 @@ bool dirichlet_solve(const SpMat& A, const std::vector<char>& fixed, Eigen::Matr
     if (iterations) *iterations = its;
     return true;
   }
-  Eigen::SimplicialLDLT<SpMat> ldlt(Aff);
-  if (ldlt.info() != Eigen::Success) return false;
-  const Eigen::MatrixXd sol = ldlt.solve(rhs);
-  if (ldlt.info() != Eigen::Success || !sol.allFinite()) return false;
+  SparseCholesky chol;
+  if (!chol.factorize(Aff)) return false;
+  const Eigen::MatrixXd sol = chol.solve(rhs);
+  if (!sol.allFinite()) return false;
   for (int i = 0; i < k; ++i)
     if (idx[i] >= 0) u.row(i) = sol.row(idx[i]);
   return true;

@@ -20,7 +20,7 @@ PUBLIC = {
     "register": ["rbf", "registration", "dense_registration"],
     "collective": ["collective", "elements", "sampling", "statistics", "map_back", "cohort_view", "view_page"],
 }
-WITH = {"with_tetgen": "image", "with_cgal": "image", "with_nifti": "image"}
+WITH = {"with_tetgen": "image", "with_cgal": "image", "with_nifti": "image", "with_cholmod": "linalg"}
 
 
 def layer_of_include(inc):
