@@ -1,6 +1,16 @@
 // CHOLMOD's supernodal LLT (SuiteSparse, LGPL-2.1+/GPL-2+ Supernodal module) behind
 // linalg/sparse_cholesky.hpp, through Eigen's CholmodSupport wrapper.
+//
+// The supernodes are factored by the BLAS, which OpenBLAS threads over every core by default.
+// On the 16-core H200 machine (gVisor) that made one factorisation of the 10M-tet Colin27's
+// boundary Laplacian 10x slower than one thread (4.3 s against 0.41 s; 4 threads 0.34 s), and
+// the whole map 53 s against 32-36 s. So each call runs the BLAS on one thread (restored
+// after), unless the user chose a count with OPENBLAS_NUM_THREADS; on the 2-core VM one
+// thread costs 0.45 against 0.30 s per factorisation.
+#include <dlfcn.h>
+
 #include <Eigen/CholmodSupport>
+#include <cstdlib>
 
 #include "linalg/sparse_cholesky.hpp"
 
@@ -8,10 +18,35 @@ namespace vpm::detail {
 
 namespace {
 
+// OpenBLAS's thread count set to one for this object's lifetime, found at run time (no link
+// to OpenBLAS: with another BLAS, or OPENBLAS_NUM_THREADS set, it does nothing).
+class OneBlasThread {
+ public:
+  OneBlasThread() {
+    if (std::getenv("OPENBLAS_NUM_THREADS")) return;
+    static const auto get = reinterpret_cast<int (*)()>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
+    static const auto set = reinterpret_cast<void (*)(int)>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
+    if (!get || !set) return;
+    set_ = set;
+    saved_ = get();
+    if (saved_ != 1) set_(1);
+  }
+  ~OneBlasThread() {
+    if (set_ && saved_ != 1) set_(saved_);
+  }
+  OneBlasThread(const OneBlasThread&) = delete;
+  OneBlasThread& operator=(const OneBlasThread&) = delete;
+
+ private:
+  void (*set_)(int) = nullptr;
+  int saved_ = 1;
+};
+
 class CholmodSupernodal final : public CholeskyBackend {
  public:
-  CholmodSupernodal() { llt_.cholmod().print = 0; }  // a matrix not positive definite is not news: the caller falls back
+  CholmodSupernodal() { llt_.cholmod().print = 0; }  // not positive definite is not news: the caller falls back
   bool factorize(const Eigen::SparseMatrix<double>& a, bool same_pattern) override {
+    const OneBlasThread one;
     if (!(same_pattern && analysed_)) {
       llt_.analyzePattern(a);
       analysed_ = llt_.info() == Eigen::Success;
@@ -20,7 +55,10 @@ class CholmodSupernodal final : public CholeskyBackend {
     llt_.factorize(a);
     return llt_.info() == Eigen::Success;
   }
-  Eigen::MatrixXd solve(const Eigen::MatrixXd& b) const override { return llt_.solve(b); }
+  Eigen::MatrixXd solve(const Eigen::MatrixXd& b) const override {
+    const OneBlasThread one;
+    return llt_.solve(b);
+  }
   const char* name() const override { return "cholmod-supernodal"; }
 
  private:
