@@ -197,8 +197,11 @@ void build_mesh(const Refinement& f, const TetMesh& input, SplitResult& r) {
 }  // namespace
 
 SplitResult split_boundary_edges(const TetMesh& input, int max_rounds) {
+  return split_boundary_edges(input, boundary_faces(input.tets), max_rounds);
+}
+
+SplitResult split_boundary_edges(const TetMesh& input, const Triangles& bf, int max_rounds) {
   SplitResult r;
-  const Triangles bf = boundary_faces(input.tets);
   std::vector<char> bnd = boundary_vertex_mask(input.num_vertices(), bf);
   const auto bedges = surface_edges(bf);
   r.four_boundary_tets_before = count_four_boundary_tets(input.tets, bnd);

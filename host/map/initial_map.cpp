@@ -72,16 +72,17 @@ std::string quality_note(const TetMesh& input, const InitialMapReport& rep) {
 }
 
 // Step 1, or the input as it is (InitialMapOptions::split_edges false).
-SplitResult split(const TetMesh& input, const InitialMapOptions& opt, InitialMapReport& rep) {
+SplitResult split(const TetMesh& input, const Triangles& boundary, const InitialMapOptions& opt,
+                  InitialMapReport& rep) {
   SplitResult sp;
   if (opt.split_edges) {
-    sp = split_boundary_edges(input, opt.max_split_rounds);
+    sp = split_boundary_edges(input, boundary, opt.max_split_rounds);
   } else {
     sp.mesh = input;
     sp.mesh.set_point_field("original_position", FieldValues(input.vertices));
     sp.parent_tet.resize(input.num_tets());
     std::iota(sp.parent_tet.begin(), sp.parent_tet.end(), 0);
-    sp.boundary = boundary_faces(input.tets);
+    sp.boundary = boundary;
   }
   rep.split_rounds = sp.rounds;
   rep.inserted_vertices = sp.inserted_vertices;
@@ -146,19 +147,38 @@ Points harmonic_interior(const TetMesh& m, const std::vector<char>& boundary, co
 
 using detail::untangle_map;
 
-// Steps 2-4 on the refined mesh m (boundary surface surf, mask res.boundary): sphere map,
-// harmonic interior, untangling; fills res.ball and rep. False when the sphere map flipped a
-// triangle or folds remain.
+// A sphere map and the seconds it took.
+struct TimedSphereMap {
+  SphereMapResult map;
+  double seconds = 0;
+};
+
+TimedSphereMap timed_sphere_map(const TriSurface& surf, const InitialMapOptions& opt) {
+  const auto t0 = Clock::now();
+  TimedSphereMap r{sphere_map(surf, opt), 0};
+  r.seconds = seconds_since(t0);
+  return r;
+}
+
+// Steps 2-4 on the refined mesh m (boundary surface surf, mask res.boundary): sphere map (or
+// `early`, the same map made on the input's vertices while the split ran), harmonic interior,
+// untangling; fills res.ball and rep. False when the sphere map flipped a triangle or folds
+// remain.
 bool map_through_sphere(Device& device, const TetMesh& m, const TriSurface& surf, const InitialMapOptions& opt,
                         const std::string& note, InitialMapResult& res, InitialMapReport& rep,
-                        std::future<std::shared_ptr<PoissonSolver>>& solver) {
-  auto t0 = Clock::now();
-  const SphereMapResult sm = sphere_map(surf, opt);
+                        std::future<std::shared_ptr<PoissonSolver>>& solver, TimedSphereMap* early = nullptr) {
+  TimedSphereMap tm = early ? std::move(*early) : timed_sphere_map(surf, opt);
+  SphereMapResult& sm = tm.map;
   rep.boundary = sm.report;
-  rep.timings.boundary = seconds_since(t0);
+  rep.timings.boundary = tm.seconds;
   if (sm.flipped_triangles > 0) return false;
+  if (sm.sphere.rows() < m.num_vertices()) {  // inserted (interior) vertices: rows as for unused ones
+    const Eigen::Index k = sm.sphere.rows();
+    sm.sphere.conservativeResize(m.num_vertices(), 3);
+    sm.sphere.bottomRows(m.num_vertices() - k) = Eigen::RowVector3d(0, 0, 1).replicate(m.num_vertices() - k, 1);
+  }
 
-  t0 = Clock::now();
+  auto t0 = Clock::now();
   if (!res.poisson) res.poisson = solver.get();
   res.ball = harmonic_interior(m, res.boundary, sm.sphere, opt, note, rep, *res.poisson);
   rep.folds_before_untangle = static_cast<int>(inverted_tets(res.ball, m.tets).size());
@@ -210,8 +230,14 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
   const std::string note = quality_note(input, rep);
   rep.timings.input_quality = seconds_since(t0);
 
+  // The sphere map needs only the boundary surface, which the split does not change (it inserts
+  // interior vertices after the input's): it runs on a second thread while the split runs.
   t0 = Clock::now();
-  SplitResult sp = split(input, opt, rep);
+  const Triangles input_boundary = boundary_faces(input.tets);
+  std::future<TimedSphereMap> early_sphere = std::async(std::launch::async, [&] {
+    return timed_sphere_map(TriSurface{input.vertices, input_boundary}, opt);
+  });
+  SplitResult sp = split(input, input_boundary, opt, rep);
   res.mesh = std::move(sp.mesh);
   const TetMesh& m = res.mesh;
   rep.timings.split = seconds_since(t0);
@@ -221,7 +247,8 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
   surf.triangles = std::move(sp.boundary);
   res.boundary = boundary_vertex_mask(m.num_vertices(), surf.triangles);
   std::future<std::shared_ptr<PoissonSolver>> solver = start_harmonic_solver(device, m, opt);
-  const bool done = map_through_sphere(device, m, surf, opt, note, res, rep, solver);
+  TimedSphereMap early = early_sphere.get();
+  const bool done = map_through_sphere(device, m, surf, opt, note, res, rep, solver, &early);
   if (!done && rep.boundary.flipped_triangles == 0 &&
       opt.sphere_density != InitialMapOptions::SphereDensity::conformal) {
     // untangling the map from the equal-area boundary left folds: the conformal boundary is

@@ -266,6 +266,8 @@ struct SplitResult {
 };
 /// Step 1 on `input` (positively oriented tets).
 SplitResult split_boundary_edges(const TetMesh& input, int max_rounds = 4);
+/// The same, given `boundary` = boundary_faces(input.tets) (the caller has it already).
+SplitResult split_boundary_edges(const TetMesh& input, const Triangles& boundary, int max_rounds = 4);
 
 /// Number of tets whose four vertices are all boundary vertices.
 int count_four_boundary_tets(const Tets& tets, const std::vector<char>& boundary);
