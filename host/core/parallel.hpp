@@ -7,9 +7,12 @@
 
 namespace vpm::detail {
 
+/// The number of host threads parallel_for uses: the hardware's, at most 16.
+inline int host_threads() { return std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, 16); }
+
 template <class Body>
 void parallel_for(int n, int min_parallel, Body body) {
-  const int threads = std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, 16);
+  const int threads = host_threads();
   if (threads == 1 || n < min_parallel) {
     if (n > 0) body(0, n);
     return;

@@ -25,28 +25,12 @@ std::vector<int> tet_neighbors(const Tets& tets, Triangles* boundary) {
   return nbr;
 }
 
-void build_background(TetGrid& f, const Points& x, const Tets& tets, const std::vector<int>& nbr) {
-  f.n = static_cast<int>(x.rows());
-  f.m = static_cast<int>(tets.rows());
-  f.tets = &tets;
-  f.nbr = &nbr;
-  f.inv.assign(12 * static_cast<size_t>(f.m), 0.0);
-  parallel_for(f.m, 8192, [&](int t0, int t1) {
-    for (int t = t0; t < t1; ++t) {
-      const Eigen::Vector3d a = x.row(tets(t, 0)).transpose();
-      Eigen::Matrix3d M;
-      for (int c = 0; c < 3; ++c) M.col(c) = x.row(tets(t, c + 1)).transpose() - a;
-      const Eigen::Matrix3d Mi = M.inverse();
-      double* q = &f.inv[12 * static_cast<size_t>(t)];
-      q[0] = a.x();
-      q[1] = a.y();
-      q[2] = a.z();
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) q[3 + 3 * r + c] = Mi(r, c);
-    }
-  });
-  // Uniform grid: about one cell per tet over the bounding box (cells capped at 128 a side);
-  // each tet is listed in every cell its bounding box (grown by a quarter cell) overlaps.
+namespace {
+
+// The uniform grid of f over the positions x: about one cell per tet over the bounding box
+// (cells capped at 128 a side); each tet is listed in every cell its bounding box (grown by a
+// quarter cell) overlaps.
+void bin_tets(TetGrid& f, const Points& x, const Tets& tets) {
   Eigen::RowVector3d lo = x.colwise().minCoeff(), hi = x.colwise().maxCoeff();
   const Eigen::RowVector3d ext = (hi - lo).cwiseMax(1e-300);
   double h = std::cbrt(ext.prod() / std::max(1, f.m));
@@ -70,23 +54,71 @@ void build_background(TetGrid& f, const Points& x, const Tets& tets, const std::
       b[c] = std::clamp(static_cast<int>(std::floor((mx + 0.25 * h - f.lo[c]) * f.inv_h)), 0, f.dims[c] - 1);
     }
   };
+  // Counting sort of the (cell, tet) pairs in P contiguous tet chunks, one per thread: chunk c's
+  // tets go after chunks 0..c-1's in every cell, so each cell lists its tets in ascending order,
+  // exactly as one pass would.
+  const int chunks = f.m < 65536 ? 1 : host_threads();
+  const int per = (f.m + chunks - 1) / chunks;
+  std::vector<int> count(static_cast<size_t>(chunks) * cells, 0);
+  auto for_cells = [&](int c, auto&& visit) {
+    int a[3], b[3];
+    for (int t = c * per, e = std::min(f.m, (c + 1) * per); t < e; ++t) {
+      cell_range(t, a, b);
+      for (int k = a[2]; k <= b[2]; ++k)
+        for (int j = a[1]; j <= b[1]; ++j)
+          for (int i = a[0]; i <= b[0]; ++i) visit(i + gx * (j + static_cast<size_t>(gy) * k), t);
+    }
+  };
+  parallel_for(chunks, 1, [&](int c0, int c1) {
+    for (int c = c0; c < c1; ++c) {
+      int* n = &count[static_cast<size_t>(c) * cells];
+      for_cells(c, [&](size_t cell, int) { ++n[cell]; });
+    }
+  });
   f.cell_start.assign(cells + 1, 0);
-  int a[3], b[3];
-  for (int t = 0; t < f.m; ++t) {
-    cell_range(t, a, b);
-    for (int k = a[2]; k <= b[2]; ++k)
-      for (int j = a[1]; j <= b[1]; ++j)
-        for (int i = a[0]; i <= b[0]; ++i) ++f.cell_start[1 + i + gx * (j + static_cast<size_t>(gy) * k)];
+  int total = 0;
+  for (size_t cell = 0; cell < cells; ++cell) {  // count becomes each chunk's first slot in the cell
+    f.cell_start[cell] = total;
+    for (int c = 0; c < chunks; ++c) {
+      int& n = count[static_cast<size_t>(c) * cells + cell];
+      const int here = n;
+      n = total;
+      total += here;
+    }
   }
-  for (size_t c = 0; c < cells; ++c) f.cell_start[c + 1] += f.cell_start[c];
-  f.cell_tets.assign(static_cast<size_t>(f.cell_start[cells]), 0);
-  std::vector<int> fill(f.cell_start.begin(), f.cell_start.end() - 1);
-  for (int t = 0; t < f.m; ++t) {
-    cell_range(t, a, b);
-    for (int k = a[2]; k <= b[2]; ++k)
-      for (int j = a[1]; j <= b[1]; ++j)
-        for (int i = a[0]; i <= b[0]; ++i) f.cell_tets[fill[i + gx * (j + static_cast<size_t>(gy) * k)]++] = t;
-  }
+  f.cell_start[cells] = total;
+  f.cell_tets.assign(static_cast<size_t>(total), 0);
+  parallel_for(chunks, 1, [&](int c0, int c1) {
+    for (int c = c0; c < c1; ++c) {
+      int* slot = &count[static_cast<size_t>(c) * cells];
+      for_cells(c, [&](size_t cell, int t) { f.cell_tets[static_cast<size_t>(slot[cell]++)] = t; });
+    }
+  });
+}
+
+}  // namespace
+
+void build_background(TetGrid& f, const Points& x, const Tets& tets, const std::vector<int>& nbr) {
+  f.n = static_cast<int>(x.rows());
+  f.m = static_cast<int>(tets.rows());
+  f.tets = &tets;
+  f.nbr = &nbr;
+  f.inv.assign(12 * static_cast<size_t>(f.m), 0.0);
+  parallel_for(f.m, 8192, [&](int t0, int t1) {
+    for (int t = t0; t < t1; ++t) {
+      const Eigen::Vector3d a = x.row(tets(t, 0)).transpose();
+      Eigen::Matrix3d M;
+      for (int c = 0; c < 3; ++c) M.col(c) = x.row(tets(t, c + 1)).transpose() - a;
+      const Eigen::Matrix3d Mi = M.inverse();
+      double* q = &f.inv[12 * static_cast<size_t>(t)];
+      q[0] = a.x();
+      q[1] = a.y();
+      q[2] = a.z();
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) q[3 + 3 * r + c] = Mi(r, c);
+    }
+  });
+  bin_tets(f, x, tets);
 }
 
 
