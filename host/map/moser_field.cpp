@@ -208,14 +208,14 @@ void DeviceAdvector::Impl::upload_background(const MoserField& f) {
   // the last round's buffers go first: the new ones are not made beside them (12 doubles a tet)
   s.inv = bc::vector<double>(s.dev.context());
   s.cell_tets = bc::vector<int>(s.dev.context());
-  s.inv = bc::vector<double>(f.inv.begin(), f.inv.end(), q);
+  s.inv = bc::vector<double>(f.inv.data(), f.inv.data() + f.inv.size(), q);
   bc::copy(f.rho0.begin(), f.rho0.end(), s.rho0.begin(), q);
   s.cell_start = bc::vector<int>(f.cell_start.begin(), f.cell_start.end(), q);
   if (f.cell_tets.empty()) {
     const int zero = 0;
     s.cell_tets = bc::vector<int>(&zero, &zero + 1, q);
   } else {
-    s.cell_tets = bc::vector<int>(f.cell_tets.begin(), f.cell_tets.end(), q);
+    s.cell_tets = bc::vector<int>(f.cell_tets.data(), f.cell_tets.data() + f.cell_tets.size(), q);
   }
   for (int c = 0; c < 3; ++c) {
     s.lo[c] = f.lo[c];

@@ -87,7 +87,8 @@ void bin_tets(TetGrid& f, const Points& x, const Tets& tets) {
     }
   }
   f.cell_start[cells] = total;
-  f.cell_tets.assign(static_cast<size_t>(total), 0);
+  f.cell_tets.clear();
+  f.cell_tets.resize(static_cast<size_t>(total));  // every slot written below
   parallel_for(chunks, 1, [&](int c0, int c1) {
     for (int c = c0; c < c1; ++c) {
       int* slot = &count[static_cast<size_t>(c) * cells];
@@ -103,7 +104,8 @@ void build_background(TetGrid& f, const Points& x, const Tets& tets, const std::
   f.m = static_cast<int>(tets.rows());
   f.tets = &tets;
   f.nbr = &nbr;
-  f.inv.assign(12 * static_cast<size_t>(f.m), 0.0);
+  f.inv.clear();
+  f.inv.resize(12 * static_cast<size_t>(f.m));  // every entry written below, by the thread that owns it
   parallel_for(f.m, 8192, [&](int t0, int t1) {
     for (int t = t0; t < t1; ++t) {
       const Eigen::Vector3d a = x.row(tets(t, 0)).transpose();

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "core/uninitialized.hpp"
 #include "vpm/mesh.hpp"
 
 namespace vpm::detail {
@@ -20,12 +21,12 @@ struct TetGrid {
   int n = 0, m = 0;
   const Tets* tets = nullptr;        ///< m x 4 (owned by the caller)
   const std::vector<int>* nbr = nullptr;
-  std::vector<double> inv;           ///< m x 12: corner a, then rows of [b-a, c-a, d-a]^-1
+  UninitVector<double> inv;          ///< m x 12: corner a, then rows of [b-a, c-a, d-a]^-1 (filled in parallel)
   double lo[3] = {0, 0, 0};
   double inv_h = 1;
   int dims[3] = {1, 1, 1};
   std::vector<int> cell_start;       ///< cells + 1
-  std::vector<int> cell_tets;
+  UninitVector<int> cell_tets;       ///< the tets of each cell, cells in order (filled in parallel)
 };
 
 /// Fills inv and the grid of `f` for background positions `x` (n x 3).
