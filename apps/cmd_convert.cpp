@@ -1,4 +1,4 @@
-// vpm convert IN OUT: reads any mesh (or surface) format and writes any other, by extension.
+// vpm convert IN OUT [--ascii]: reads any mesh (or surface) format and writes any other, by extension.
 #include <iostream>
 
 #include "cli.hpp"
@@ -35,10 +35,11 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
     throw vpm::InputError(out + ": unknown file extension for a tet mesh (expected .node .ele "
                           ".mesh .vtu .msh)");
   const vpm::TetMesh m = vpm::read_mesh(in);
-  vpm::write_mesh(out, m);
+  vpm::write_mesh(out, m, args.has("--ascii") ? vpm::VtuEncoding::ascii : vpm::VtuEncoding::binary);
   vpm::cli::info("wrote " + out + ": " + std::to_string(m.num_vertices()) + " vertices, " +
                  std::to_string(m.num_tets()) + " tets");
   return 0;
 }
-vpm::cli::Registrar reg({"convert", "IN OUT", "convert between mesh (or surface) formats, chosen by extension; a tet mesh to .off/.obj/.stl writes its boundary", {}, run});
+vpm::cli::Registrar reg({"convert", "IN OUT", "convert between mesh (or surface) formats, chosen by extension; a tet mesh to .off/.obj/.stl writes its boundary",
+                          {{"--ascii", "", "a .vtu output as ASCII text (default: appended raw binary, as ParaView writes it)"}}, run});
 }  // namespace

@@ -533,16 +533,19 @@ TEST_CASE("io: our .vtu opens in VTK's own reader (scripts/check_vtu.py)") {
     WARN("python3 with vtk (python3-vtk9) not available: skipping the VTK reader check");
     return;
   }
-  write_mesh(tmp("vtk.vtu"), mesh_with_fields());
   const std::string script = std::string(VPM_SOURCE_DIR) + "/scripts/check_vtu.py";
   const std::string out = tmp("vtk.out");
-  CHECK(run_status(python + " " + script + " " + tmp("vtk.vtu") +
-                   " original_position vertex_volume_ratio label tet_volume_ratio > " + out + " 2>&1") == 0);
-  const std::string text = slurp(out);
-  CHECK_THAT(text, Catch::Contains("points 64"));
-  CHECK_THAT(text, Catch::Contains("cells 162 types [10]"));
-  CHECK_THAT(text, Catch::Contains("point field original_position components 3 type double"));
-  CHECK_THAT(text, Catch::Contains("cell field label components 1 type int"));
+  for (const VtuEncoding encoding : {VtuEncoding::binary, VtuEncoding::ascii}) {
+    INFO((encoding == VtuEncoding::binary ? "binary" : "ascii"));
+    write_mesh(tmp("vtk.vtu"), mesh_with_fields(), encoding);
+    CHECK(run_status(python + " " + script + " " + tmp("vtk.vtu") +
+                     " original_position vertex_volume_ratio label tet_volume_ratio > " + out + " 2>&1") == 0);
+    const std::string text = slurp(out);
+    CHECK_THAT(text, Catch::Contains("points 64"));
+    CHECK_THAT(text, Catch::Contains("cells 162 types [10]"));
+    CHECK_THAT(text, Catch::Contains("point field original_position components 3 type double"));
+    CHECK_THAT(text, Catch::Contains("cell field label components 1 type int"));
+  }
   CHECK(run_status(python + " " + script + " " + tmp("vtk.vtu") + " no_such_field > " + out + " 2>&1") == 1);
   CHECK(run_status(python + " " + script + " " + bad("vtu_truncated.vtu") + " > " + out + " 2>&1") == 1);
 }
@@ -556,7 +559,7 @@ TEST_CASE("io: large ASCII .vtu arrays (read on the host threads) round trip exa
     for (int c = 0; c < 6; ++c) wide(i, c) = std::sin(0.37 * i + c) * std::pow(10.0, (i % 9) - 4);
   m.set_point_field("wide", wide);
   const std::string path = tmp("large.vtu");
-  write_mesh(path, m);
+  write_mesh(path, m, VtuEncoding::ascii);
   const TetMesh r = read_mesh(path);
   require_same_geometry(m, r);
   require_same_field(m.find_point_field("wide"), r.find_point_field("wide"));

@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
+#include <cmath>
 #include <sstream>
 
 #include "vpm/error.hpp"
@@ -95,4 +96,43 @@ TEST_CASE("io: corrupt binary .vtu files are InputErrors naming the file, never 
   big.replace(big.find("LittleEndian"), 12, "BigEndian");
   spit(target, big);
   CHECK_THROWS_WITH(read_mesh(target), Catch::Contains("big-endian"));
+}
+
+TEST_CASE("io: vpm writes .vtu as appended raw binary by default and ASCII on request, both read back exactly") {
+  TetMesh ref = read_mesh(fixture("ascii"));  // three point fields (one integer, one 3-component), a cell label
+  FieldValues wide(ref.num_tets(), 2);
+  for (int t = 0; t < ref.num_tets(); ++t) wide.row(t) << std::sin(0.7 * t) * 1e-300, -t * 1e12 / 7.0;
+  ref.set_cell_field("wide", wide);
+  const std::string tmp = std::string(VPM_TEST_TMP) + "/written_";
+  write_mesh(tmp + "binary.vtu", ref);
+  write_mesh(tmp + "ascii.vtu", ref, VtuEncoding::ascii);
+  const std::string bin = slurp(tmp + "binary.vtu"), txt = slurp(tmp + "ascii.vtu");
+  CHECK_THAT(bin, Catch::Contains("<AppendedData encoding=\"raw\">"));
+  CHECK(bin.find("format=\"ascii\"") == std::string::npos);
+  CHECK_THAT(txt, Catch::Contains("format=\"ascii\""));
+  CHECK(txt.find("AppendedData") == std::string::npos);
+  for (const std::string& which : {"binary", "ascii"}) {
+    INFO(which);
+    const TetMesh m = read_mesh(tmp + which + ".vtu");
+    CHECK(m.vertices == ref.vertices);
+    CHECK(m.tets == ref.tets);
+    REQUIRE(m.point_data.size() == ref.point_data.size());
+    REQUIRE(m.cell_data.size() == ref.cell_data.size());
+    for (const Field& f : ref.point_data) {
+      REQUIRE(m.find_point_field(f.name));
+      CHECK(m.find_point_field(f.name)->values == f.values);
+      CHECK(m.find_point_field(f.name)->integer == f.integer);
+    }
+    for (const Field& f : ref.cell_data) {
+      REQUIRE(m.find_cell_field(f.name));
+      CHECK(m.find_cell_field(f.name)->values == f.values);
+      CHECK(m.find_cell_field(f.name)->integer == f.integer);
+    }
+  }
+  // ASCII -> binary -> ASCII gives the same bytes
+  write_mesh(tmp + "again.vtu", read_mesh(tmp + "binary.vtu"), VtuEncoding::ascii);
+  CHECK(slurp(tmp + "again.vtu") == txt);
+  // a truncated binary file is an InputError naming it
+  spit(tmp + "cut.vtu", bin.substr(0, bin.size() / 2));
+  CHECK_THROWS_WITH(read_mesh(tmp + "cut.vtu"), Catch::StartsWith(tmp + "cut.vtu"));
 }

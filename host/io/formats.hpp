@@ -11,7 +11,8 @@ void write_tetgen(const std::string& path, const TetMesh& mesh);  // .node + .el
 TetMesh read_medit(const std::string& path);
 void write_medit(const std::string& path, const TetMesh& mesh);
 TetMesh read_vtu(const std::string& path);
-void write_vtu(const std::string& path, const TetMesh& mesh);
+void write_vtu(const std::string& path, const TetMesh& mesh);         // ASCII (vtu_write.cpp)
+void write_vtu_binary(const std::string& path, const TetMesh& mesh);  // appended raw (vtu_write_binary.cpp)
 TetMesh read_gmsh(const std::string& path);
 void write_gmsh(const std::string& path, const TetMesh& mesh);
 

@@ -31,7 +31,9 @@ TetMesh read_mesh(const std::string& path) {
   throw InputError(path + ": unknown mesh file extension '" + e + "' (expected " + kMeshExts + ")");
 }
 
-void write_mesh(const std::string& path, const TetMesh& mesh) {
+void write_mesh(const std::string& path, const TetMesh& mesh) { write_mesh(path, mesh, VtuEncoding::binary); }
+
+void write_mesh(const std::string& path, const TetMesh& mesh, VtuEncoding encoding) {
   const std::string e = detail::extension_of(path);
   if (!is_mesh_path(path))
     throw InputError(path + ": unknown mesh file extension '" + e + "' (expected " + kMeshExts +
@@ -39,7 +41,8 @@ void write_mesh(const std::string& path, const TetMesh& mesh) {
   detail::check_fields(path, mesh);
   if (e == ".node" || e == ".ele") return detail::write_tetgen(path, mesh);
   if (e == ".mesh") return detail::write_medit(path, mesh);
-  if (e == ".vtu") return detail::write_vtu(path, mesh);
+  if (e == ".vtu")
+    return encoding == VtuEncoding::ascii ? detail::write_vtu(path, mesh) : detail::write_vtu_binary(path, mesh);
   return detail::write_gmsh(path, mesh);
 }
 

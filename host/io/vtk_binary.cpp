@@ -156,6 +156,20 @@ int vtk_type_size(const std::string& t) {
   return 0;
 }
 
+namespace {
+
+// The n values of type T at p (little-endian, unaligned) as doubles.
+template <class T>
+void convert(const unsigned char* p, size_t n, std::vector<double>& v) {
+  for (size_t i = 0; i < n; ++i, p += sizeof(T)) {
+    T x;
+    std::memcpy(&x, p, sizeof(T));
+    v[i] = static_cast<double>(x);
+  }
+}
+
+}  // namespace
+
 std::vector<double> vtk_values(const std::vector<unsigned char>& bytes, const std::string& t, const VtkBinaryFail& fail) {
   const int size = vtk_type_size(t);
   if (size == 0) fail("binary data of type '" + t + "' (expected Int8..Int64, UInt8..UInt64, Float32, Float64)");
@@ -163,18 +177,16 @@ std::vector<double> vtk_values(const std::vector<unsigned char>& bytes, const st
   const size_t n = bytes.size() / static_cast<size_t>(size);
   std::vector<double> v(n);
   const unsigned char* p = bytes.data();
-  for (size_t i = 0; i < n; ++i, p += size) {
-    if (t == "Float64") { double x; std::memcpy(&x, p, 8); v[i] = x; }
-    else if (t == "Float32") { float x; std::memcpy(&x, p, 4); v[i] = x; }
-    else if (t == "Int8") v[i] = static_cast<std::int8_t>(p[0]);
-    else if (t == "UInt8") v[i] = p[0];
-    else if (t == "Int16") { std::int16_t x; std::memcpy(&x, p, 2); v[i] = x; }
-    else if (t == "UInt16") { std::uint16_t x; std::memcpy(&x, p, 2); v[i] = x; }
-    else if (t == "Int32") { std::int32_t x; std::memcpy(&x, p, 4); v[i] = x; }
-    else if (t == "UInt32") { std::uint32_t x; std::memcpy(&x, p, 4); v[i] = x; }
-    else if (t == "Int64") { std::int64_t x; std::memcpy(&x, p, 8); v[i] = static_cast<double>(x); }
-    else { std::uint64_t x; std::memcpy(&x, p, 8); v[i] = static_cast<double>(x); }
-  }
+  if (t == "Float64") convert<double>(p, n, v);  // the type is dispatched once, not per value
+  else if (t == "Float32") convert<float>(p, n, v);
+  else if (t == "Int8") convert<std::int8_t>(p, n, v);
+  else if (t == "UInt8") convert<std::uint8_t>(p, n, v);
+  else if (t == "Int16") convert<std::int16_t>(p, n, v);
+  else if (t == "UInt16") convert<std::uint16_t>(p, n, v);
+  else if (t == "Int32") convert<std::int32_t>(p, n, v);
+  else if (t == "UInt32") convert<std::uint32_t>(p, n, v);
+  else if (t == "Int64") convert<std::int64_t>(p, n, v);
+  else convert<std::uint64_t>(p, n, v);
   return v;
 }
 

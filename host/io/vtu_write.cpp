@@ -1,4 +1,5 @@
-// Writing VTK XML UnstructuredGrid (.vtu), ASCII: points, tets (VTK type 10) and every point/cell
+// Writing VTK XML UnstructuredGrid (.vtu) as ASCII (VtuEncoding::ascii; the binary form is in
+// vtu_write_binary.cpp): points, tets (VTK type 10) and every point/cell
 // field (Int32 for integer fields, Float64 otherwise). The reader is in vtu.cpp.
 #include "core/atomic_file.hpp"
 #include "io/formats.hpp"

@@ -2,8 +2,8 @@
 // Mesh and surface file formats, chosen by file extension.
 //
 // Tet meshes: TetGen .node/.ele (either name gives the pair; .face ignored on read, written
-// with the boundary), Medit .mesh, VTK .vtu (XML, ASCII; fields as point and cell data),
-// Gmsh .msh 4.1 ASCII. Surfaces: .off, .obj, .stl (ASCII or binary).
+// with the boundary), Medit .mesh, VTK .vtu (XML; fields as point and cell data; read in ASCII
+// and every binary form, written as appended raw binary or ASCII), Gmsh .msh 4.1 ASCII. Surfaces: .off, .obj, .stl (ASCII or binary).
 //
 // Readers throw InputError("FILE:LINE: problem") on malformed input (truncated, wrong counts,
 // text in numbers, 1-based/0-based confusion, counts larger than the file could hold) and
@@ -19,9 +19,17 @@ namespace vpm {
 /// call validate_mesh() for that.
 TetMesh read_mesh(const std::string& path);
 
-/// Writes a tet mesh; .vtu writes all fields, other formats write geometry (and a `label`
-/// cell field as the element reference/region tag where the format has one).
+/// How write_mesh() encodes a .vtu file's arrays: `binary` appends them as raw little-endian
+/// bytes (`<AppendedData encoding="raw">`, as ParaView writes; the default), `ascii` writes
+/// decimal text in the XML. Both are exact (Float64 and Int32).
+enum class VtuEncoding { binary, ascii };
+
+/// Writes a tet mesh; .vtu writes all fields (binary, see VtuEncoding), other formats write
+/// geometry (and a `label` cell field as the element reference/region tag where the format
+/// has one).
 void write_mesh(const std::string& path, const TetMesh& mesh);
+/// The same, with the encoding of a .vtu file chosen (ignored for other formats).
+void write_mesh(const std::string& path, const TetMesh& mesh, VtuEncoding encoding);
 
 /// Reads a triangle surface.
 TriSurface read_surface(const std::string& path);
