@@ -1,0 +1,79 @@
+#!/usr/bin/env bash
+# Runs on the GPU machine, from the repository root, out of the folder scripts/gpu/bundle.sh
+# made (docs/gpu.md): the test suite with VPM_DEVICE=$DEV, the solver and harmonic benchmarks,
+# and `vpm map` of Colin27 at 1.1M and 10M tets (meshed there). Everything lands in $OUT/res.tgz,
+# refreshed after each step, so a run cut short still returns what it did.
+#   usage: bash .gpu/run.sh [STEPS (tests,bench,map1m,map10m)]
+# DEVICE (gpu) and ICD_DIR (the bundle's NVIDIA vendor file) may be set for a dry run elsewhere,
+# e.g. DEVICE=cpu ICD_DIR=/etc/OpenCL/vendors on a machine with PoCL.
+set -u
+R=$PWD
+G=$(cd "$(dirname "$0")" && pwd)
+W=/tmp/res
+STEPS=${1:-tests,bench,map1m,map10m}
+OUT=${OUT:-/tmp/out}
+mkdir -p "$W" "$OUT"
+save() { tar czf "$OUT/res.tgz" -C /tmp res 2>/dev/null; }
+log() { echo "== $(date +%T) $*" | tee -a "$W/log.txt"; }
+want() { [[ ",$STEPS," == *",$1,"* ]]; }
+tar xJf "$G/libs.tar.xz" -C "$G"
+TV="$G/bin/time -v"
+export LD_LIBRARY_PATH=$R/build:$G/lib OCL_ICD_VENDORS=${ICD_DIR:-$G/icd}
+DEV=${DEVICE:-gpu}
+mkdir -p build && cp -a "$G/build/." build/ && mkdir -p build/tests/tmp  # the tests write there
+SRC=$(sed -n 's/^# Source directory: //p' build/CTestTestfile.cmake)
+[[ -n $SRC && $SRC != "$R" ]] && grep -rl "$SRC" build --include=*.cmake | xargs sed -i "s#$SRC#$R#g"
+mkdir -p /usr/share/mricron/templates && cp "$G"/mricron/* /usr/share/mricron/templates/
+command -v ctest > /dev/null || export PATH=$PATH:/opt/torch/.venv/bin
+log "root $R; $(nproc) cores; $(free -g | awk '/Mem/{print $2}') GB"
+nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv >> "$W/log.txt" 2>&1
+VPM_DEVICE=$DEV build/vpm devices >> "$W/log.txt" 2>&1 || { log "vpm devices failed"; cat "$W/log.txt"; save; exit 1; }
+save
+M=/usr/share/mricron/templates/ch2bet.nii.gz
+MP=""
+if want map10m; then
+  ( $TV build/vpm mesh-image $M --max-volume 0.37 -o /tmp/colin_10m.vtu > "$W/mesh10m.txt" 2>&1 ) &
+  MP=$!
+fi
+if want tests; then
+  log "ctest${MP:+ (the 10M mesh being made beside it)}"
+  VPM_DEVICE=$DEV VPM_TEST_REQUIRE_OPENCL=1 timeout 300 ctest --test-dir build -E "install|arch|workflow|browser" \
+    -j10 --timeout 200 --output-on-failure > "$W/ctest_gpu.log" 2>&1
+  log "ctest rc $?"; grep -E "tests passed|tests failed" "$W/ctest_gpu.log" | tee -a "$W/log.txt"; save
+fi
+if want map1m || want bench; then
+  $TV build/vpm mesh-image $M --max-volume 3.4 -o /tmp/colin_1m.vtu > "$W/mesh1m.txt" 2>&1
+fi
+[[ -n $MP ]] && { wait "$MP"; log "10M mesh made"; grep -h Elapsed "$W/mesh10m.txt" | tee -a "$W/log.txt"; }
+if want map1m; then
+  for i in 1 2; do
+    log "map 1.1M, run $i"
+    VPM_DEVICE=$DEV $TV timeout 120 build/vpm map /tmp/colin_1m.vtu -o /tmp/ball_1m.vtu --report "$W/map1m_gpu_$i.json" \
+      > "$W/map1m_gpu_$i.txt" 2>&1
+    log "rc $?"; grep -h "Elapsed\|Maximum resident" "$W/map1m_gpu_$i.txt" | tee -a "$W/log.txt"; save
+  done
+fi
+if want map10m; then
+  for i in 1 2; do
+    log "map 10M, run $i"
+    VPM_DEVICE=$DEV $TV timeout 150 build/vpm map /tmp/colin_10m.vtu -o /tmp/ball_10m.vtu --report "$W/map10m_gpu_$i.json" \
+      > "$W/map10m_gpu_$i.txt" 2>&1
+    log "rc $?"; grep -h "Elapsed\|Maximum resident" "$W/map10m_gpu_$i.txt" | tee -a "$W/log.txt"; save
+  done
+fi
+if want bench; then
+  log "benchmarks"
+  VPM_DEVICE=$DEV timeout 120 build/bench/vpm_bench_solver --sizes 100000,400000,1600000 --repeats 3 --no-hypre \
+    --json "$W/solver_gpu.json" > "$W/solver_gpu.txt" 2>&1
+  VPM_DEVICE=$DEV timeout 90 build/bench/vpm_bench_harmonic --sizes 400000,1600000 --repeats 3 --json "$W/harmonic_gpu.json" \
+    /tmp/colin_1m.vtu > "$W/harmonic_gpu.txt" 2>&1
+  log "benchmarks done"; save
+fi
+python3 - <<'PY' | tee -a "$W/log.txt"
+import glob, json
+for f in sorted(glob.glob("/tmp/res/map*.json")):
+    r = json.load(open(f))
+    print(f.split("/")[-1], "converged", r["converged"], "folds", r["final"]["inverted_tets"],
+          "total %.2f s" % r["timings_s"]["total"], json.dumps(r["initial_map"]["timings_s"]))
+PY
+save; log end
