@@ -338,3 +338,29 @@ TEST_CASE("sphere map: where the conformal map flips triangles the progressive s
   CHECK(parse_sphere_start("progressive") == InitialMapOptions::SphereStart::progressive);
   CHECK_THROWS_AS(parse_sphere_start("tutte"), InputError);
 }
+
+TEST_CASE("equal-area sphere map: the steps' systems solved by device CG give the host's sphere") {
+  const std::shared_ptr<Device> dev = test::opencl_device();
+  if (!dev) {
+    WARN("no OpenCL device: skipped");
+    return;
+  }
+  TetMesh rod = test::box_mesh(24, 4, 4);  // elongated: many equal-area steps
+  rod.vertices.col(0) *= 6.0;
+  const TriSurface s{rod.vertices, boundary_faces(rod.tets)};
+  const SphereMapResult host = sphere_map(s);
+  InitialMapOptions on_device;
+  on_device.density_solve = InitialMapOptions::DensitySolve::device;
+  const SphereMapResult d = sphere_map(s, on_device, dev.get());
+  CHECK(d.report.density_solver == "device-cg");
+  CHECK(host.report.density_solver != "device-cg");
+  REQUIRE(d.flipped_triangles == 0);
+  CHECK(*d.report.density_steps == *host.report.density_steps);
+  CHECK(std::abs(d.report.area_distortion_final - host.report.area_distortion_final) <
+        1e-6 * host.report.area_distortion_final);
+  CHECK((d.sphere - host.sphere).cwiseAbs().maxCoeff() < 1e-6);
+  // without a device the option falls back to the host
+  const SphereMapResult none = sphere_map(s, on_device, nullptr);
+  CHECK(none.report.density_solver == host.report.density_solver);
+  CHECK(none.sphere == host.sphere);
+}

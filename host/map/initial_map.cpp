@@ -8,6 +8,7 @@
 #include <future>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string>
@@ -153,9 +154,9 @@ struct TimedSphereMap {
   double seconds = 0;
 };
 
-TimedSphereMap timed_sphere_map(const TriSurface& surf, const InitialMapOptions& opt) {
+TimedSphereMap timed_sphere_map(const TriSurface& surf, const InitialMapOptions& opt, Device& device) {
   const auto t0 = Clock::now();
-  TimedSphereMap r{sphere_map(surf, opt), 0};
+  TimedSphereMap r{sphere_map(surf, opt, &device), 0};
   r.seconds = seconds_since(t0);
   return r;
 }
@@ -167,7 +168,7 @@ TimedSphereMap timed_sphere_map(const TriSurface& surf, const InitialMapOptions&
 bool map_through_sphere(Device& device, const TetMesh& m, const TriSurface& surf, const InitialMapOptions& opt,
                         const std::string& note, InitialMapResult& res, InitialMapReport& rep,
                         std::future<std::shared_ptr<PoissonSolver>>& solver, TimedSphereMap* early = nullptr) {
-  TimedSphereMap tm = early ? std::move(*early) : timed_sphere_map(surf, opt);
+  TimedSphereMap tm = early ? std::move(*early) : timed_sphere_map(surf, opt, device);
   SphereMapResult& sm = tm.map;
   rep.boundary = sm.report;
   rep.timings.boundary = tm.seconds;
@@ -235,7 +236,7 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
   t0 = Clock::now();
   const Triangles input_boundary = boundary_faces(input.tets);
   std::future<TimedSphereMap> early_sphere = std::async(std::launch::async, [&] {
-    return timed_sphere_map(TriSurface{input.vertices, input_boundary}, opt);
+    return timed_sphere_map(TriSurface{input.vertices, input_boundary}, opt, device);
   });
   SplitResult sp = split(input, input_boundary, opt, rep);
   res.mesh = std::move(sp.mesh);
@@ -246,8 +247,12 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
   surf.vertices = m.vertices;
   surf.triangles = std::move(sp.boundary);
   res.boundary = boundary_vertex_mask(m.num_vertices(), surf.triangles);
+  // a sphere map solving on the device finishes before the Poisson solver is built there: two
+  // threads never share the device (its program cache and Boost.Compute's are not thread-safe)
+  std::optional<TimedSphereMap> sphere_first;
+  if (opt.density_solve == InitialMapOptions::DensitySolve::device) sphere_first = early_sphere.get();
   std::future<std::shared_ptr<PoissonSolver>> solver = start_harmonic_solver(device, m, opt);
-  TimedSphereMap early = early_sphere.get();
+  TimedSphereMap early = sphere_first ? std::move(*sphere_first) : early_sphere.get();
   const bool done = map_through_sphere(device, m, surf, opt, note, res, rep, solver, &early);
   if (!done && rep.boundary.flipped_triangles == 0 &&
       opt.sphere_density != InitialMapOptions::SphereDensity::conformal) {

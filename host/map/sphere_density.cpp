@@ -9,8 +9,8 @@
 // (c_t: the triangle's chord area, T_t: its share of the input's area times the sphere's), so
 // the flow's divergence is the log of the area deficit: a triangle e^-40 too small grows by a
 // factor e per unit of (dt * g), whatever its size (the cotangent Laplacian is scale-free), and
-// the log ratios decay like e^-t. Each step is one solve with the Laplacian (FactorReuse
-// below); dt = 0.5 / max |g|, halved until no triangle flips and the area-weighted mean square
+// the log ratios decay like e^-t. Each step is one solve with the Laplacian
+// (map/density_solve.hpp); dt = 0.5 / max |g|, halved until no triangle flips and the area-weighted mean square
 // of g falls. Stops when the area distortion reaches `tolerance`, stalls, or after max_steps.
 //
 // A stretch-energy fixed point (Yueh et al. 2019) in a stereographic chart was tried first and
@@ -22,7 +22,7 @@
 #include <cmath>
 #include <vector>
 
-#include "linalg/sparse_cholesky.hpp"
+#include "map/density_solve.hpp"
 #include "map/sphere_steps.hpp"
 #include "vpm/initial_map.hpp"
 
@@ -142,58 +142,6 @@ Points rigid_where_flipped(const Points& s, const Triangles& f, Points& v, doubl
   return Points();
 }
 
-// Solves the density steps' systems L u = b. The Laplacians of successive steps differ by the
-// step's change of shape, so the factor of an earlier step's L preconditions CG on the current
-// one to a relative residual of 1e-12 in 9-15 iterations (a pair of triangular solves each): a
-// new factor is made when CG needed more than kRefactorAfter iterations last time or does not
-// converge within kMaxIterations. On the 10M-tet Colin27's boundary (136k vertices, 13 steps)
-// that is 4 factorisations instead of 13, and the whole sphere map 6.45 -> 5.55 s on the 2-core
-// VM with CHOLMOD (one CG iteration 20 ms, one factorisation 0.33 s), 14.7 -> 8.3 s with
-// Eigen's SimplicialLDLT (factorisation 1.0 s).
-class FactorReuse {
- public:
-  bool solve(const SpMat& L, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
-    if (factored_ && last_iterations_ <= kRefactorAfter && pcg(L, b, x)) return true;
-    if (!chol_.factorize(L, factored_)) return false;
-    factored_ = true;
-    last_iterations_ = 0;
-    x = chol_.solve(b);
-    return x.allFinite();
-  }
-
- private:
-  static constexpr int kRefactorAfter = 12, kMaxIterations = 40;
-  static constexpr double kTolerance = 1e-12;
-
-  bool pcg(const SpMat& L, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
-    const double bn = b.norm();
-    x = chol_.solve(b);
-    Eigen::VectorXd r = b - L * x;
-    Eigen::VectorXd z = chol_.solve(r), p = z;
-    double rz = r.dot(z);
-    for (int it = 1; it <= kMaxIterations; ++it) {
-      if (!(r.norm() > kTolerance * bn)) {
-        last_iterations_ = it - 1;
-        return x.allFinite();
-      }
-      const Eigen::VectorXd q = L * p;
-      const double alpha = rz / p.dot(q);
-      x += alpha * p;
-      r -= alpha * q;
-      z = chol_.solve(r);
-      const double rz_next = r.dot(z);
-      p = z + (rz_next / rz) * p;
-      rz = rz_next;
-    }
-    last_iterations_ = kMaxIterations + 1;
-    return false;
-  }
-
-  SparseCholesky chol_;
-  bool factored_ = false;
-  int last_iterations_ = 0;
-};
-
 }  // namespace
 
 Eigen::VectorXd vertex_area_shares(const Points& in, const Triangles& f) {
@@ -207,7 +155,7 @@ Eigen::VectorXd vertex_area_shares(const Points& in, const Triangles& f) {
 }
 
 EquiarealStats equalise_density(const Points& in, const Triangles& f, const Eigen::VectorXd& target, Points& s,
-                                int max_steps, double tolerance) {
+                                int max_steps, double tolerance, Device* device) {
   EquiarealStats st;
   const int k = static_cast<int>(s.rows());
   Eigen::VectorXd share = target.cwiseMax(1e-300 * target.maxCoeff());
@@ -220,7 +168,7 @@ EquiarealStats equalise_density(const Points& in, const Triangles& f, const Eige
   Eigen::VectorXd cv;
   Eigen::VectorXd g = log_deficit(f, k, c, share, &misfit, &cv);
   st.misfit_before = st.misfit_after = misfit;
-  FactorReuse solver;
+  DensitySolver solver(device);
   int stalled = 0;
   double best = st.distortion_before;
   for (int step = 0; step < max_steps && st.distortion_after > tolerance; ++step) {
@@ -267,6 +215,7 @@ EquiarealStats equalise_density(const Points& in, const Triangles& f, const Eige
     }
   }
   st.misfit_after = misfit;
+  st.solver = solver.name();
   return st;
 }
 

@@ -16,6 +16,7 @@
 #include <Eigen/IterativeLinearSolvers>
 #include <complex>
 
+#include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "map/sphere_steps.hpp"
 #include "vpm/topology.hpp"
@@ -224,11 +225,14 @@ void balance(const Points& in, const Triangles& f, const InitialMapOptions& opt,
 
 // Step 2.5: area equalisation, kept when it brings the sphere areas closer to the input's
 // shares without a flip.
-void equalise(const Points& in, const Triangles& f, const InitialMapOptions& opt, Points& s, SphereMapReport& rep) {
+void equalise(const Points& in, const Triangles& f, const InitialMapOptions& opt, Points& s, SphereMapReport& rep,
+              Device* device) {
   rep.density_target = "area";
   Points q = s;
-  const EquiarealStats st =
-      equalise_density(in, f, vertex_area_shares(in, f), q, opt.density_max_steps, opt.density_tolerance);
+  Device* solve_on = opt.density_solve == InitialMapOptions::DensitySolve::device ? device : nullptr;
+  const EquiarealStats st = equalise_density(in, f, vertex_area_shares(in, f), q, opt.density_max_steps,
+                                             opt.density_tolerance, solve_on);
+  rep.density_solver = st.solver;
   rep.density_steps = st.steps;
   rep.density_misfit_before = st.misfit_before;
   rep.density_misfit_after = st.misfit_after;
@@ -239,7 +243,9 @@ void equalise(const Points& in, const Triangles& f, const InitialMapOptions& opt
 
 }  // namespace
 
-SphereMapResult sphere_map(const TriSurface& surf, const InitialMapOptions& opt) {
+SphereMapResult sphere_map(const TriSurface& surf, const InitialMapOptions& opt) { return sphere_map(surf, opt, nullptr); }
+
+SphereMapResult sphere_map(const TriSurface& surf, const InitialMapOptions& opt, Device* device) {
   SphereMapResult r;
   SphereMapReport& rep = r.report;
   const CompactSurface cs = compact(surf);
@@ -274,7 +280,7 @@ SphereMapResult sphere_map(const TriSurface& surf, const InitialMapOptions& opt)
     rep.progressive_seconds = ps.seconds;
   }
   if (opt.sphere_density != InitialMapOptions::SphereDensity::conformal && flips == 0)
-    equalise(in, f, opt, s, rep);
+    equalise(in, f, opt, s, rep, device);
   if (opt.area_correction) rep.area_correction_steps = area_flow(in, f, s, opt.area_correction_steps, false);
   if (flipped_sphere_triangles(s, f) > 0) {
     // Extreme conformal scale factors (protrusions, coarse elongated shapes) can make a chord
@@ -298,6 +304,12 @@ InitialMapOptions::SphereDensity parse_sphere_density(const std::string& name) {
   if (name == "conformal") return D::conformal;
   if (name == "area") return D::area;
   throw InputError("sphere density '" + name + "' is not one of conformal, area");
+}
+
+InitialMapOptions::DensitySolve parse_density_solve(const std::string& name) {
+  if (name == "host") return InitialMapOptions::DensitySolve::host;
+  if (name == "device") return InitialMapOptions::DensitySolve::device;
+  throw InputError("sphere solve '" + name + "' is not one of host, device");
 }
 
 InitialMapOptions::SphereStart parse_sphere_start(const std::string& name) {
@@ -337,6 +349,7 @@ Json to_json(const SphereMapReport& r) {
     e["log_misfit_after"] = r.density_misfit_after;
     e["area_distortion"] = r.area_distortion_density;
     e["kept"] = r.density_kept;
+    if (!r.density_solver.empty()) e["solver"] = r.density_solver;
     j["density"] = e;
   }
   j["start"] = r.start;

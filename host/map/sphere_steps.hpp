@@ -6,9 +6,14 @@
 // of tet meshes.
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <string>
 #include <vector>
 
 #include "vpm/mesh.hpp"
+
+namespace vpm {
+class Device;
+}
 
 namespace vpm::detail {
 
@@ -48,14 +53,16 @@ int area_flow(const Points& in, const Triangles& f, Points& s, int steps, bool u
 struct EquiarealStats {
   int steps = 0, flips_before = 0;
   double misfit_before = 0, misfit_after = 0, distortion_before = 0, distortion_after = 0;
+  std::string solver;  ///< what solved the last step's Laplacian system (DensitySolver::name)
 };
 /// Moves the sphere map s of surface (in, f) until each vertex's lumped sphere area (a third of
 /// its triangles' chord areas) is its share `target` (k entries, normalised here) of the
 /// sphere's, by a log-density Moser flow on the sphere (map/sphere_density.cpp). Never flips
 /// a triangle that was not flipped; stops after `max_steps`, when the area distortion is at
-/// most `tolerance`, or when it stalls.
+/// most `tolerance`, or when it stalls. `device`: where the steps' Laplacian systems are solved
+/// (null: the host; map/density_solve.hpp).
 EquiarealStats equalise_density(const Points& in, const Triangles& f, const Eigen::VectorXd& target, Points& s,
-                                int max_steps, double tolerance);
+                                int max_steps, double tolerance, Device* device = nullptr);
 /// What progressive_sphere did.
 struct ProgressiveStats {
   int passes = 0, collapses = 0, sweeps = 0;

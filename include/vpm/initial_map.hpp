@@ -65,6 +65,14 @@ struct InitialMapOptions {
   /// the target and were worse on every shape measured: docs/shapes.md.)
   enum class SphereDensity { conformal, area };
   SphereDensity sphere_density = SphereDensity::area;
+  /// Where the area equalisation's Laplacian systems are solved (one per step): host = sparse
+  /// Cholesky, an earlier step's factor reused as CG preconditioner (the default); device =
+  /// Jacobi CG on the OpenCL device sphere_map() is given (the host when it is given none or the
+  /// host device; a step whose CG fails is redone on the host). On the 2-core CPU device the
+  /// host is faster; meant for GPUs, where 136k boundary vertices cost 0.3-0.4 s per host
+  /// factorisation: not yet measured on one (docs/gpu.md).
+  enum class DensitySolve { host, device };
+  DensitySolve density_solve = DensitySolve::host;
   int density_max_steps = 300;
   double density_tolerance = 0.02;  ///< stop at this area distortion (mean |area ratio - 1|)
   /// Where the sphere map starts. automatic: the conformal map, and when that leaves chord
@@ -122,6 +130,7 @@ struct SphereMapReport {
   // after, the area distortion reached, kept or not
   std::string density_target;
   std::optional<int> density_steps;
+  std::string density_solver;  ///< "cholmod-supernodal", "eigen-simplicial-ldlt" or "device-cg" (the last step's)
   double density_misfit_before = 0, density_misfit_after = 0, area_distortion_density = 0;
   bool density_kept = false;
   // the progressive embedding (InitialMapOptions::sphere_start), when it ran: edge-collapse
@@ -247,6 +256,8 @@ InitialMapOptions::SphereDensity parse_sphere_density(const std::string& name);
 const char* to_string(InitialMapOptions::SphereDensity d);
 /// "auto", "progressive" (InitialMapOptions::SphereStart); InputError otherwise.
 InitialMapOptions::SphereStart parse_sphere_start(const std::string& name);
+/// "host" or "device" (InputError otherwise).
+InitialMapOptions::DensitySolve parse_density_solve(const std::string& name);
 
 /// Result of step 1.
 struct SplitResult {
@@ -281,6 +292,8 @@ struct SphereMapResult {
 /// Step 2 for a closed genus-0 triangle surface with outward orientation (vertices unused by
 /// a triangle are mapped to (0,0,1) and ignored). Throws InputError if not genus 0.
 SphereMapResult sphere_map(const TriSurface& surface, const InitialMapOptions& options = {});
+/// The same; `device` (may be null: host) is where InitialMapOptions::density_solve may run.
+SphereMapResult sphere_map(const TriSurface& surface, const InitialMapOptions& options, Device* device);
 
 /// Mean over `triangles` of |a_sphere/A_sphere / (a_in/A_in) - 1|.
 double area_distortion(const Points& input, const Points& sphere, const Triangles& triangles);
