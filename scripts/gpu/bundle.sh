@@ -17,7 +17,7 @@ cp -a "$B/vpm" "$B/libvpm.so" "$B/CTestTestfile.cmake" "$O/build/"
 cp -a "$B"/tests/*.cmake "$O/build/tests/"
 for t in "$B"/tests/test_*; do [[ -f $t && -x $t ]] && cp -a "$t" "$O/build/tests/"; done
 [[ -f $B/bench/CTestTestfile.cmake ]] && cp -a "$B/bench/CTestTestfile.cmake" "$O/build/bench/"
-for b in solver harmonic volume_map register; do
+for b in solver harmonic sphere_map volume_map register; do
   [[ -x $B/bench/vpm_bench_$b ]] && cp -a "$B/bench/vpm_bench_$b" "$O/build/bench/"
 done
 # the shared libraries of everything above, less the C/C++ runtime every Linux has

@@ -69,7 +69,10 @@ if want bench; then
     --json "$W/solver_gpu.json" > "$W/solver_gpu.txt" 2>&1
   VPM_DEVICE=$DEV timeout 90 build/bench/vpm_bench_harmonic --sizes 400000,1600000 --repeats 3 --json "$W/harmonic_gpu.json" \
     /tmp/colin_1m.vtu > "$W/harmonic_gpu.txt" 2>&1
-  log "benchmarks done"; save
+  TENM=""; want map10m && TENM=/tmp/colin_10m.vtu  # the sphere map, host Cholesky against device CG
+  VPM_DEVICE=$DEV timeout 180 build/bench/vpm_bench_sphere_map --sizes "" --repeats 1 --json "$W/sphere_map_gpu.json" \
+    /tmp/colin_1m.vtu $TENM > "$W/sphere_map_gpu.txt" 2>&1
+  log "benchmarks done"; tail -4 "$W/sphere_map_gpu.txt" | tee -a "$W/log.txt"; save
 fi
 python3 - <<'PY' | tee -a "$W/log.txt"
 import glob, json
