@@ -20,16 +20,13 @@
 #include "vpm/solver.hpp"
 #include "vpm/timing.hpp"
 #include "vpm/topology.hpp"
+#include "bench_util.hpp"
 
 using namespace vpm;
+using bench::median;
+using bench::parse_sizes;
 
 namespace {
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 struct Result {
   std::string name;
@@ -70,17 +67,6 @@ Result run(Device& dev, const std::string& name, const TetMesh& m, int repeats) 
   r.columns_s = median(columns_t);
   r.max_difference = (block - columns).cwiseAbs().maxCoeff();
   return r;
-}
-
-std::vector<long> parse_sizes(const std::string& s) {
-  std::vector<long> out;
-  size_t p = 0;
-  while (p <= s.size()) {
-    const size_t q = std::min(s.find(',', p), s.size());
-    out.push_back(std::stol(s.substr(p, q - p)));
-    p = q + 1;
-  }
-  return out;
 }
 
 }  // namespace

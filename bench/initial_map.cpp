@@ -24,16 +24,12 @@
 #include "vpm/io.hpp"
 #include "vpm/json.hpp"
 #include "vpm/validate.hpp"
+#include "bench_util.hpp"
 
 using namespace vpm;
+using bench::median;
 
 namespace {
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 // The synthetic shapes at `scale`, then the given mesh files (skipped with a message if bad).
 std::vector<std::pair<std::string, TetMesh>> load_shapes(double scale, const std::vector<std::string>& paths) {
   std::vector<std::pair<std::string, TetMesh>> shapes;

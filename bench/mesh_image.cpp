@@ -15,17 +15,15 @@
 #include "vpm/config.hpp"
 #include "vpm/json.hpp"
 #include "vpm/mesh_image.hpp"
+#include "bench_util.hpp"
+
+using vpm::bench::median;
 
 namespace {
 
 const char* kDir = "/usr/share/mricron/templates/";
 const int kLabels[] = {71, 72, 77, 78};
 const char* kNames[] = {"Caudate_L", "Caudate_R", "Thalamus_L", "Thalamus_R"};
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
-}
 
 // The stage's time in `rep`, or null when it did not run.
 const vpm::StageTime* stage(const vpm::MeshImageReport& rep, const std::string& name) {

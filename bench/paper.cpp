@@ -33,17 +33,13 @@
 #include "vpm/metrics.hpp"
 #include "vpm/timing.hpp"
 #include "vpm/validate.hpp"
+#include "bench_util.hpp"
 
 using namespace vpm;
+using bench::median;
 using Vec = Eigen::Vector3d;
 
 namespace {
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n == 0 ? 0 : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 // Brain centroid c and mean radius R: 4 potentials centred within R/2 of c, width s = 0.35 R,
 // |a_k| chosen so each term's speed peaks at 3-6 % of R (support/incompressible.hpp).

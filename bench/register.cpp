@@ -22,8 +22,10 @@
 #include "vpm/json.hpp"
 #include "vpm/metrics.hpp"
 #include "vpm/registration.hpp"
+#include "bench_util.hpp"
 
 using namespace vpm;
+using bench::median;
 
 namespace {
 
@@ -50,12 +52,6 @@ TetMesh ball_mesh(int n) {
 // (drawn so that a move of 0.2 stays inside radius 0.9; fixed seed).
 void landmarks(int n, unsigned seed, double move, Points& p, Points& q) {
   test::random_landmarks(n, seed, 0.8, 0.2, 0.9, move, p, q);
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n == 0 ? 0 : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 struct Case {

@@ -19,16 +19,13 @@
 #include "vpm/json.hpp"
 #include "vpm/timing.hpp"
 #include "vpm/topology.hpp"
+#include "bench_util.hpp"
 
 using namespace vpm;
+using bench::median;
+using bench::parse_sizes;
 
 namespace {
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 struct Timed {
   SphereMapResult map;
@@ -47,17 +44,6 @@ Timed timed(const TriSurface& s, InitialMapOptions::DensitySolve where, Device* 
   }
   r.seconds = median(t);
   return r;
-}
-
-std::vector<long> parse_sizes(const std::string& s) {
-  std::vector<long> out;
-  size_t p = 0;
-  while (p <= s.size()) {
-    const size_t q = std::min(s.find(',', p), s.size());
-    if (q > p) out.push_back(std::stol(s.substr(p, q - p)));  // "" = none
-    p = q + 1;
-  }
-  return out;
 }
 
 TriSurface surface_of(const std::string& path) {
