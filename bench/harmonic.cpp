@@ -24,7 +24,6 @@
 
 using namespace vpm;
 using bench::median;
-using bench::parse_sizes;
 
 namespace {
 
@@ -72,19 +71,12 @@ Result run(Device& dev, const std::string& name, const TetMesh& m, int repeats) 
 }  // namespace
 
 int main(int argc, char** argv) try {
-  std::vector<long> sizes = {100000, 400000, 1600000};
-  std::vector<std::string> files;
-  int repeats = 3;
-  std::string json_path = "harmonic.json";
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    const bool has_value = i + 1 < argc;
-    if (a == "--sizes" && has_value) sizes = parse_sizes(argv[++i]);
-    else if (a == "--repeats" && has_value) repeats = std::max(1, std::stoi(argv[++i]));
-    else if (a == "--json" && has_value) json_path = argv[++i];
-    else if (!a.empty() && a[0] != '-') files.push_back(a);
-    else throw InputError("usage: vpm_bench_harmonic [--sizes N,N,...] [--repeats R] [--json FILE] [MESH ...]");
-  }
+  const bench::SizedRun run_opts = bench::parse_sized_run(argc, argv, {{100000, 400000, 1600000}, 3, "harmonic.json", {}},
+                                                          "usage: vpm_bench_harmonic [--sizes N,N,...] [--repeats R] [--json FILE] [MESH ...]");
+  const std::vector<long>& sizes = run_opts.sizes;
+  const std::vector<std::string>& files = run_opts.files;
+  const int repeats = run_opts.repeats;
+  const std::string& json_path = run_opts.json;
   Device& dev = Device::current();
   std::printf("device: %s, %d repeats (medians)\n", dev.name().c_str(), repeats);
   std::printf("%-16s %9s %9s %10s %6s %9s %9s %7s %9s\n", "mesh", "vertices", "tets", "nnz", "iters", "block s",

@@ -9,16 +9,18 @@
 
 namespace vpm::detail {
 
+void open_vtu_piece(TextOut& o, std::string_view vtkfile_attributes, long long n, long long m) {
+  o << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" " << vtkfile_attributes
+    << ">\n  <UnstructuredGrid>\n    <Piece NumberOfPoints=\"";
+  o.integer(n) << "\" NumberOfCells=\"";
+  o.integer(m) << "\">\n";
+}
+
 void write_vtu(const std::string& path, const TetMesh& mesh) {
   AtomicFile file(path);
   TextOut o(file.stream());
   const long long n = mesh.num_vertices(), m = mesh.num_tets();
-  o << "<?xml version=\"1.0\"?>\n"
-       "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
-       "  <UnstructuredGrid>\n"
-       "    <Piece NumberOfPoints=\"";
-  o.integer(n) << "\" NumberOfCells=\"";
-  o.integer(m) << "\">\n";
+  open_vtu_piece(o, "version=\"0.1\" byte_order=\"LittleEndian\"", n, m);
   auto fields = [&](const char* section, const std::vector<Field>& fs) {
     o << "      <" << section << ">\n";
     for (const Field& f : fs) {

@@ -3,7 +3,9 @@
 // compression: bit-exact like the ASCII form (vtu_write.cpp), a third of the bytes for the
 // connectivity, and read without parsing text. The reader (vtu.cpp, vtk_binary.cpp) reads both.
 #include <bit>
+#include <cmath>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "core/atomic_file.hpp"
@@ -62,12 +64,7 @@ Block field_block(const Field& f) {
 
 void write_header(TextOut& o, const std::vector<Block>& blocks, size_t point_fields, size_t cell_fields,
                   long long n, long long m) {
-  o << "<?xml version=\"1.0\"?>\n"
-       "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
-       "  <UnstructuredGrid>\n"
-       "    <Piece NumberOfPoints=\"";
-  o.integer(n) << "\" NumberOfCells=\"";
-  o.integer(m) << "\">\n";
+  open_vtu_piece(o, "version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\"", n, m);
   std::uint64_t offset = 0;
   size_t next = 0;
   auto arrays = [&](const char* section, size_t count) {

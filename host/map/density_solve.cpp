@@ -70,10 +70,10 @@ class FactorReuse {
 };
 
 // Jacobi CG on the device, one matrix per step (uploaded with the solver), warm-started from
-// the previous step's solution. On a GPU a step of the 10M-tet Colin27's boundary (136k
-// vertices, about 750 iterations) is a few tens of milliseconds of kernels instead of a host
-// factorisation; on CPU devices the host's Cholesky is faster, so the automatic rule keeps it
-// there.
+// the previous step's solution: meant for GPUs, where a step of the 10M-tet Colin27's boundary
+// (136k vertices, about 750 iterations) should cost kernels instead of a host factorisation
+// (not yet measured on one). On the CPU device the host's Cholesky is faster (1.1M boundary
+// 2.06 s against 0.92 s), so InitialMapOptions::density_solve defaults to the host.
 class DeviceCg {
  public:
   explicit DeviceCg(Device& device) : device_(device) {}

@@ -45,24 +45,18 @@ if want map1m || want bench; then
   $TV build/vpm mesh-image $M --max-volume 3.4 -o /tmp/colin_1m.vtu > "$W/mesh1m.txt" 2>&1
 fi
 [[ -n $MP ]] && { wait "$MP"; log "10M mesh made"; grep -h Elapsed "$W/mesh10m.txt" | tee -a "$W/log.txt"; }
-if want map1m; then
-  for i in 1 2; do  # run 2: the sphere map's equal-area solves on the device (--sphere-solve device)
-    log "map 1.1M, run $i"
+# Two maps of MESH: the default, then with the sphere map's equal-area solves on the device.
+maps() {  # LABEL MESH TIMEOUT
+  for i in 1 2; do
+    log "map $1, run $i"
     X=""; [[ $i == 2 ]] && X="--sphere-solve device"
-    VPM_DEVICE=$DEV $TV timeout 120 build/vpm map /tmp/colin_1m.vtu -o /tmp/ball_1m.vtu --report "$W/map1m_gpu_$i.json" $X \
-      > "$W/map1m_gpu_$i.txt" 2>&1
-    log "rc $?"; grep -h "Elapsed\|Maximum resident" "$W/map1m_gpu_$i.txt" | tee -a "$W/log.txt"; save
+    VPM_DEVICE=$DEV $TV timeout "$3" build/vpm map "$2" -o "/tmp/ball_$1.vtu" --report "$W/map$1_gpu_$i.json" $X \
+      > "$W/map$1_gpu_$i.txt" 2>&1
+    log "rc $?"; grep -h "Elapsed\|Maximum resident" "$W/map$1_gpu_$i.txt" | tee -a "$W/log.txt"; save
   done
-fi
-if want map10m; then
-  for i in 1 2; do  # run 2 with --sphere-solve device, as above
-    log "map 10M, run $i"
-    X=""; [[ $i == 2 ]] && X="--sphere-solve device"
-    VPM_DEVICE=$DEV $TV timeout 150 build/vpm map /tmp/colin_10m.vtu -o /tmp/ball_10m.vtu --report "$W/map10m_gpu_$i.json" $X \
-      > "$W/map10m_gpu_$i.txt" 2>&1
-    log "rc $?"; grep -h "Elapsed\|Maximum resident" "$W/map10m_gpu_$i.txt" | tee -a "$W/log.txt"; save
-  done
-fi
+}
+want map1m && maps 1m /tmp/colin_1m.vtu 120
+want map10m && maps 10m /tmp/colin_10m.vtu 150
 if want bench; then
   log "benchmarks"
   VPM_DEVICE=$DEV timeout 120 build/bench/vpm_bench_solver --sizes 100000,400000,1600000 --repeats 3 --no-hypre \
