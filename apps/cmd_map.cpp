@@ -35,7 +35,8 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   if (vo.solver != "cg" && vo.solver != "paper")
     throw vpm::InputError("option --solver: '" + vo.solver + "' is not one of cg, paper");
   vo.preconditioner = vpm::cli::parse_option("--preconditioner", [&] {
-    return std::string(vpm::to_string(vpm::parse_preconditioner(args.get("--preconditioner", "jacobi"))));
+    const std::string p = args.get("--preconditioner", "auto");
+    return p == "auto" ? p : std::string(vpm::to_string(vpm::parse_preconditioner(p)));
   });
   vo.rk_steps = args.get_int("--rk-steps", vo.rk_steps);
   if (vo.rk_steps < 1) throw vpm::InputError("option --rk-steps: must be >= 1");
@@ -96,7 +97,7 @@ vpm::cli::Registrar reg({"map", "MESH -o OUT", "map a tet mesh to the unit ball,
                           {"--sphere-solve", "host|device", "the equal-area steps' solves: host Cholesky (default) or device CG (for GPUs; not yet measured on one)", false, 0, true},
                           {"--boundary", "slide|fixed", "boundary vertices slide on the sphere (moser default) or stay"},
                           {"--solver", "cg|paper", "Jacobi CG (default) or the paper's BiCGSTAB on the normal equations"},
-                          {"--preconditioner", "jacobi|amg", "of CG: Jacobi (default) or smoothed-aggregation AMG"},
+                          {"--preconditioner", "auto|jacobi|amg", "of CG: Jacobi, smoothed-aggregation AMG, or auto (default: AMG on CPUs from 2M tets)"},
                           {"--rk-steps", "N", "RK4 steps per Moser round (default " + std::to_string(vpm::VolumeMapOptions{}.rk_steps) + ")"},
                           {"--report", "REPORT.json", "write the report (metrics, rounds, timings)"}},
                          run});

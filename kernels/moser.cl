@@ -4,6 +4,7 @@
 //
 // Background data (uploaded once per round):
 //   inv   m x 12: corner a (3), then the rows of [b-a, c-a, d-a]^-1 (9): lambda_{1..3} = Minv (p - a)
+//         (uploaded from the host, or made here by moser_tet_inverses)
 //   tets  m x 4, nbr m x 4 (tet across the face opposite corner k, -1 on the boundary)
 //   grad  n x 3 vertex gradients of psi, rho0 n
 //   grid: lo (3), inv_h, dims (3); cell_start (cells + 1), cell_tets
@@ -206,4 +207,32 @@ __kernel void moser_vertex_gradients(const int n, __global const int* offset,
   grad[3 * v] = g.x;
   grad[3 * v + 1] = g.y;
   grad[3 * v + 2] = g.z;
+}
+
+// ---- The round's background on the device -----------------------------------------------
+// inv of tet t from the positions x: its corner a, then the rows of M^-1 for the columns
+// e1, e2, e3 = b - a, c - a, d - a of M, i.e. (e2 x e3, e3 x e1, e1 x e2) / det M. The host's
+// build_background (Eigen's cofactor inverse) gives the same to round-off.
+__kernel void moser_tet_inverses(const int m, __global const real* x, __global const int* tets,
+                                 __global real* inv) {
+  const int t = get_global_id(0);
+  if (t >= m) return;
+  __global const int* T = tets + 4 * t;
+  const real3 a = load3(x, T[0]);
+  const real3 e1 = load3(x, T[1]) - a, e2 = load3(x, T[2]) - a, e3 = load3(x, T[3]) - a;
+  const real3 r1 = cross(e2, e3), r2 = cross(e3, e1), r3 = cross(e1, e2);
+  const real inv_det = 1.0 / dot(e1, r1);
+  __global real* q = inv + 12 * (size_t)t;
+  q[0] = a.x;
+  q[1] = a.y;
+  q[2] = a.z;
+  q[3] = r1.x * inv_det;
+  q[4] = r1.y * inv_det;
+  q[5] = r1.z * inv_det;
+  q[6] = r2.x * inv_det;
+  q[7] = r2.y * inv_det;
+  q[8] = r2.z * inv_det;
+  q[9] = r3.x * inv_det;
+  q[10] = r3.y * inv_det;
+  q[11] = r3.z * inv_det;
 }

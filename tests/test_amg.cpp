@@ -192,3 +192,17 @@ TEST_CASE("AMG-CG: Neumann and Dirichlet on host and device, device V-cycle equa
     CHECK((z_dev - z_host).norm() <= 1e-13 * z_host.norm());
   }
 }
+
+TEST_CASE("preconditioner auto: AMG on CPU devices for large meshes, Jacobi below and on GPUs") {
+  for (auto& dev : test::devices()) {
+    INFO(dev->name());
+    const bool cpu = dev->is_host() || dev->description().type == "cpu";
+    CHECK(choose_preconditioner("auto", *dev, 1000) == Preconditioner::jacobi);
+    CHECK(choose_preconditioner("auto", *dev, kAutoAmgTets - 1) == Preconditioner::jacobi);
+    CHECK(choose_preconditioner("auto", *dev, kAutoAmgTets) == (cpu ? Preconditioner::amg : Preconditioner::jacobi));
+    // explicit names are kept whatever the size and device
+    CHECK(choose_preconditioner("jacobi", *dev, 10 * kAutoAmgTets) == Preconditioner::jacobi);
+    CHECK(choose_preconditioner("amg", *dev, 10) == Preconditioner::amg);
+    CHECK_THROWS_AS(choose_preconditioner("ilu", *dev, 10), InputError);
+  }
+}

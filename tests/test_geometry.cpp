@@ -3,6 +3,7 @@
 #include <cmath>
 #include <map>
 
+#include "mesh/device_volumes.hpp"
 #include "support/devices.hpp"
 #include "support/fixtures.hpp"
 #include "support/incompressible.hpp"
@@ -37,6 +38,23 @@ TEST_CASE("dual volumes sum to the total and host and device agree") {
     INFO("device " << dev->name());
     const Eigen::VectorXd d = dual_volumes(*dev, m.vertices, m.tets);
     CHECK((d - host).cwiseAbs().maxCoeff() <= 1e-15 * host.cwiseAbs().maxCoeff() * 10);
+  }
+}
+
+TEST_CASE("volumes kept on the device (connectivity uploaded once) follow new positions") {
+  const TetMesh m = test::ball_mesh(6);
+  for (auto& dev : test::devices()) {
+    if (dev->is_host()) continue;
+    INFO("device " << dev->name());
+    detail::DeviceVolumes dv(*dev, m.tets);
+    for (int k = 0; k < 3; ++k) {  // the same object at three shapes: nothing stale is reused
+      Points x = m.vertices;
+      for (int i = 0; i < m.num_vertices(); ++i) x.row(i) *= 1.0 + 0.02 * k * std::sin(5.0 * i + k);
+      const Eigen::VectorXd tv = tet_volumes(x, m.tets), dual = dual_volumes(x, m.tets);
+      CHECK((dv.tet_volumes(x) - tv).cwiseAbs().maxCoeff() <= 1e-14 * tv.cwiseAbs().maxCoeff());
+      CHECK((dv.dual_volumes(x) - dual).cwiseAbs().maxCoeff() <= 1e-14 * dual.cwiseAbs().maxCoeff());
+      CHECK((tet_volumes(*dev, x, m.tets) - tv).cwiseAbs().maxCoeff() <= 1e-14 * tv.cwiseAbs().maxCoeff());
+    }
   }
 }
 

@@ -562,7 +562,8 @@ TEST_CASE("vpm map: writes the ball mesh with fields and the report, refuses bad
   CHECK(j.find("final")->find("vertex_volume_ratio")->find("mean_abs_dev")->number() <
         j.find("initial")->find("vertex_volume_ratio")->find("mean_abs_dev")->number());
   CHECK(j.find("timings_s")->find("total") != nullptr);
-  CHECK(j.find("volume_map")->find("preconditioner")->string() == "jacobi");
+  CHECK(j.find("volume_map")->find("preconditioner")->string() == "jacobi");  // auto, a small mesh
+  CHECK(j.find("initial_map")->find("harmonic")->find("preconditioner")->string() == "jacobi");
 
   // the AMG preconditioner gives the same map (to the solver tolerance) with fewer iterations
   REQUIRE(run_status(vpm + " map " + tmp("in.vtu") + " -o " + tmp("out_amg.vtu") + " --report " +
@@ -573,6 +574,7 @@ TEST_CASE("vpm map: writes the ball mesh with fields and the report, refuses bad
   const Json ja = Json::parse(ss_amg.str());
   const Json& va = *ja.find("volume_map");
   CHECK(va.find("preconditioner")->string() == "amg");
+  CHECK(ja.find("initial_map")->find("harmonic")->find("preconditioner")->string() == "amg");
   const double first_jacobi = j.find("volume_map")->find("rounds")->at(0).find("solver_iterations")->number();
   const double first_amg = va.find("rounds")->at(0).find("solver_iterations")->number();
   CHECK(first_amg < 0.5 * first_jacobi);
@@ -647,7 +649,7 @@ TEST_CASE("point location: walk, grid fallback and clamping give exact P1 transp
   if (results.size() == 2) CHECK((results[0] - results[1]).cwiseAbs().maxCoeff() < 1e-12);
 }
 
-TEST_CASE("Moser field gradients (eq. 12-13): linear psi reproduced, host == device") {
+TEST_CASE("Moser field gradients (eq. 12-13): linear psi reproduced, host == device, inverses too") {
   // On a jittered ball a linear psi = a . x has the gradient a on every tet, so every interior
   // vertex average is a to round-off, boundary vertices keep a's tangential part (sliding) or
   // 0 (fixed). A nonlinear psi compares the device kernels with the host reference.
@@ -688,6 +690,13 @@ TEST_CASE("Moser field gradients (eq. 12-13): linear psi reproduced, host == dev
       INFO("device " << dev->name());
       detail::DeviceAdvector adv(*dev, m.tets, nbr, boundary);
       adv.set_field(f, wavy, m.vertices, slide);
+      // the inverse matrices made on the device == the host's (relative to each tet's size)
+      const std::vector<double> inv = adv.inverses();
+      REQUIRE(inv.size() == f.inv.size());
+      double inv_diff = 0;
+      for (size_t k = 0; k < inv.size(); ++k)
+        inv_diff = std::max(inv_diff, std::fabs(inv[k] - f.inv[k]) / (1.0 + std::fabs(f.inv[k])));
+      CHECK(inv_diff < 1e-12);
       const std::vector<double> d = adv.gradients();
       REQUIRE(d.size() == host.size());
       double diff = 0;

@@ -32,6 +32,12 @@ Preconditioner parse_preconditioner(const std::string& name) {
   throw InputError("unknown preconditioner '" + name + "' (expected jacobi or amg)");
 }
 
+Preconditioner choose_preconditioner(const std::string& name, const Device& device, long long tets) {
+  if (name != "auto") return parse_preconditioner(name);
+  const bool cpu = device.is_host() || device.description().type == "cpu";
+  return cpu && tets >= kAutoAmgTets ? Preconditioner::amg : Preconditioner::jacobi;
+}
+
 const char* to_string(Preconditioner p) { return p == Preconditioner::amg ? "amg" : "jacobi"; }
 
 const char* to_string(SolverMethod m) {

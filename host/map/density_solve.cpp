@@ -18,12 +18,14 @@ using SpMat = Eigen::SparseMatrix<double>;
 
 // Solves the density steps' systems L u = b. The Laplacians of successive steps differ by the
 // step's change of shape, so the factor of an earlier step's L preconditions CG on the current
-// one to a relative residual of 1e-12 in 9-15 iterations (a pair of triangular solves each): a
-// new factor is made when CG needed more than kRefactorAfter iterations last time or does not
-// converge within kMaxIterations. On the 10M-tet Colin27's boundary (136k vertices, 13 steps)
-// that is 4 factorisations instead of 13, and the whole sphere map 6.45 -> 5.55 s on the 2-core
-// VM with CHOLMOD (one CG iteration 20 ms, one factorisation 0.33 s), 14.7 -> 8.3 s with
-// Eigen's SimplicialLDLT (factorisation 1.0 s).
+// one (a pair of triangular solves an iteration): a new factor is made when CG needed more
+// than kRefactorAfter iterations last time or does not converge within kMaxIterations. On the
+// 10M-tet Colin27's boundary (136k vertices, 13 steps) that is 4 factorisations instead of 13,
+// and the whole sphere map 6.45 -> 5.55 s on the 2-core VM with CHOLMOD (one CG iteration
+// 20 ms, one factorisation 0.33 s), 14.7 -> 8.3 s with Eigen's SimplicialLDLT (factorisation
+// 1.0 s). The flow needs its velocity, not 12 digits of it: at a relative residual of 1e-8
+// (was 1e-12, 104 iterations) the 13 steps take 70 iterations, the solves 3.8 -> 3.3 s there,
+// and the sphere moves by 2e-10 (1e-6 would save 0.4 s more and move it by 4e-8).
 class FactorReuse {
  public:
   bool solve(const SpMat& L, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
@@ -37,8 +39,8 @@ class FactorReuse {
   const char* backend() const { return chol_.backend(); }
 
  private:
-  static constexpr int kRefactorAfter = 12, kMaxIterations = 40;
-  static constexpr double kTolerance = 1e-12;
+  static constexpr int kRefactorAfter = 8, kMaxIterations = 40;
+  static constexpr double kTolerance = 1e-8;
 
   bool pcg(const SpMat& L, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
     const double bn = b.norm();

@@ -95,10 +95,10 @@ SplitResult split(const TetMesh& input, const Triangles& boundary, const Initial
   return sp;
 }
 
-SolverOptions harmonic_solver_options(const InitialMapOptions& opt) {
+SolverOptions harmonic_solver_options(const InitialMapOptions& opt, const Device& device, long long tets) {
   SolverOptions so;
   so.relative_tolerance = opt.solver_tolerance;
-  so.preconditioner = parse_preconditioner(opt.preconditioner);
+  so.preconditioner = choose_preconditioner(opt.preconditioner, device, tets);
   return so;
 }
 
@@ -107,7 +107,7 @@ SolverOptions harmonic_solver_options(const InitialMapOptions& opt) {
 // meanwhile is host code on one thread (0.4 s of the 1.1M-tet map hidden).
 std::future<std::shared_ptr<PoissonSolver>> start_harmonic_solver(Device& device, const TetMesh& m,
                                                                    const InitialMapOptions& opt) {
-  return std::async(std::launch::async, [&device, &m, so = harmonic_solver_options(opt)] {
+  return std::async(std::launch::async, [&device, &m, so = harmonic_solver_options(opt, device, m.num_tets())] {
     auto ps = std::make_shared<PoissonSolver>(device, m.num_vertices(), m.tets, so);
     ps->set_positions(m.vertices);
     return ps;
@@ -130,7 +130,7 @@ Points harmonic_interior(const TetMesh& m, const std::vector<char>& boundary, co
                            : Eigen::RowVector3d((m.vertices.row(i) - c) / std::max(r, 1e-300));
   SolverStats st;
   try {
-    ps.options() = harmonic_solver_options(opt);
+    ps.options() = harmonic_solver_options(opt, ps.device(), m.num_tets());
     const FieldValues values = u;
     st = ps.solve_dirichlet(boundary, values, u);
   } catch (const NumericalError& e) {
@@ -138,6 +138,7 @@ Points harmonic_interior(const TetMesh& m, const std::vector<char>& boundary, co
   }
   if (!u.allFinite()) throw NumericalError("initial_map: the harmonic solve gave non-finite positions; " + note);
   rep.harmonic_on_device = !ps.device().is_host();
+  rep.harmonic_preconditioner = to_string(ps.options().preconditioner);
   rep.harmonic_iterations = st.iterations;
   rep.harmonic_relative_residual = st.relative_residual;
   Points ball = u;
@@ -325,6 +326,7 @@ Json to_json(const InitialMapReport& r) {
     f["seconds"] = r.fallback->seconds;
   }
   rep["harmonic"]["solver"] = r.harmonic_on_device ? "PoissonSolver CG (OpenCL)" : "PoissonSolver CG (host)";
+  rep["harmonic"]["preconditioner"] = r.harmonic_preconditioner;
   rep["harmonic"]["iterations"] = r.harmonic_iterations;
   rep["harmonic"]["relative_residual"] = r.harmonic_relative_residual;
   rep["harmonic"]["inverted_tets"] = r.folds_before_untangle;

@@ -160,8 +160,11 @@ struct DeviceAdvector::Impl {
         inc_tet(d.context()),
         psi(d.context()) {}
 
-  // The background of a round without its gradients.
-  void upload_background(const MoserField& f);
+  bc::kernel kinv;  // the inverse matrices from x on the device (set_field with psi)
+
+  // The background of a round without its gradients; f.inv is uploaded unless
+  // `inverses_here` (then the caller makes them on the device).
+  void upload_background(const MoserField& f, bool inverses_here = false);
 };
 
 DeviceAdvector::DeviceAdvector(Device& device, const Tets& tets, const std::vector<int>& nbr,
@@ -180,16 +183,20 @@ void DeviceAdvector::set_field(const MoserField& f, const Eigen::VectorXd& psi, 
                                bool slide) {
   Impl& s = *impl_;
   auto& q = s.dev.queue();
-  s.upload_background(f);
+  s.upload_background(f, true);
   if (s.inc_offset.size() != static_cast<size_t>(s.n) + 1) {
     const Incidence inc = vertex_tet_incidence(s.n, *f.tets);
     s.inc_offset = bc::vector<int>(inc.offset.begin(), inc.offset.end(), q);
     s.inc_tet = bc::vector<int>(inc.tet_of.begin(), inc.tet_of.end(), q);
     s.psi = bc::vector<double>(static_cast<size_t>(s.n), s.dev.context());
     s.kvg = s.dev.kernel("moser", "moser_vertex_gradients");
+    s.kinv = s.dev.kernel("moser", "moser_tet_inverses");
   }
   bc::copy(psi.data(), psi.data() + psi.size(), s.psi.begin(), q);
   bc::copy(x.data(), x.data() + x.size(), s.x.begin(), q);
+  if (s.inv.size() != 12 * static_cast<size_t>(s.m)) s.inv = bc::vector<double>(12 * static_cast<size_t>(s.m), s.dev.context());
+  s.kinv.set_args(s.m, s.x, s.tets, s.inv);
+  s.dev.launch(s.kinv, static_cast<size_t>(s.m));
   s.kvg.set_args(s.n, s.inc_offset, s.inc_tet, s.tets, s.inv, s.psi, s.boundary, static_cast<int>(slide),
                  s.x, s.grad);
   s.dev.launch(s.kvg, static_cast<size_t>(s.n));
@@ -202,13 +209,22 @@ std::vector<double> DeviceAdvector::gradients() {
   return g;
 }
 
-void DeviceAdvector::Impl::upload_background(const MoserField& f) {
+std::vector<double> DeviceAdvector::inverses() {
+  Impl& s = *impl_;
+  std::vector<double> v(s.inv.size());
+  bc::copy(s.inv.begin(), s.inv.end(), v.begin(), s.dev.queue());
+  return v;
+}
+
+void DeviceAdvector::Impl::upload_background(const MoserField& f, bool inverses_here) {
   Impl& s = *this;
   auto& q = s.dev.queue();
   // the last round's buffers go first: the new ones are not made beside them (12 doubles a tet)
-  s.inv = bc::vector<double>(s.dev.context());
   s.cell_tets = bc::vector<int>(s.dev.context());
-  s.inv = bc::vector<double>(f.inv.data(), f.inv.data() + f.inv.size(), q);
+  if (!inverses_here) {
+    s.inv = bc::vector<double>(s.dev.context());
+    s.inv = bc::vector<double>(f.inv.data(), f.inv.data() + f.inv.size(), q);
+  }
   bc::copy(f.rho0.begin(), f.rho0.end(), s.rho0.begin(), q);
   s.cell_start = bc::vector<int>(f.cell_start.begin(), f.cell_start.end(), q);
   if (f.cell_tets.empty()) {

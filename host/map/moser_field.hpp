@@ -62,14 +62,19 @@ class DeviceAdvector {
   ~DeviceAdvector();
   /// The round's background and field from the host: f's inverse matrices, grid, rho0 and grad.
   void set_field(const MoserField& f);
-  /// The same background (f.grad is not read) with the vertex gradients computed on the device
-  /// from psi (paper eq. 12-13): per-tet gradients from f's inverse matrices, their
-  /// volume-weighted vertex averages, the normal part removed at boundary vertices (the whole
-  /// vector when `slide` is false); the same arithmetic as tet_gradients and the volume map's
-  /// host averaging. `x`: the background's positions. Only psi and x go up, nothing comes back.
+  /// The same background with the inverse matrices and the vertex gradients computed on the
+  /// device (f.inv and f.grad are not read: build_grid suffices): the inverses from x
+  /// (kernels/moser.cl, equal to build_background's to round-off), the gradients from psi
+  /// (paper eq. 12-13): per-tet gradients from the inverses, their volume-weighted vertex
+  /// averages, the normal part removed at boundary vertices (the whole vector when `slide` is
+  /// false); the same arithmetic as tet_gradients and the volume map's host averaging. `x`: the
+  /// background's positions. Only psi, x and the grid go up (not 12 doubles a tet), nothing
+  /// comes back.
   void set_field(const MoserField& f, const Eigen::VectorXd& psi, const Points& x, bool slide);
   /// The vertex gradients now on the device (n x 3), for tests.
   std::vector<double> gradients();
+  /// The background's inverse matrices now on the device (m x 12, TetGrid::inv), for tests.
+  std::vector<double> inverses();
   void advect(const AdvectParams& p, Points& x, std::vector<int>& hint, AdvectStats* stats);
 
  private:

@@ -25,6 +25,7 @@
 #include "map/density_solve.hpp"
 #include "map/sphere_steps.hpp"
 #include "vpm/initial_map.hpp"
+#include "vpm/timing.hpp"
 
 namespace vpm::detail {
 
@@ -177,7 +178,10 @@ EquiarealStats equalise_density(const Points& in, const Triangles& f, const Eige
     const Eigen::VectorXd rhs = -cv.cwiseProduct(g);
     Eigen::VectorXd u = Eigen::VectorXd::Zero(k);
     Eigen::VectorXd tail;
-    if (!solver.solve(L, rhs.tail(k - 1), tail)) break;
+    const auto t_solve = Clock::now();
+    const bool solved = solver.solve(L, rhs.tail(k - 1), tail);
+    st.solve_seconds += seconds_since(t_solve);
+    if (!solved) break;
     u.tail(k - 1) = tail;
     if (!u.allFinite()) break;
     Points v = velocity(s, f, c, u);

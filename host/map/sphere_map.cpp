@@ -19,6 +19,7 @@
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "map/sphere_steps.hpp"
+#include "vpm/timing.hpp"
 #include "vpm/topology.hpp"
 
 namespace vpm {
@@ -228,17 +229,20 @@ void balance(const Points& in, const Triangles& f, const InitialMapOptions& opt,
 void equalise(const Points& in, const Triangles& f, const InitialMapOptions& opt, Points& s, SphereMapReport& rep,
               Device* device) {
   rep.density_target = "area";
+  const auto t0 = Clock::now();
   Points q = s;
   Device* solve_on = opt.density_solve == InitialMapOptions::DensitySolve::device ? device : nullptr;
   const EquiarealStats st = equalise_density(in, f, vertex_area_shares(in, f), q, opt.density_max_steps,
                                              opt.density_tolerance, solve_on);
   rep.density_solver = st.solver;
+  rep.seconds_density_solve = st.solve_seconds;
   rep.density_steps = st.steps;
   rep.density_misfit_before = st.misfit_before;
   rep.density_misfit_after = st.misfit_after;
   rep.area_distortion_density = st.distortion_after;
   rep.density_kept = st.steps > 0 && st.misfit_after < st.misfit_before && flipped_sphere_triangles(q, f) == 0;
   if (rep.density_kept) s = std::move(q);
+  rep.seconds_density = seconds_since(t0);
 }
 
 }  // namespace
@@ -256,6 +260,7 @@ SphereMapResult sphere_map(const TriSurface& surf, const InitialMapOptions& opt,
   int flips = 0;
   Points s;
   if (opt.sphere_start == InitialMapOptions::SphereStart::automatic) {
+    const auto t0 = Clock::now();
     s = conformal_sphere(in, f, rep, &flips);
     if (opt.south_pole_correction && s.allFinite()) correct_south_pole(in, f, s, &flips, rep);
     normalize_rows(s);
@@ -266,7 +271,10 @@ SphereMapResult sphere_map(const TriSurface& surf, const InitialMapOptions& opt,
     rep.mirrored = vol < 0;
     if (vol < 0) s.col(0) *= -1;
     rep.area_distortion_conformal = area_distortion(in, s, f);
+    rep.seconds_conformal = seconds_since(t0);
+    const auto t1 = Clock::now();
     if (opt.moebius_balance) balance(in, f, opt, s, &flips, rep);
+    rep.seconds_moebius = seconds_since(t1);
     flips = flipped_sphere_triangles(s, f);
   }
   if (opt.sphere_start == InitialMapOptions::SphereStart::progressive || flips > 0) {
@@ -365,6 +373,12 @@ Json to_json(const SphereMapReport& r) {
   if (r.repair_steps) j["repair_steps"] = *r.repair_steps;
   j["area_distortion_final"] = r.area_distortion_final;
   j["flipped_triangles"] = r.flipped_triangles;
+  Json t = Json::object();
+  t["conformal"] = r.seconds_conformal;
+  t["moebius"] = r.seconds_moebius;
+  t["density"] = r.seconds_density;
+  t["density_solve"] = r.seconds_density_solve;
+  j["timings_s"] = t;
   return j;
 }
 

@@ -54,6 +54,7 @@ struct EquiarealStats {
   int steps = 0, flips_before = 0;
   double misfit_before = 0, misfit_after = 0, distortion_before = 0, distortion_after = 0;
   std::string solver;  ///< what solved the last step's Laplacian system (DensitySolver::name)
+  double solve_seconds = 0;  ///< wall-clock seconds in the steps' Laplacian solves
 };
 /// Moves the sphere map s of surface (in, f) until each vertex's lumped sphere area (a third of
 /// its triangles' chord areas) is its share `target` (k entries, normalised here) of the

@@ -9,6 +9,7 @@
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/geometry.hpp"
+#include "vpm/solver.hpp"
 #include "vpm/timing.hpp"
 #include "vpm/topology.hpp"
 
@@ -190,6 +191,7 @@ void set_up(detail::MapContext& c) {
     c.gradients_on_device = opt.advection == ExecutionPlace::device || c.dev.description().type == "gpu";
   }
   c.polish_on_device = polish_on_device(c.dev, opt);
+  if (!c.dev.is_host()) c.volumes = std::make_unique<detail::DeviceVolumes>(c.dev, tets);
 }
 
 }  // namespace
@@ -204,7 +206,7 @@ VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, cons
   res.method = opt.method;
   res.slide = c.slide;
   res.solver = opt.solver;
-  res.preconditioner = opt.preconditioner;
+  res.preconditioner = to_string(choose_preconditioner(opt.preconditioner, dev, tets.rows()));
   res.rk_steps = opt.rk_steps;
   res.device_advection = c.advector != nullptr;
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "map/moser_field.hpp"
+#include "mesh/device_volumes.hpp"
 #include "map/polish.hpp"
 #include "map/volume_map_solve.hpp"
 #include "vpm/mesh.hpp"
@@ -33,6 +34,7 @@ struct MapContext {
   Eigen::VectorXd ref_tet;        // input tet volumes / input total volume
   std::unique_ptr<MapSolver> solver;
   std::unique_ptr<DeviceAdvector> advector;
+  std::unique_ptr<DeviceVolumes> volumes;  // fold checks and dual volumes on the device (null on the host)
   Eigen::VectorXd psi;
   Triangles bfaces;  // boundary faces (outward), from the same face sort as nbr
   std::vector<char> freedom;                          // polish: free / tangent / fixed per vertex

@@ -57,7 +57,7 @@ MapSolver::MapSolver(Device& device, int n, const Tets& tets, const std::string&
     throw InputError("--solver: '" + method + "' is not one of cg, paper");
   impl_->options.method = parse_solver_method(method);
   impl_->options.relative_tolerance = tol;
-  impl_->options.preconditioner = parse_preconditioner(preconditioner);
+  impl_->options.preconditioner = choose_preconditioner(preconditioner, device, tets.rows());
   impl_->options.neumann_tolerance = 1e-8;
   if (reuse && &reuse->device() == &device && reuse->laplacian().num_vertices() == n &&
       reuse->laplacian().num_tets() == tets.rows() && reuse->laplacian().tets() == tets) {

@@ -13,7 +13,7 @@
 namespace vpm::detail {
 
 int count_folds(MapContext& c, const Points& x) {
-  const Eigen::VectorXd v = tet_volumes(c.dev, x, c.tets);
+  const Eigen::VectorXd v = c.volumes ? c.volumes->tet_volumes(x) : tet_volumes(x, c.tets);
   return static_cast<int>((v.array() <= 0).count());
 }
 
@@ -56,7 +56,7 @@ namespace {
 void solve_round(MapContext& c, const Points& x, Eigen::VectorXd& V, Eigen::VectorXd& target,
                  VolumeMapRound& r) {
   const auto t0 = Clock::now();
-  V = dual_volumes(c.dev, x, c.tets);
+  V = c.volumes ? c.volumes->dual_volumes(x) : dual_volumes(x, c.tets);
   target = c.ref_dual * V.sum();
   const Eigen::VectorXd b = target - V;
   c.psi.setZero(c.n);
@@ -66,14 +66,16 @@ void solve_round(MapContext& c, const Points& x, Eigen::VectorXd& V, Eigen::Vect
   r.time_solve += seconds_since(t0);
 }
 
-// The solve of a round and its field on the background x: f's grid, and the vertex gradients
-// on the host unless `gradients_on_device` (the advector computes them from psi).
+// The solve of a round and its field on the background x: f's grid, and its inverse matrices
+// and vertex gradients on the host unless `gradients_on_device` (the advector makes both).
 void solve_and_field(MapContext& c, const Points& x, Eigen::VectorXd& V, Eigen::VectorXd& target,
                      detail::MoserField& f, VolumeMapRound& r, bool gradients_on_device = false) {
   solve_round(c, x, V, target, r);
   const auto t1 = Clock::now();
-  detail::build_background(f, x, c.tets, c.nbr);
-  if (!gradients_on_device) {
+  if (gradients_on_device) {
+    detail::build_grid(f, x, c.tets, c.nbr);
+  } else {
+    detail::build_background(f, x, c.tets, c.nbr);
     const auto G = detail::tet_gradients(f, c.psi);
     const Eigen::VectorXd vol = tet_volumes(x, c.tets);
     f.grad = detail::vertex_gradients(c.tets, x, G, vol, c.boundary, c.slide);

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "core/parallel.hpp"
+#include "mesh/device_volumes.hpp"
 #include "vpm/device.hpp"
 #include "vpm/topology.hpp"
 
@@ -34,43 +35,14 @@ Eigen::VectorXd dual_volumes(const Points& x, const Tets& t) {
   return d;
 }
 
-namespace {
-// Uploads positions and tets, runs tet_volumes, leaves the result in `vol`.
-void device_tet_volumes(Device& dev, const Points& x, const Tets& t, bc::vector<double>& vol) {
-  auto& q = dev.queue();
-  bc::vector<double> dx(x.data(), x.data() + x.size(), q);
-  bc::vector<int> dt(t.data(), t.data() + t.size(), q);
-  vol.resize(static_cast<size_t>(t.rows()), q);
-  auto k = dev.kernel("geometry", "tet_volumes");
-  k.set_args(static_cast<int>(t.rows()), dx, dt, vol);
-  dev.launch(k, static_cast<size_t>(t.rows()));
-}
-}  // namespace
-
 Eigen::VectorXd tet_volumes(Device& dev, const Points& x, const Tets& t) {
   if (dev.is_host() || t.rows() == 0) return tet_volumes(x, t);
-  bc::vector<double> vol(dev.context());
-  device_tet_volumes(dev, x, t, vol);
-  Eigen::VectorXd out(t.rows());
-  bc::copy(vol.begin(), vol.end(), out.data(), dev.queue());
-  return out;
+  return detail::DeviceVolumes(dev, t).tet_volumes(x);
 }
 
 Eigen::VectorXd dual_volumes(Device& dev, const Points& x, const Tets& t) {
   if (dev.is_host() || t.rows() == 0) return dual_volumes(x, t);
-  auto& q = dev.queue();
-  bc::vector<double> vol(dev.context());
-  device_tet_volumes(dev, x, t, vol);
-  const Incidence inc = vertex_tet_incidence(static_cast<int>(x.rows()), t);
-  bc::vector<int> off(inc.offset.begin(), inc.offset.end(), q);
-  bc::vector<int> tof(inc.tet_of.begin(), inc.tet_of.end(), q);
-  bc::vector<double> dual(static_cast<size_t>(x.rows()), dev.context());
-  auto k = dev.kernel("geometry", "dual_volumes");
-  k.set_args(static_cast<int>(x.rows()), off, tof, vol, dual);
-  dev.launch(k, static_cast<size_t>(x.rows()));
-  Eigen::VectorXd out(x.rows());
-  bc::copy(dual.begin(), dual.end(), out.data(), q);
-  return out;
+  return detail::DeviceVolumes(dev, t).dual_volumes(x);
 }
 
 namespace {

@@ -99,12 +99,17 @@ void bin_tets(TetGrid& f, const Points& x, const Tets& tets) {
 
 }  // namespace
 
-void build_background(TetGrid& f, const Points& x, const Tets& tets, const std::vector<int>& nbr) {
+void build_grid(TetGrid& f, const Points& x, const Tets& tets, const std::vector<int>& nbr) {
   f.n = static_cast<int>(x.rows());
   f.m = static_cast<int>(tets.rows());
   f.tets = &tets;
   f.nbr = &nbr;
   f.inv.clear();
+  bin_tets(f, x, tets);
+}
+
+void build_background(TetGrid& f, const Points& x, const Tets& tets, const std::vector<int>& nbr) {
+  build_grid(f, x, tets, nbr);
   f.inv.resize(12 * static_cast<size_t>(f.m));  // every entry written below, by the thread that owns it
   parallel_for(f.m, 8192, [&](int t0, int t1) {
     for (int t = t0; t < t1; ++t) {
@@ -120,7 +125,6 @@ void build_background(TetGrid& f, const Points& x, const Tets& tets, const std::
         for (int c = 0; c < 3; ++c) q[3 + 3 * r + c] = Mi(r, c);
     }
   });
-  bin_tets(f, x, tets);
 }
 
 

@@ -32,6 +32,10 @@ struct TetGrid {
 /// Fills inv and the grid of `f` for background positions `x` (n x 3).
 void build_background(TetGrid& f, const Points& x, const Tets& tets, const std::vector<int>& nbr);
 
+/// The same without inv (left empty): for a background whose inverse matrices are made where
+/// it is used (DeviceAdvector::set_field with psi).
+void build_grid(TetGrid& f, const Points& x, const Tets& tets, const std::vector<int>& nbr);
+
 /// Barycentric coordinates l[0..3] of `p` in tet `t` of the background `f`.
 void bary(const TetGrid& f, int t, const Eigen::Vector3d& p, double* l);
 

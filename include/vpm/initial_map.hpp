@@ -84,8 +84,9 @@ struct InitialMapOptions {
   enum class SphereStart { automatic, progressive };
   SphereStart sphere_start = SphereStart::automatic;
   // ---- step 3: harmonic interior
-  /// Preconditioner of the harmonic solve's CG: "jacobi" or "amg" (vpm/amg.hpp).
-  std::string preconditioner = "jacobi";
+  /// Preconditioner of the harmonic solve's CG: "auto", "jacobi" or "amg" (vpm/amg.hpp;
+  /// "auto": vpm::choose_preconditioner).
+  std::string preconditioner = "auto";
   double solver_tolerance = 1e-10;   ///< relative residual when an iterative solver is used
   // ---- step 4: untangling
   enum class Untangle { Never, IfFolded, Always };
@@ -143,6 +144,9 @@ struct SphereMapReport {
   std::optional<int> repair_steps;           ///< ... this many area-flow steps
   double area_distortion_final = 0;
   int flipped_triangles = 0;
+  /// wall-clock seconds of the steps: the conformal map (with the south-pole correction and
+  /// the orientation), the Moebius balancing, the area equalisation and, of it, its linear solves
+  double seconds_conformal = 0, seconds_moebius = 0, seconds_density = 0, seconds_density_solve = 0;
 };
 /// {"vertices", "faces", "planar_weights", "flipped_after_conformal", "flipped_after_south_pole"?,
 ///  "south_pole_correction"?, "mirrored", "area_distortion_conformal", "moebius_iterations"?,
@@ -150,7 +154,8 @@ struct SphereMapReport {
 ///  "area_correction_steps"?, "density"? {"target","steps","log_misfit_before",
 ///  "log_misfit_after","area_distortion","kept"}, "start", "progressive"? {"passes","collapses",
 ///  "sweeps","seconds"}, "flipped_before_repair"?, "repair_steps"?, "area_distortion_final",
-///  "flipped_triangles"} (? = only when present)
+///  "flipped_triangles", "timings_s" {"conformal","moebius","density","density_solve"}}
+///  (? = only when present)
 Json to_json(const SphereMapReport& report);
 
 /// A tet of poor quality in the input.
@@ -185,6 +190,7 @@ struct InitialMapReport {
   bool harmonic_on_device = false;
   int harmonic_iterations = 0;
   double harmonic_relative_residual = 0;
+  std::string harmonic_preconditioner = "jacobi";  ///< what InitialMapOptions::preconditioner resolved to
   int folds_before_untangle = 0;  ///< inverted tets of the harmonic map
   // step 4
   std::optional<InitialUntangle> untangle;              ///< the last untangling run
@@ -216,7 +222,7 @@ struct InitialMapReport {
 ///  "centroid"}], "warning"? (below 1 degree)}, "split": {"rounds","inserted_vertices",
 ///  "four_boundary_tets_before","four_boundary_tets_after","centroid_splits"},
 ///  "refined": {"vertices","tets"}, "boundary": to_json(SphereMapReport),
-///  "harmonic": {"solver","iterations","relative_residual","inverted_tets"},
+///  "harmonic": {"solver","preconditioner","iterations","relative_residual","inverted_tets"},
 ///  "folds_before_untangle", "untangle"? (to_json(UntangleResult) + "scope", "rings"),
 ///  "untangle_local_failed"?, "untangle_cleanup"?, "untangle_slide"?, "folds_after_untangle", "fallback"? {"from","to",
 ///  "flipped_triangles","folds_after_untangle","seconds"}, "boundary_max_radius_error",

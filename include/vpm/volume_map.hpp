@@ -110,9 +110,10 @@ struct VolumeMapOptions {
   MapBoundary boundary = MapBoundary::automatic;
   /// Linear solver: "cg" (Jacobi CG) or "paper" (BiCGSTAB on the normal equations).
   std::string solver = "cg";
-  /// Preconditioner of "cg": "jacobi" or "amg" (smoothed aggregation, vpm/amg.hpp; the
-  /// hierarchy is built once and its values refreshed every solve).
-  std::string preconditioner = "jacobi";
+  /// Preconditioner of "cg": "auto", "jacobi" or "amg" (smoothed aggregation, vpm/amg.hpp;
+  /// the hierarchy is built once and its values refreshed every solve); "auto": AMG on CPU
+  /// devices from 2M tets on, else Jacobi (vpm::choose_preconditioner).
+  std::string preconditioner = "auto";
   /// Relative residual of each linear solve.
   double solver_tolerance = 1e-8;
   /// Local untangling (theta 0.5, two rings, boundary fixed) of rounds that fold.
@@ -218,7 +219,7 @@ struct VolumeMapResult {
   VolumeMapMethod method = VolumeMapMethod::moser;
   bool slide = true;          ///< boundary vertices slid on the sphere (else fixed)
   std::string solver = "cg";  ///< VolumeMapOptions::solver
-  std::string preconditioner = "jacobi";  ///< VolumeMapOptions::preconditioner
+  std::string preconditioner = "jacobi";  ///< what VolumeMapOptions::preconditioner resolved to
   int rk_steps = 10;
   bool device_advection = false;  ///< the advection ran on the OpenCL device
   VolumeMapTimings timings;
