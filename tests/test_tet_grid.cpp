@@ -4,9 +4,11 @@
 #include <catch2/catch.hpp>
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <random>
 
 #include "mesh/tet_grid.hpp"
+#include "vpm/topology.hpp"
 #include "support/shapes.hpp"
 
 using namespace vpm;
@@ -52,4 +54,29 @@ TEST_CASE("tet grid: each cell lists the tets overlapping it in ascending order,
   CHECK(mismatched == 0);
   CHECK(g.cell_tets.size() == total);
   CHECK(total > static_cast<size_t>(mesh.num_tets()));  // tets straddle cells: the lists overlap
+}
+
+TEST_CASE("vertex-tet incidence built in tet chunks lists each vertex's tets in ascending order") {
+  TetMesh mesh = test::box_mesh(26, 24, 22);  // > 65,536 tets: the chunked (threaded) build
+  REQUIRE(mesh.num_tets() > 65536);
+  // tets in a random order, so chunk boundaries cut through every vertex's list
+  std::mt19937 rng(11);
+  std::vector<int> perm(static_cast<size_t>(mesh.num_tets()));
+  std::iota(perm.begin(), perm.end(), 0);
+  std::shuffle(perm.begin(), perm.end(), rng);
+  Tets shuffled(mesh.num_tets(), 4);
+  for (int t = 0; t < mesh.num_tets(); ++t) shuffled.row(t) = mesh.tets.row(perm[static_cast<size_t>(t)]);
+  const int n = mesh.num_vertices();
+  const Incidence inc = vertex_tet_incidence(n, shuffled);
+  std::vector<std::vector<int>> ref(static_cast<size_t>(n));
+  for (int t = 0; t < shuffled.rows(); ++t)
+    for (int c = 0; c < 4; ++c) ref[static_cast<size_t>(shuffled(t, c))].push_back(t);
+  REQUIRE(inc.offset.size() == static_cast<size_t>(n) + 1);
+  REQUIRE(inc.offset.back() == 4 * shuffled.rows());
+  int wrong = 0;
+  for (int v = 0; v < n; ++v) {
+    const std::vector<int> got(inc.tet_of.begin() + inc.offset[v], inc.tet_of.begin() + inc.offset[v + 1]);
+    wrong += got != ref[static_cast<size_t>(v)];
+  }
+  CHECK(wrong == 0);
 }

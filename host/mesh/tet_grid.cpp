@@ -7,6 +7,7 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "core/group_by_key.hpp"
 #include "core/parallel.hpp"
 #include "mesh/face_table.hpp"
 
@@ -54,47 +55,17 @@ void bin_tets(TetGrid& f, const Points& x, const Tets& tets) {
       b[c] = std::clamp(static_cast<int>(std::floor((mx + 0.25 * h - f.lo[c]) * f.inv_h)), 0, f.dims[c] - 1);
     }
   };
-  // Counting sort of the (cell, tet) pairs in P contiguous tet chunks, one per thread: chunk c's
-  // tets go after chunks 0..c-1's in every cell, so each cell lists its tets in ascending order,
-  // exactly as one pass would.
-  const int chunks = f.m < 65536 ? 1 : host_threads();
-  const int per = (f.m + chunks - 1) / chunks;
-  std::vector<int> count(static_cast<size_t>(chunks) * cells, 0);
-  auto for_cells = [&](int c, auto&& visit) {
-    int a[3], b[3];
-    for (int t = c * per, e = std::min(f.m, (c + 1) * per); t < e; ++t) {
-      cell_range(t, a, b);
-      for (int k = a[2]; k <= b[2]; ++k)
-        for (int j = a[1]; j <= b[1]; ++j)
-          for (int i = a[0]; i <= b[0]; ++i) visit(i + gx * (j + static_cast<size_t>(gy) * k), t);
-    }
-  };
-  parallel_for(chunks, 1, [&](int c0, int c1) {
-    for (int c = c0; c < c1; ++c) {
-      int* n = &count[static_cast<size_t>(c) * cells];
-      for_cells(c, [&](size_t cell, int) { ++n[cell]; });
-    }
-  });
-  f.cell_start.assign(cells + 1, 0);
-  int total = 0;
-  for (size_t cell = 0; cell < cells; ++cell) {  // count becomes each chunk's first slot in the cell
-    f.cell_start[cell] = total;
-    for (int c = 0; c < chunks; ++c) {
-      int& n = count[static_cast<size_t>(c) * cells + cell];
-      const int here = n;
-      n = total;
-      total += here;
-    }
-  }
-  f.cell_start[cells] = total;
-  f.cell_tets.clear();
-  f.cell_tets.resize(static_cast<size_t>(total));  // every slot written below
-  parallel_for(chunks, 1, [&](int c0, int c1) {
-    for (int c = c0; c < c1; ++c) {
-      int* slot = &count[static_cast<size_t>(c) * cells];
-      for_cells(c, [&](size_t cell, int t) { f.cell_tets[static_cast<size_t>(slot[cell]++)] = t; });
-    }
-  });
+  // the (cell, tet) pairs grouped by cell, each cell's tets in ascending order
+  group_by_key(
+      f.m, cells,
+      [&](int t, auto&& visit) {
+        int a[3], b[3];
+        cell_range(t, a, b);
+        for (int k = a[2]; k <= b[2]; ++k)
+          for (int j = a[1]; j <= b[1]; ++j)
+            for (int i = a[0]; i <= b[0]; ++i) visit(i + gx * (j + static_cast<size_t>(gy) * k));
+      },
+      f.cell_start, f.cell_tets);
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <numeric>
 #include <unordered_map>
 
+#include "core/group_by_key.hpp"
 #include "mesh/face_table.hpp"
 
 namespace vpm {
@@ -79,14 +80,12 @@ Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> unique_edges(const Tets& 
 
 Incidence vertex_tet_incidence(int num_vertices, const Tets& tets) {
   Incidence inc;
-  inc.offset.assign(static_cast<size_t>(num_vertices) + 1, 0);
-  for (int t = 0; t < tets.rows(); ++t)
-    for (int c = 0; c < 4; ++c) ++inc.offset[static_cast<size_t>(tets(t, c)) + 1];
-  std::partial_sum(inc.offset.begin(), inc.offset.end(), inc.offset.begin());
-  inc.tet_of.resize(static_cast<size_t>(inc.offset.back()));
-  std::vector<int> fill(inc.offset.begin(), inc.offset.end() - 1);
-  for (int t = 0; t < tets.rows(); ++t)
-    for (int c = 0; c < 4; ++c) inc.tet_of[static_cast<size_t>(fill[static_cast<size_t>(tets(t, c))]++)] = t;
+  detail::group_by_key(
+      static_cast<int>(tets.rows()), static_cast<size_t>(num_vertices),
+      [&](int t, auto&& visit) {
+        for (int c = 0; c < 4; ++c) visit(static_cast<size_t>(tets(t, c)));
+      },
+      inc.offset, inc.tet_of);
   return inc;
 }
 

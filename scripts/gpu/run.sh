@@ -1,16 +1,17 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine, from the repository root, out of the folder scripts/gpu/bundle.sh
 # made (docs/gpu.md): the test suite with VPM_DEVICE=$DEV, the solver and harmonic benchmarks,
-# and `vpm map` of Colin27 at 1.1M and 10M tets (meshed there). Everything lands in $OUT/res.tgz,
-# refreshed after each step, so a run cut short still returns what it did.
-#   usage: bash .gpu/run.sh [STEPS (tests,bench,map1m,map10m)]
+# and `vpm map` of Colin27 at 1.1M and 10M tets (meshed there), last a 10M map with AMG-CG.
+# Everything lands in $OUT/res.tgz, refreshed after each step, so a run cut short still returns
+# what it did.
+#   usage: bash .gpu/run.sh [STEPS (tests,bench,map1m,map10m,amg10m)]
 # DEVICE (gpu) and ICD_DIR (the bundle's NVIDIA vendor file) may be set for a dry run elsewhere,
 # e.g. DEVICE=cpu ICD_DIR=/etc/OpenCL/vendors on a machine with PoCL.
 set -u
 R=$PWD
 G=$(cd "$(dirname "$0")" && pwd)
 W=/tmp/res
-STEPS=${1:-tests,bench,map1m,map10m}
+STEPS=${1:-tests,bench,map1m,map10m,amg10m}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$W" "$OUT"
 save() { tar czf "$OUT/res.tgz" -C /tmp res 2>/dev/null; }
@@ -31,7 +32,7 @@ VPM_DEVICE=$DEV build/vpm devices >> "$W/log.txt" 2>&1 || { log "vpm devices fai
 save
 M=/usr/share/mricron/templates/ch2bet.nii.gz
 MP=""
-if want map10m; then
+if want map10m || want amg10m; then
   ( $TV build/vpm mesh-image $M --max-volume 0.37 -o /tmp/colin_10m.vtu > "$W/mesh10m.txt" 2>&1 ) &
   MP=$!
 fi
@@ -45,15 +46,18 @@ if want map1m || want bench; then
   $TV build/vpm mesh-image $M --max-volume 3.4 -o /tmp/colin_1m.vtu > "$W/mesh1m.txt" 2>&1
 fi
 [[ -n $MP ]] && { wait "$MP"; log "10M mesh made"; grep -h Elapsed "$W/mesh10m.txt" | tee -a "$W/log.txt"; }
+# One map of MESH with OPTIONS, its report and output as map<LABEL>_gpu_<RUN>.json/.txt.
+map_run() {  # LABEL MESH TIMEOUT RUN [OPTIONS...]
+  local label=$1 mesh=$2 limit=$3 run=$4; shift 4
+  log "map $label, run $run $*"
+  VPM_DEVICE=$DEV $TV timeout "$limit" build/vpm map "$mesh" -o "/tmp/ball_$label.vtu" \
+    --report "$W/map${label}_gpu_$run.json" "$@" > "$W/map${label}_gpu_$run.txt" 2>&1
+  log "rc $?"; grep -h "Elapsed\|Maximum resident" "$W/map${label}_gpu_$run.txt" | tee -a "$W/log.txt"; save
+}
 # Two maps of MESH: the default, then with the sphere map's equal-area solves on the device.
 maps() {  # LABEL MESH TIMEOUT
-  for i in 1 2; do
-    log "map $1, run $i"
-    X=""; [[ $i == 2 ]] && X="--sphere-solve device"
-    VPM_DEVICE=$DEV $TV timeout "$3" build/vpm map "$2" -o "/tmp/ball_$1.vtu" --report "$W/map$1_gpu_$i.json" $X \
-      > "$W/map$1_gpu_$i.txt" 2>&1
-    log "rc $?"; grep -h "Elapsed\|Maximum resident" "$W/map$1_gpu_$i.txt" | tee -a "$W/log.txt"; save
-  done
+  map_run "$1" "$2" "$3" 1
+  map_run "$1" "$2" "$3" 2 --sphere-solve device
 }
 want map1m && maps 1m /tmp/colin_1m.vtu 120
 want map10m && maps 10m /tmp/colin_10m.vtu 150
@@ -68,6 +72,8 @@ if want bench; then
     /tmp/colin_1m.vtu $TENM > "$W/sphere_map_gpu.txt" 2>&1
   log "benchmarks done"; tail -4 "$W/sphere_map_gpu.txt" | tee -a "$W/log.txt"; save
 fi
+# --preconditioner auto keeps Jacobi on GPUs: this run says whether AMG would pay at 10M there
+want amg10m && map_run 10m /tmp/colin_10m.vtu 150 amg --preconditioner amg
 python3 - <<'PY' | tee -a "$W/log.txt"
 import glob, json
 for f in sorted(glob.glob("/tmp/res/map*.json")):
