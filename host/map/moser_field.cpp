@@ -123,9 +123,12 @@ struct DeviceAdvector::Impl {
   Device& dev;
   int n, m;
   bc::kernel kvel, kupd;
-  bc::vector<int> tets, nbr, hint, cell_start, cell_tets, stats;
+  bc::vector<int> tets, nbr, hint, cell_start, stats;
   bc::vector<char> boundary;
-  bc::vector<double> inv, grad, rho0, x, k1, k2, k3, k4;
+  bc::vector<double> grad, rho0, x, k1, k2, k3, k4;
+  // the background's two big arrays: on CPU devices views of the host's (no copy), else copies
+  bc::buffer inv, cell_tets;
+  bool zero_copy = false, inv_is_view = false;
   double lo[3] = {0, 0, 0}, inv_h = 1;
   int dims[3] = {1, 1, 1};
   std::vector<char> bmask;
@@ -144,10 +147,8 @@ struct DeviceAdvector::Impl {
         nbr(nb.begin(), nb.end(), d.queue()),
         hint(static_cast<size_t>(n), d.context()),
         cell_start(d.context()),
-        cell_tets(d.context()),
         stats(3 * static_cast<size_t>(n), d.context()),
         boundary(b.begin(), b.end(), d.queue()),
-        inv(d.context()),
         grad(3 * static_cast<size_t>(n), d.context()),
         rho0(static_cast<size_t>(n), d.context()),
         x(3 * static_cast<size_t>(n), d.context()),
@@ -158,13 +159,21 @@ struct DeviceAdvector::Impl {
         bmask(b),
         inc_offset(d.context()),
         inc_tet(d.context()),
-        psi(d.context()) {}
+        psi(d.context()),
+        zero_copy(d.description().type == "cpu") {}
 
   bc::kernel kinv;  // the inverse matrices from x on the device (set_field with psi)
 
   // The background of a round without its gradients; f.inv is uploaded unless
   // `inverses_here` (then the caller makes them on the device).
   void upload_background(const MoserField& f, bool inverses_here = false);
+
+  // A read-only buffer of `bytes` at host memory p: a view of it on CPU devices (valid while p
+  // lives unchanged: DeviceAdvector::release_field), a copy elsewhere.
+  bc::buffer host_array(const void* p, size_t bytes, bool view) {
+    const cl_mem_flags how = view && zero_copy ? CL_MEM_USE_HOST_PTR : CL_MEM_COPY_HOST_PTR;
+    return bc::buffer(dev.context(), bytes, CL_MEM_READ_ONLY | how, const_cast<void*>(p));
+  }
 };
 
 DeviceAdvector::DeviceAdvector(Device& device, const Tets& tets, const std::vector<int>& nbr,
@@ -194,7 +203,11 @@ void DeviceAdvector::set_field(const MoserField& f, const Eigen::VectorXd& psi, 
   }
   bc::copy(psi.data(), psi.data() + psi.size(), s.psi.begin(), q);
   bc::copy(x.data(), x.data() + x.size(), s.x.begin(), q);
-  if (s.inv.size() != 12 * static_cast<size_t>(s.m)) s.inv = bc::vector<double>(12 * static_cast<size_t>(s.m), s.dev.context());
+  const size_t inv_bytes = 12 * sizeof(double) * static_cast<size_t>(std::max(1, s.m));
+  if (s.inv.get() == nullptr || s.inv.size() != inv_bytes || s.inv_is_view) {
+    s.inv = bc::buffer(s.dev.context(), inv_bytes);
+    s.inv_is_view = false;
+  }
   s.kinv.set_args(s.m, s.x, s.tets, s.inv);
   s.dev.launch(s.kinv, static_cast<size_t>(s.m));
   s.kvg.set_args(s.n, s.inc_offset, s.inc_tet, s.tets, s.inv, s.psi, s.boundary, static_cast<int>(slide),
@@ -209,10 +222,19 @@ std::vector<double> DeviceAdvector::gradients() {
   return g;
 }
 
+void DeviceAdvector::release_field() {
+  Impl& s = *impl_;
+  s.cell_tets = bc::buffer();
+  if (s.inv_is_view) {
+    s.inv = bc::buffer();
+    s.inv_is_view = false;
+  }
+}
+
 std::vector<double> DeviceAdvector::inverses() {
   Impl& s = *impl_;
-  std::vector<double> v(s.inv.size());
-  bc::copy(s.inv.begin(), s.inv.end(), v.begin(), s.dev.queue());
+  std::vector<double> v(12 * static_cast<size_t>(s.m));
+  if (!v.empty()) s.dev.queue().enqueue_read_buffer(s.inv, 0, v.size() * sizeof(double), v.data());
   return v;
 }
 
@@ -220,19 +242,19 @@ void DeviceAdvector::Impl::upload_background(const MoserField& f, bool inverses_
   Impl& s = *this;
   auto& q = s.dev.queue();
   // the last round's buffers go first: the new ones are not made beside them (12 doubles a tet)
-  s.cell_tets = bc::vector<int>(s.dev.context());
+  s.cell_tets = bc::buffer();
+  static const double no_tet[12] = {};
+  static const int no_cell = 0;
   if (!inverses_here) {
-    s.inv = bc::vector<double>(s.dev.context());
-    s.inv = bc::vector<double>(f.inv.data(), f.inv.data() + f.inv.size(), q);
+    s.inv = bc::buffer();
+    s.inv = f.inv.empty() ? s.host_array(no_tet, sizeof(no_tet), false)
+                          : s.host_array(f.inv.data(), f.inv.size() * sizeof(double), true);
+    s.inv_is_view = s.zero_copy && !f.inv.empty();
   }
   bc::copy(f.rho0.begin(), f.rho0.end(), s.rho0.begin(), q);
   s.cell_start = bc::vector<int>(f.cell_start.begin(), f.cell_start.end(), q);
-  if (f.cell_tets.empty()) {
-    const int zero = 0;
-    s.cell_tets = bc::vector<int>(&zero, &zero + 1, q);
-  } else {
-    s.cell_tets = bc::vector<int>(f.cell_tets.data(), f.cell_tets.data() + f.cell_tets.size(), q);
-  }
+  s.cell_tets = f.cell_tets.empty() ? s.host_array(&no_cell, sizeof(int), false)
+                                    : s.host_array(f.cell_tets.data(), f.cell_tets.size() * sizeof(int), true);
   for (int c = 0; c < 3; ++c) {
     s.lo[c] = f.lo[c];
     s.dims[c] = f.dims[c];

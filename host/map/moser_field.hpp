@@ -61,7 +61,11 @@ class DeviceAdvector {
                  const std::vector<char>& boundary);
   ~DeviceAdvector();
   /// The round's background and field from the host: f's inverse matrices, grid, rho0 and grad.
+  /// On CPU devices the inverse matrices and the grid's lists are not copied but used where f
+  /// holds them: f must then live unchanged until release_field() (or the next set_field).
   void set_field(const MoserField& f);
+  /// Drops the views of the last set_field's host arrays (call before that MoserField goes).
+  void release_field();
   /// The same background with the inverse matrices and the vertex gradients computed on the
   /// device (f.inv and f.grad are not read: build_grid suffices): the inverses from x
   /// (kernels/moser.cl, equal to build_background's to round-off), the gradients from psi

@@ -95,8 +95,7 @@ void moser_round(MapContext& c, Points& x, double t_end, VolumeMapRound& r) {
   f.rho0.resize(static_cast<size_t>(c.n));
   for (int i = 0; i < c.n; ++i) f.rho0[i] = V(i) > 0 ? target(i) / V(i) : 1.0;
   if (c.gradients_on_device) c.advector->set_field(f, c.psi, x, c.slide);
-  else if (c.advector) c.advector->set_field(f);
-  if (c.advector) f = detail::MoserField{};  // on the device now: the host copy (12 doubles a tet) goes
+  else if (c.advector) c.advector->set_field(f);  // on CPU devices a view of f's arrays: f stays
   r.time_field += seconds_since(t1);
 
   const auto t2 = Clock::now();
@@ -108,6 +107,7 @@ void moser_round(MapContext& c, Points& x, double t_end, VolumeMapRound& r) {
   detail::AdvectStats st;
   if (c.advector) {
     c.advector->advect(p, x, hint, &st);
+    c.advector->release_field();
   } else {
     detail::advect_host(f, c.boundary, p, x, hint, &st);
   }
