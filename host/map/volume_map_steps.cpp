@@ -90,6 +90,13 @@ void solve_and_field(MapContext& c, const Points& x, Eigen::VectorXd& V, Eigen::
 void moser_round(MapContext& c, Points& x, double t_end, VolumeMapRound& r) {
   Eigen::VectorXd V, target;
   detail::MoserField f;
+  // on CPU devices the advector views f's arrays: its views go before f, even on an exception
+  struct ReleaseField {
+    DeviceAdvector* advector;
+    ~ReleaseField() {
+      if (advector) advector->release_field();
+    }
+  } release{c.advector.get()};
   solve_and_field(c, x, V, target, f, r, c.gradients_on_device);
   const auto t1 = Clock::now();
   f.rho0.resize(static_cast<size_t>(c.n));
@@ -107,7 +114,6 @@ void moser_round(MapContext& c, Points& x, double t_end, VolumeMapRound& r) {
   detail::AdvectStats st;
   if (c.advector) {
     c.advector->advect(p, x, hint, &st);
-    c.advector->release_field();
   } else {
     detail::advect_host(f, c.boundary, p, x, hint, &st);
   }
