@@ -1,8 +1,11 @@
 #include <catch2/catch.hpp>
+#include <Eigen/Sparse>
+#include <algorithm>
 #include <cmath>
 #include <random>
 
 #include "linalg/amg_device.hpp"
+#include "linalg/csr_ops.hpp"
 #include "support/devices.hpp"
 #include "support/fixtures.hpp"
 #include "support/shapes.hpp"
@@ -205,4 +208,44 @@ TEST_CASE("preconditioner auto: AMG on CPU devices for large meshes, Jacobi belo
     CHECK(choose_preconditioner("amg", *dev, 10) == Preconditioner::amg);
     CHECK_THROWS_AS(choose_preconditioner("ilu", *dev, 10), InputError);
   }
+}
+
+TEST_CASE("sparse products in row blocks on the host threads equal Eigen's, pattern and values") {
+  const TetMesh m = test::box_mesh(24, 22, 20);  // 12,075 rows: three blocks of 4,096
+  const CsrMatrix a = cotan_laplacian(m.vertices, m.tets);
+  REQUIRE(a.rows > 2 * 4096);
+  // B: a rectangular matrix (rows of A, columns every third vertex, values varied)
+  Eigen::SparseMatrix<double> be(a.rows, (a.rows + 2) / 3);
+  std::vector<Eigen::Triplet<double>> tr;
+  for (int i = 0; i < a.rows; ++i) tr.emplace_back(i, i / 3, 1.0 + 0.01 * (i % 7));
+  be.setFromTriplets(tr.begin(), tr.end());
+  const CsrMatrix b = CsrMatrix::from_eigen(be);
+  CsrMatrix c = detail::spgemm_pattern(a, b);
+  std::vector<int> pos;
+  detail::spgemm_values(a, b, c, pos);
+  const Eigen::SparseMatrix<double, Eigen::RowMajor> want = a.to_eigen() * be;
+  REQUIRE(c.rows == want.rows());
+  REQUIRE(c.cols == want.cols());
+  double worst = 0;
+  int missing = 0;
+  for (int i = 0; i < want.rows(); ++i)
+    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(want, i); it; ++it) {
+      const int k = c.find(i, static_cast<int>(it.col()));
+      if (k < 0) {
+        missing += it.value() != 0;
+        continue;
+      }
+      worst = std::max(worst, std::fabs(c.val[static_cast<size_t>(k)] - it.value()));
+    }
+  CHECK(missing == 0);
+  double scale = 0;
+  for (double v : a.val) scale = std::max(scale, std::fabs(v));
+  CHECK(worst < 1e-12 * scale);
+  int unsorted = 0;
+  for (int i = 0; i < c.rows; ++i) unsorted += !std::is_sorted(c.col.begin() + c.row_ptr[i], c.col.begin() + c.row_ptr[i + 1]);
+  CHECK(unsorted == 0);
+  // the same product twice (the update path reuses the pattern) gives the same values bit for bit
+  const std::vector<double> first = c.val;
+  detail::spgemm_values(a, b, c, pos);
+  CHECK(c.val == first);
 }

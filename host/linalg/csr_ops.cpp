@@ -1,6 +1,9 @@
 #include "linalg/csr_ops.hpp"
 
 #include <algorithm>
+#include <cstddef>
+
+#include "core/parallel.hpp"
 
 namespace vpm::detail {
 
@@ -23,44 +26,66 @@ CsrMatrix csr_transpose(const CsrMatrix& a) {
   return t;
 }
 
+namespace {
+// Rows per block of the products below: blocks run on the host threads; every row is computed
+// the same way whichever thread takes it, so the results do not depend on the thread count.
+constexpr int kRowsPerBlock = 4096;
+}  // namespace
+
 CsrMatrix spgemm_pattern(const CsrMatrix& a, const CsrMatrix& b) {
   CsrMatrix c;
   c.rows = a.rows;
   c.cols = b.cols;
   c.row_ptr.assign(a.rows + 1, 0);
-  std::vector<int> marker(b.cols, -1);
-  for (int i = 0; i < a.rows; ++i) {
-    const size_t start = c.col.size();
-    for (int ka = a.row_ptr[i]; ka < a.row_ptr[i + 1]; ++ka) {
-      const int k = a.col[ka];
-      for (int kb = b.row_ptr[k]; kb < b.row_ptr[k + 1]; ++kb) {
-        const int j = b.col[kb];
-        if (marker[j] != i) {
-          marker[j] = i;
-          c.col.push_back(j);
+  const int blocks = (a.rows + kRowsPerBlock - 1) / kRowsPerBlock;
+  std::vector<std::vector<int>> cols(static_cast<size_t>(blocks));
+  parallel_for(blocks, 2, [&](int b0, int b1) {
+    std::vector<int> marker(static_cast<size_t>(b.cols), -1);
+    for (int blk = b0; blk < b1; ++blk) {
+      std::vector<int>& out = cols[static_cast<size_t>(blk)];
+      for (int i = blk * kRowsPerBlock, e = std::min(a.rows, (blk + 1) * kRowsPerBlock); i < e; ++i) {
+        const size_t start = out.size();
+        for (int ka = a.row_ptr[i]; ka < a.row_ptr[i + 1]; ++ka) {
+          const int k = a.col[ka];
+          for (int kb = b.row_ptr[k]; kb < b.row_ptr[k + 1]; ++kb) {
+            const int j = b.col[kb];
+            if (marker[j] != i) {
+              marker[j] = i;
+              out.push_back(j);
+            }
+          }
         }
+        std::sort(out.begin() + static_cast<std::ptrdiff_t>(start), out.end());
+        c.row_ptr[i + 1] = static_cast<int>(out.size() - start);  // the row's length for now
       }
     }
-    std::sort(c.col.begin() + start, c.col.end());
-    c.row_ptr[i + 1] = static_cast<int>(c.col.size());
-  }
+  });
+  for (int i = 0; i < a.rows; ++i) c.row_ptr[i + 1] += c.row_ptr[i];
+  c.col.reserve(static_cast<size_t>(c.row_ptr[a.rows]));
+  for (const std::vector<int>& block : cols) c.col.insert(c.col.end(), block.begin(), block.end());
   c.val.assign(c.col.size(), 0.0);
   return c;
 }
 
 void spgemm_values(const CsrMatrix& a, const CsrMatrix& b, CsrMatrix& c, std::vector<int>& pos) {
-  pos.assign(b.cols, -1);
-  for (int i = 0; i < a.rows; ++i) {
-    for (int q = c.row_ptr[i]; q < c.row_ptr[i + 1]; ++q) {
-      pos[c.col[q]] = q;
-      c.val[q] = 0.0;
+  const int blocks = (a.rows + kRowsPerBlock - 1) / kRowsPerBlock;
+  pos.assign(static_cast<size_t>(b.cols), -1);  // the first thread's scratch; the others make their own
+  parallel_for(blocks, 2, [&](int b0, int b1) {
+    std::vector<int> own;
+    if (b0 != 0) own.assign(static_cast<size_t>(b.cols), -1);
+    std::vector<int>& where = b0 == 0 ? pos : own;
+    for (int i = b0 * kRowsPerBlock, e = std::min(a.rows, b1 * kRowsPerBlock); i < e; ++i) {
+      for (int q = c.row_ptr[i]; q < c.row_ptr[i + 1]; ++q) {
+        where[c.col[q]] = q;
+        c.val[q] = 0.0;
+      }
+      for (int ka = a.row_ptr[i]; ka < a.row_ptr[i + 1]; ++ka) {
+        const int k = a.col[ka];
+        const double av = a.val[ka];
+        for (int kb = b.row_ptr[k]; kb < b.row_ptr[k + 1]; ++kb) c.val[where[b.col[kb]]] += av * b.val[kb];
+      }
     }
-    for (int ka = a.row_ptr[i]; ka < a.row_ptr[i + 1]; ++ka) {
-      const int k = a.col[ka];
-      const double av = a.val[ka];
-      for (int kb = b.row_ptr[k]; kb < b.row_ptr[k + 1]; ++kb) c.val[pos[b.col[kb]]] += av * b.val[kb];
-    }
-  }
+  });
 }
 
 }  // namespace vpm::detail
