@@ -30,7 +30,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   opt.sphere_start = vpm::cli::parse_option(
       "--sphere-start", [&] { return vpm::parse_sphere_start(args.get("--sphere-start", "auto")); });
   opt.density_solve = vpm::cli::parse_option(
-      "--sphere-solve", [&] { return vpm::parse_density_solve(args.get("--sphere-solve", "host")); });
+      "--sphere-solve", [&] { return vpm::parse_density_solve(args.get("--sphere-solve", "auto")); });
   opt.split_edges = !args.has("--no-split");
   const auto report_path = args.get("--report");
 
@@ -67,7 +67,7 @@ vpm::cli::Registrar reg({"initial-map", "MESH -o OUT", "the fold-free initial ma
                          {{"--untangle", "never|if-folded|always", "untangle the harmonic map (default if-folded)"},
                           {"--sphere", "area|conformal", "boundary map to the sphere: equal-area (default) or conformal only"},
                           {"--sphere-start", "auto|progressive", "start of the sphere map: conformal, progressive where it flips (auto, default), or progressive"},
-                          {"--sphere-solve", "host|device", "the equal-area steps' solves: host Cholesky (default) or device CG (for GPUs; not yet measured on one)", false, 0, true},
+                          {"--sphere-solve", "auto|host|device", "the sphere map's equal-area solves: host Cholesky, device AMG-CG, or auto (default: a GPU from 50,000 boundary vertices)"},
                           {"--area-correction", "", "equalise areas on the sphere before the interior map"},
                           {"--no-split", "", "do not split interior edges between boundary vertices"},
                           {"--report", "REPORT.json", "write the report (stages, metrics, timings)"}},

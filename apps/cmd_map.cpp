@@ -66,7 +66,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   bo.initial.sphere_start = vpm::cli::parse_option(
       "--sphere-start", [&] { return vpm::parse_sphere_start(args.get("--sphere-start", "auto")); });
   bo.initial.density_solve = vpm::cli::parse_option(
-      "--sphere-solve", [&] { return vpm::parse_density_solve(args.get("--sphere-solve", "host")); });
+      "--sphere-solve", [&] { return vpm::parse_density_solve(args.get("--sphere-solve", "auto")); });
   vpm::BallMap bm = vpm::map_to_ball(dev, mesh, vr, in, bo);
 
   t0 = Clock::now();
@@ -94,7 +94,7 @@ vpm::cli::Registrar reg({"map", "MESH -o OUT", "map a tet mesh to the unit ball,
                           {"--method", "moser|paper|vsem", "moser (default) or a peer method for comparison"},
                           {"--sphere", "area|conformal", "boundary map to the sphere: equal-area (default) or conformal only"},
                           {"--sphere-start", "auto|progressive", "start of the sphere map: conformal, progressive where it flips (auto, default), or progressive"},
-                          {"--sphere-solve", "host|device", "the equal-area steps' solves: host Cholesky (default) or device CG (for GPUs; not yet measured on one)", false, 0, true},
+                          {"--sphere-solve", "auto|host|device", "the sphere map's equal-area solves: host Cholesky, device AMG-CG, or auto (default: a GPU from 50,000 boundary vertices)"},
                           {"--boundary", "slide|fixed", "boundary vertices slide on the sphere (moser default) or stay"},
                           {"--solver", "cg|paper", "Jacobi CG (default) or the paper's BiCGSTAB on the normal equations"},
                           {"--preconditioner", "auto|jacobi|amg", "of CG: Jacobi, smoothed-aggregation AMG, or auto (default: AMG on CPUs from 2M tets)"},

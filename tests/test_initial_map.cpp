@@ -339,7 +339,7 @@ TEST_CASE("sphere map: where the conformal map flips triangles the progressive s
   CHECK_THROWS_AS(parse_sphere_start("tutte"), InputError);
 }
 
-TEST_CASE("equal-area sphere map: the steps' systems solved by device CG give the host's sphere") {
+TEST_CASE("equal-area sphere map: the steps' systems solved by device AMG-CG give the host's sphere") {
   const std::shared_ptr<Device> dev = test::opencl_device();
   if (!dev) {
     WARN("no OpenCL device: skipped");
@@ -352,8 +352,8 @@ TEST_CASE("equal-area sphere map: the steps' systems solved by device CG give th
   InitialMapOptions on_device;
   on_device.density_solve = InitialMapOptions::DensitySolve::device;
   const SphereMapResult d = sphere_map(s, on_device, dev.get());
-  CHECK(d.report.density_solver == "device-cg");
-  CHECK(host.report.density_solver != "device-cg");
+  CHECK(d.report.density_solver == "device-amg-cg");
+  CHECK(host.report.density_solver != "device-amg-cg");
   REQUIRE(d.flipped_triangles == 0);
   CHECK(*d.report.density_steps == *host.report.density_steps);
   CHECK(std::abs(d.report.area_distortion_final - host.report.area_distortion_final) <
@@ -363,4 +363,29 @@ TEST_CASE("equal-area sphere map: the steps' systems solved by device CG give th
   const SphereMapResult none = sphere_map(s, on_device, nullptr);
   CHECK(none.report.density_solver == host.report.density_solver);
   CHECK(none.sphere == host.sphere);
+  // automatic (the default): this small boundary stays on the host, also given the device
+  const SphereMapResult automatic = sphere_map(s, InitialMapOptions{}, dev.get());
+  CHECK(automatic.report.density_solver == host.report.density_solver);
+  CHECK(automatic.sphere == host.sphere);
+}
+
+TEST_CASE("where the equal-area steps solve: automatic takes a GPU for large boundaries only") {
+  using S = InitialMapOptions::DensitySolve;
+  InitialMapOptions o;
+  CHECK(o.density_solve == S::automatic);
+  CHECK(parse_density_solve("auto") == S::automatic);
+  CHECK(parse_density_solve("device") == S::device);
+  CHECK_THROWS_AS(parse_density_solve("gpu"), InputError);
+  const std::shared_ptr<Device> host = Device::host();
+  CHECK_FALSE(density_solve_on_device(o, nullptr, 10 * kDeviceDensityVertices));
+  CHECK_FALSE(density_solve_on_device(o, host.get(), 10 * kDeviceDensityVertices));
+  const std::shared_ptr<Device> dev = test::opencl_device();
+  if (!dev) return;
+  const bool gpu = dev->description().type == "gpu";
+  CHECK_FALSE(density_solve_on_device(o, dev.get(), kDeviceDensityVertices - 1));
+  CHECK(density_solve_on_device(o, dev.get(), kDeviceDensityVertices) == gpu);
+  o.density_solve = S::host;
+  CHECK_FALSE(density_solve_on_device(o, dev.get(), 10 * kDeviceDensityVertices));
+  o.density_solve = S::device;
+  CHECK(density_solve_on_device(o, dev.get(), 100));
 }

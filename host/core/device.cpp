@@ -211,6 +211,7 @@ void Device::launch(bc::kernel& k, size_t n) {
 bc::kernel Device::kernel(const std::string& program, const std::string& kernel_name,
                           const std::string& options) {
   const std::string key = program + "|" + options + (group_reduce() ? "|group" : "");
+  std::lock_guard<std::mutex> lock(programs_mutex_);
   auto it = programs_.find(key);
   if (it == programs_.end()) {
     const auto& sources = detail::embedded_kernel_sources();

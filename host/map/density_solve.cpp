@@ -72,11 +72,13 @@ class FactorReuse {
   int last_iterations_ = 0;
 };
 
-// Jacobi CG on the device, one matrix per step (uploaded with the solver), warm-started from
-// the previous step's solution: meant for GPUs, where a step of the 10M-tet Colin27's boundary
-// (136k vertices, about 750 iterations) should cost kernels instead of a host factorisation
-// (not yet measured on one). On the CPU device the host's Cholesky is faster (1.1M boundary
-// 2.06 s against 0.92 s), so InitialMapOptions::density_solve defaults to the host.
+// AMG-preconditioned CG on the device (vpm/amg.hpp: the hierarchy built on the host for each
+// step's matrix, the V-cycles on the device), warm-started from the previous step's solution.
+// On the 10M-tet Colin27's boundary (136,449 vertices) 29-33 iterations a step, where Jacobi CG
+// took 1,700-1,950: the 13 steps' solves 2.5 s on the 2-core PoCL device against 3.8 s for the
+// host's Cholesky and 14.7 s for Jacobi CG; on the 1.1M one's (32,098) 0.64-0.68 s against
+// 0.62-0.66 s. InitialMapOptions::DensitySolve::automatic uses it on GPUs only (on CPUs its
+// kernels compete with the host threads of the rest of the map: vpm/initial_map.hpp).
 class DeviceCg {
  public:
   explicit DeviceCg(Device& device) : device_(device) {}
@@ -84,6 +86,7 @@ class DeviceCg {
     SolverOptions o;
     o.relative_tolerance = 1e-10;
     o.max_iterations = std::max(20000, 4 * static_cast<int>(L.rows()));
+    o.preconditioner = Preconditioner::amg;
     try {
       SparseSolver cg(device_, CsrMatrix::from_eigen(L), o);
       x = last_.size() == b.size() ? last_ : Eigen::VectorXd::Zero(b.size());
@@ -117,7 +120,7 @@ DensitySolver::~DensitySolver() = default;
 
 bool DensitySolver::solve(const SpMat& L, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   if (impl_->device && impl_->device->solve(L, b, x)) {
-    impl_->last = "device-cg";
+    impl_->last = "device-amg-cg";
     return true;
   }
   if (!impl_->host.solve(L, b, x)) return false;

@@ -24,7 +24,7 @@ class DensitySolver {
   DensitySolver& operator=(const DensitySolver&) = delete;
   /// False when neither path gave a finite solution.
   bool solve(const Eigen::SparseMatrix<double>& L, const Eigen::VectorXd& b, Eigen::VectorXd& x);
-  /// "device-cg", "cholmod-supernodal" or "eigen-simplicial-ldlt": what solved the last system.
+  /// "device-amg-cg", "cholmod-supernodal" or "eigen-simplicial-ldlt": what solved the last system.
   const char* name() const;
 
  private:

@@ -248,12 +248,11 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
   surf.vertices = m.vertices;
   surf.triangles = std::move(sp.boundary);
   res.boundary = boundary_vertex_mask(m.num_vertices(), surf.triangles);
-  // a sphere map solving on the device finishes before the Poisson solver is built there: two
-  // threads never share the device (its program cache and Boost.Compute's are not thread-safe)
-  std::optional<TimedSphereMap> sphere_first;
-  if (opt.density_solve == InitialMapOptions::DensitySolve::device) sphere_first = early_sphere.get();
+  // the Poisson solver is built on a third thread, also while a sphere map solves on the device
+  // (Device::kernel is thread-safe, kernels are never shared, and neither uses Boost.Compute's
+  // kernel-generating algorithms, whose program cache is not)
   std::future<std::shared_ptr<PoissonSolver>> solver = start_harmonic_solver(device, m, opt);
-  TimedSphereMap early = sphere_first ? std::move(*sphere_first) : early_sphere.get();
+  TimedSphereMap early = early_sphere.get();
   const bool done = map_through_sphere(device, m, surf, opt, note, res, rep, solver, &early);
   if (!done && rep.boundary.flipped_triangles == 0 &&
       opt.sphere_density != InitialMapOptions::SphereDensity::conformal) {

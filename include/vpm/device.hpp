@@ -14,6 +14,7 @@
 #include <boost/compute/kernel.hpp>
 #include <boost/compute/program.hpp>
 #include <map>
+#include <mutex>
 #include <optional>
 #include <memory>
 #include <string>
@@ -109,6 +110,7 @@ class Device {
   size_t local_size_ = 64;
   std::optional<bool> group_reduce_override_;
   std::map<std::string, boost::compute::program> programs_;
+  std::mutex programs_mutex_;  ///< kernel() may be called from several threads
 };
 
 }  // namespace vpm

@@ -66,13 +66,15 @@ struct InitialMapOptions {
   enum class SphereDensity { conformal, area };
   SphereDensity sphere_density = SphereDensity::area;
   /// Where the area equalisation's Laplacian systems are solved (one per step): host = sparse
-  /// Cholesky, an earlier step's factor reused as CG preconditioner (the default); device =
-  /// Jacobi CG on the OpenCL device sphere_map() is given (the host when it is given none or the
-  /// host device; a step whose CG fails is redone on the host). On the 2-core CPU device the
-  /// host is faster; meant for GPUs, where 136k boundary vertices cost 0.3-0.4 s per host
-  /// factorisation: not yet measured on one (docs/gpu.md).
-  enum class DensitySolve { host, device };
-  DensitySolve density_solve = DensitySolve::host;
+  /// Cholesky, an earlier step's factor reused as CG preconditioner; device = AMG-CG on the
+  /// OpenCL device sphere_map() is given (the host when it is given none or the host device; a
+  /// step whose CG fails is redone on the host); automatic (the default) = device on GPUs for
+  /// boundaries of at least kDeviceDensityVertices vertices, else host (density_solve_on_device).
+  /// On the 2-core PoCL device AMG-CG solves the 10M-tet Colin27's boundary (136k vertices) in
+  /// 2.5 s against the host's 3.8 s alone, but inside `vpm map`, where its kernels share the
+  /// cores with the Poisson solver being built, 7.1 s against 5.3 s (the map 96 vs 87 s).
+  enum class DensitySolve { automatic, host, device };
+  DensitySolve density_solve = DensitySolve::automatic;
   int density_max_steps = 300;
   double density_tolerance = 0.02;  ///< stop at this area distortion (mean |area ratio - 1|)
   /// Where the sphere map starts. automatic: the conformal map, and when that leaves chord
@@ -131,7 +133,7 @@ struct SphereMapReport {
   // after, the area distortion reached, kept or not
   std::string density_target;
   std::optional<int> density_steps;
-  std::string density_solver;  ///< "cholmod-supernodal", "eigen-simplicial-ldlt" or "device-cg" (the last step's)
+  std::string density_solver;  ///< "cholmod-supernodal", "eigen-simplicial-ldlt" or "device-amg-cg" (the last step's)
   double density_misfit_before = 0, density_misfit_after = 0, area_distortion_density = 0;
   bool density_kept = false;
   // the progressive embedding (InitialMapOptions::sphere_start), when it ran: edge-collapse
@@ -262,8 +264,16 @@ InitialMapOptions::SphereDensity parse_sphere_density(const std::string& name);
 const char* to_string(InitialMapOptions::SphereDensity d);
 /// "auto", "progressive" (InitialMapOptions::SphereStart); InputError otherwise.
 InitialMapOptions::SphereStart parse_sphere_start(const std::string& name);
-/// "host" or "device" (InputError otherwise).
+/// "auto", "host" or "device" (InputError otherwise).
 InitialMapOptions::DensitySolve parse_density_solve(const std::string& name);
+
+/// Boundaries of at least this many vertices have their equal-area steps solved on a GPU under
+/// InitialMapOptions::DensitySolve::automatic (at 32k the host and the CPU device tie).
+inline constexpr int kDeviceDensityVertices = 50'000;
+/// Whether the equal-area steps of a boundary of `boundary_vertices` vertices are solved on
+/// `device` (null: none) under `opt.density_solve`: never on the host device or without one;
+/// automatic only on GPUs.
+bool density_solve_on_device(const InitialMapOptions& opt, const Device* device, int boundary_vertices);
 
 /// Result of step 1.
 struct SplitResult {
