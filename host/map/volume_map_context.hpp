@@ -35,6 +35,7 @@ struct MapContext {
   std::unique_ptr<MapSolver> solver;
   std::unique_ptr<DeviceAdvector> advector;
   std::unique_ptr<DeviceVolumes> volumes;  // fold checks and dual volumes on the device (null on the host)
+  MoserField field;  // a Moser round's field, its arrays reused by the next round (freed after the rounds)
   Eigen::VectorXd psi;
   Triangles bfaces;  // boundary faces (outward), from the same face sort as nbr
   std::vector<char> freedom;                          // polish: free / tangent / fixed per vertex

@@ -163,6 +163,7 @@ void run_rounds(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& 
     prev_vertex = d.vertex;
   }
   if (res.stop_reason == "rounds" && opt.rounds < 0 && d.vertex <= opt.tolerance) res.stop_reason = "tolerance";
+  c.field = MoserField{};  // the polish rounds do not need its memory
 }
 
 namespace {

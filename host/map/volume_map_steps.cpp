@@ -89,8 +89,10 @@ void solve_and_field(MapContext& c, const Points& x, Eigen::VectorXd& V, Eigen::
 // computed where the advection runs, from psi.
 void moser_round(MapContext& c, Points& x, double t_end, VolumeMapRound& r) {
   Eigen::VectorXd V, target;
-  detail::MoserField f;
-  // on CPU devices the advector views f's arrays: its views go before f, even on an exception
+  // the context's field: its big arrays keep their memory from round to round (rebuilt in place,
+  // no fresh pages; MapContext::field)
+  detail::MoserField& f = c.field;
+  // on CPU devices the advector views f's arrays: the views go after the round, even on an exception
   struct ReleaseField {
     DeviceAdvector* advector;
     ~ReleaseField() {
