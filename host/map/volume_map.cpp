@@ -9,7 +9,6 @@
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/geometry.hpp"
-#include "vpm/solver.hpp"
 #include "vpm/timing.hpp"
 #include "vpm/topology.hpp"
 
@@ -206,7 +205,7 @@ VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, cons
   res.method = opt.method;
   res.slide = c.slide;
   res.solver = opt.solver;
-  res.preconditioner = to_string(choose_preconditioner(opt.preconditioner, dev, tets.rows()));
+  res.preconditioner = to_string(c.solver->preconditioner());
   res.rk_steps = opt.rk_steps;
   res.device_advection = c.advector != nullptr;
 

@@ -68,6 +68,8 @@ MapSolver::MapSolver(Device& device, int n, const Tets& tets, const std::string&
 }
 MapSolver::~MapSolver() = default;
 
+Preconditioner MapSolver::preconditioner() const { return impl_->options.preconditioner; }
+
 SolveStats MapSolver::neumann(const Points& x, const Eigen::VectorXd& b_in, Eigen::VectorXd& psi) {
   const auto t0 = Clock::now();
   if (!impl_->poisson)

@@ -10,10 +10,10 @@
 #include <vector>
 
 #include "vpm/mesh.hpp"
+#include "vpm/solver.hpp"
 
 namespace vpm {
 class Device;
-class PoissonSolver;
 }
 
 namespace vpm::detail {
@@ -33,12 +33,15 @@ Eigen::SparseMatrix<double> weighted_stiffness(const Points& x, const Tets& tets
 class MapSolver {
  public:
   /// `method`: "cg" or "paper" (normal equations, BiCGSTAB). `tolerance`: relative residual.
-  /// `preconditioner`: "jacobi" or "amg" (of cg). `reuse`: a PoissonSolver built on the same
+  /// `preconditioner` (of cg): "auto", "jacobi" or "amg" (vpm::choose_preconditioner resolves
+  /// "auto" for the device and the tet count). `reuse`: a PoissonSolver built on the same
   /// tets and device to use for the Neumann solves (ignored otherwise; nullptr: one is built).
   MapSolver(Device& device, int num_vertices, const Tets& tets, const std::string& method,
             double tolerance, const std::string& preconditioner = "jacobi",
             std::shared_ptr<PoissonSolver> reuse = nullptr);
   ~MapSolver();
+  /// The preconditioner the Neumann solves use (what "auto" resolved to).
+  Preconditioner preconditioner() const;
   /// Neumann: K(x) psi = b (b sums to zero); psi in: warm start, out: zero-mean solution.
   SolveStats neumann(const Points& x, const Eigen::VectorXd& b, Eigen::VectorXd& psi);
   /// Dirichlet with a given matrix K (negative semi-definite, e.g. weighted_stiffness):
