@@ -4,14 +4,15 @@
 # and `vpm map` of Colin27 at 1.1M and 10M tets (meshed there), last a 10M map with AMG-CG.
 # Everything lands in $OUT/res.tgz, refreshed after each step, so a run cut short still returns
 # what it did.
-#   usage: bash .gpu/run.sh [STEPS (tests,bench,map1m,map10m,amg10m)]
+#   usage: bash .gpu/run.sh [STEPS (tests,bench,map1m,map10m,amg10m,extra)]
+# (extra: the volume-map and registration benchmarks and `vpm demo`, about 30 s on an H200)
 # DEVICE (gpu) and ICD_DIR (the bundle's NVIDIA vendor file) may be set for a dry run elsewhere,
 # e.g. DEVICE=cpu ICD_DIR=/etc/OpenCL/vendors on a machine with PoCL.
 set -u
 R=$PWD
 G=$(cd "$(dirname "$0")" && pwd)
 W=/tmp/res
-STEPS=${1:-tests,bench,map1m,map10m,amg10m}
+STEPS=${1:-tests,bench,map1m,map10m,amg10m,extra}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$W" "$OUT"
 save() { tar czf "$OUT/res.tgz" -C /tmp res 2>/dev/null; }
@@ -75,6 +76,15 @@ if want bench; then
 fi
 # --preconditioner auto keeps Jacobi on GPUs: this run says whether AMG would pay at 10M there
 want amg10m && map_run 10m /tmp/colin_10m.vtu 150 amg --preconditioner amg
+if want extra; then
+  log "volume-map and registration benchmarks, vpm demo"
+  VPM_DEVICE=$DEV timeout 200 build/bench/vpm_bench_register --runs 3 --out "$W/register_gpu.json" > "$W/register_gpu.txt" 2>&1
+  VPM_DEVICE=$DEV timeout 200 build/bench/vpm_bench_volume_map --runs 3 --out /tmp/vm > "$W/vm_gpu.txt" 2>&1
+  cp /tmp/vm/volume_map.json "$W/volume_map_gpu.json" 2>/dev/null
+  VPM_DEVICE=$DEV timeout 200 build/vpm demo --out /tmp/demo > "$W/demo_gpu.txt" 2>&1
+  cp /tmp/demo/demo.json "$W/demo_gpu.json" 2>/dev/null
+  log "extra done"; tail -3 "$W/demo_gpu.txt" | tee -a "$W/log.txt"; save
+fi
 python3 - <<'PY' | tee -a "$W/log.txt"
 import glob, json
 for f in sorted(glob.glob("/tmp/res/map*.json")):
