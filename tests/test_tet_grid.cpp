@@ -1,17 +1,32 @@
-// The point-location grid (mesh/tet_grid.hpp): built in tet chunks on several threads, it must
-// list in every cell exactly the tets whose grown bounding box overlaps it, in ascending order
-// (the order the location's fallback search and its device twin rely on for identical maps).
+// The point-location grid (mesh/tet_grid.hpp) and the vertex-tet incidence, built in chunks on
+// several threads, and the face table: the grid must list in every cell exactly the tets whose
+// grown bounding box overlaps it, in ascending order (the order the location's fallback search
+// and its device twin rely on for identical maps).
 #include <catch2/catch.hpp>
 #include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <random>
 
+#include "mesh/face_table.hpp"
 #include "mesh/tet_grid.hpp"
 #include "vpm/topology.hpp"
 #include "support/shapes.hpp"
 
 using namespace vpm;
+
+namespace {
+/// The tets in a seeded random order.
+Tets shuffled_tets(const Tets& tets, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::vector<int> perm(static_cast<size_t>(tets.rows()));
+  std::iota(perm.begin(), perm.end(), 0);
+  std::shuffle(perm.begin(), perm.end(), rng);
+  Tets out(tets.rows(), 4);
+  for (Eigen::Index t = 0; t < tets.rows(); ++t) out.row(t) = tets.row(perm[static_cast<size_t>(t)]);
+  return out;
+}
+}  // namespace
 
 TEST_CASE("tet grid: each cell lists the tets overlapping it in ascending order, as one serial pass") {
   TetMesh mesh = test::box_mesh(26, 24, 22);  // > 65,536 tets: the chunked (threaded) build
@@ -60,12 +75,7 @@ TEST_CASE("vertex-tet incidence built in tet chunks lists each vertex's tets in 
   TetMesh mesh = test::box_mesh(26, 24, 22);  // > 65,536 tets: the chunked (threaded) build
   REQUIRE(mesh.num_tets() > 65536);
   // tets in a random order, so chunk boundaries cut through every vertex's list
-  std::mt19937 rng(11);
-  std::vector<int> perm(static_cast<size_t>(mesh.num_tets()));
-  std::iota(perm.begin(), perm.end(), 0);
-  std::shuffle(perm.begin(), perm.end(), rng);
-  Tets shuffled(mesh.num_tets(), 4);
-  for (int t = 0; t < mesh.num_tets(); ++t) shuffled.row(t) = mesh.tets.row(perm[static_cast<size_t>(t)]);
+  const Tets shuffled = shuffled_tets(mesh.tets, 11);
   const int n = mesh.num_vertices();
   const Incidence inc = vertex_tet_incidence(n, shuffled);
   std::vector<std::vector<int>> ref(static_cast<size_t>(n));
@@ -79,4 +89,35 @@ TEST_CASE("vertex-tet incidence built in tet chunks lists each vertex's tets in 
     wrong += got != ref[static_cast<size_t>(v)];
   }
   CHECK(wrong == 0);
+}
+
+TEST_CASE("face table: every slot, ordered by (sorted triple, slot), grouped by smallest vertex") {
+  TetMesh mesh = test::box_mesh(26, 24, 22);
+  const Tets shuffled = shuffled_tets(mesh.tets, 11);
+  const detail::FaceTable ft = detail::face_table(shuffled);
+  // the serial reference: all (triple, slot) pairs sorted
+  constexpr int kOpp[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  std::vector<std::pair<std::array<int, 3>, int>> ref;
+  for (int t = 0; t < shuffled.rows(); ++t)
+    for (int k = 0; k < 4; ++k) {
+      std::array<int, 3> s = {shuffled(t, kOpp[k][0]), shuffled(t, kOpp[k][1]), shuffled(t, kOpp[k][2])};
+      std::sort(s.begin(), s.end());
+      ref.push_back({s, 4 * t + k});
+    }
+  std::sort(ref.begin(), ref.end());
+  REQUIRE(ft.entries.size() == ref.size());
+  REQUIRE(ft.start.size() == static_cast<size_t>(mesh.num_vertices()) + 1);
+  size_t wrong = 0;
+  for (size_t i = 0; i < ref.size(); ++i) {
+    const auto& [s, slot] = ref[i];
+    const std::uint64_t rest = (static_cast<std::uint64_t>(s[1]) << 32) | static_cast<std::uint32_t>(s[2]);
+    wrong += ft.entries[i].slot != slot || ft.entries[i].rest != rest ||
+             static_cast<int>(i) < ft.start[static_cast<size_t>(s[0])] ||
+             static_cast<int>(i) >= ft.start[static_cast<size_t>(s[0]) + 1];
+  }
+  CHECK(wrong == 0);
+  int pairs = 0, singles = 0;  // interior faces twice, boundary faces once
+  ft.for_each_group([&](int, int count) { (count == 2 ? pairs : singles) += 1; });
+  CHECK(2 * pairs + singles == static_cast<int>(ref.size()));
+  CHECK(singles == static_cast<int>(boundary_faces(mesh.tets).rows()));
 }

@@ -221,4 +221,44 @@ SplitResult split_boundary_edges(const TetMesh& input, const Triangles& bf, int 
   return r;
 }
 
+SplitResult split_edges_near(const TetMesh& mesh, const Triangles& bf, const std::vector<int>& seed_tets,
+                             int rings) {
+  SplitResult r;
+  const int n = mesh.num_vertices();
+  std::vector<char> bnd = boundary_vertex_mask(n, bf);
+  const auto bedges = surface_edges(bf);
+  // the tets within `rings` vertex rings of the seeds
+  std::vector<char> near(static_cast<size_t>(n), 0);
+  for (int t : seed_tets)
+    for (int c = 0; c < 4; ++c) near[static_cast<size_t>(mesh.tets(t, c))] = 1;
+  for (int ring = 0; ring < rings; ++ring) {
+    const std::vector<char> seen = near;
+    for (int t = 0; t < mesh.num_tets(); ++t)
+      if (seen[mesh.tets(t, 0)] || seen[mesh.tets(t, 1)] || seen[mesh.tets(t, 2)] || seen[mesh.tets(t, 3)])
+        for (int c = 0; c < 4; ++c) near[static_cast<size_t>(mesh.tets(t, c))] = 1;
+  }
+  std::vector<std::pair<int, int>> cand;
+  for (int t = 0; t < mesh.num_tets(); ++t) {
+    bool inside = true;
+    for (int c = 0; c < 4; ++c) inside = inside && near[static_cast<size_t>(mesh.tets(t, c))];
+    if (!inside) continue;
+    for (const auto& e : kEdges) {
+      int a = mesh.tets(t, e[0]), b = mesh.tets(t, e[1]);
+      if (a > b) std::swap(a, b);
+      if (!bedges.count({a, b})) cand.push_back({a, b});
+    }
+  }
+  std::sort(cand.begin(), cand.end());
+  cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+  Refinement f = start(mesh, std::move(bnd));
+  r.rounds = 1;
+  split_edges(f, cand);
+  r.inserted_vertices = static_cast<int>(f.X.size()) - n;
+  r.parent_tet = f.parent_tet;
+  build_mesh(f, mesh, r);
+  r.four_boundary_tets_before = r.four_boundary_tets_after = count_four_boundary_tets(r.mesh.tets, f.bnd);
+  r.boundary = bf;
+  return r;
+}
+
 }  // namespace vpm

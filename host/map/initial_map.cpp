@@ -272,6 +272,11 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
     map_through_sphere(device, m, surf, conformal, note, res, rep, solver);
     rep.fallback = fb;
   }
+  if (rep.boundary.flipped_triangles == 0 && detail::refine_folds(device, surf.triangles, opt, res, rep)) {
+    res.poisson = std::make_shared<PoissonSolver>(device, res.mesh.num_vertices(), res.mesh.tets,
+                                                  harmonic_solver_options(opt, device, res.mesh.num_tets()));
+    res.poisson->set_positions(res.mesh.vertices);
+  }
   if (rep.boundary.flipped_triangles > 0)
     throw NumericalError("initial_map: the boundary map to the sphere flipped " +
                          std::to_string(rep.boundary.flipped_triangles) + " of " +
@@ -335,6 +340,14 @@ Json to_json(const InitialMapReport& r) {
   if (r.untangle_cleanup) rep["untangle_cleanup"] = untangle_json(*r.untangle_cleanup);
   if (r.untangle_slide) rep["untangle_slide"] = untangle_json(*r.untangle_slide);
   rep["folds_after_untangle"] = r.folds_after_untangle;
+  if (r.refine) {
+    Json& f = rep["refine"];
+    f["rounds"] = r.refine->rounds;
+    f["inserted_vertices"] = r.refine->inserted_vertices;
+    f["folds_before"] = r.refine->folds_before;
+    f["folds_after"] = r.refine->folds_after;
+    f["seconds"] = r.refine->seconds;
+  }
   rep["boundary_max_radius_error"] = r.boundary_max_radius_error;
   rep["metrics"] = to_json(r.metrics);
   Json& tm = rep["timings_s"];

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "vpm/device.hpp"
+#include "vpm/timing.hpp"
 #include "vpm/topology.hpp"
 #include "vpm/untangle.hpp"
 
@@ -100,6 +101,45 @@ int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boun
   }
   if (folds > 0 && folds <= kCleanupMaxFolds) folds = slide_cleanup(device, m, boundary, opt, ball, folds, rep);
   return folds;
+}
+
+bool refine_folds(Device& device, const Triangles& bf, const InitialMapOptions& opt, InitialMapResult& res,
+                  InitialMapReport& rep) {
+  int folds = rep.folds_after_untangle;
+  if (folds == 0 || opt.max_refine_rounds <= 0) return false;
+  const auto t0 = Clock::now();
+  InitialMapReport::Refine rf;
+  rf.folds_before = folds;
+  const std::string kBall = "vpm_refine_ball";  // the ball positions, carried to the midpoints
+  for (int round = 0, rings = 1; round < opt.max_refine_rounds && folds > 0; ++round, rings *= 2) {
+    TetMesh carrier = res.mesh;
+    carrier.set_point_field(kBall, FieldValues(res.ball));
+    SplitResult sp = split_edges_near(carrier, bf, inverted_tets(res.ball, carrier.tets), rings);
+    TetMesh& m = sp.mesh;
+    Points ball = m.find_point_field(kBall)->values;
+    m.point_data.erase(std::find_if(m.point_data.begin(), m.point_data.end(),
+                                    [&](const Field& f) { return f.name == kBall; }));
+    std::vector<char> boundary = res.boundary;
+    boundary.resize(static_cast<size_t>(m.num_vertices()), 0);  // inserted vertices are interior
+    InitialMapReport sub;
+    sub.folds_before_untangle = static_cast<int>(inverted_tets(ball, m.tets).size());
+    const int left = untangle_map(device, m, boundary, opt, ball, sub);
+    ++rf.rounds;
+    if (left >= folds) break;  // no better: the mesh before this round stays
+    folds = left;
+    res.mesh = std::move(m);
+    res.ball = std::move(ball);
+    res.boundary = std::move(boundary);
+    rf.inserted_vertices += sp.inserted_vertices;
+    rep.untangle = sub.untangle;
+  }
+  rf.folds_after = folds;
+  rf.seconds = seconds_since(t0);
+  rep.refine = rf;
+  rep.folds_after_untangle = folds;
+  rep.refined_vertices = res.mesh.num_vertices();
+  rep.refined_tets = res.mesh.num_tets();
+  return rf.inserted_vertices > 0;
 }
 
 }  // namespace vpm::detail

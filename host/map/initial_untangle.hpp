@@ -23,4 +23,12 @@ constexpr int kCleanupMaxFolds = 64;
 int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boundary, const InitialMapOptions& opt,
                  Points& ball, InitialMapReport& rep);
 
+/// Step 5 (vpm/initial_map.hpp): while folds remain, up to opt.max_refine_rounds times, the
+/// interior edges of the tets within 1, 2, 4 rings of the folds split (split_edges_near) and
+/// untangle_map run again on the refined mesh; a round that leaves as many folds is dropped and
+/// ends the step. Updates res.mesh, res.ball, res.boundary (not res.poisson), rep.refine,
+/// rep.folds_after_untangle and rep.refined_*; true when it kept a refined mesh.
+bool refine_folds(Device& device, const Triangles& boundary_faces, const InitialMapOptions& opt,
+                  InitialMapResult& res, InitialMapReport& rep);
+
 }  // namespace vpm::detail

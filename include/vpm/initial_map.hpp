@@ -23,6 +23,11 @@
 //     shape of each tet is the refined input tet scaled to the ball mesh's volume.
 //  When steps 2-4 with the equal-area sphere map leave a fold, they are redone with the
 //  conformal sphere map (report.fallback says so).
+//  5. refine: a fixed boundary on the sphere can leave a tet mesh no fold-free interior (an
+//     armadillo's tet pinned at det -5e-12, a dinosaur's feet); when folds remain, the interior
+//     edges of the tets within 1, 2, 4 rings of them are split at their midpoints (the boundary
+//     untouched, inserted vertices after the others) and step 4 runs again on the refined
+//     mesh, up to `max_refine_rounds` times (report.refine says so).
 //
 // A map that is still folded after step 4 is never returned: NumericalError (exit 3) with the
 // number of folded tets, where they are, and the smallest dihedral angle of the input (meshes
@@ -105,6 +110,8 @@ struct InitialMapOptions {
   /// IfFolded: first untangle locally (the folded tets and this many rings of neighbours free,
   /// boundary fixed, same energy and theta), then globally if folds remain. 0: global only.
   int local_untangle_rings = 3;
+  /// Step 5: rounds of refinement around folds left after step 4 (0: none).
+  int max_refine_rounds = 3;
   /// Throw NumericalError when folds remain (the default and the contract of `vpm map`).
   /// false: return the folded map and let the caller read report.folds_after_untangle.
   bool throw_on_folds = true;
@@ -212,6 +219,12 @@ struct InitialMapReport {
     double seconds = 0;  ///< spent on the first attempt's steps 2-4
   };
   std::optional<Fallback> fallback;
+  /// Set when step 5 ran (folds were left after step 4).
+  struct Refine {
+    int rounds = 0, inserted_vertices = 0, folds_before = 0, folds_after = 0;
+    double seconds = 0;
+  };
+  std::optional<Refine> refine;
   double boundary_max_radius_error = 0;
   MapMetrics metrics;  ///< of the returned map against the refined input
   struct Timings {
@@ -227,7 +240,8 @@ struct InitialMapReport {
 ///  "harmonic": {"solver","preconditioner","iterations","relative_residual","inverted_tets"},
 ///  "folds_before_untangle", "untangle"? (to_json(UntangleResult) + "scope", "rings"),
 ///  "untangle_local_failed"?, "untangle_cleanup"?, "untangle_slide"?, "folds_after_untangle", "fallback"? {"from","to",
-///  "flipped_triangles","folds_after_untangle","seconds"}, "boundary_max_radius_error",
+///  "flipped_triangles","folds_after_untangle","seconds"}, "refine"? {"rounds",
+///  "inserted_vertices","folds_before","folds_after","seconds"}, "boundary_max_radius_error",
 ///  "metrics": to_json(MapMetrics), "timings_s": {"input_quality","metrics","split","boundary",
 ///  "harmonic","untangle","total"}}
 Json to_json(const InitialMapReport& report);
@@ -295,6 +309,13 @@ struct SplitResult {
 SplitResult split_boundary_edges(const TetMesh& input, int max_rounds = 4);
 /// The same, given `boundary` = boundary_faces(input.tets) (the caller has it already).
 SplitResult split_boundary_edges(const TetMesh& input, const Triangles& boundary, int max_rounds = 4);
+
+/// Step 5's refinement: every interior edge (not on the boundary surface `boundary`) of the
+/// tets within `rings` vertex rings of `seed_tets` split at its midpoint, as
+/// split_boundary_edges does (point fields averaged, so a field of positions in another space
+/// comes out at the midpoints there too). The boundary surface is unchanged.
+SplitResult split_edges_near(const TetMesh& mesh, const Triangles& boundary, const std::vector<int>& seed_tets,
+                             int rings);
 
 /// Number of tets whose four vertices are all boundary vertices.
 int count_four_boundary_tets(const Tets& tets, const std::vector<char>& boundary);
