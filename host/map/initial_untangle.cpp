@@ -106,7 +106,7 @@ int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boun
 bool refine_folds(Device& device, const Triangles& bf, const InitialMapOptions& opt, InitialMapResult& res,
                   InitialMapReport& rep) {
   int folds = rep.folds_after_untangle;
-  if (folds == 0 || opt.max_refine_rounds <= 0) return false;
+  if (folds == 0 || opt.max_refine_rounds <= 0 || opt.untangle == InitialMapOptions::Untangle::Never) return false;
   const auto t0 = Clock::now();
   InitialMapReport::Refine rf;
   rf.folds_before = folds;
