@@ -93,6 +93,14 @@ assert steps == set(states), (steps, states)  # every job ran its rules as job s
 PY
 smk -n > "$work/run4.log" 2>&1
 grep -q "Nothing to be done" "$work/run4.log" || { cat "$work/run4.log"; fail "after the Slurm run a rerun would redo work"; }
+# a changed truth mask (read by the evaluation, not by the analysis) redoes the evaluation only
+# (new bytes: Snakemake skips small inputs whose checksum it recorded and that only got newer)
+sleep 1
+/usr/bin/python3 -c 'import gzip, sys; p = sys.argv[1]; d = gzip.open(p).read(); gzip.open(p, "wb", compresslevel=1).write(d)' \
+  "$work/bids/derivatives/truth/sub-P01_foci.nii.gz"
+smk -n > "$work/run5.log" 2>&1
+jobs=$(awk '/^Job stats:/{s=1;next} s&&/^total/{exit} s&&NF==4&&$2~/^[0-9]+$/{print $1}' "$work/run5.log" | sort | tr '\n' ' ')
+[[ $jobs == "evaluate group " ]] || { cat "$work/run5.log"; fail "a new truth mask plans: $jobs"; }
 # a participants.tsv without a group column is refused naming the file
 cp -r "$work/bids" "$work/bad"
 printf 'participant_id\tage\nsub-N01\t30\n' > "$work/bad/participants.tsv"
