@@ -227,16 +227,8 @@ SplitResult split_edges_near(const TetMesh& mesh, const Triangles& bf, const std
   const int n = mesh.num_vertices();
   std::vector<char> bnd = boundary_vertex_mask(n, bf);
   const auto bedges = surface_edges(bf);
-  // the tets within `rings` vertex rings of the seeds
-  std::vector<char> near(static_cast<size_t>(n), 0);
-  for (int t : seed_tets)
-    for (int c = 0; c < 4; ++c) near[static_cast<size_t>(mesh.tets(t, c))] = 1;
-  for (int ring = 0; ring < rings; ++ring) {
-    const std::vector<char> seen = near;
-    for (int t = 0; t < mesh.num_tets(); ++t)
-      if (seen[mesh.tets(t, 0)] || seen[mesh.tets(t, 1)] || seen[mesh.tets(t, 2)] || seen[mesh.tets(t, 3)])
-        for (int c = 0; c < 4; ++c) near[static_cast<size_t>(mesh.tets(t, c))] = 1;
-  }
+  // the tets within `rings` vertex rings of the seeds: those with all four vertices near them
+  const std::vector<char> near = vertices_near_tets(n, mesh.tets, seed_tets, rings);
   std::vector<std::pair<int, int>> cand;
   for (int t = 0; t < mesh.num_tets(); ++t) {
     bool inside = true;

@@ -272,11 +272,8 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
     map_through_sphere(device, m, surf, conformal, note, res, rep, solver);
     rep.fallback = fb;
   }
-  if (rep.boundary.flipped_triangles == 0 && detail::refine_folds(device, surf.triangles, opt, res, rep)) {
-    res.poisson = std::make_shared<PoissonSolver>(device, res.mesh.num_vertices(), res.mesh.tets,
-                                                  harmonic_solver_options(opt, device, res.mesh.num_tets()));
-    res.poisson->set_positions(res.mesh.vertices);
-  }
+  if (rep.boundary.flipped_triangles == 0 && detail::refine_folds(device, surf.triangles, opt, res, rep))
+    res.poisson = start_harmonic_solver(device, res.mesh, opt).get();  // on the refined tets
   if (rep.boundary.flipped_triangles > 0)
     throw NumericalError("initial_map: the boundary map to the sphere flipped " +
                          std::to_string(rep.boundary.flipped_triangles) + " of " +

@@ -330,26 +330,10 @@ UntangleResult untangle_local(Device& device, const Points& reference, const Tet
                               int rings, const UntangleOptions& options) {
   check_sizes(reference, tets, x, fixed);
   const int n = static_cast<int>(x.rows());
-  // the folded tets' vertices (ring 0), then `rings` rings of tets around them: pass r takes
-  // every tet with a vertex found before it (so a pass adds one ring, as a breadth-first search
-  // over the tets around each vertex would, without building that incidence for the whole mesh)
-  std::vector<int> level(static_cast<size_t>(n), -1);
-  for (int t : folded) {
+  for (int t : folded)
     if (t < 0 || t >= tets.rows())
       throw InputError("untangle_local: folded tet index " + std::to_string(t) + " out of range");
-    for (int c = 0; c < 4; ++c) level[static_cast<size_t>(tets(t, c))] = 0;
-  }
-  for (int r = 1; r <= rings; ++r)
-    for (Eigen::Index t = 0; t < tets.rows(); ++t) {
-      const int* q = &tets(t, 0);
-      bool touches = false;
-      for (int c = 0; c < 4; ++c) touches = touches || (level[q[c]] >= 0 && level[q[c]] < r);
-      if (touches)
-        for (int c = 0; c < 4; ++c)
-          if (level[q[c]] < 0) level[q[c]] = r;
-    }
-  std::vector<char> near(static_cast<size_t>(n));
-  for (int v = 0; v < n; ++v) near[static_cast<size_t>(v)] = level[static_cast<size_t>(v)] >= 0;
+  const std::vector<char> near = vertices_near_tets(n, tets, folded, rings);
   Problem p = problem_of(tets, n, fixed, near);
   return run(p, reference, tets, x, options, &device);
 }

@@ -89,6 +89,26 @@ Incidence vertex_tet_incidence(int num_vertices, const Tets& tets) {
   return inc;
 }
 
+std::vector<char> vertices_near_tets(int num_vertices, const Tets& tets, const std::vector<int>& seed_tets,
+                                     int rings) {
+  // level: the ring a vertex was found in; pass r takes every tet with a vertex found before it
+  std::vector<int> level(static_cast<size_t>(num_vertices), -1);
+  for (int t : seed_tets)
+    for (int c = 0; c < 4; ++c) level[static_cast<size_t>(tets(t, c))] = 0;
+  for (int r = 1; r <= rings; ++r)
+    for (Eigen::Index t = 0; t < tets.rows(); ++t) {
+      const int* q = &tets(t, 0);
+      bool touches = false;
+      for (int c = 0; c < 4; ++c) touches = touches || (level[q[c]] >= 0 && level[q[c]] < r);
+      if (touches)
+        for (int c = 0; c < 4; ++c)
+          if (level[q[c]] < 0) level[q[c]] = r;
+    }
+  std::vector<char> near(static_cast<size_t>(num_vertices));
+  for (int v = 0; v < num_vertices; ++v) near[static_cast<size_t>(v)] = level[static_cast<size_t>(v)] >= 0;
+  return near;
+}
+
 std::vector<int> vertex_components(int num_vertices, const Tets& tets, int* count) {
   std::vector<int> p(static_cast<size_t>(num_vertices));
   std::iota(p.begin(), p.end(), 0);

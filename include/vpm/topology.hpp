@@ -34,6 +34,11 @@ struct Incidence {
 };
 Incidence vertex_tet_incidence(int num_vertices, const Tets& tets);
 
+/// The vertices of `seed_tets` and of every tet within `rings` rings of them (1 = the seeds'
+/// vertices and those of the tets touching them, ...): a mask of num_vertices entries. One pass
+/// over the tets a ring, no incidence built. Seed indices must be in range.
+std::vector<char> vertices_near_tets(int num_vertices, const Tets& tets, const std::vector<int>& seed_tets, int rings);
+
 /// Connected components of the vertices that tets join (isolated vertices are their own
 /// component). Returns the component id of each vertex; `count` receives the number.
 std::vector<int> vertex_components(int num_vertices, const Tets& tets, int* count);
