@@ -112,8 +112,26 @@ int convergence_status(const std::string& command, const std::string& what, doub
 
 int convergence_status(const std::string& command, const MapConvergence& c, bool allow_partial) {
   if (!c.checked) return kExitOk;
+  if (c.reason == "time_budget" && c.reached > c.tolerance)
+    return time_budget_status(command, "vertex mean |r-1| " + pct(c.reached) + " > tolerance " + pct(c.tolerance),
+                              allow_partial);
   return convergence_status(command, "vertex mean |r-1|", c.reached, c.tolerance, "rounds stopped: " + c.reason,
                             allow_partial, [](double v) { return pct(v); });
+}
+
+Deadline time_budget(const Args& args, Clock::time_point start) {
+  if (!args.has("--max-seconds")) return {};
+  const double s = args.get_double("--max-seconds", 0);
+  if (!(s > 0) || s >= 1e9) throw InputError("option --max-seconds: must be > 0 and < 1e9");
+  Deadline d;
+  d.at = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+  return d;
+}
+
+int time_budget_status(const std::string& command, const std::string& reached, bool allow_partial) {
+  std::fprintf(stderr, "vpm %s: warning: not converged: the time budget (--max-seconds) ran out at %s; the output "
+               "was written%s\n", command.c_str(), reached.c_str(), allow_partial ? "" : "; exit status 4 (--allow-partial: 0)");
+  return allow_partial ? kExitOk : kExitNotConverged;
 }
 
 std::optional<std::string> Args::get(const std::string& opt) const {
@@ -158,21 +176,6 @@ void Args::expect_positional(size_t n, const std::string& usage) const {
 std::vector<Command>& commands() {
   static std::vector<Command> c;
   return c;
-}
-
-Verbosity& verbosity() {
-  static Verbosity v{false, false, static_cast<bool>(::isatty(2))};
-  return v;
-}
-
-void info(const std::string& line) {
-  if (!verbosity().quiet) std::cerr << line << '\n';
-}
-
-void progress(const std::string& line) {
-  if (verbosity().quiet) return;
-  if (verbosity().verbose) std::cerr << line << '\n';
-  else if (verbosity().terminal) std::cerr << '\r' << line << "\033[K" << std::flush;
 }
 
 

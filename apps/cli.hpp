@@ -8,6 +8,7 @@
 
 #include "vpm/ball_map.hpp"
 #include "vpm/error.hpp"
+#include "vpm/timing.hpp"
 
 namespace vpm::cli {
 
@@ -48,8 +49,16 @@ MeshInOut mesh_in_out(const Args& args, const Command& command);
 /// `format` prints a value (e.g. vpm::pct).
 int convergence_status(const std::string& command, const std::string& what, double reached, double tolerance,
                        const std::string& reason, bool allow_partial, std::string (*format)(double));
-/// The same for a ball map (vpm/ball_map.hpp MapConvergence; 0 when it was not checked).
+/// The same for a ball map (vpm/ball_map.hpp MapConvergence; 0 when it was not checked). A map
+/// that the time budget stopped short of its tolerance exits 4 (unless allow_partial) however
+/// close it came.
 int convergence_status(const std::string& command, const MapConvergence& convergence, bool allow_partial);
+/// --max-seconds S: a Deadline S seconds after `start` (none without the option; InputError
+/// for S <= 0 or not a number).
+Deadline time_budget(const Args& args, Clock::time_point start);
+/// After an output was written although the time budget stopped the work: a warning naming
+/// `reached` (what was done), exit kExitNotConverged unless allow_partial.
+int time_budget_status(const std::string& command, const std::string& reached, bool allow_partial);
 
 /// Runs `parse` (a library parser of an option's value, e.g. parse_volume_map_method) and
 /// prefixes an InputError it throws with "option FLAG: ", so the message names the flag.
@@ -100,8 +109,13 @@ struct Verbosity {
   bool terminal = false;  ///< stderr is a terminal: show progress
 };
 Verbosity& verbosity();
-/// Prints to stderr unless quiet; progress lines only when stderr is a terminal or verbose.
+/// Prints a line to stderr unless quiet.
 void info(const std::string& line);
+/// Shows where long work is (apps/progress.cpp; docs/robustness.md): on a terminal one line
+/// rewritten in place; in a log (stderr not a terminal) plain lines, at most one every
+/// VPM_PROGRESS_SECONDS (default 10; 0: every line), and a "still working" line naming the
+/// last step reported when 3 such intervals (at least 0.75 s) pass without a new line; --verbose: every line;
+/// --quiet: none. Lines carry the seconds since the command started.
 void progress(const std::string& line);
 
 }  // namespace vpm::cli

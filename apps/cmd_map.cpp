@@ -20,6 +20,7 @@ using vpm::seconds_since;
 
 
 int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
+  const auto t_start = Clock::now();
   vpm::cli::Args args(argv, self);
   const vpm::cli::MeshInOut io = vpm::cli::mesh_in_out(args, self);
   const std::string& in = io.in;
@@ -43,7 +44,6 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   vo.progress = [](const std::string& line) { vpm::cli::progress(line); };
   const auto report_path = args.get("--report");
 
-  const auto t_start = Clock::now();
   vpm::Device& dev = vpm::Device::current();
   auto t0 = Clock::now();
   vpm::TetMesh mesh = vpm::read_mesh(in);
@@ -60,6 +60,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
                  in.c_str(), vr.sliver_tets, vpm::kSliverDihedralDeg, vr.min_dihedral_deg, vr.min_dihedral_tet, in.c_str());
   vpm::BallMapOptions bo;
   bo.volume = vo;
+  bo.deadline = vpm::cli::time_budget(args, t_start);
   bo.initial.preconditioner = vo.preconditioner;
   bo.initial.sphere_density = vpm::cli::parse_option(
       "--sphere", [&] { return vpm::parse_sphere_density(args.get("--sphere", "area")); });
@@ -99,6 +100,7 @@ vpm::cli::Registrar reg({"map", "MESH -o OUT", "map a tet mesh to the unit ball,
                           {"--solver", "cg|paper", "Jacobi CG (default) or the paper's BiCGSTAB on the normal equations"},
                           {"--preconditioner", "auto|jacobi|amg", "of CG: Jacobi, smoothed-aggregation AMG, or auto (default: AMG on CPUs from 2M tets)"},
                           {"--rk-steps", "N", "RK4 steps per Moser round (default " + std::to_string(vpm::VolumeMapOptions{}.rk_steps) + ")"},
+                          {"--max-seconds", "S", "time budget: the rounds stop when it is spent and the map reached is written (exit 4)"},
                           {"--report", "REPORT.json", "write the report (metrics, rounds, timings)"}},
                          run});
 }  // namespace

@@ -209,7 +209,7 @@ Json report_json(const std::string& device, const Inputs& io, const Registration
   for (const char* k : {"landmark_rms_error", "landmark_max_error", "max_normal_velocity", "inverted_tets",
                         "vertex_volume_ratio", "tet_volume_ratio", "boundary_max_radius_error"})
     r[k] = *summary.find(k);
-  r["converged"] = res.landmark_max_error <= kLandmarkTolerance;
+  r["converged"] = res.landmark_max_error <= kLandmarkTolerance && !(dense && dense->time_budget_spent);
   r["registration"] = to_json(res);
   if (dense) r["dense"] = to_json(*dense);
   r["timings_s"] = timings;
@@ -220,6 +220,8 @@ int run(const cli::Command& self, const std::vector<std::string>& argv) {
   const auto t_start = Clock::now();
   const cli::Args args(argv, self);
   Inputs io = read_inputs(args, self);
+  io.dense.deadline = cli::time_budget(args, t_start);
+  io.dense.progress = [](const std::string& line) { cli::progress("register: " + line); };
   const RegistrationOptions opt = parse_options(args);
   Json timings = Json::object();
   auto t0 = Clock::now();
@@ -256,6 +258,10 @@ int run(const cli::Command& self, const std::vector<std::string>& argv) {
     timings["total"] = seconds_since(t_start);
     write_json_file(*report_path, report_json(dev.name(), io, res, dense, mm, timings));
   }
+  if (dense && dense->time_budget_spent)
+    return cli::time_budget_status("register", std::to_string(dense->iterations.size()) + " of " +
+                                                   std::to_string(io.dense.iterations) + " dense iterations",
+                                   args.has("--allow-partial"));
   // the flow's landmarks are exact up to the RK4 error (about 1e-10); far from it something is off
   return cli::convergence_status("register", "landmark max error", res.landmark_max_error, kLandmarkTolerance,
                                  "after the flow and volume restoration", args.has("--allow-partial"),
@@ -283,6 +289,7 @@ vpm::cli::Registrar reg(cli::with_dense_options(
       {"--no-untangle", "", "skip local untangling (folded results exit 3)"},
       {"--no-restore", "", "skip the volume restoration after the flow"},
       {"--restore-iterations", "N", "CGLS iterations per restoration step (default 10; more: lower volume distortion, the regions drift more)"},
-      {"--allow-partial", "", "exit 0 even when a landmark misses its target by over 1e-3 (the warning stays)"}},
+      {"--max-seconds", "S", "time budget: the dense iterations stop when it is spent (the landmarks and volumes are still restored; exit 4)"},
+      {"--allow-partial", "", "exit 0 even when a landmark misses its target by over 1e-3 or the time budget stopped the iterations (the warning stays)"}},
      run}, "--exclude-labels", 0));
 }  // namespace

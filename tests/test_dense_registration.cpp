@@ -368,6 +368,20 @@ TEST_CASE("vpm register --dense-iterations: dense registration from the command 
   const Json* regions = jx.find("dense")->find("regions");
   REQUIRE(regions->size() == 4);
   for (size_t i = 0; i < regions->size(); ++i) CHECK(regions->at(i).number() != 2);
+  // a spent time budget: no dense iteration, still a valid registration (landmarks exact,
+  // volumes restored), written, "converged": false, exit 4 (docs/robustness.md)
+  std::filesystem::remove(dir + "out.vtu");
+  CHECK(test::run_status(vpm + "--template " + dir + "templ.vtu --dense-iterations 4 --max-seconds 0.000001 --quiet " +
+                         "--report " + dir + "rb.json 2>" + dir + "err.txt") == kExitNotConverged);
+  CHECK(std::filesystem::exists(dir + "out.vtu"));
+  const Json jb = Json::parse(test::slurp(dir + "rb.json"));
+  CHECK(jb.find("dense")->find("stop_reason")->string() == "time_budget");
+  CHECK(jb.find("dense")->find("iterations")->size() == 0);
+  CHECK_FALSE(jb.find("converged")->boolean());
+  CHECK(jb.find("landmark_max_error")->number() < 1e-6);
+  CHECK(jb.find("inverted_tets")->number() == 0);
+  CHECK(test::slurp(dir + "err.txt").find("time budget (--max-seconds) ran out at 0 of 4 dense iterations") !=
+        std::string::npos);
   // refused without a template, and for a negative count
   CHECK(test::run_status(vpm + "--landmarks a.csv --targets b.csv --dense-iterations 2 2>" + dir + "err.txt") == 2);
   CHECK(test::slurp(dir + "err.txt").find("--dense-iterations needs --template") != std::string::npos);

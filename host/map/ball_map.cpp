@@ -28,7 +28,10 @@ BallMap map_to_ball(Device& device, const TetMesh& input, const ValidationReport
   };
   BallMap out;
   auto t0 = Clock::now();
-  InitialMapResult im = initial_map(device, input, options.initial);  // its errors name the quality
+  InitialMapOptions io = options.initial;
+  if (options.deadline.set()) io.deadline = options.deadline;
+  if (!io.progress) io.progress = options.volume.progress;
+  InitialMapResult im = initial_map(device, input, io);  // its errors name the quality
   out.timings.initial_map = seconds_since(t0);
   out.initial = im.report.metrics;  // the initial map measured its result already
   say("initial map: vertex mean |r-1| " + pct(out.initial.vertex_volume_ratio.mean_abs_dev) + ", tet " +
@@ -40,6 +43,7 @@ BallMap map_to_ball(Device& device, const TetMesh& input, const ValidationReport
     t0 = Clock::now();
     try {
       VolumeMapOptions vo = options.volume;
+      if (options.deadline.set()) vo.deadline = options.deadline;
       vo.poisson = std::move(im.poisson);  // the harmonic step's solver: its pattern is built
       out.volume_map = volume_preserving_map(device, im.mesh.vertices, im.mesh.tets, ball, vo);
     } catch (const NumericalError& e) {
@@ -75,7 +79,7 @@ BallMap map_to_ball(Device& device, const TetMesh& input, const ValidationReport
   out.convergence.tolerance = options.volume.tolerance;
   out.convergence.reached = out.final.vertex_volume_ratio.mean_abs_dev;
   out.convergence.reason = out.volume_map ? out.volume_map->stop_reason : "initial map only";
-  out.convergence.checked = options.volume.rounds < 0;
+  out.convergence.checked = options.volume.rounds < 0 || out.convergence.reason == "time_budget";
   out.convergence.converged = !out.convergence.checked || out.convergence.reached <= out.convergence.tolerance;
   out.timings.total = seconds_since(t_start);
   return out;

@@ -149,6 +149,10 @@ Points harmonic_interior(const TetMesh& m, const std::vector<char>& boundary, co
 
 using detail::untangle_map;
 
+void say(const InitialMapOptions& opt, const std::string& line) {
+  if (opt.progress) opt.progress("initial map: " + line);
+}
+
 // A sphere map and the seconds it took.
 struct TimedSphereMap {
   SphereMapResult map;
@@ -173,6 +177,8 @@ bool map_through_sphere(Device& device, const TetMesh& m, const TriSurface& surf
   SphereMapResult& sm = tm.map;
   rep.boundary = sm.report;
   rep.timings.boundary = tm.seconds;
+  say(opt, "sphere map: " + strprintf("%.2f s", tm.seconds) +
+               (sm.flipped_triangles ? ", " + std::to_string(sm.flipped_triangles) + " triangles flipped" : ""));
   if (sm.flipped_triangles > 0) return false;
   if (sm.sphere.rows() < m.num_vertices()) {  // inserted (interior) vertices: rows as for unused ones
     const Eigen::Index k = sm.sphere.rows();
@@ -185,10 +191,15 @@ bool map_through_sphere(Device& device, const TetMesh& m, const TriSurface& surf
   res.ball = harmonic_interior(m, res.boundary, sm.sphere, opt, note, rep, *res.poisson);
   rep.folds_before_untangle = static_cast<int>(inverted_tets(res.ball, m.tets).size());
   rep.timings.harmonic = seconds_since(t0);
+  say(opt, "harmonic interior: " + std::to_string(rep.harmonic_iterations) + " iterations, " +
+               std::to_string(rep.folds_before_untangle) + " folds" + strprintf(", %.2f s", rep.timings.harmonic));
 
   t0 = Clock::now();
   rep.folds_after_untangle = untangle_map(device, m, res.boundary, opt, res.ball, rep);
   rep.timings.untangle = seconds_since(t0);
+  if (rep.folds_before_untangle > 0 || rep.folds_after_untangle > 0)
+    say(opt, "untangling: " + std::to_string(rep.folds_before_untangle) + " -> " +
+                 std::to_string(rep.folds_after_untangle) + " folds" + strprintf(", %.2f s", rep.timings.untangle));
   rep.boundary_max_radius_error = 0;
   for (int i = 0; i < m.num_vertices(); ++i)  // boundary exactly on the sphere
     if (res.boundary[i])
@@ -197,7 +208,7 @@ bool map_through_sphere(Device& device, const TetMesh& m, const TriSurface& surf
 }
 
 [[noreturn]] void throw_folded(const TetMesh& m, const Points& ball, const InitialMapReport& rep,
-                               const std::string& note) {
+                               const std::string& note, bool budget_spent) {
   const std::vector<int> bad = inverted_tets(ball, m.tets);
   std::string where;
   for (size_t i = 0; i < bad.size() && i < 3; ++i) {
@@ -205,8 +216,8 @@ bool map_through_sphere(Device& device, const TetMesh& m, const TriSurface& surf
     where += (i ? "; " : "") + std::string("tet ") + std::to_string(bad[i]) + " at (" + format_sig(c(0)) + ", " +
              format_sig(c(1)) + ", " + format_sig(c(2)) + ")";
   }
-  throw NumericalError("initial_map: " + std::to_string(bad.size()) +
-                       " tets remain folded after untangling (harmonic map folded " +
+  throw NumericalError("initial_map: " + std::to_string(bad.size()) + " tets remain folded after untangling" +
+                       (budget_spent ? " cut short by the time budget" : "") + " (harmonic map folded " +
                        std::to_string(rep.folds_before_untangle) + "): " + where + "; " + note);
 }
 
@@ -243,6 +254,8 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
   res.mesh = std::move(sp.mesh);
   const TetMesh& m = res.mesh;
   rep.timings.split = seconds_since(t0);
+  say(opt, "split: " + std::to_string(res.mesh.num_vertices()) + " vertices, " + std::to_string(res.mesh.num_tets()) +
+               strprintf(" tets, %.2f s", rep.timings.split));
 
   TriSurface surf;
   surf.vertices = m.vertices;
@@ -254,8 +267,9 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
   std::future<std::shared_ptr<PoissonSolver>> solver = start_harmonic_solver(device, m, opt);
   TimedSphereMap early = early_sphere.get();
   const bool done = map_through_sphere(device, m, surf, opt, note, res, rep, solver, &early);
-  if (!done && rep.boundary.flipped_triangles == 0 &&
+  if (!done && rep.boundary.flipped_triangles == 0 && !opt.deadline.passed() &&
       opt.sphere_density != InitialMapOptions::SphereDensity::conformal) {
+    say(opt, std::to_string(rep.folds_after_untangle) + " folds left: again from the conformal sphere map");
     // untangling the map from the equal-area boundary left folds: the conformal boundary is
     // the fallback (a flipped sphere map would flip the same way: the flow never flips)
     InitialMapReport::Fallback fb;
@@ -272,13 +286,15 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
     map_through_sphere(device, m, surf, conformal, note, res, rep, solver);
     rep.fallback = fb;
   }
+  if (rep.folds_after_untangle > 0 && rep.boundary.flipped_triangles == 0)
+    say(opt, std::to_string(rep.folds_after_untangle) + " folds left: refining around them");
   if (rep.boundary.flipped_triangles == 0 && detail::refine_folds(device, surf.triangles, opt, res, rep))
     res.poisson = start_harmonic_solver(device, res.mesh, opt).get();  // on the refined tets
   if (rep.boundary.flipped_triangles > 0)
     throw NumericalError("initial_map: the boundary map to the sphere flipped " +
                          std::to_string(rep.boundary.flipped_triangles) + " of " +
                          std::to_string(surf.triangles.rows()) + " triangles; " + note);
-  if (rep.folds_after_untangle > 0 && opt.throw_on_folds) throw_folded(m, res.ball, rep, note);
+  if (rep.folds_after_untangle > 0 && opt.throw_on_folds) throw_folded(m, res.ball, rep, note, opt.deadline.passed());
 
   t0 = Clock::now();
   rep.metrics = map_metrics(device, m.vertices, res.ball, m.tets, &res.boundary);

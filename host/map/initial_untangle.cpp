@@ -55,11 +55,23 @@ int slide_cleanup(Device& device, const TetMesh& m, const std::vector<char>& bou
 
 }  // namespace
 
+// The options with every untangling run capped by what is left of opt.deadline.
+static InitialMapOptions within_budget(const InitialMapOptions& opt) {
+  InitialMapOptions o = opt;
+  if (opt.deadline.set()) {
+    const double left = std::max(opt.deadline.remaining(), 1e-6);
+    double& cap = o.untangle_options.max_seconds;
+    cap = cap > 0 ? std::min(cap, left) : left;
+  }
+  return o;
+}
+
 // Local runs widen the rings this many times (x2 each) while each leaves fewer folds.
 constexpr int kLocalWidenings = 3;
-int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boundary, const InitialMapOptions& opt,
+int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boundary, const InitialMapOptions& options,
                  Points& ball, InitialMapReport& rep) {
   int folds = rep.folds_before_untangle;
+  const InitialMapOptions opt = within_budget(options);
   const bool run = opt.untangle == InitialMapOptions::Untangle::Always ||
                    (opt.untangle == InitialMapOptions::Untangle::IfFolded && folds > 0);
   if (!run) return folds;
@@ -111,7 +123,8 @@ bool refine_folds(Device& device, const Triangles& bf, const InitialMapOptions& 
   InitialMapReport::Refine rf;
   rf.folds_before = folds;
   const std::string kBall = "vpm_refine_ball";  // the ball positions, carried to the midpoints
-  for (int round = 0, rings = 1; round < opt.max_refine_rounds && folds > 0; ++round, rings *= 2) {
+  for (int round = 0, rings = 1; round < opt.max_refine_rounds && folds > 0 && !opt.deadline.passed();
+       ++round, rings *= 2) {
     TetMesh carrier = res.mesh;
     carrier.set_point_field(kBall, FieldValues(res.ball));
     SplitResult sp = split_edges_near(carrier, bf, inverted_tets(res.ball, carrier.tets), rings);

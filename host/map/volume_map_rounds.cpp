@@ -130,6 +130,10 @@ void run_rounds(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& 
       res.stop_reason = "tolerance";
       break;
     }
+    if (opt.deadline.passed()) {
+      res.stop_reason = "time_budget";
+      break;
+    }
     const auto t_round = Clock::now();
     VolumeMapRound r;
     r.round = k;
@@ -192,6 +196,10 @@ void run_polish(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& 
   const int iterations = !opt.polish_only && d.vertex > 5 * opt.tolerance ? std::max(opt.polish_iterations, far)
                                                                              : opt.polish_iterations;
   for (int k = 1; k <= n_polish; ++k) {
+    if (opt.deadline.passed()) {
+      res.stop_reason = "time_budget";
+      break;
+    }
     const auto t_round = Clock::now();
     VolumeMapRound r;
     r.round = static_cast<int>(res.rounds.size()) + 1;

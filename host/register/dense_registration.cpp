@@ -8,6 +8,7 @@
 #include <memory>
 #include <sstream>
 
+#include "vpm/format.hpp"
 #include "register/dense_force.hpp"
 #include "register/dense_image_force.hpp"
 #include "register/rbf_gram.hpp"
@@ -226,9 +227,19 @@ void dense_iterations(Device& dev, const DenseState& st, Points& x, const DenseR
     if (n == 0) continue;
     const Level level(o.widths[static_cast<size_t>(l)], o);
     for (int i = 0; i < n; ++i) {
+      if (o.deadline.passed()) {
+        r.time_budget_spent = true;
+        break;
+      }
       r.iterations.push_back(dense_step(dev, st, x, level, o, fit, r.max_normal_velocity));
-      if (!r.iterations.back().accepted) break;
+      const DenseIteration& it = r.iterations.back();
+      if (o.progress)
+        o.progress(strprintf("dense iteration %d/%d (width %.3g): label agreement %.4f, %s%.2f s",
+                             static_cast<int>(r.iterations.size()), o.iterations, level.width, it.agreement,
+                             it.accepted ? "" : "rejected, ", it.seconds));
+      if (!it.accepted) break;
     }
+    if (r.time_budget_spent) break;
   }
   r.agreement_after = fit.agreement;
   r.mismatch_after = fit.mismatch;

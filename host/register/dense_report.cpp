@@ -71,6 +71,7 @@ Json to_json(const DenseRegistrationResult& r) {
   j["landmark_max_error"] = r.landmark_max_error;
   j["max_normal_velocity"] = r.max_normal_velocity;
   j["inverted_tets"] = r.inverted_tets;
+  j["stop_reason"] = r.time_budget_spent ? "time_budget" : "iterations";
   Json t = Json::object();
   t["landmark"] = r.seconds_landmark;
   t["dense"] = r.seconds_dense;

@@ -20,6 +20,12 @@ struct BallMapOptions {
   InitialMapOptions initial{};
   /// volume.rounds == 0 stops after the initial map.
   VolumeMapOptions volume{};
+  /// Time budget of the whole map, handed to both stages (their own deadlines when not set).
+  /// When it stops the rounds, the map reached so far is returned with convergence.converged
+  /// false and reason "time_budget"; when it passes before the initial map is fold-free,
+  /// NumericalError. volume.progress also receives the initial map's lines when
+  /// initial.progress is empty.
+  Deadline deadline{};
 };
 
 /// Seconds spent in the stages of map_to_ball.
@@ -34,7 +40,7 @@ struct MapConvergence {
   bool converged = true;   ///< final vertex mean |r-1| <= tolerance (true when not checked)
   double tolerance = 0;
   double reached = 0;      ///< final vertex mean |r-1|
-  std::string reason;      ///< why the rounds stopped (VolumeMapResult::stop_reason)
+  std::string reason;      ///< why the rounds stopped (VolumeMapResult::stop_reason; "time_budget": checked)
 };
 
 /// {"checked", "converged", "tolerance", "reached", "reason"}

@@ -44,6 +44,7 @@
 // restoration of the landmark registration runs once against the map before registration
 // (with an image force: holding the image's edges, `restore_image_weight`).
 #include <Eigen/Core>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -52,6 +53,7 @@
 #include "vpm/json.hpp"
 #include "vpm/mesh.hpp"
 #include "vpm/registration.hpp"
+#include "vpm/timing.hpp"
 
 namespace vpm {
 
@@ -107,6 +109,12 @@ struct DenseRegistrationOptions {
   /// their edges (VolumeHold rows weighing this x the number of tets against the volume rows),
   /// so restoring volumes does not slide structures off what the images aligned; 0 = off.
   double restore_image_weight = 300;
+  /// Time budget (vpm/timing.hpp), checked before every dense iteration: when it has passed the
+  /// iterations stop there (DenseRegistrationResult::time_budget_spent) and the landmarks and
+  /// volumes are still restored, so the result is a valid registration, less aligned.
+  Deadline deadline{};
+  /// Called with one line per dense iteration (progress display); may be empty.
+  std::function<void(const std::string&)> progress;
 };
 
 /// One dense iteration.
@@ -144,6 +152,7 @@ struct DenseRegistrationResult {
   double landmark_rms_error = 0, landmark_max_error = 0;  ///< at the end (ball units)
   double max_normal_velocity = 0; ///< largest max |u . n| of all flows
   int inverted_tets = 0;          ///< at the end
+  bool time_budget_spent = false; ///< DenseRegistrationOptions::deadline stopped the iterations
   double seconds_landmark = 0, seconds_dense = 0, seconds_correction = 0, seconds_restore = 0,
          seconds_total = 0;
 };

@@ -32,6 +32,7 @@
 // A map that is still folded after step 4 is never returned: NumericalError (exit 3) with the
 // number of folded tets, where they are, and the smallest dihedral angle of the input (meshes
 // with slivers of 0.01-0.05 degrees are known to defeat this pipeline, docs/design.md 4.2).
+#include <functional>
 #include <array>
 #include <memory>
 #include <optional>
@@ -41,6 +42,7 @@
 #include "vpm/json.hpp"
 #include "vpm/mesh.hpp"
 #include "vpm/metrics.hpp"
+#include "vpm/timing.hpp"
 #include "vpm/untangle.hpp"
 
 namespace vpm {
@@ -117,6 +119,12 @@ struct InitialMapOptions {
   bool throw_on_folds = true;
   /// Number of worst tets (smallest dihedral angle) listed in report.worst.
   int report_worst_tets = 5;
+  /// Time budget (vpm/timing.hpp): every untangling run stops when it passes, and the conformal
+  /// fallback and the refinement rounds are skipped after it; folds then left end in the
+  /// NumericalError of throw_on_folds, which says the budget ran out.
+  Deadline deadline{};
+  /// Called with one line per step (progress display); may be empty.
+  std::function<void(const std::string&)> progress;
 };
 
 /// What step 2 (the boundary to the sphere) did. Optional fields are absent when their step did

@@ -43,6 +43,7 @@
 #include "vpm/json.hpp"
 #include "vpm/mesh.hpp"
 #include "vpm/metrics.hpp"
+#include "vpm/timing.hpp"
 
 namespace vpm {
 
@@ -170,6 +171,9 @@ struct VolumeMapOptions {
   ExecutionPlace polish = ExecutionPlace::automatic;
   /// Called with one line per round (progress display); may be empty.
   std::function<void(const std::string&)> progress;
+  /// Time budget (vpm/timing.hpp): checked before every Moser and polish round; when it has
+  /// passed the rounds stop with the map reached so far (stop_reason "time_budget").
+  Deadline deadline{};
   /// A Poisson solver already built on these tets and this device (InitialMapResult::poisson):
   /// the Moser solves reuse it instead of building the Laplacian's pattern again (0.3 s at 1.1M
   /// tets), with the solver options above. Ignored when it was built on other tets or another
@@ -214,7 +218,9 @@ struct VolumeMapResult {
   double initial_vertex_mean_abs_dev = 0, initial_tet_mean_abs_dev = 0;
   double final_vertex_mean_abs_dev = 0, final_tet_mean_abs_dev = 0;
   int final_folds = 0;     ///< always 0 on return
-  std::string stop_reason; ///< of the Moser rounds: "tolerance", "rounds", "stalled", "fold", "polish_only"
+  /// of the Moser rounds: "tolerance", "rounds", "stalled", "fold", "polish_only"; "time_budget"
+  /// when VolumeMapOptions::deadline stopped the Moser or polish rounds
+  std::string stop_reason;
   // What ran:
   VolumeMapMethod method = VolumeMapMethod::moser;
   bool slide = true;          ///< boundary vertices slid on the sphere (else fixed)
