@@ -8,9 +8,7 @@
 #include <cmath>
 #include <map>
 
-#include "core/parallel.hpp"
 #include "vpm/device.hpp"
-#include "vpm/geometry.hpp"
 
 namespace vpm::detail {
 
@@ -69,123 +67,6 @@ AnchorGroups anchor_groups(const std::vector<VolumeAnchor>& anchors) {
     g.ptr.push_back(static_cast<int>(g.vertices.size()));
   }
   return g;
-}
-
-PolishDirection polish_direction_host(const Points& x, const Tets& tets, const Eigen::VectorXd& target,
-                                      const std::vector<char>& freedom, const std::vector<VolumeAnchor>& anchors,
-                                      int iterations, const std::vector<VolumeHold>& holds) {
-  const int n = static_cast<int>(x.rows()), m = static_cast<int>(tets.rows());
-  const Eigen::VectorXd vol = tet_volumes(x, tets);
-  // per-tet scaled gradients sg_{t,k} = vol_t grad phi_k / target_t, kept for k = 1..3 only
-  // (sg[3 t + k - 1]); corner 0's, minus their sum, is recomputed where it is used, in the same
-  // order of operations (the loops below are memory-bound: a quarter less to read)
-  std::vector<Eigen::Vector3d> sg(3 * static_cast<size_t>(m));
-  auto corner0 = [&](int t) {
-    Eigen::Vector3d g0 = Eigen::Vector3d::Zero();
-    for (int q = 0; q < 3; ++q) g0 -= sg[3 * static_cast<size_t>(t) + q];
-    return g0;
-  };
-  Eigen::VectorXd b(m);
-  parallel_for(m, 8192, [&](int t0, int t1) {
-    for (int t = t0; t < t1; ++t) {
-      const Eigen::Vector3d a = x.row(tets(t, 0)).transpose();
-      Eigen::Matrix3d M;
-      for (int q = 0; q < 3; ++q) M.col(q) = x.row(tets(t, q + 1)).transpose() - a;
-      const Eigen::Matrix3d Mi = M.inverse();
-      const double s = vol(t) / target(t);
-      for (int q = 0; q < 3; ++q) sg[3 * static_cast<size_t>(t) + q] = s * Mi.row(q).transpose();
-      b(t) = 1.0 - vol(t) / target(t);
-    }
-  });
-  const AnchorGroups groups = anchor_groups(anchors);
-  auto project = [&](Points& d) {
-    for (int v = 0; v < n; ++v) {
-      if (freedom[v] == kPolishFixed) {
-        d.row(v).setZero();
-      } else if (freedom[v] == kPolishTangent) {
-        const Eigen::Vector3d nv = x.row(v).transpose().normalized(), u = d.row(v).transpose();
-        d.row(v) = (u - u.dot(nv) * nv).transpose();
-      }
-    }
-    for (int gi = 0; gi < groups.groups(); ++gi) {  // d_V <- P d_V
-      const int b = groups.ptr[static_cast<size_t>(gi)], k = groups.ptr[static_cast<size_t>(gi) + 1] - b;
-      const double* P = groups.matrix.data() + groups.offset[static_cast<size_t>(gi)];
-      Points dv(k, 3);
-      for (int i = 0; i < k; ++i) dv.row(i) = d.row(groups.vertices[static_cast<size_t>(b + i)]);
-      for (int i = 0; i < k; ++i) {
-        Eigen::RowVector3d o = Eigen::RowVector3d::Zero();
-        for (int j = 0; j < k; ++j) o += P[i * k + j] * dv.row(j);
-        d.row(groups.vertices[static_cast<size_t>(b + i)]) = o;
-      }
-    }
-  };
-  // The holds' rows h . sum_k w_k d_(v_k) (right-hand side 0) stacked under A: residuals
-  // (volume rows, hold rows).
-  const int nr = static_cast<int>(holds.size());
-  auto apply = [&](const Points& d, Eigen::VectorXd& out, Eigen::VectorXd& out_h) {  // A d, H d (d projected)
-    parallel_for(m, 8192, [&](int t0, int t1) {
-      for (int t = t0; t < t1; ++t) {
-        double s = 0;
-        s += corner0(t).dot(d.row(tets(t, 0)).transpose());
-        for (int k = 1; k < 4; ++k) s += sg[3 * static_cast<size_t>(t) + k - 1].dot(d.row(tets(t, k)).transpose());
-        out(t) = s;
-      }
-    });
-    for (int r = 0; r < nr; ++r) {
-      const VolumeHold& h = holds[static_cast<size_t>(r)];
-      Eigen::Vector3d acc = Eigen::Vector3d::Zero();
-      for (int k = 0; k < 4; ++k) acc += h.weights[static_cast<size_t>(k)] * d.row(h.vertices[static_cast<size_t>(k)]).transpose();
-      out_h(r) = h.direction.dot(acc);
-    }
-  };
-  // out = P (A^T y + H^T y_h): tets split into two fixed chunks, each scattering into its own
-  // buffer (no races, and the result does not depend on the number of threads), then summed.
-  const int chunks = m >= 8192 ? 2 : 1;
-  std::vector<Points> part(static_cast<size_t>(chunks));
-  auto apply_t = [&](const Eigen::VectorXd& y, const Eigen::VectorXd& y_h, Points& out) {
-    const int per = (m + chunks - 1) / chunks;
-    parallel_for(chunks, 2, [&](int k0, int k1) {
-      for (int j = k0; j < k1; ++j) {
-        Points& o = part[static_cast<size_t>(j)];
-        o.setZero(n, 3);
-        for (int t = j * per; t < std::min(m, (j + 1) * per); ++t)
-          for (int k = 0; k < 4; ++k)
-            o.row(tets(t, k)) += y(t) * (k ? sg[3 * static_cast<size_t>(t) + k - 1] : corner0(t)).transpose();
-      }
-    });
-    out = part[0];
-    for (int j = 1; j < chunks; ++j) out += part[static_cast<size_t>(j)];
-    for (int r = 0; r < nr; ++r) {
-      const VolumeHold& h = holds[static_cast<size_t>(r)];
-      for (int k = 0; k < 4; ++k)
-        out.row(h.vertices[static_cast<size_t>(k)]) += (y_h(r) * h.weights[static_cast<size_t>(k)]) * h.direction.transpose();
-    }
-    project(out);
-  };
-  PolishDirection res;
-  Points dx = Points::Zero(n, 3), s(n, 3), p(n, 3);
-  Eigen::VectorXd rr = b, q(m), rr_h = Eigen::VectorXd::Zero(nr), q_h(nr);
-  apply_t(rr, rr_h, s);
-  p = s;
-  double gamma = s.squaredNorm();
-  int it = 0;
-  for (; it < iterations && gamma > 0; ++it) {
-    apply(p, q, q_h);
-    const double qq = q.squaredNorm() + q_h.squaredNorm();
-    if (qq <= 0) break;
-    const double alpha = gamma / qq;
-    dx += alpha * p;
-    rr -= alpha * q;
-    rr_h -= alpha * q_h;
-    apply_t(rr, rr_h, s);
-    const double g2 = s.squaredNorm();
-    p = s + (g2 / gamma) * p;
-    gamma = g2;
-  }
-  res.dx = std::move(dx);
-  res.iterations = it;
-  res.residual = b.norm() > 0 ? rr.norm() / b.norm() : 0;
-  return res;
 }
 
 // ---- OpenCL ----------------------------------------------------------------------------------

@@ -1,0 +1,178 @@
+// The polish direction on the host threads (map/polish.hpp, polish_direction_host): CGLS on the
+// linearised per-tet volume equations and the soft holds, from dx = 0, in the projected space of
+// allowed moves (fixed, tangent, anchored). The least-squares system is HostPolishSystem, the
+// iteration cgls() over it.
+#include <Eigen/Dense>
+#include <algorithm>
+
+#include "core/parallel.hpp"
+#include "map/polish.hpp"
+#include "vpm/geometry.hpp"
+
+namespace vpm::detail {
+
+namespace {
+
+// min |A d - b|^2 + |H d|^2 over projected moves d = P d: A's rows are the tets' linearised
+// relative volume changes (b = 1 - vol / target), H's the holds' h . sum_k w_k d_(v_k).
+class HostPolishSystem {
+ public:
+  HostPolishSystem(const Points& x, const Tets& tets, const Eigen::VectorXd& target, const std::vector<char>& freedom,
+                   const std::vector<VolumeAnchor>& anchors, const std::vector<VolumeHold>& holds)
+      : x_(x), tets_(tets), freedom_(freedom), holds_(holds), groups_(anchor_groups(anchors)),
+        n_(static_cast<int>(x.rows())), m_(static_cast<int>(tets.rows())), nr_(static_cast<int>(holds.size())),
+        chunks_(m_ >= 8192 ? 2 : 1), part_(static_cast<size_t>(chunks_)) {
+    scaled_gradients(target);
+  }
+
+  int vertices() const { return n_; }
+  int volume_rows() const { return m_; }
+  int hold_rows() const { return nr_; }
+  const Eigen::VectorXd& rhs() const { return b_; }
+
+  /// out = A d, out_h = H d (d projected).
+  void apply(const Points& d, Eigen::VectorXd& out, Eigen::VectorXd& out_h) const {
+    parallel_for(m_, 8192, [&](int t0, int t1) {
+      for (int t = t0; t < t1; ++t) {
+        double s = 0;
+        s += corner0(t).dot(d.row(tets_(t, 0)).transpose());
+        for (int k = 1; k < 4; ++k) s += sg_[3 * static_cast<size_t>(t) + k - 1].dot(d.row(tets_(t, k)).transpose());
+        out(t) = s;
+      }
+    });
+    for (int r = 0; r < nr_; ++r) {
+      const VolumeHold& h = holds_[static_cast<size_t>(r)];
+      Eigen::Vector3d acc = Eigen::Vector3d::Zero();
+      for (int k = 0; k < 4; ++k)
+        acc += h.weights[static_cast<size_t>(k)] * d.row(h.vertices[static_cast<size_t>(k)]).transpose();
+      out_h(r) = h.direction.dot(acc);
+    }
+  }
+
+  /// out = P (A^T y + H^T y_h): tets split into fixed chunks, each scattering into its own
+  /// buffer (no races, and the result does not depend on the number of threads), then summed.
+  void apply_t(const Eigen::VectorXd& y, const Eigen::VectorXd& y_h, Points& out) {
+    const int per = (m_ + chunks_ - 1) / chunks_;
+    parallel_for(chunks_, 2, [&](int k0, int k1) {
+      for (int j = k0; j < k1; ++j) {
+        Points& o = part_[static_cast<size_t>(j)];
+        o.setZero(n_, 3);
+        for (int t = j * per; t < std::min(m_, (j + 1) * per); ++t)
+          for (int k = 0; k < 4; ++k)
+            o.row(tets_(t, k)) += y(t) * (k ? sg_[3 * static_cast<size_t>(t) + k - 1] : corner0(t)).transpose();
+      }
+    });
+    out = part_[0];
+    for (int j = 1; j < chunks_; ++j) out += part_[static_cast<size_t>(j)];
+    for (int r = 0; r < nr_; ++r) {
+      const VolumeHold& h = holds_[static_cast<size_t>(r)];
+      for (int k = 0; k < 4; ++k)
+        out.row(h.vertices[static_cast<size_t>(k)]) +=
+            (y_h(r) * h.weights[static_cast<size_t>(k)]) * h.direction.transpose();
+    }
+    project(out);
+  }
+
+ private:
+  // Per-tet scaled gradients sg_{t,k} = vol_t grad phi_k / target_t, kept for k = 1..3 only
+  // (sg_[3 t + k - 1]); corner 0's, minus their sum, is recomputed where it is used, in the
+  // same order of operations (the loops are memory-bound: a quarter less to read).
+  void scaled_gradients(const Eigen::VectorXd& target) {
+    const Eigen::VectorXd vol = tet_volumes(x_, tets_);
+    sg_.resize(3 * static_cast<size_t>(m_));
+    b_.resize(m_);
+    parallel_for(m_, 8192, [&](int t0, int t1) {
+      for (int t = t0; t < t1; ++t) {
+        const Eigen::Vector3d a = x_.row(tets_(t, 0)).transpose();
+        Eigen::Matrix3d M;
+        for (int q = 0; q < 3; ++q) M.col(q) = x_.row(tets_(t, q + 1)).transpose() - a;
+        const Eigen::Matrix3d Mi = M.inverse();
+        const double s = vol(t) / target(t);
+        for (int q = 0; q < 3; ++q) sg_[3 * static_cast<size_t>(t) + q] = s * Mi.row(q).transpose();
+        b_(t) = 1.0 - vol(t) / target(t);
+      }
+    });
+  }
+
+  Eigen::Vector3d corner0(int t) const {
+    Eigen::Vector3d g0 = Eigen::Vector3d::Zero();
+    for (int q = 0; q < 3; ++q) g0 -= sg_[3 * static_cast<size_t>(t) + q];
+    return g0;
+  }
+
+  // d <- P d: fixed vertices zeroed, tangent ones projected on the sphere's tangent plane, each
+  // anchor group's moves projected on the null space of its constraints.
+  void project(Points& d) const {
+    for (int v = 0; v < n_; ++v) {
+      if (freedom_[v] == kPolishFixed) {
+        d.row(v).setZero();
+      } else if (freedom_[v] == kPolishTangent) {
+        const Eigen::Vector3d nv = x_.row(v).transpose().normalized(), u = d.row(v).transpose();
+        d.row(v) = (u - u.dot(nv) * nv).transpose();
+      }
+    }
+    for (int gi = 0; gi < groups_.groups(); ++gi) {
+      const int b = groups_.ptr[static_cast<size_t>(gi)], k = groups_.ptr[static_cast<size_t>(gi) + 1] - b;
+      const double* P = groups_.matrix.data() + groups_.offset[static_cast<size_t>(gi)];
+      Points dv(k, 3);
+      for (int i = 0; i < k; ++i) dv.row(i) = d.row(groups_.vertices[static_cast<size_t>(b + i)]);
+      for (int i = 0; i < k; ++i) {
+        Eigen::RowVector3d o = Eigen::RowVector3d::Zero();
+        for (int j = 0; j < k; ++j) o += P[i * k + j] * dv.row(j);
+        d.row(groups_.vertices[static_cast<size_t>(b + i)]) = o;
+      }
+    }
+  }
+
+  const Points& x_;
+  const Tets& tets_;
+  const std::vector<char>& freedom_;
+  const std::vector<VolumeHold>& holds_;
+  const AnchorGroups groups_;
+  const int n_, m_, nr_, chunks_;
+  std::vector<Points> part_;
+  std::vector<Eigen::Vector3d> sg_;
+  Eigen::VectorXd b_;
+};
+
+// CGLS from dx = 0 for `iterations` steps (early-stopped: the minimum-norm smooth part of the
+// correction) on a system with apply / apply_t / rhs as HostPolishSystem's.
+template <class System>
+PolishDirection cgls(System& sys, int iterations) {
+  const Eigen::VectorXd& b = sys.rhs();
+  Points dx = Points::Zero(sys.vertices(), 3), s(sys.vertices(), 3), p(sys.vertices(), 3);
+  Eigen::VectorXd rr = b, q(sys.volume_rows()), rr_h = Eigen::VectorXd::Zero(sys.hold_rows()), q_h(sys.hold_rows());
+  sys.apply_t(rr, rr_h, s);
+  p = s;
+  double gamma = s.squaredNorm();
+  int it = 0;
+  for (; it < iterations && gamma > 0; ++it) {
+    sys.apply(p, q, q_h);
+    const double qq = q.squaredNorm() + q_h.squaredNorm();
+    if (qq <= 0) break;
+    const double alpha = gamma / qq;
+    dx += alpha * p;
+    rr -= alpha * q;
+    rr_h -= alpha * q_h;
+    sys.apply_t(rr, rr_h, s);
+    const double g2 = s.squaredNorm();
+    p = s + (g2 / gamma) * p;
+    gamma = g2;
+  }
+  PolishDirection res;
+  res.dx = std::move(dx);
+  res.iterations = it;
+  res.residual = b.norm() > 0 ? rr.norm() / b.norm() : 0;
+  return res;
+}
+
+}  // namespace
+
+PolishDirection polish_direction_host(const Points& x, const Tets& tets, const Eigen::VectorXd& target,
+                                      const std::vector<char>& freedom, const std::vector<VolumeAnchor>& anchors,
+                                      int iterations, const std::vector<VolumeHold>& holds) {
+  HostPolishSystem sys(x, tets, target, freedom, anchors, holds);
+  return cgls(sys, iterations);
+}
+
+}  // namespace vpm::detail
