@@ -50,28 +50,6 @@ __kernel void eval_field(const int n, __global const real* x, const int nc,
   out[3 * i + 2] = u.z;
 }
 
-// Integrates dx/dt = u(x, t) over `steps` RK4 steps of length dt for every point. Field slot s
-// (time s * dt / 2) has centres [slot[2s], slot[2s + 1]); step k uses slots 2k, 2k+1, 2k+2.
-// The whole path of a point stays in registers: one launch for the whole advection.
-__kernel void rk4_advect(const int n, __global real* x, const int steps, const real dt,
-                         __global const int* slot, __global const real* centres,
-                         __global const real* coefs, const real l, const int tangent) {
-  const int i = get_global_id(0);
-  if (i >= n) return;
-  real3 p = load3(x, i);
-  for (int k = 0; k < steps; ++k) {
-    __global const int* s = slot + 4 * k;  // slots 2k, 2k+1, 2k+2 as (begin, end) pairs
-    const real3 k1 = field_at(p, s[0], s[1], centres, coefs, l, tangent);
-    const real3 k2 = field_at(p + (0.5 * dt) * k1, s[2], s[3], centres, coefs, l, tangent);
-    const real3 k3 = field_at(p + (0.5 * dt) * k2, s[2], s[3], centres, coefs, l, tangent);
-    const real3 k4 = field_at(p + dt * k3, s[4], s[5], centres, coefs, l, tangent);
-    p += (dt / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
-  }
-  x[3 * i] = p.x;
-  x[3 * i + 1] = p.y;
-  x[3 * i + 2] = p.z;
-}
-
 // ---- SIMD variant: each work item advects LANES points held in vector registers -------------
 // Positions are structure-of-arrays (xs, ys, zs), padded to a multiple of LANES. LANES is
 // injected with -DLANES=8 for CPU devices (PoCL maps double8 onto AVX registers and its vector
@@ -153,7 +131,10 @@ inline void field_v(const vreal x0, const vreal x1, const vreal x2, const int b,
   *u2 = a2;
 }
 
-// rk4_advect on nv = padded n / LANES vectors of points (same slots as rk4_advect).
+// Integrates dx/dt = u(x, t) over `steps` RK4 steps of length dt for nv = padded n / LANES
+// vectors of points. Field slot s (time s * dt / 2) has centres [slot[2s], slot[2s + 1]); step k
+// uses slots 2k, 2k+1, 2k+2. The whole path of a point stays in registers: one launch for the
+// whole advection.
 __kernel void rk4_advect_soa(const int nv, __global real* xs, __global real* ys, __global real* zs,
                              const int steps, const real dt, __global const int* slot,
                              __global const real* centres, __global const real* coefs,

@@ -77,7 +77,6 @@ Json to_json(const VolumeMapResult& res) {
   j["preconditioner"] = res.preconditioner;
   j["rk_steps"] = res.rk_steps;
   j["advection"] = res.device_advection ? "device" : "host";
-  j["local_untangle_available"] = true;
   Json ji = Json::object();
   ji["vertex_mean_abs_dev"] = res.initial_vertex_mean_abs_dev;
   ji["tet_mean_abs_dev"] = res.initial_tet_mean_abs_dev;

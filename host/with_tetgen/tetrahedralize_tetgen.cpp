@@ -303,15 +303,10 @@ TetMesh tetrahedralize_surface(const TriSurface& surface, const TetgenOptions& o
     ++rounds;
     run_tetgen(sw, surface, extra, mesh);
     bad = count_four_boundary_vertex_tets(mesh);
-    if (std::getenv("VPM_DEBUG_TETGEN")) std::fprintf(stderr, "round %d: %zu points, %d bad\n", rounds, extra.size(), bad);
   }
   drop_unused_vertices(mesh);
   // What point insertion left: split the longest interior edge of each remaining such tet
   // at its midpoint (docs/design.md 4.1 step 1); the new vertex is interior.
-  if (std::getenv("VPM_DEBUG_TETGEN")) {
-    const auto dih = dihedral_angles_deg(mesh.vertices, mesh.tets);
-    std::fprintf(stderr, "tetgen: %d tets, min dihedral %.3f, %d four-boundary-vertex tets\n", mesh.num_tets(), dih.minCoeff(), bad);
-  }
   int splits = 0, centroids = 0;
   const int first_inserted = mesh.num_vertices();
   for (int guard = 0; bad > 0 && guard < 8; ++guard) {
@@ -319,10 +314,6 @@ TetMesh tetrahedralize_surface(const TriSurface& surface, const TetgenOptions& o
     bad = count_four_boundary_vertex_tets(mesh);
   }
   optimise_inserted_vertices(mesh, first_inserted);
-  if (std::getenv("VPM_DEBUG_TETGEN")) {
-    const auto dih = dihedral_angles_deg(mesh.vertices, mesh.tets);
-    std::fprintf(stderr, "after %d splits (%d centroid): min dihedral %.3f, %d left\n", splits, centroids, dih.minCoeff(), bad);
-  }
   if (info) {
     info->edge_splits = splits;
     info->switches = sw;

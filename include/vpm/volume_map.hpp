@@ -231,7 +231,7 @@ struct VolumeMapResult {
   VolumeMapTimings timings;
 };
 
-/// {"method", "boundary", "solver", "preconditioner", "rk_steps", "advection", "local_untangle_available",
+/// {"method", "boundary", "solver", "preconditioner", "rk_steps", "advection",
 ///  "initial": {"vertex_mean_abs_dev", "tet_mean_abs_dev"},
 ///  "final": {"vertex_mean_abs_dev", "tet_mean_abs_dev", "inverted_tets"}, "stop_reason",
 ///  "rounds": [to_json(round)...], "timings_s": {"solve", "field", "advect", "untangle", "total"}}
