@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Fails when a host/<layer> file includes a header of a layer above its own.
+"""Fails when a host/<layer> file includes a header of a layer above its own, or when the layer
+table of docs/architecture.md and the PUBLIC table below disagree.
 
 The layers, lowest first, and the public headers (include/vpm/) each one implements. A file in
 host/<layer>/ may include headers of its own layer and of the layers below it; host/with_<dep>/
@@ -38,9 +39,36 @@ def layer_of_include(inc):
     return None
 
 
+def documented_layers(root):
+    """{layer: set of public headers} from the layer table of docs/architecture.md (rows
+    "| layer | `host/layer` | owns | `header`, `header` |")."""
+    table = {}
+    for line in (root / "docs/architecture.md").read_text().splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 4 and cells[0] in LAYERS and cells[1] == f"`host/{cells[0]}`":
+            table[cells[0]] = set(re.findall(r"`(\w+)`", cells[3]))
+    return table
+
+
+def table_problems(root):
+    """Where docs/architecture.md's layer table and PUBLIC disagree."""
+    doc = documented_layers(root)
+    out = []
+    for layer in LAYERS:
+        if layer not in doc:
+            out.append(f"docs/architecture.md: the layer table has no row for {layer}")
+            continue
+        code = set(PUBLIC[layer])
+        for name in sorted(code - doc[layer]):
+            out.append(f"docs/architecture.md: layer {layer} does not list vpm/{name}.hpp (tests/arch/check_layers.py does)")
+        for name in sorted(doc[layer] - code):
+            out.append(f"docs/architecture.md: layer {layer} lists vpm/{name}.hpp, which check_layers.py puts elsewhere or nowhere")
+    return out
+
+
 def main():
     root = pathlib.Path(sys.argv[1] if len(sys.argv) > 1 else ".")
-    problems = []
+    problems = table_problems(root)
     public = {p.stem for p in (root / "include/vpm").glob("*.hpp")}
     unmapped = public - {n for names in PUBLIC.values() for n in names}
     for name in sorted(unmapped):
