@@ -24,7 +24,7 @@
 //    and sum w g (S - T); the matches' mass and mean) and the field is fitted to all of them at
 //    once (vpm/rbf.hpp, fit_divfree_weighted), so an edge constrains only the motion across it and
 //    flat white matter nothing: the field there follows from its neighbours instead of being held
-//    still. DenseFit::translations (before 2026-11-25) solves each centre alone (+ eps I, capped)
+//    still. DenseFit::translations (the earlier method) solves each centre alone (+ eps I, capped)
 //    and fits the field to those translations (steps 2-3).
 // 2. Smoothing (labels): the matches are averaged with a Gaussian of width `smoothing` x w at centres on
 //    a grid of spacing `centre_spacing` x w in the ball (sum w_i g_i d_i / (sum w_i g_i + 1), so
@@ -68,7 +68,7 @@ DenseForce dense_force_from_string(const std::string& word);
 
 /// How the force becomes a field (see the top of this header): every centre's local
 /// least-squares system fitted at once (systems), or one translation per centre, then fitted
-/// (translations, the method before 2026-11-25).
+/// (translations, the earlier method, kept for comparison: docs/register.md).
 enum class DenseFit { systems, translations };
 
 /// "systems", "translations"; and back (InputError naming the accepted words otherwise).

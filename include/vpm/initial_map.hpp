@@ -76,10 +76,9 @@ struct InitialMapOptions {
   /// Cholesky, an earlier step's factor reused as CG preconditioner; device = AMG-CG on the
   /// OpenCL device sphere_map() is given (the host when it is given none or the host device; a
   /// step whose CG fails is redone on the host); automatic (the default) = device on GPUs for
-  /// boundaries of at least kDeviceDensityVertices vertices, else host (density_solve_on_device).
-  /// On the 2-core PoCL device AMG-CG solves the 10M-tet Colin27's boundary (136k vertices) in
-  /// 2.5 s against the host's 3.8 s alone, but inside `vpm map`, where its kernels share the
-  /// cores with the Poisson solver being built, 7.1 s against 5.3 s (the map 96 vs 87 s).
+  /// boundaries of at least kDeviceDensityVertices vertices, else host (density_solve_on_device):
+  /// on CPU devices the kernels share the cores with the Poisson solver being built beside
+  /// them and lose inside `vpm map` (docs/volume_map.md, docs/gpu.md).
   enum class DensitySolve { automatic, host, device };
   DensitySolve density_solve = DensitySolve::automatic;
   int density_max_steps = 300;

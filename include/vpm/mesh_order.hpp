@@ -2,8 +2,7 @@
 // A memory-friendly numbering of a tet mesh: vertices and tets along a space-filling curve, so
 // that the vertices of a tet, and the tets of a neighbourhood, lie close together in memory.
 // Every sparse product, gather and scatter of the solvers, the AMG hierarchy, the polish and
-// the advection then hits the cache far more often (docs/solver.md: the AMG-CG on a 1.6M-tet
-// Colin27 Laplacian 1.9x faster after this numbering than in TetGen's order).
+// the advection then hits the cache far more often (measured in docs/solver.md).
 #include <vector>
 
 #include "vpm/mesh.hpp"

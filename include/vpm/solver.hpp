@@ -46,10 +46,9 @@ Preconditioner parse_preconditioner(const std::string& name);
 inline constexpr long long kAutoAmgTets = 2'000'000;
 /// The preconditioner `name` stands for on `device` for the Laplacian of a mesh of `tets` tets:
 /// "jacobi" and "amg" as parse_preconditioner; "auto": AMG on CPU devices (the host and OpenCL
-/// CPU devices) from kAutoAmgTets tets on, Jacobi below and on GPUs. On 2 CPU cores AMG-CG
-/// took the 10M-tet map 130 -> 101 s (Moser solves 21 -> 10 s a round) for 18 % more memory,
-/// and the 1.1M one 9.5 -> 8.9 s at 1.50 instead of 1.30 GB; on a GPU Jacobi-CG iterations cost
-/// microseconds while AMG's value update runs on the host (docs/solver.md).
+/// CPU devices) from kAutoAmgTets tets on, Jacobi below and on GPUs: on CPUs AMG's fewer
+/// iterations win on large meshes for some more memory, on a GPU Jacobi-CG iterations cost
+/// microseconds while AMG's value update runs on the host (measurements: docs/solver.md).
 Preconditioner choose_preconditioner(const std::string& name, const Device& device, long long tets);
 const char* to_string(Preconditioner p);
 

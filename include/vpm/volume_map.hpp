@@ -20,7 +20,7 @@
 //    boundary tet for points just outside the inscribed polyhedron) or as the same code on the
 //    host. Then polish rounds (VolumeMapOptions::polish_rounds): Gauss-Newton steps on the
 //    per-tet volumes (CGLS, minimum-norm), which remove the per-tet distortion that the
-//    vertex-based rounds leave (Colin27: tet mean |r-1| 5.3 % -> 2.75 %).
+//    vertex-based rounds leave (docs/volume_map.md).
 //  * paper: the paper's discrete loop (4.3): at each of `paper_steps` steps recompute
 //    rho = m / V from the current geometry, re-solve, step x += dt grad psi / rho (dt = 1/K).
 //    A step that folds is retried with dt halved. Kept for comparison (it stalls, docs/design.md 4.2).
@@ -102,9 +102,8 @@ struct VolumeMapOptions {
   int max_rounds = 0;
   /// Stop when the vertex mean |r - 1| (normalised dual volumes) is at or below this.
   double tolerance = 0.01;
-  /// RK4 steps per Moser round (t from 0 to 1). 10 since 2026-11-26 (40 before): the same maps
-  /// to 3-4 digits on brains from 26k to 1.1M tets and on the shapes benchmark, at a quarter of
-  /// the advection's time (docs/volume_map.md).
+  /// RK4 steps per Moser round (t from 0 to 1): 10 give the same maps as 40 to 3-4 digits on
+  /// brains and on the shapes benchmark at a quarter of the advection's time (docs/volume_map.md).
   int rk_steps = 10;
   /// Explicit steps K of the paper's loop (dt = 1/K).
   int paper_steps = 50;
@@ -135,10 +134,9 @@ struct VolumeMapOptions {
   int polish_rounds = 8;
   int polish_iterations = 60;
   /// The polish's CGLS iterations when the polish starts with the vertex mean |r-1| above 5 x
-  /// `tolerance` (the Moser rounds stalled far from it, as on a hand's fingers: 3.1 % with 60,
-  /// 1.0 % with 200; docs/shapes.md), at up to 30,000 tets, times cbrt(tets / 30,000) above (the
-  /// hand at 322k: 3.4 % with 200, 0.9 % with 440); otherwise `polish_iterations` (brains hand
-  /// over at about 2 %). Not with polish_only.
+  /// `tolerance` (the Moser rounds stalled far from it, as on a hand's fingers; docs/shapes.md),
+  /// at up to 30,000 tets, times cbrt(tets / 30,000) above (the same correction spans more
+  /// elements on a finer mesh); otherwise `polish_iterations`. Not with polish_only.
   int polish_iterations_far = 200;
   /// Skip the Moser rounds: only the polish rounds run (method moser). Registration uses it to
   /// give back, against the pre-registration map, the volume that linear tets lost under its
@@ -166,8 +164,8 @@ struct VolumeMapOptions {
   /// fragile shapes keep the host's round-off: docs/volume_map.md).
   ExecutionPlace advection = ExecutionPlace::automatic;
   /// Where the polish's CGLS runs: automatic = the OpenCL kernels (kernels/polish.cl) on GPUs,
-  /// the threaded host loops otherwise (on PoCL the kernels were 2x slower than the host loops
-  /// at 1.1M tets: 3.1-4.7 s against 1.7-2.2 s per step).
+  /// the threaded host loops otherwise (on PoCL the kernels are slower than the host loops:
+  /// docs/volume_map.md).
   ExecutionPlace polish = ExecutionPlace::automatic;
   /// Called with one line per round (progress display); may be empty.
   std::function<void(const std::string&)> progress;
@@ -175,8 +173,8 @@ struct VolumeMapOptions {
   /// passed the rounds stop with the map reached so far (stop_reason "time_budget").
   Deadline deadline{};
   /// A Poisson solver already built on these tets and this device (InitialMapResult::poisson):
-  /// the Moser solves reuse it instead of building the Laplacian's pattern again (0.3 s at 1.1M
-  /// tets), with the solver options above. Ignored when it was built on other tets or another
+  /// the Moser solves reuse it instead of building the Laplacian's pattern again, with the
+  /// solver options above. Ignored when it was built on other tets or another
   /// device; nullptr: one is built.
   std::shared_ptr<PoissonSolver> poisson;
 };
