@@ -297,6 +297,40 @@ TEST_CASE("dense registration by the image force undoes the known flow without l
   CHECK_THROWS_AS(dense_force_from_string("intensity"), InputError);
 }
 
+TEST_CASE("dense registration: the restoration's polish on the OpenCL device, image holds included, equals the host's") {
+  auto cl = test::opencl_device();
+  if (!cl) {
+    WARN("no OpenCL device");
+    return;
+  }
+  const Case c = make_case();
+  const Image image = native_image();
+  const DenseImages images = case_images(c, image);
+  auto run = [&](ExecutionPlace place, DenseRegistrationResult& r) {
+    DenseRegistrationOptions o;
+    o.iterations = 6;
+    o.widths = {0.5, 0.35};
+    o.force = DenseForce::both;
+    o.image_grid = 32;
+    RegistrationOptions lo;
+    lo.restore_polish = place;
+    Points ball = c.subject.vertices;
+    r = register_dense(*cl, ball, c.subject.tets, c.labels, c.templ.vertices, c.templ.tets, c.labels,
+                       c.landmarks.source, c.landmarks.target, lo, o, &images);
+    return ball;
+  };
+  DenseRegistrationResult rh, rd;
+  const Points host = run(ExecutionPlace::host, rh), device = run(ExecutionPlace::device, rd);
+  REQUIRE(rh.restore);
+  REQUIRE(rd.restore);
+  CHECK(rd.restore->held_points > 100);  // the image holds went to the device
+  CHECK(rd.restore->held_points == rh.restore->held_points);
+  const double diff = (host - device).cwiseAbs().maxCoeff();
+  INFO("max |host - device| " << diff);
+  CHECK(diff < 1e-10);
+  CHECK(rd.inverted_tets == 0);
+}
+
 TEST_CASE("dense registration of a subject to itself is the identity") {
   Case c = make_case();
   c.subject = c.templ;

@@ -442,6 +442,24 @@ TEST_CASE("polish direction: holds keep their points from moving along their dir
   // no holds: bit for bit the direction without the argument
   const detail::PolishDirection none = detail::polish_direction_host(x, T, target, freedom, {}, 40, {});
   CHECK(none.dx == free.dx);
+  // the OpenCL polisher carries the holds as rows after the tets': the same direction to
+  // round-off (8 iterations, as in the test above), in both reduction modes, with anchors too
+  if (auto cl = test::opencl_device()) {
+    const std::vector<VolumeAnchor> anchors = interior_anchors(T, n, 12);
+    for (bool group : {false, true}) {
+      INFO("group reduce " << group);
+      test::GroupReduceScope scope(*cl, group);
+      detail::DevicePolisher dp(*cl, T, n, freedom, anchors, firm);
+      const detail::PolishDirection h8 = detail::polish_direction_host(x, T, target, freedom, anchors, 8, firm);
+      const detail::PolishDirection d8 = dp.direction(x, target, 8);
+      CHECK(d8.iterations == 8);
+      CHECK(d8.residual == Approx(h8.residual).epsilon(1e-10));
+      CHECK((d8.dx - h8.dx).cwiseAbs().maxCoeff() < 1e-10 * h8.dx.cwiseAbs().maxCoeff());
+      CHECK(along(holds, dp.direction(x, target, 40).dx) < 0.3 * along(holds, free.dx));
+    }
+  } else {
+    WARN("no OpenCL device: device polish with holds not compared");
+  }
   // holds need polish_only
   VolumeMapOptions vo;
   vo.holds = holds;

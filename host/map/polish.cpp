@@ -79,14 +79,15 @@ enum { P_ITER = 4, P_BB = 5, P_RR = 6, kPolishSlots = 8 };
 struct DevicePolisher::Impl {
   Device& dev;
   int n, m;
+  int rows;  // m volume rows, then the holds' rows
   size_t G;  // reduction grid
   bc::vector<int> tets, inc_ptr, inc_slot, anchor, anchor_row, group_ptr, group_vertex, group_offset;
   bc::vector<double> group_matrix;
   bc::vector<char> freedom;
   bc::vector<double> x, target, sg, b, r, q, dx, p, s, partial, S;
   bc::kernel k_setup, k_apply, k_apply_t, k_scalars, k_update, k_update_p;
-  Impl(Device& d, int n_, int m_)
-      : dev(d), n(n_), m(m_), tets(d.context()), inc_ptr(d.context()), inc_slot(d.context()),
+  Impl(Device& d, int n_, int m_, int rows_)
+      : dev(d), n(n_), m(m_), rows(rows_), tets(d.context()), inc_ptr(d.context()), inc_slot(d.context()),
         anchor(d.context()), anchor_row(d.context()), group_ptr(d.context()), group_vertex(d.context()), group_offset(d.context()),
         group_matrix(d.context()),
         freedom(d.context()), x(d.context()), target(d.context()), sg(d.context()), b(d.context()),
@@ -98,25 +99,45 @@ struct DevicePolisher::Impl {
   }
 };
 
+namespace {
+
+// The rows of A on the device: the m tets, then one row per hold, which has the shape of a tet's
+// row (four vertices, a 3-vector each: its weight times its direction, right-hand side 0), so
+// the kernels apply both alike. Returns the rows' vertices (4 per row) and the holds' part of sg.
+std::pair<std::vector<int>, std::vector<double>> rows_with_holds(const Tets& tets, const std::vector<VolumeHold>& holds) {
+  const size_t m = static_cast<size_t>(tets.rows());
+  std::vector<int> v(4 * (m + holds.size()));
+  for (size_t t = 0; t < m; ++t)
+    for (int k = 0; k < 4; ++k) v[4 * t + k] = tets(static_cast<Eigen::Index>(t), k);
+  std::vector<double> g(12 * holds.size());
+  for (size_t h = 0; h < holds.size(); ++h)
+    for (size_t k = 0; k < 4; ++k) {
+      v[4 * (m + h) + k] = holds[h].vertices[k];
+      for (int c = 0; c < 3; ++c) g[12 * h + 3 * k + c] = holds[h].weights[k] * holds[h].direction(c);
+    }
+  return {std::move(v), std::move(g)};
+}
+
+}  // namespace
+
 DevicePolisher::DevicePolisher(Device& dev, const Tets& tets, int n, const std::vector<char>& freedom,
-                               const std::vector<VolumeAnchor>& anchors) {
-  const int m = static_cast<int>(tets.rows());
-  impl_ = std::make_unique<Impl>(dev, n, m);
+                               const std::vector<VolumeAnchor>& anchors, const std::vector<VolumeHold>& holds) {
+  const int m = static_cast<int>(tets.rows()), rows = m + static_cast<int>(holds.size());
+  impl_ = std::make_unique<Impl>(dev, n, m, rows);
   Impl& I = *impl_;
   auto& queue = dev.queue();
   const bool cpu = dev.description().type == "cpu";
   const size_t ls = dev.local_size();
   const unsigned cu = std::max(1u, dev.description().compute_units);
   I.G = cpu ? ls * std::max<size_t>(4, 2 * cu) : ls * std::max<size_t>(64, 4 * cu);
-  // vertex -> tet-corner slots (4 t + k), CSR
-  std::vector<int> ptr(static_cast<size_t>(n) + 1, 0), slot(4 * static_cast<size_t>(m));
-  for (int t = 0; t < m; ++t)
-    for (int k = 0; k < 4; ++k) ++ptr[static_cast<size_t>(tets(t, k)) + 1];
+  // vertex -> row-corner slots (4 t + k) of the tets' and the holds' rows, CSR
+  const auto [row_vertex, hold_sg] = rows_with_holds(tets, holds);
+  std::vector<int> ptr(static_cast<size_t>(n) + 1, 0), slot(4 * static_cast<size_t>(rows));
+  for (int j = 0; j < 4 * rows; ++j) ++ptr[static_cast<size_t>(row_vertex[static_cast<size_t>(j)]) + 1];
   for (int v = 0; v < n; ++v) ptr[v + 1] += ptr[v];
   std::vector<int> fill(ptr.begin(), ptr.end() - 1);
-  for (int t = 0; t < m; ++t)
-    for (int k = 0; k < 4; ++k) slot[static_cast<size_t>(fill[tets(t, k)]++)] = 4 * t + k;
-  I.tets = bc::vector<int>(tets.data(), tets.data() + 4 * static_cast<size_t>(m), queue);
+  for (int j = 0; j < 4 * rows; ++j) slot[static_cast<size_t>(fill[row_vertex[static_cast<size_t>(j)]]++)] = j;
+  I.tets = bc::vector<int>(row_vertex.begin(), row_vertex.end(), queue);
   I.inc_ptr = bc::vector<int>(ptr.begin(), ptr.end(), queue);
   I.inc_slot = bc::vector<int>(slot.begin(), slot.end(), queue);
   // anchors: kPolishAnchored on their vertices, vertex -> its group and its row there; every buffer gets
@@ -146,7 +167,7 @@ DevicePolisher::DevicePolisher(Device& dev, const Tets& tets, int n, const std::
   I.group_vertex = bc::vector<int>(gv.begin(), gv.end(), queue);
   I.group_offset = bc::vector<int>(go.begin(), go.end(), queue);
   I.group_matrix = bc::vector<double>(gm.begin(), gm.end(), queue);
-  const size_t n3 = 3 * static_cast<size_t>(std::max(n, 1)), mm = static_cast<size_t>(std::max(m, 1));
+  const size_t n3 = 3 * static_cast<size_t>(std::max(n, 1)), mm = static_cast<size_t>(std::max(rows, 1));
   I.x = bc::vector<double>(n3, dev.context());
   I.target = bc::vector<double>(mm, dev.context());
   I.sg = bc::vector<double>(12 * mm, dev.context());
@@ -160,11 +181,12 @@ DevicePolisher::DevicePolisher(Device& dev, const Tets& tets, int n, const std::
   I.S = bc::vector<double>(kPolishSlots, dev.context());
   for (auto* v : {&I.x, &I.target, &I.sg, &I.b, &I.r, &I.q, &I.dx, &I.p, &I.s, &I.partial, &I.S})
     bc::fill(v->begin(), v->end(), 0.0, queue);
+  if (!hold_sg.empty()) bc::copy(hold_sg.begin(), hold_sg.end(), I.sg.begin() + 12 * static_cast<size_t>(m), queue);
 
   I.k_setup = dev.kernel("polish", "polish_setup");
   I.k_setup.set_args(m, I.tets, I.x, I.target, I.sg, I.b, I.r);
   I.k_apply = dev.kernel("polish", "polish_apply");
-  I.k_apply.set_args(m, I.tets, I.sg, I.p, I.q, I.partial);
+  I.k_apply.set_args(rows, I.tets, I.sg, I.p, I.q, I.partial);
   I.k_apply_t = dev.kernel("polish", "polish_apply_t");
   I.k_apply_t.set_args(n, m, I.inc_ptr, I.inc_slot, I.sg, I.r, I.freedom, I.x, I.s, I.partial, I.anchor,
                        I.anchor_row, I.group_ptr, I.group_vertex, I.group_offset, I.group_matrix);
@@ -172,7 +194,7 @@ DevicePolisher::DevicePolisher(Device& dev, const Tets& tets, int n, const std::
   I.k_scalars.set_arg(0, static_cast<int>(dev.reduction_partials(I.G)));
   set_args_at(I.k_scalars, 2, I.partial, I.S);
   I.k_update = dev.kernel("polish", "polish_update");
-  I.k_update.set_args(3 * n, m, I.S, I.dx, I.p, I.r, I.q);
+  I.k_update.set_args(3 * n, rows, I.S, I.dx, I.p, I.r, I.q);
   I.k_update_p = dev.kernel("polish", "polish_update_p");
   I.k_update_p.set_args(3 * n, I.S, I.p, I.s);
 }
@@ -188,7 +210,8 @@ PolishDirection DevicePolisher::direction(const Points& x, const Eigen::VectorXd
   bc::copy(x.data(), x.data() + 3 * static_cast<size_t>(I.n), I.x.begin(), queue);
   bc::copy(target.data(), target.data() + I.m, I.target.begin(), queue);
   bc::fill(I.dx.begin(), I.dx.end(), 0.0, queue);
-  I.dev.launch(I.k_setup, static_cast<size_t>(I.m));  // sg, b, r = b
+  if (I.rows > I.m) bc::fill(I.r.begin() + I.m, I.r.begin() + I.rows, 0.0, queue);  // the holds' residuals
+  I.dev.launch(I.k_setup, static_cast<size_t>(I.m));  // sg, b, r = b of the tets' rows
   I.dev.launch(I.k_apply_t, I.G);                     // s = P A^T r; |s|^2, |b|^2
   I.scalars(P_OP_INIT);
   I.dev.launch(I.k_update_p, I.G);  // p = s

@@ -52,12 +52,14 @@ PolishDirection polish_direction_host(const Points& x, const Tets& tets, const E
                                       const std::vector<char>& freedom, const std::vector<VolumeAnchor>& anchors,
                                       int iterations, const std::vector<VolumeHold>& holds = {});
 
-/// OpenCL: connectivity (vertex -> tet-corner incidence) and freedom uploaded once; each call
-/// uploads x and target, runs the iterations without a host synchronisation, reads dx back.
+/// OpenCL: connectivity (vertex -> row-corner incidence), freedom and the holds' rows uploaded
+/// once; each call uploads x and target, runs the iterations without a host synchronisation,
+/// reads dx back. The holds' rows sit after the tets' in the kernels' A (same shape: four
+/// vertices with a 3-vector each), so the same kernels apply both.
 class DevicePolisher {
  public:
   DevicePolisher(Device& device, const Tets& tets, int num_vertices, const std::vector<char>& freedom,
-                 const std::vector<VolumeAnchor>& anchors);
+                 const std::vector<VolumeAnchor>& anchors, const std::vector<VolumeHold>& holds = {});
   ~DevicePolisher();
   PolishDirection direction(const Points& x, const Eigen::VectorXd& target, int iterations);
 

@@ -149,8 +149,9 @@ void polish_step(MapContext& c, const Points& x, VolumeMapRound& r, Points& dx_o
   const Eigen::VectorXd target = c.ref_tet * vol.sum();
   if (c.freedom.empty()) c.freedom = detail::polish_freedom(c.boundary, c.slide, c.opt.pinned);
   detail::PolishDirection d;
-  if (c.polish_on_device && c.opt.holds.empty()) {
-    if (!c.polisher) c.polisher = std::make_unique<detail::DevicePolisher>(c.dev, c.tets, c.n, c.freedom, c.opt.anchors);
+  if (c.polish_on_device) {
+    if (!c.polisher)
+      c.polisher = std::make_unique<detail::DevicePolisher>(c.dev, c.tets, c.n, c.freedom, c.opt.anchors, c.opt.holds);
     d = c.polisher->direction(x, target, iterations);
   } else {
     d = detail::polish_direction_host(x, c.tets, target, c.freedom, c.opt.anchors, iterations, c.opt.holds);

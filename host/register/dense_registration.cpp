@@ -362,7 +362,7 @@ DenseRegistrationResult register_dense(Device& dev, Points& ball, const Tets& te
       const std::vector<VolumeHold> holds =
           st.image && o.restore_image_weight > 0 ? image_holds(st, work, o.restore_image_weight) : std::vector<VolumeHold>{};
       r.restore = restore_volumes(dev, ball, tets, work, landmark_vertices(ball, landmarks), lm, lo.restore_iterations,
-                                  lo.restore_rounds, holds);
+                                  lo.restore_rounds, holds, lo.restore_polish);
       r.seconds_restore = seconds_since(t0);
     }
   }

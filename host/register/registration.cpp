@@ -156,7 +156,7 @@ Points check_and_restore(Device& dev, RegistrationResult& res, const Points& bef
   if (opt.restore_volumes && res.inverted_tets == 0) {
     t0 = Clock::now();
     rep.restore = restore_volumes(dev, before, tets, after, landmark_vertex, res.landmarks_final, opt.restore_iterations,
-                                  opt.restore_rounds);
+                                  opt.restore_rounds, {}, opt.restore_polish);
     rep.timings.restore = seconds_since(t0);
   }
   return after;

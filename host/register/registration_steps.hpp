@@ -49,10 +49,11 @@ std::optional<RegistrationUntangle> untangle_flow_folds(Device& device, const Po
 /// landmark vertices pinned and each moved landmark held in place (an anchor of the polish, or
 /// its tet's vertices pinned where the tet touches the boundary); `iterations` CGLS iterations
 /// per polish step, at most `rounds` steps; `holds` (VolumeHold) keep points from sliding across
-/// image edges (dense registration with an image force).
+/// image edges (dense registration with an image force); `place`: where the polish directions
+/// are computed (RegistrationOptions::restore_polish).
 RegistrationRestore restore_volumes(Device& device, const Points& before, const Tets& tets, Points& after,
                                     const std::vector<char>& landmark_vertex, const Points& landmarks_final,
-                                    int iterations, int rounds,
-                                    const std::vector<VolumeHold>& holds = {});
+                                    int iterations, int rounds, const std::vector<VolumeHold>& holds = {},
+                                    ExecutionPlace place = ExecutionPlace::automatic);
 
 }  // namespace vpm

@@ -12,9 +12,11 @@ namespace vpm {
 
 RegistrationRestore restore_volumes(Device& dev, const Points& before, const Tets& tets, Points& after,
                                     const std::vector<char>& landmark_vertex, const Points& landmarks_final,
-                                    int iterations, int rounds, const std::vector<VolumeHold>& holds) {
+                                    int iterations, int rounds, const std::vector<VolumeHold>& holds,
+                                    ExecutionPlace place) {
   const int n = static_cast<int>(after.rows());
   VolumeMapOptions vo;
+  vo.polish = place;
   vo.polish_only = true;
   vo.boundary = MapBoundary::slide;
   vo.pinned = landmark_vertex;

@@ -29,6 +29,7 @@
 #include "vpm/json.hpp"
 #include "vpm/landmarks.hpp"
 #include "vpm/mesh.hpp"
+#include "vpm/volume_map.hpp"
 #include "vpm/metrics.hpp"
 #include "vpm/rbf.hpp"
 #include "vpm/untangle.hpp"
@@ -105,6 +106,9 @@ struct RegistrationOptions {
   /// 1.07 / 1.00 / 0.97 %.
   int restore_iterations = 10;
   int restore_rounds = 12;
+  /// Where the restoration's polish directions are computed (VolumeMapOptions::polish):
+  /// automatic = the OpenCL kernels on GPUs (image holds included), the host threads otherwise.
+  ExecutionPlace restore_polish = ExecutionPlace::automatic;
   /// Throw NumericalError when tets invert (false: return the folded result and count them;
   /// for benchmarks and diagnosis only).
   bool refuse_folds = true;

@@ -154,8 +154,8 @@ struct VolumeMapOptions {
   /// which lets the polish give back more of the volume the flow took.
   std::vector<VolumeAnchor> anchors;
   /// Soft holds (VolumeHold) added to the polish's least squares; only with polish_only
-  /// (InputError otherwise, and for vertices out of range). With holds the polish directions are
-  /// computed on the host threads (the OpenCL polisher has no such rows).
+  /// (InputError otherwise, and for vertices out of range). The OpenCL polisher carries them as
+  /// rows after the tets'.
   std::vector<VolumeHold> holds;
   /// Where the RK4 advection (point location and field interpolation) runs: automatic = on
   /// the OpenCL device when there is one (kernels/moser.cl), else the host reference. The
