@@ -20,6 +20,7 @@
 #include "vpm/initial_map.hpp"
 #include "vpm/io.hpp"
 #include "vpm/json.hpp"
+#include "vpm/polish.hpp"
 #include "vpm/solver.hpp"
 #include "vpm/topology.hpp"
 #include "vpm/volume_map.hpp"
@@ -169,16 +170,15 @@ TEST_CASE("volume map: the polish runs the longer CGLS when the Moser rounds sto
   }
 }
 
-TEST_CASE("volume map: polish_only runs only polish rounds and never moves pinned vertices") {
+TEST_CASE("polish_volumes runs only polish rounds and never moves pinned vertices") {
   const InitialMapResult& im = ellipsoid_start();
   auto host = Device::host();
   const int n = static_cast<int>(im.ball.rows());
   Points x = im.ball;
-  VolumeMapOptions o;
-  o.polish_only = true;
+  PolishOptions o;
   o.pinned.assign(static_cast<size_t>(n), 0);
   for (int v = 0; v < n; v += 7) o.pinned[static_cast<size_t>(v)] = 1;
-  const VolumeMapResult r = volume_preserving_map(*host, im.mesh.vertices, im.mesh.tets, x, o);
+  const VolumeMapResult r = polish_volumes(*host, im.mesh.vertices, im.mesh.tets, x, o);
   REQUIRE(!r.rounds.empty());
   for (const auto& round : r.rounds) CHECK(round.kind == "polish");
   CHECK(r.stop_reason == "polish_only");
@@ -191,17 +191,22 @@ TEST_CASE("volume map: polish_only runs only polish rounds and never moves pinne
   }
   CHECK(moved > n / 2);
   CHECK(max_boundary_radius_error(x, im.mesh.tets) < 1e-12);
-  // pinned needs polish_only, the right length, and the moser method
+  // pinned needs the right length; rounds >= 0, iterations >= 1
   Points y = im.ball;
-  VolumeMapOptions bad = o;
-  bad.polish_only = false;
-  CHECK_THROWS_AS(volume_preserving_map(*host, im.mesh.vertices, im.mesh.tets, y, bad), InputError);
-  bad = o;
+  PolishOptions bad = o;
   bad.pinned.pop_back();
-  CHECK_THROWS_AS(volume_preserving_map(*host, im.mesh.vertices, im.mesh.tets, y, bad), InputError);
+  CHECK_THROWS_WITH(polish_volumes(*host, im.mesh.vertices, im.mesh.tets, y, bad), Catch::Contains("pinned has"));
   bad = o;
-  bad.method = VolumeMapMethod::vsem;
-  CHECK_THROWS_AS(volume_preserving_map(*host, im.mesh.vertices, im.mesh.tets, y, bad), InputError);
+  bad.rounds = -1;
+  CHECK_THROWS_AS(polish_volumes(*host, im.mesh.vertices, im.mesh.tets, y, bad), InputError);
+  bad = o;
+  bad.iterations = 0;
+  CHECK_THROWS_AS(polish_volumes(*host, im.mesh.vertices, im.mesh.tets, y, bad), InputError);
+  CHECK(y == im.ball);
+  // the iteration scaling: as given up to 30,000 tets, times cbrt(tets / 30,000) above
+  CHECK(polish_iterations_for(10, 1000) == 10);
+  CHECK(polish_iterations_for(10, 30000) == 10);
+  CHECK(polish_iterations_for(10, 240000) == 20);
 }
 
 namespace {
@@ -280,12 +285,11 @@ TEST_CASE("volume map: anchors (sharing vertices or not) stay in place while the
   REQUIRE(anchors.size() >= 32);
   for (auto& dev : test::devices()) {
     INFO(dev->description().name);
-    VolumeMapOptions o;
-    o.polish_only = true;
-    o.polish = ExecutionPlace::device;  // the kernels on an OpenCL device, the host loops on the host
+    PolishOptions o;
+    o.place = ExecutionPlace::device;  // the kernels on an OpenCL device, the host loops on the host
     o.anchors = anchors;
     Points x = moved;
-    const VolumeMapResult r = volume_preserving_map(*dev, ball.vertices, ball.tets, x, o);
+    const VolumeMapResult r = polish_volumes(*dev, ball.vertices, ball.tets, x, o);
     REQUIRE(!r.rounds.empty());
     CHECK(volume_distortion(ball.vertices, x, ball.tets).folds == 0);
     CHECK(r.final_tet_mean_abs_dev < 0.5 * r.initial_tet_mean_abs_dev);
@@ -296,13 +300,13 @@ TEST_CASE("volume map: anchors (sharing vertices or not) stay in place while the
     }
     CHECK(vertices_moved > 2 * static_cast<int>(anchors.size()));
     // the same points held by pinning their tets' vertices: 12 constraints each instead of 3
-    VolumeMapOptions p = o;
+    PolishOptions p = o;
     p.anchors.clear();
     p.pinned.assign(static_cast<size_t>(n), 0);
     for (const VolumeAnchor& a : anchors)
       for (int v : a.vertices) p.pinned[static_cast<size_t>(v)] = 1;
     Points y = moved;
-    const VolumeMapResult rp = volume_preserving_map(*dev, ball.vertices, ball.tets, y, p);
+    const VolumeMapResult rp = polish_volumes(*dev, ball.vertices, ball.tets, y, p);
     INFO("tet mean |r-1|: start " << r.initial_tet_mean_abs_dev << ", anchors " << r.final_tet_mean_abs_dev
                                   << ", pins " << rp.final_tet_mean_abs_dev);
     CHECK(r.final_tet_mean_abs_dev < 0.8 * rp.final_tet_mean_abs_dev);
@@ -310,22 +314,18 @@ TEST_CASE("volume map: anchors (sharing vertices or not) stay in place while the
   const InitialMapResult& im = ellipsoid_start();
   const std::vector<VolumeAnchor> ea = interior_anchors(im.mesh.tets, static_cast<int>(im.ball.rows()), 10);
   REQUIRE(ea.size() >= 5);
-  // refused: without polish_only, on the boundary, pinned, weightless
+  // refused: on the boundary, pinned, weightless
   auto host = Device::host();
   const int ne = static_cast<int>(im.ball.rows());
   const auto boundary = boundary_vertex_mask(ne, boundary_faces(im.mesh.tets));
-  VolumeMapOptions o;
-  o.polish_only = true;
+  PolishOptions o;
   o.anchors = ea;
-  auto refused = [&](const VolumeMapOptions& bad, const char* what) {
+  auto refused = [&](const PolishOptions& bad, const char* what) {
     Points y = im.ball;
-    CHECK_THROWS_WITH(volume_preserving_map(*host, im.mesh.vertices, im.mesh.tets, y, bad), Catch::Contains(what));
+    CHECK_THROWS_WITH(polish_volumes(*host, im.mesh.vertices, im.mesh.tets, y, bad), Catch::Contains(what));
     CHECK(y == im.ball);
   };
-  VolumeMapOptions bad = o;
-  bad.polish_only = false;
-  refused(bad, "polish_only");
-  bad = o;
+  PolishOptions bad = o;
   for (int v = 0; v < ne; ++v)
     if (boundary[static_cast<size_t>(v)]) {
       bad.anchors[0].vertices[0] = v;
@@ -460,11 +460,12 @@ TEST_CASE("polish direction: holds keep their points from moving along their dir
   } else {
     WARN("no OpenCL device: device polish with holds not compared");
   }
-  // holds need polish_only
-  VolumeMapOptions vo;
-  vo.holds = holds;
+  // a hold's vertex out of range is refused
+  PolishOptions po;
+  po.holds = holds;
+  po.holds[0].vertices[2] = n;
   Points y = x;
-  CHECK_THROWS_AS(volume_preserving_map(*Device::host(), im.mesh.vertices, T, y, vo), InputError);
+  CHECK_THROWS_WITH(polish_volumes(*Device::host(), im.mesh.vertices, T, y, po), Catch::Contains("out of range"));
 }
 
 TEST_CASE("volume map: --boundary fixed keeps the boundary vertices in place") {

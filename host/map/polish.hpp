@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "vpm/mesh.hpp"
-#include "vpm/volume_map.hpp"
+#include "vpm/polish.hpp"
 
 namespace vpm {
 class Device;

@@ -102,25 +102,6 @@ Json to_json(const VolumeMapResult& res) {
 
 namespace {
 
-// Anchor vertices: in range, interior, not pinned; weights not all zero.
-void check_anchors(const Points& reference, const Tets& tets, const VolumeMapOptions& opt) {
-  if (opt.anchors.empty()) return;
-  const std::vector<char> boundary = boundary_vertex_mask(static_cast<int>(reference.rows()), boundary_faces(tets));
-  for (size_t a = 0; a < opt.anchors.size(); ++a) {
-    const VolumeAnchor& an = opt.anchors[a];
-    double w2 = 0;
-    for (int k = 0; k < 4; ++k) {
-      const int v = an.vertices[static_cast<size_t>(k)];
-      const std::string where = "volume map: anchor " + std::to_string(a) + " vertex " + std::to_string(v);
-      if (v < 0 || v >= reference.rows()) throw InputError(where + " is out of range");
-      if (boundary[static_cast<size_t>(v)]) throw InputError(where + " is on the boundary");
-      if (!opt.pinned.empty() && opt.pinned[static_cast<size_t>(v)]) throw InputError(where + " is pinned");
-      w2 += an.weights[static_cast<size_t>(k)] * an.weights[static_cast<size_t>(k)];
-    }
-    if (!(w2 > 0)) throw InputError("volume map: anchor " + std::to_string(a) + " has no weight");
-  }
-}
-
 void check_inputs(const Points& reference, const Tets& tets, const Points& ball, const VolumeMapOptions& opt) {
   if (reference.rows() != ball.rows())
     throw InputError("volume map: reference has " + std::to_string(reference.rows()) +
@@ -129,21 +110,6 @@ void check_inputs(const Points& reference, const Tets& tets, const Points& ball,
   if (tets.minCoeff() < 0 || tets.maxCoeff() >= reference.rows())
     throw InputError("volume map: tet vertex index out of range");
   if (opt.rk_steps < 1) throw InputError("volume map: rk_steps must be >= 1");
-  if (!opt.pinned.empty() && opt.pinned.size() != static_cast<size_t>(reference.rows()))
-    throw InputError("volume map: pinned has " + std::to_string(opt.pinned.size()) + " entries for " +
-                     std::to_string(reference.rows()) + " vertices");
-  if (!opt.pinned.empty() && !opt.polish_only)
-    throw InputError("volume map: pinned vertices need polish_only (Moser rounds move every vertex)");
-  if (!opt.anchors.empty() && !opt.polish_only)
-    throw InputError("volume map: anchors need polish_only (Moser rounds move every vertex)");
-  if (!opt.holds.empty() && !opt.polish_only)
-    throw InputError("volume map: holds need polish_only (Moser rounds move every vertex)");
-  for (const VolumeHold& h : opt.holds)
-    for (int v : h.vertices)
-      if (v < 0 || v >= reference.rows()) throw InputError("volume map: a hold's vertex is out of range");
-  check_anchors(reference, tets, opt);
-  if (opt.polish_only && opt.method != VolumeMapMethod::moser)
-    throw InputError("volume map: polish_only needs the moser method");
 }
 
 // Where the parts run (VolumeMapOptions::advection, ::polish).
@@ -168,9 +134,9 @@ void set_up(detail::MapContext& c) {
   c.nbr = detail::tet_neighbors(tets, &c.bfaces);
   c.boundary = boundary_vertex_mask(c.n, c.bfaces);
   c.frozen = c.boundary;
-  for (size_t v = 0; v < opt.pinned.size(); ++v)
-    if (opt.pinned[v]) c.frozen[v] = 1;
-  for (const VolumeAnchor& a : opt.anchors)
+  for (size_t v = 0; v < c.pc.pinned.size(); ++v)
+    if (c.pc.pinned[v]) c.frozen[v] = 1;
+  for (const VolumeAnchor& a : c.pc.anchors)
     for (int v : a.vertices) c.frozen[static_cast<size_t>(v)] = 1;
   c.vertex_tet.assign(static_cast<size_t>(c.n), 0);
   for (int t = c.m - 1; t >= 0; --t)
@@ -196,9 +162,15 @@ void set_up(detail::MapContext& c) {
 
 VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, const Tets& tets,
                                       Points& ball, const VolumeMapOptions& opt) {
+  static const detail::PolishConstraints none;
+  return detail::map_volumes(dev, reference, tets, ball, opt, none);
+}
+
+VolumeMapResult detail::map_volumes(Device& dev, const Points& reference, const Tets& tets, Points& ball,
+                                    const VolumeMapOptions& opt, const PolishConstraints& pc) {
   const auto t_start = Clock::now();
   check_inputs(reference, tets, ball, opt);
-  detail::MapContext c(dev, reference, tets, opt);
+  detail::MapContext c(dev, reference, tets, opt, pc);
   set_up(c);
   VolumeMapResult res;
   res.method = opt.method;

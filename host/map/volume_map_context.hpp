@@ -11,6 +11,7 @@
 #include "map/polish.hpp"
 #include "map/volume_map_solve.hpp"
 #include "vpm/mesh.hpp"
+#include "vpm/polish.hpp"
 #include "vpm/volume_map.hpp"
 
 namespace vpm {
@@ -19,11 +20,21 @@ class Device;
 
 namespace vpm::detail {
 
+/// What polish_volumes adds to the rounds' machinery: only the polish rounds run, with pins,
+/// anchors and holds (vpm/polish.hpp). volume_preserving_map runs with none.
+struct PolishConstraints {
+  bool only = false;
+  std::vector<char> pinned;
+  std::vector<VolumeAnchor> anchors;
+  std::vector<VolumeHold> holds;
+};
+
 struct MapContext {
   Device& dev;
   const Points& ref;
   const Tets& tets;
   const VolumeMapOptions& opt;
+  const PolishConstraints& pc;
   int n = 0, m = 0;
   bool slide = true;
   std::vector<char> boundary;
@@ -43,9 +54,14 @@ struct MapContext {
   bool polish_on_device = false;                      // VolumeMapOptions::polish resolved
   bool gradients_on_device = false;                   // the advector computes the field's gradients
 
-  MapContext(Device& d, const Points& r, const Tets& t, const VolumeMapOptions& o) : dev(d), ref(r), tets(t), opt(o) {}
-  bool pinned(int v) const { return !opt.pinned.empty() && opt.pinned[static_cast<size_t>(v)]; }
+  MapContext(Device& d, const Points& r, const Tets& t, const VolumeMapOptions& o, const PolishConstraints& p)
+      : dev(d), ref(r), tets(t), opt(o), pc(p) {}
+  bool pinned(int v) const { return !pc.pinned.empty() && pc.pinned[static_cast<size_t>(v)]; }
 };
+
+/// volume_preserving_map with the polish constraints `pc` (polish_volumes: pc.only).
+VolumeMapResult map_volumes(Device& device, const Points& reference, const Tets& tets, Points& ball,
+                            const VolumeMapOptions& options, const PolishConstraints& pc);
 
 /// Tets of `x` with signed volume <= 0 (volumes on the context's device).
 int count_folds(MapContext& c, const Points& x);

@@ -13,8 +13,8 @@ namespace vpm::detail {
 
 namespace {
 
-int round_cap(const VolumeMapOptions& opt) {
-  if (opt.polish_only) return 0;
+int round_cap(const VolumeMapOptions& opt, bool polish_only) {
+  if (polish_only) return 0;
   if (opt.rounds >= 0) return opt.rounds;
   if (opt.max_rounds > 0) return opt.max_rounds;
   if (opt.method == VolumeMapMethod::moser) return 8;
@@ -120,8 +120,8 @@ bool stalled(const VolumeMapOptions& opt, double vertex, double prev_vertex) {
 
 void run_rounds(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& d) {
   const VolumeMapOptions& opt = c.opt;
-  const int max_rounds = round_cap(opt);
-  res.stop_reason = opt.polish_only ? "polish_only" : "rounds";
+  const int max_rounds = round_cap(opt, c.pc.only);
+  res.stop_reason = c.pc.only ? "polish_only" : "rounds";
   double paper_dt = 1.0 / std::max(1, opt.paper_steps);
   Eigen::VectorXd vsem_w = Eigen::VectorXd::Ones(c.m);
   double prev_vertex = d.vertex;
@@ -192,8 +192,8 @@ void run_polish(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& 
   // when the Moser rounds stalled far from the tolerance (long thin parts such as fingers), a
   // longer CGLS: early-stopped, it only reaches the smooth part of the correction, and on a finer
   // mesh the same correction spans more elements (cube root of the tet count past 30,000)
-  const int far = static_cast<int>(std::lround(opt.polish_iterations_far * std::max(1.0, std::cbrt(c.m / 30000.0))));
-  const int iterations = !opt.polish_only && d.vertex > 5 * opt.tolerance ? std::max(opt.polish_iterations, far)
+  const int far = polish_iterations_for(opt.polish_iterations_far, c.m);
+  const int iterations = !c.pc.only && d.vertex > 5 * opt.tolerance ? std::max(opt.polish_iterations, far)
                                                                              : opt.polish_iterations;
   for (int k = 1; k <= n_polish; ++k) {
     if (opt.deadline.passed()) {
@@ -211,7 +211,7 @@ void run_polish(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& 
     const int folds = fold_free_polish(c, x, saved, dx, r);
     r.time_advect += seconds_since(t2) - r.time_untangle;
     const DistortionPair dp = volume_distortion(c.ref, x, c.tets);
-    const bool converged = !opt.polish_only && dp.vertex <= opt.tolerance;
+    const bool converged = !c.pc.only && dp.vertex <= opt.tolerance;
     const bool no_gain = dp.tet > (converged ? kPolishKeepConverged : kPolishKeep) * d.tet;
     if (folds > 0 || dp.tet >= d.tet) {  // no progress or folded: undo and stop polishing
       x = saved;

@@ -36,7 +36,7 @@ int untangle_folds(MapContext& c, Points& x, double* seconds, const Points* befo
   std::vector<int> folded = folded_list(x, c.tets);
   if (folded.empty()) return 0;
   if (c.opt.local_untangle && c.slide && before) {
-    unflip_sphere_faces(*before, c.bfaces, x, c.opt.pinned);
+    unflip_sphere_faces(*before, c.bfaces, x, c.pc.pinned);
     folded = folded_list(x, c.tets);
   }
   if (c.opt.local_untangle) {
@@ -147,14 +147,14 @@ void polish_step(MapContext& c, const Points& x, VolumeMapRound& r, Points& dx_o
   const auto t0 = Clock::now();
   const Eigen::VectorXd vol = tet_volumes(x, c.tets);
   const Eigen::VectorXd target = c.ref_tet * vol.sum();
-  if (c.freedom.empty()) c.freedom = detail::polish_freedom(c.boundary, c.slide, c.opt.pinned);
+  if (c.freedom.empty()) c.freedom = detail::polish_freedom(c.boundary, c.slide, c.pc.pinned);
   detail::PolishDirection d;
   if (c.polish_on_device) {
     if (!c.polisher)
-      c.polisher = std::make_unique<detail::DevicePolisher>(c.dev, c.tets, c.n, c.freedom, c.opt.anchors, c.opt.holds);
+      c.polisher = std::make_unique<detail::DevicePolisher>(c.dev, c.tets, c.n, c.freedom, c.pc.anchors, c.pc.holds);
     d = c.polisher->direction(x, target, iterations);
   } else {
-    d = detail::polish_direction_host(x, c.tets, target, c.freedom, c.opt.anchors, iterations, c.opt.holds);
+    d = detail::polish_direction_host(x, c.tets, target, c.freedom, c.pc.anchors, iterations, c.pc.holds);
   }
   r.solver_iterations += d.iterations;
   r.solver_residual = d.residual;

@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "vpm/registration.hpp"
-#include "vpm/volume_map.hpp"
+#include "vpm/polish.hpp"
 
 namespace vpm {
 

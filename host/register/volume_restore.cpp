@@ -6,7 +6,7 @@
 
 #include "vpm/locate.hpp"
 #include "vpm/topology.hpp"
-#include "vpm/volume_map.hpp"
+#include "vpm/polish.hpp"
 
 namespace vpm {
 
@@ -15,15 +15,13 @@ RegistrationRestore restore_volumes(Device& dev, const Points& before, const Tet
                                     int iterations, int rounds, const std::vector<VolumeHold>& holds,
                                     ExecutionPlace place) {
   const int n = static_cast<int>(after.rows());
-  VolumeMapOptions vo;
-  vo.polish = place;
-  vo.polish_only = true;
+  PolishOptions vo;
+  vo.place = place;
   vo.boundary = MapBoundary::slide;
   vo.pinned = landmark_vertex;
   vo.holds = holds;
-  // the same reach in ball units on finer meshes: a CGLS iteration reaches one more ring of tets
-  vo.polish_iterations = static_cast<int>(std::lround(iterations * std::max(1.0, std::cbrt(tets.rows() / 30000.0))));
-  vo.polish_rounds = rounds;
+  vo.iterations = iterations;  // scaled by polish_iterations_for: the same reach on finer meshes
+  vo.rounds = rounds;
   // Each landmark inside a tet is held where it is: as an anchor (its barycentric combination of
   // the tet's vertices fixed) when the tet's vertices are interior and not landmark vertices;
   // otherwise by pinning the tet's four vertices. Pinned vertices cannot be anchor vertices, so
@@ -65,7 +63,7 @@ RegistrationRestore restore_volumes(Device& dev, const Points& before, const Tet
   r.anchored_landmarks = static_cast<int>(vo.anchors.size());
   r.held_points = static_cast<int>(holds.size());
   for (char c : vo.pinned) r.pinned_vertices += c != 0;
-  const VolumeMapResult vm = volume_preserving_map(dev, before, tets, after, vo);
+  const VolumeMapResult vm = polish_volumes(dev, before, tets, after, vo);
   r.vertex_mean_abs_dev_before = vm.initial_vertex_mean_abs_dev;
   r.tet_mean_abs_dev_before = vm.initial_tet_mean_abs_dev;
   r.vertex_mean_abs_dev = vm.final_vertex_mean_abs_dev;

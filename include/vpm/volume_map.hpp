@@ -65,27 +65,6 @@ enum class MapBoundary {
 MapBoundary parse_map_boundary(const std::string& name);
 const char* to_string(MapBoundary m);
 
-/// A material point the polish keeps in place: p = sum_k weights[k] x_(vertices[k]) (e.g.
-/// barycentric coordinates in a tet). Every polish direction dx satisfies
-/// sum_k weights[k] dx_(vertices[k]) = 0 (the orthogonal projection onto that constraint), the
-/// polish's steps are x + s dx, and untangling leaves the four vertices alone, so p stays where it
-/// is to rounding while its vertices move.
-struct VolumeAnchor {
-  std::array<int, 4> vertices{};
-  std::array<double, 4> weights{};
-};
-
-/// A material point p = sum_k weights[k] x_(vertices[k]) that the polish should not move along
-/// `direction` (registration: an image edge at p, its gradient scaled by the hold's weight): the
-/// least-squares row direction . sum_k weights[k] dx_(vertices[k]) = 0 joins the polish's
-/// tet-volume rows, so a step that slides p across the edge costs |direction|^2 |move|^2, and
-/// motion along the edge or where nothing is held stays free.
-struct VolumeHold {
-  std::array<int, 4> vertices{};
-  std::array<double, 4> weights{};
-  Eigen::Vector3d direction = Eigen::Vector3d::Zero();
-};
-
 /// Where a part of a stage runs when the device is an OpenCL device.
 enum class ExecutionPlace {
   automatic,  ///< the stage's rule (documented at each option)
@@ -126,8 +105,9 @@ struct VolumeMapOptions {
   /// vertices moving tangentially (slide) or not at all (fixed); x += dx, halved while it folds.
   /// They target the per-tet distortion that vertex-based Moser rounds cannot see.
   /// At most this many (they stop when the tet mean |r-1| improves by less than 1 %, or by less
-  /// than 3 % once the vertex mean |r-1| is within `tolerance`, except with polish_only: the
-  /// last rounds of large meshes gain 0-1.5 % each for seconds, docs/volume_map.md). With
+  /// than 3 % once the vertex mean |r-1| is within `tolerance`; polish_volumes (vpm/polish.hpp)
+  /// goes on while they gain at all: the last rounds of large meshes gain 0-1.5 % each for
+  /// seconds, docs/volume_map.md). With
   /// rounds == -1 the Moser rounds hand over to the polish once a round gains less than half on
   /// the vertex mean |r-1| with it within 5 x tolerance, or gains less than a fifth. A polish
   /// step that folds is untangled locally like a round, then halved.
@@ -136,27 +116,8 @@ struct VolumeMapOptions {
   /// The polish's CGLS iterations when the polish starts with the vertex mean |r-1| above 5 x
   /// `tolerance` (the Moser rounds stalled far from it, as on a hand's fingers; docs/shapes.md),
   /// at up to 30,000 tets, times cbrt(tets / 30,000) above (the same correction spans more
-  /// elements on a finer mesh); otherwise `polish_iterations`. Not with polish_only.
+  /// elements on a finer mesh, vpm::polish_iterations_for); otherwise `polish_iterations`.
   int polish_iterations_far = 200;
-  /// Skip the Moser rounds: only the polish rounds run (method moser). Registration uses it to
-  /// give back, against the pre-registration map, the volume that linear tets lost under its
-  /// divergence-free flow.
-  bool polish_only = false;
-  /// Vertices that never move: n entries (1 = pinned) or empty. Honoured by the polish rounds
-  /// and the untangling; only with polish_only (InputError otherwise: Moser rounds move every
-  /// vertex along the flow).
-  std::vector<char> pinned;
-  /// Material points that never move (VolumeAnchor); only with polish_only (InputError
-  /// otherwise, and when an anchor's vertex is out of range, on the boundary or pinned, or its
-  /// weights are all zero). Anchors may share vertices (several points in one tet or in
-  /// neighbouring tets): their constraints are then projected jointly. Registration anchors its
-  /// landmarks this way: 3 constraints per landmark instead of its tet's 4 pinned vertices (12),
-  /// which lets the polish give back more of the volume the flow took.
-  std::vector<VolumeAnchor> anchors;
-  /// Soft holds (VolumeHold) added to the polish's least squares; only with polish_only
-  /// (InputError otherwise, and for vertices out of range). The OpenCL polisher carries them as
-  /// rows after the tets'.
-  std::vector<VolumeHold> holds;
   /// Where the RK4 advection (point location and field interpolation) runs: automatic = on
   /// the OpenCL device when there is one (kernels/moser.cl), else the host reference. The
   /// field's vertex gradients (eq. 12-13) are computed next to it on GPUs, or with `device`;
@@ -216,7 +177,8 @@ struct VolumeMapResult {
   double initial_vertex_mean_abs_dev = 0, initial_tet_mean_abs_dev = 0;
   double final_vertex_mean_abs_dev = 0, final_tet_mean_abs_dev = 0;
   int final_folds = 0;     ///< always 0 on return
-  /// of the Moser rounds: "tolerance", "rounds", "stalled", "fold", "polish_only"; "time_budget"
+  /// of the Moser rounds: "tolerance", "rounds", "stalled", "fold"; "polish_only" from
+  /// polish_volumes (vpm/polish.hpp); "time_budget"
   /// when VolumeMapOptions::deadline stopped the Moser or polish rounds
   std::string stop_reason;
   // What ran:

@@ -17,7 +17,7 @@ PUBLIC = {
     "io": ["io", "landmarks"],
     "linalg": ["sparse", "laplacian", "solver", "amg"],
     "image": ["image", "mesh_image", "mesh_image_report", "voxelize"],
-    "map": ["initial_map", "untangle", "volume_map", "ball_map"],
+    "map": ["initial_map", "untangle", "volume_map", "polish", "ball_map"],
     "register": ["rbf", "registration", "dense_registration"],
     "collective": ["collective", "elements", "sampling", "statistics", "map_back", "cohort_view", "view_page"],
 }
