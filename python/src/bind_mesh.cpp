@@ -1,4 +1,6 @@
 // vpm.Mesh (the library's TetMesh, its arrays shared with NumPy), read_mesh, write_mesh, validate.
+#include <cstdint>
+
 #include "common.hpp"
 #include "vpm/error.hpp"
 #include "vpm/io.hpp"
@@ -98,6 +100,16 @@ nothing either.)");
            (f.empty() ? "" : "; fields " + f) + ">";
   });
 
+  m.def(
+      "_mesh_addresses",
+      [](const py::object& vertices, const py::object& tets) {
+        const auto mesh = mesh_argument(vertices, tets);
+        return py::make_tuple(reinterpret_cast<std::uintptr_t>(mesh->vertices.data()),
+                              reinterpret_cast<std::uintptr_t>(mesh->tets.data()));
+      },
+      py::arg("vertices"), py::arg("tets") = py::none(),
+      "Where the mesh a call would work on keeps its vertices and tets (addresses): equal to the\n"
+      "arrays' own when they pass without a copy (tests and bench/python measure it).");
   m.def(
       "read_mesh",
       [](const std::string& path) {
