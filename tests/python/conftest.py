@@ -50,7 +50,7 @@ def image_array():
 def small_mesh(vpm, image_array):
     data, affine = image_array
     mesh, report = vpm.mesh_image(data, affine=affine, target_vertices=500)
-    assert report["mesh"]["tets"] == mesh.num_tets if "mesh" in report else True
+    assert isinstance(report, dict) and mesh.num_tets > 500
     return mesh
 
 
