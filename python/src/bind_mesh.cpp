@@ -32,9 +32,7 @@ void set_field(TetMesh& mesh, const std::string& name, const py::handle& values,
   else mesh.set_point_field(name, std::move(v), integer);
 }
 
-}  // namespace
-
-void bind_mesh(py::module_& m) {
+void bind_mesh_type(py::module_& m) {
   py::class_<TetMesh, std::shared_ptr<TetMesh>> mesh(m, "Mesh", R"(A tetrahedral mesh: vertices, tets and named point and cell fields.
 
 Mesh(vertices, tets, point_data=None, cell_data=None) copies the arrays once into the library's
@@ -99,6 +97,12 @@ nothing either.)");
     return "<vpm.Mesh " + std::to_string(m.num_vertices()) + " vertices, " + std::to_string(m.num_tets()) + " tets" +
            (f.empty() ? "" : "; fields " + f) + ">";
   });
+}
+
+}  // namespace
+
+void bind_mesh(py::module_& m) {
+  bind_mesh_type(m);
 
   m.def(
       "_mesh_addresses",

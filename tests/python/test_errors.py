@@ -27,14 +27,16 @@ def test_input_errors_are_value_errors_with_the_cli_message(vpm, cli, tmp_path):
 
 def test_numerical_error(vpm, small_mesh):
     assert issubclass(vpm.NumericalError, RuntimeError)
-    # a registration whose flow must fold tets (two nearby landmarks swapped), with the
-    # repairs off, is refused: NumericalError, nothing returned
+    # a registration whose flow must fold tets (ten landmarks sent to each other's places), with
+    # the repairs off, is refused: NumericalError with the library's message, nothing returned
     out, _ = vpm.map_to_ball(small_mesh.copy(), device="host")
     v = out.vertices
-    a, b = np.argsort(np.linalg.norm(v - [0.3, 0, 0], axis=1))[:2]
-    with pytest.raises(vpm.NumericalError, match="invert"):
-        vpm.register(out, landmarks=v[[a, b]], targets=v[[b, a]], untangle=False, restore=False, rigid=False,
-                     device="host")
+    inner = np.flatnonzero(np.linalg.norm(v, axis=1) < 0.7)
+    rng = np.random.default_rng(0)
+    ids = rng.choice(inner, 10, replace=False)
+    with pytest.raises(vpm.NumericalError, match="registration folded the mesh: [0-9]+ of [0-9]+ tets inverted"):
+        vpm.register(out, landmarks=v[ids], targets=v[ids[rng.permutation(10)]], untangle=False, restore=False,
+                     rigid=False, steps=1, device="host")
 
 
 def test_bad_options_name_themselves(vpm, small_mesh):
