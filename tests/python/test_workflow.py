@@ -40,6 +40,9 @@ def dataset(tmp_path_factory):
     seg = nib.load(str(anat / "sub-N03_dseg.nii.gz"))
     nib.save(nib.MGHImage(np.asanyarray(seg.dataobj).astype(np.int32), seg.affine), str(fs / "aparc+aseg.mgz"))
     shutil.rmtree(anat)
+    # the evaluation against planted truth reads every subject's raw AAL _dseg (a synthetic
+    # cohort's baseline), which these subjects no longer have: not part of this test
+    shutil.rmtree(bids / "derivatives" / "truth")
     (work / "fast.yaml").write_text("mesh: {target_vertices: 2000}\nview: {enabled: false}\n"
                                     "elements: {layout: graded, level: 3, samples: 16}\n")
     return work
