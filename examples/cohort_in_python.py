@@ -115,7 +115,7 @@ im = ax.imshow(np.ma.masked_where(np.abs(z.data[:, :, k]) < 2, z.data[:, :, k]).
 if truth.any():
     ax.contour((truth[:, :, k] > 0).T, levels=[0.5], colors="yellow", linewidths=1)
 fig.colorbar(im, ax=ax, label="z")
-ax.set_title(f"sub-P01 PET, slice {k}: z-map (|z| >= 2) and planted foci")
+ax.set_title(f"sub-P01 PET, slice {k}: z (|z| >= 2), planted foci in yellow", fontsize=10)
 fig.tight_layout()
 fig.savefig(os.path.join(args.out, "zmap.png"), dpi=100)
 print("wrote", os.path.join(args.out, "distortion.png"), "and", os.path.join(args.out, "zmap.png"))
