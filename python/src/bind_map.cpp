@@ -57,7 +57,11 @@ void bind_reports(py::module_& m) {
       .def_readonly("vertex_volume_ratio", &MapMetrics::vertex_volume_ratio)
       .def_readonly("tet_volume_ratio", &MapMetrics::tet_volume_ratio)
       .def_readonly("boundary_max_radius_error", &MapMetrics::boundary_max_radius_error)
-      .def("to_dict", [](const MapMetrics& s) { return json_to_python(to_json(s)); });
+      .def("to_dict", [](const MapMetrics& s) { return json_to_python(to_json(s)); })
+      .def("__repr__", [](const MapMetrics& s) {
+        return "<vpm.MapMetrics vertex mean |r-1| " + std::to_string(s.vertex_volume_ratio.mean_abs_dev) + ", tet " +
+               std::to_string(s.tet_volume_ratio.mean_abs_dev) + ", " + std::to_string(s.inverted_tets) + " inverted>";
+      });
   bind_report_base(m);
   py::class_<MapReport, Report>(m, "MapReport", "What map_to_ball did; to_dict() is `vpm map --report`'s JSON.")
       .def_readonly("device", &MapReport::device)
