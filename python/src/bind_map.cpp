@@ -84,7 +84,7 @@ void bind_map_to_ball(py::module_& m) {
       [](const py::object& vertices, const py::object& tets, int rounds, double tolerance, const std::string& method,
          const std::string& sphere, const std::string& sphere_start, const std::string& sphere_solve,
          const std::string& boundary, const std::string& solver, const std::string& preconditioner, int rk_steps,
-         const std::string& source, std::optional<std::string> device, py::object progress) {
+         double max_seconds, const std::string& source, std::optional<std::string> device, py::object progress) {
         auto mesh = mesh_argument(vertices, tets);
         BallMapOptions bo;
         bo.volume.rounds = rounds;
@@ -99,6 +99,7 @@ void bind_map_to_ball(py::module_& m) {
         bo.initial = initial_options(sphere, sphere_start, sphere_solve, "if-folded", preconditioner, true);
         bo.volume.preconditioner = bo.initial.preconditioner;
         bo.volume.rk_steps = rk_steps;
+        bo.deadline = Deadline::in_seconds(max_seconds);  // 0: none
         Progress p(std::move(progress));
         bo.volume.progress = p.function();
         auto dev = device_for(device);
@@ -123,7 +124,7 @@ void bind_map_to_ball(py::module_& m) {
       py::arg("tolerance") = 0.01, py::arg("method") = "moser", py::arg("sphere") = "area",
       py::arg("sphere_start") = "auto", py::arg("sphere_solve") = "auto", py::arg("boundary") = "auto",
       py::arg("solver") = "cg", py::arg("preconditioner") = "auto", py::arg("rk_steps") = VolumeMapOptions{}.rk_steps,
-      py::arg("source") = "mesh", py::arg("device") = py::none(), py::arg("progress") = py::none());
+      py::arg("max_seconds") = 0.0, py::arg("source") = "mesh", py::arg("device") = py::none(), py::arg("progress") = py::none());
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include "vpm/image.hpp"
 #include "vpm/metrics.hpp"
 #include "vpm/registration.hpp"
+#include "vpm/timing.hpp"
 
 namespace vpm::python {
 namespace {
@@ -79,7 +80,8 @@ py::tuple register_py(const py::object& mesh, const py::object& landmarks, const
                       int dense_iterations, const std::string& dense_force, std::shared_ptr<Image> image,
                       std::shared_ptr<Image> template_image, int steps, std::optional<double> width,
                       double width_factor, const std::string& boundary, const std::string& field, bool rigid,
-                      bool untangle, bool restore, std::optional<std::string> device) {
+                      bool untangle, bool restore, double max_seconds, std::optional<std::string> device,
+                      py::object progress) {
   Request r;
   r.mesh = mesh_argument(mesh, py::none());
   if (!templ.is_none()) r.templ = mesh_argument(templ, py::none());
@@ -114,9 +116,12 @@ py::tuple register_py(const py::object& mesh, const py::object& landmarks, const
   r.dense.force = dense_force_from_string(dense_force);
   r.dense.exclude_labels = std::move(exclude);
   r.image = std::move(image), r.templ_image = std::move(template_image);
+  r.dense.deadline = Deadline::in_seconds(max_seconds);  // 0: none
+  Progress p(std::move(progress));
+  r.dense.progress = p.function();
   auto dev = device_for(device);
   auto report = std::make_unique<RegistrationReportPy>();
-  auto out = without_gil(nullptr, [&] {
+  auto out = without_gil(&p, [&] {
     Points ball = r.mesh->vertices;
     const RegistrationResult res = run(r, *dev, ball);
     report->metrics = map_metrics(*dev, r.mesh->vertices, ball, r.mesh->tets);
@@ -153,7 +158,8 @@ void bind_register(py::module_& m) {
         py::arg("steps") = RegistrationOptions{}.steps, py::arg("width") = py::none(),
         py::arg("width_factor") = RegistrationOptions{}.width_factor, py::arg("boundary") = "tangent",
         py::arg("field") = "per-step", py::arg("rigid") = true, py::arg("untangle") = true,
-        py::arg("restore") = true, py::arg("device") = py::none());
+        py::arg("restore") = true, py::arg("max_seconds") = 0.0, py::arg("device") = py::none(),
+        py::arg("progress") = py::none());
 }
 
 }  // namespace vpm::python

@@ -107,8 +107,9 @@ def map_to_ball(vertices, tets=None, *, progress=None, **options):
 
     `vertices`: a vpm.Mesh (then no `tets`) or an (n, 3) array with `tets` (m, 4). Options (as
     `vpm map`'s): rounds (-1: until tolerance), tolerance (0.01), method ('moser'|'paper'|'vsem'),
-    sphere, sphere_start, sphere_solve, boundary, solver, preconditioner, rk_steps, source (the
-    name used in messages), device. `progress`: a callable given each round's line, or True for
+    sphere, sphere_start, sphere_solve, boundary, solver, preconditioner, rk_steps, max_seconds
+    (a time budget: the map reached so far, report.converged False), source (the name used in
+    messages), device. `progress`: a callable given each round's line, or True for
     a tqdm bar (lines on stderr without tqdm).
 
     Returns (ball, report): `ball` a vpm.Mesh (input vertices first, then the inserted ones; point
@@ -119,7 +120,8 @@ def map_to_ball(vertices, tets=None, *, progress=None, **options):
     return _call(_vpm._map_to_ball, progress, "map", vertices, tets, **options)
 
 
-def register(mesh, *, landmarks=None, targets=None, template=None, image=None, template_image=None, **options):
+def register(mesh, *, landmarks=None, targets=None, template=None, image=None, template_image=None, progress=None,
+             **options):
     """Registers a mapped mesh inside the ball (paper 5; `vpm register`).
 
     Either `landmarks` and `targets` ((N, 3) ball coordinates or (N,) vertex ids of `mesh`), or a
@@ -130,9 +132,11 @@ def register(mesh, *, landmarks=None, targets=None, template=None, image=None, t
     dense_force='labels'|'image'|'both') pull the subject onto the template; the image force
     reads `image` and `template_image` (path, nibabel image, vpm.Image) through both maps.
     Other options: exclude_labels, steps, width, width_factor, boundary, field, rigid,
-    untangle, restore, device. Returns (registered vpm.Mesh, vpm.RegistrationReport)."""
-    return _vpm._register(mesh, landmarks=landmarks, targets=targets, template=template,
-                          image=_optional_image(image), template_image=_optional_image(template_image), **options)
+    untangle, restore, max_seconds (a time budget for the dense iterations), device; `progress`
+    as map_to_ball's (one line per dense iteration). Returns (registered vpm.Mesh,
+    vpm.RegistrationReport)."""
+    return _call(_vpm._register, progress, "register", mesh, landmarks=landmarks, targets=targets, template=template,
+                 image=_optional_image(image), template_image=_optional_image(template_image), **options)
 
 
 def elements(level=3, shells=8, samples=64, layout="shells"):

@@ -149,7 +149,8 @@ def map_to_ball(vertices: Union[Mesh, ArrayLike], tets: Optional[ArrayLike] = ..
                 sphere: Literal["area", "conformal"] = ..., sphere_start: Literal["auto", "progressive"] = ...,
                 sphere_solve: Literal["auto", "host", "device"] = ...,
                 boundary: Literal["auto", "slide", "fixed"] = ..., solver: Literal["cg", "paper"] = ...,
-                preconditioner: Literal["auto", "jacobi", "amg"] = ..., rk_steps: int = ..., source: str = ...,
+                preconditioner: Literal["auto", "jacobi", "amg"] = ..., rk_steps: int = ..., max_seconds: float = ...,
+                source: str = ...,
                 device: Optional[str] = ...) -> tuple[Mesh, MapReport]: ...
 def register(mesh: Mesh, *, landmarks: Optional[ArrayLike] = ..., targets: Optional[ArrayLike] = ...,
              template: Optional[Mesh] = ..., image: Optional[ImageLike] = ..., template_image: Optional[ImageLike] = ...,
@@ -157,8 +158,8 @@ def register(mesh: Mesh, *, landmarks: Optional[ArrayLike] = ..., targets: Optio
              dense_iterations: int = ..., dense_force: Literal["labels", "image", "both"] = ..., steps: int = ...,
              width: Optional[float] = ..., width_factor: float = ...,
              boundary: Literal["tangent", "samples", "none"] = ..., field: Literal["per-step", "steady"] = ...,
-             rigid: bool = ..., untangle: bool = ..., restore: bool = ...,
-             device: Optional[str] = ...) -> tuple[Mesh, RegistrationReport]: ...
+             rigid: bool = ..., untangle: bool = ..., restore: bool = ..., max_seconds: float = ...,
+             device: Optional[str] = ..., progress: Progress = ...) -> tuple[Mesh, RegistrationReport]: ...
 def elements(level: int = ..., shells: int = ..., samples: int = ...,
              layout: Literal["shells", "graded"] = ...) -> Elements: ...
 def sample(mesh: Mesh, images: Optional[Mapping[str, ImageLike]] = ..., labels: Optional[ImageLike] = ..., *,

@@ -50,9 +50,12 @@ def test_register_landmarks_template_and_moments(vpm, image_array):
     # no labels: the moments' affine and the image force
     bare = s_ball.copy()
     bare = vpm.Mesh(bare.vertices, bare.tets, point_data={"original_position": bare.point_data["original_position"]})
+    lines = []
     reg, rep = vpm.register(bare, template=t_ball, template_landmarks="moments", dense_iterations=3,
-                            dense_force="image", image=vpm.Image(data2, affine2), template_image=(vpm.Image(data, affine)))
+                            dense_force="image", image=vpm.Image(data2, affine2), template_image=(vpm.Image(data, affine)),
+                            progress=lines.append)
     assert rep.landmarks >= 20 and rep.inverted_tets == 0
+    assert len(lines) >= 1  # one line per dense iteration
     with pytest.raises(ValueError, match="needs atlas labels"):
         vpm.register(bare, template=t_ball, template_landmarks="moments", dense_iterations=1, dense_force="labels")
 
