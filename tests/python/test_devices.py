@@ -54,3 +54,25 @@ def test_select_device_and_argument(vpm, small_mesh):
     # the same map up to the solvers' tolerances (2e-4 seen on this mesh)
     assert np.abs(host_ball.vertices - cl_ball.vertices).max() < 2e-3
     assert abs(host_report.final.vertex_volume_ratio.mean_abs_dev - report.final.vertex_volume_ratio.mean_abs_dev) < 1e-3
+
+
+def test_the_gil_is_released_during_a_map(vpm, small_mesh):
+    import threading
+    import time
+    done = threading.Event()
+    result = {}
+
+    def work():
+        result["out"] = vpm.map_to_ball(small_mesh.copy(), device="host")
+        done.set()
+    t = threading.Thread(target=work)
+    t.start()
+    ticks, start = 0, time.perf_counter()
+    while not done.is_set():  # Python keeps running beside the C++ call
+        ticks += 1
+        time.sleep(0.001)
+    t.join()
+    elapsed = time.perf_counter() - start
+    assert result["out"][1].final.inverted_tets == 0
+    # with the GIL held through the call this loop could not run until the call returned (1-2 ticks)
+    assert elapsed < 0.05 or ticks >= 20, (ticks, elapsed)
