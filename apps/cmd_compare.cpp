@@ -57,12 +57,12 @@ void map_back(const vpm::cli::Args& args, const std::string& out, const vpm::Can
   std::vector<double> focus(c.cluster.begin(), c.cluster.end());
   vpm::write_mesh(beside(out, "_native.vtu"), vpm::native_mesh_with_values(reg, el, {c.z, focus}, {"z", "focus"}));
   if (const auto image_path = args.get("--image")) {
-    const vpm::Image grid = vpm::read_nifti(*image_path);
+    const vpm::Image grid = vpm::read_image(*image_path);
     vpm::write_nifti(beside(out, "_z.nii.gz"), vpm::native_volume(reg, el, c.z, grid));
     const vpm::Image foci = vpm::native_volume(reg, el, focus, grid);
     vpm::write_nifti(beside(out, "_foci.nii.gz"), foci);
     std::optional<vpm::Image> labels;
-    if (const auto labels_path = args.get("--labels")) labels = vpm::read_nifti(*labels_path);
+    if (const auto labels_path = args.get("--labels")) labels = vpm::read_image(*labels_path);
     vpm::write_native_foci(beside(out, "_foci.tsv"), vpm::native_foci(foci, c, labels ? &*labels : nullptr));
   }
 }

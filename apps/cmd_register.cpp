@@ -63,6 +63,7 @@ RegistrationOptions parse_options(const cli::Args& args) {
 // the atlas regions it shares with a template's registered or mapped mesh (--template).
 struct Inputs {
   std::string in, out, src, dst, templ;
+  bool moments = false;      // --template-landmarks moments: no atlas regions, the moments' affine
   std::vector<int> exclude;  // --exclude-labels: regions never used as landmarks
   TetMesh mesh, templ_mesh;
   LandmarkFile landmarks, targets;
@@ -103,6 +104,11 @@ Inputs read_inputs(const cli::Args& args, const cli::Command& self) {
                      (!out ? "-o OUT" : !src ? "--landmarks SRC.csv (or --template)" : "--targets DST.csv") +
                      "; usage: " + usage);
   if (!templ && args.has("--exclude-labels")) throw InputError("--exclude-labels needs --template");
+  if (!templ && args.has("--template-landmarks")) throw InputError("--template-landmarks needs --template");
+  const std::string from = args.get("--template-landmarks", "regions");
+  if (from != "regions" && from != "moments")
+    throw InputError("--template-landmarks: '" + from + "' is not one of regions, moments");
+  io.moments = from == "moments";
   for (const char* flag : {"--dense-iterations", "--dense-widths", "--dense-step", "--dense-force", "--image",
                            "--template-image", "--dense-image-grid", "--dense-image-smoothing"})
     if (!templ && args.has(flag)) throw InputError(std::string(flag) + " needs --template");
@@ -127,8 +133,8 @@ Inputs read_inputs(const cli::Args& args, const cli::Command& self) {
 }
 
 void read_images(Inputs& io) {
-  io.subject_image = read_nifti(io.image);
-  io.template_image = read_nifti(io.templ_image);
+  io.subject_image = read_image(io.image);
+  io.template_image = read_image(io.templ_image);
   io.images.subject = &io.subject_image;
   io.images.templ = &io.template_image;
   io.images.subject_native = native_positions(io.mesh, io.in);
@@ -142,6 +148,15 @@ void read_files(Inputs& io) {
       if (io.mesh.tets(t, c) < 0 || io.mesh.tets(t, c) >= io.mesh.num_vertices())
         throw InputError(io.in + ": tet " + std::to_string(t) + ": vertex index " + std::to_string(io.mesh.tets(t, c)) +
                          " out of range");
+  if (!io.templ.empty() && io.moments) {
+    io.templ_mesh = read_mesh(io.templ);
+    const MomentLandmarks lm = moment_landmarks(io.mesh, io.templ_mesh);
+    io.landmarks.points = lm.source;
+    io.targets.points = lm.target;
+    io.src = io.dst = io.templ + " (moments)";
+    if (!io.image.empty()) read_images(io);
+    return;
+  }
   if (!io.templ.empty()) {
     io.templ_mesh = read_mesh(io.templ);
     const RegionLandmarks lm = region_landmarks(io.mesh, io.templ_mesh, io.exclude);
@@ -161,12 +176,22 @@ void read_files(Inputs& io) {
                      " has " + std::to_string(io.targets.points.rows()) + " targets");
 }
 
+// The cell labels the dense force reads; with --template-landmarks moments a mesh without labels
+// has none (all 0: no region), which only the image force can do without.
+std::vector<int> labels_or_none(const Inputs& io, const TetMesh& mesh) {
+  if (mesh.find_cell_field("label") || !io.moments) return cell_labels(mesh);
+  if (io.dense.force != DenseForce::image)
+    throw InputError((&mesh == &io.mesh ? io.in : io.templ) + ": no cell field 'label': --dense-force " +
+                     to_string(io.dense.force) + " needs atlas labels on both meshes; use --dense-force image");
+  return std::vector<int>(static_cast<size_t>(mesh.num_tets()), 0);
+}
+
 // The dense registration (--dense-iterations): register_dense with the held-out regions kept out
 // of its force; the landmark stage's result carries the final landmark errors.
 RegistrationResult register_densely(Device& dev, const Inputs& io, Points& ball, const RegistrationOptions& opt,
                                     std::optional<DenseRegistrationResult>& dense) {
-  dense = register_dense(dev, ball, io.mesh.tets, cell_labels(io.mesh), io.templ_mesh.vertices, io.templ_mesh.tets,
-                         cell_labels(io.templ_mesh), io.landmarks.points, io.targets.points, opt, io.dense,
+  dense = register_dense(dev, ball, io.mesh.tets, labels_or_none(io, io.mesh), io.templ_mesh.vertices,
+                         io.templ_mesh.tets, labels_or_none(io, io.templ_mesh), io.landmarks.points, io.targets.points, opt, io.dense,
                          io.image.empty() ? nullptr : &io.images);
   RegistrationResult res = dense->landmark;
   res.landmark_rms_error = dense->landmark_rms_error;
@@ -273,6 +298,7 @@ vpm::cli::Registrar reg(cli::with_dense_options(
      {{"--landmarks", "SRC.csv", "landmarks in MAPPED's ball (x,y,z or vertex_id a line)", false, 0, true},
       {"--targets", "DST.csv", "their targets, paired line by line", false, 0, true},
       {"--template", "TEMPLATE.vtu", "instead of the two files: the centroids of the atlas regions (cell field label) MAPPED shares with this mapped template", false, 0, true},
+      {"--template-landmarks", "regions|moments", "with --template: centroids of the atlas regions both carry (default), or, for a subject without atlas labels, points paired by the affine matching the two native solids' moments (then --dense-force image)"},
       {"--exclude-labels", "L[,L...]", "with --template: regions never used as landmarks (held out)"},
       {"--image", "SUBJECT.nii.gz", "with --template: MAPPED's image in its native space (for --dense-force image|both)"},
       {"--template-image", "TEMPLATE.nii.gz", "the template's image in its native space (with --image)"},

@@ -47,9 +47,9 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   const vpm::Points native = vpm::native_positions(mesh, mesh_path);
   const vpm::CanonicalElements el(table.definition);
   const vpm::Points positions = vpm::pull_back_samples(el, mesh.vertices, mesh.tets, native);
-  for (const auto& [name, path] : images) table.features.push_back(vpm::sample_feature(el, positions, vpm::read_nifti(path), name));
+  for (const auto& [name, path] : images) table.features.push_back(vpm::sample_feature(el, positions, vpm::read_image(path), name));
   if (const auto labels = args.get("--labels"))
-    table.label_images.push_back(vpm::sample_label_fractions(el, positions, vpm::read_nifti(*labels)));
+    table.label_images.push_back(vpm::sample_label_fractions(el, positions, vpm::read_image(*labels)));
   vpm::write_subject_table(*out, table);
   vpm::cli::info("wrote " + *out + " and " + vpm::sidecar_path(*out) + ": " + std::to_string(el.size()) +
                  " elements x " + std::to_string(table.definition.samples) + " samples, " +

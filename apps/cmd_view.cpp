@@ -40,7 +40,7 @@ vpm::cli::Registrar reg(
     {"view", "RESULTS -o PAGE.html", "the cohort's coordinated table of brains as one self-contained web page",
      {{"--feature", "NAME", "only this feature (default: every feature compared)"},
       {"--template", "TEMPLATE.vtu", "the template's ball mesh naming atlas regions (default RESULTS/template/template_ball.vtu)"},
-      {"--label-names", "NAMES.txt", "atlas region names, lines 'id name' (e.g. mricron's aal.nii.txt)"},
+      {"--label-names", "NAMES.txt", "region names: AAL's table (lines 'id name', e.g. mricron's aal.nii.txt) or a FreeSurfer colour table (FreeSurferColorLUT.txt)"},
       {"--title", "TEXT", "the page's title"},
       {"--max-slice-voxels", "N", "patients' images are subsampled to at most N voxels for slices (default 400000)"}},
      run});

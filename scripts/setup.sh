@@ -13,6 +13,9 @@ PKGS=(
   libviennacl-dev python3-vtk9 python3-numpy
   libhypre-dev openmpi-bin  # bench only: hypre BoomerAMG, the solver benchmark's peer, and its mpirun
   snakemake python3-nibabel python3-scipy
+  pybind11-dev python3-dev python3-pytest  # the Python package vpm (python/) and its tests (ctest python:*)
+  python3-matplotlib python3-nbformat  # the worked example (examples/): plots, and its notebook made from the script
+  python3-tqdm  # optional: progress bars of vpm.map_to_ball(progress=True)
   chromium
 )
 missing=()

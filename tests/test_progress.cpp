@@ -54,7 +54,7 @@ TEST_CASE("Deadline: none by default, passes, counts down") {
   CHECK(already_passed().remaining() == 0);
 }
 
-TEST_CASE("volume map: a spent budget stops the rounds with the map so far; a distant one changes nothing") {
+TEST_CASE("volume map: a spent budget stops the rounds with the map so far, and a distant one changes nothing") {
   const auto host = Device::host();
   const TetMesh in = test::ellipsoid_mesh(4);
   const InitialMapResult im = initial_map(*host, in);

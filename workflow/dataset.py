@@ -93,10 +93,48 @@ def find_one(folder, pattern, what, root, required=True):
     return check_path(os.path.abspath(hits[0]), root, what)
 
 
+def anatomy(root, sid, subject_dir):
+    """A subject's anatomy: {"image": what `vpm mesh-image` meshes (voxels > 0), "t1w": the image
+    the dense image force reads ("" for none), "labels": a label image ("" for none), "scheme":
+    the labels' scheme ("atlas": the template's atlas, as a raw dataset's _dseg; "aseg":
+    FreeSurfer's segmentation numbers; "" without labels), "source"}. Looked for, in this order:
+
+    * fMRIPrep derivatives in native T1w space (no space- entity), derivatives/fmriprep/<sub>/anat:
+      <sub>_desc-brain_mask (meshed),
+      <sub>_desc-preproc_T1w (the image force), <sub>_desc-aseg_dseg (labels, optional);
+    * FreeSurfer, derivatives/freesurfer/<sub>/mri: brainmask.mgz (the skull-stripped T1: meshed
+      and the image force), aparc+aseg.mgz or aseg.mgz (labels, optional);
+    * the raw dataset, <sub>/anat: <sub>*_T1w (or a brain mask <sub>*_mask, which has no
+      intensities for the image force), <sub>*_dseg (atlas labels, optional).
+    """
+    fmriprep = os.path.join(root, "derivatives", "fmriprep", sid, "anat")
+    freesurfer = os.path.join(root, "derivatives", "freesurfer", sid, "mri")
+    if os.path.isdir(fmriprep):
+        check_path(fmriprep, root, "fMRIPrep anat folder")
+        labels = find_one(fmriprep, f"{sid}_desc-aseg_dseg.nii*", "fMRIPrep aseg (desc-aseg_dseg)", root, required=False)
+        return {"image": find_one(fmriprep, f"{sid}_desc-brain_mask.nii*", "fMRIPrep brain mask (desc-brain_mask)", root),
+                "t1w": find_one(fmriprep, f"{sid}_desc-preproc_T1w.nii*", "fMRIPrep T1w (desc-preproc_T1w)", root,
+                                required=False),
+                "labels": labels, "scheme": "aseg" if labels else "", "source": "fmriprep"}
+    if os.path.isdir(freesurfer):
+        check_path(freesurfer, root, "FreeSurfer mri folder")
+        brain = find_one(freesurfer, "brainmask.mgz", "FreeSurfer brainmask.mgz", root)
+        labels = find_one(freesurfer, "aparc+aseg.mgz", "FreeSurfer aparc+aseg.mgz", root, required=False) or \
+            find_one(freesurfer, "aseg.mgz", "FreeSurfer aseg.mgz", root, required=False)
+        return {"image": brain, "t1w": brain, "labels": labels, "scheme": "aseg" if labels else "",
+                "source": "freesurfer"}
+    anat = os.path.join(subject_dir, "anat")
+    t1w = find_one(anat, f"{sid}*_T1w.nii*", "T1w image", root, required=False)
+    image = t1w or find_one(anat, f"{sid}*_mask.nii*", "T1w image or brain mask", root)
+    labels = find_one(anat, f"{sid}*_dseg.nii*", "atlas labels (_dseg)", root, required=False)
+    return {"image": image, "t1w": t1w, "labels": labels, "scheme": "atlas" if labels else "", "source": "bids"}
+
+
 def subjects_from_bids(root, feature, more):
-    """{participant_id: {"group", "image", "labels", feature, *more}} from a BIDS dataset:
-    participants.tsv and per subject anat/<sub>*_T1w (or *_mask), anat/<sub>*_dseg and
-    <feature>/<sub>*_<feature> images. `more`: name -> "folder/suffix" of further images."""
+    """{participant_id: {"group", "image", "t1w", "labels", "scheme", "source", feature, *more}}
+    from a BIDS dataset: participants.tsv, each subject's anatomy (see anatomy(): fMRIPrep or
+    FreeSurfer derivatives, or the raw anat/ folder) and <feature>/<sub>*_<feature> images.
+    `more`: name -> "folder/suffix" of further images."""
     root = os.path.abspath(root)
     check_path(root, what="dataset folder")
     table = os.path.join(root, "participants.tsv")
@@ -107,11 +145,7 @@ def subjects_from_bids(root, feature, more):
         if not os.path.isdir(d):
             raise DatasetError(f"{table}:{row['_line']}: {sid}: no folder {d}")
         check_path(d, root, "subject folder")
-        anat = os.path.join(d, "anat")
-        image = find_one(anat, f"{sid}*_T1w.nii*", "T1w image", root, required=False) or \
-            find_one(anat, f"{sid}*_mask.nii*", "T1w image or brain mask", root)
-        subs[sid] = {"group": row["group"], "image": image,
-                     "labels": find_one(anat, f"{sid}*_dseg.nii*", "atlas labels (_dseg)", root),
+        subs[sid] = {"group": row["group"], **anatomy(root, sid, d),
                      feature: find_one(os.path.join(d, feature), f"{sid}*_{feature}.nii*", f"{feature} image", root)}
         for name, spec in more.items():
             folder, _, suffix = spec.partition("/")
@@ -138,5 +172,7 @@ def subjects_from_table(path, features):
             if not os.path.isfile(p):
                 raise DatasetError(f"{path}:{line}: {col} of {sid}: {p} not found")
             entry[col] = p
+        entry["t1w"] = "" if "_mask.nii" in os.path.basename(entry["image"]) else entry["image"]
+        entry.update(scheme="atlas", source="table")
         subs[sid] = entry
     return subs

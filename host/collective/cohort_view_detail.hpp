@@ -19,6 +19,5 @@ ViewSlices read_view_slices(const std::string& image_path, const std::string& z_
 std::vector<int> element_labels(const CanonicalElements& elements, const std::string& template_mesh);
 
 /// Atlas names from lines "id name [...]" (mricron's *.nii.txt); '#' lines skipped.
-std::map<int, std::string> read_label_names(const std::string& path);
 
 }  // namespace vpm::detail

@@ -74,7 +74,7 @@ std::vector<std::uint8_t> scaled_bytes(const Image& image, const std::vector<siz
 }  // namespace
 
 ViewSlices read_view_slices(const std::string& image_path, const std::string& z_path, long max_voxels) {
-  const Image image = read_nifti(image_path);
+  const Image image = read_image(image_path);
   ViewSlices s;
   s.source = image_path;
   const double n = static_cast<double>(image.size());
@@ -88,7 +88,7 @@ ViewSlices read_view_slices(const std::string& image_path, const std::string& z_
     for (int j = 0; j < s.dims[1]; ++j)
       for (int i = 0; i < s.dims[0]; ++i) voxels.push_back(image.index(i * s.step, j * s.step, k * s.step));
   s.image = scaled_bytes(image, voxels);
-  const Image z = read_nifti(z_path);
+  const Image z = read_image(z_path);
   if (z.dims != image.dims) throw InputError(z_path + ": the z-map's grid differs from the image's (" + image_path + ")");
   s.z.resize(voxels.size());
   for (size_t i = 0; i < voxels.size(); ++i) {
@@ -104,23 +104,6 @@ std::vector<int> element_labels(const CanonicalElements& el, const std::string& 
   Points centres(el.size(), 3);
   for (int e = 0; e < el.size(); ++e) centres.row(e) = el.centre(e).transpose();
   return sample_labels(t.vertices, t.tets, labels, centres);
-}
-
-std::map<int, std::string> read_label_names(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot be read (atlas label names)");
-  std::map<int, std::string> names;
-  std::string line;
-  for (int n = 1; std::getline(in, line); ++n) {
-    while (!line.empty() && std::isspace(static_cast<unsigned char>(line.back()))) line.pop_back();
-    std::stringstream ss(line);
-    int id = 0;
-    std::string name;
-    if (line.find_first_not_of(" \t") == std::string::npos || line[0] == '#') continue;
-    if (!(ss >> id >> name)) throw InputError(path + ":" + std::to_string(n) + ": expected 'id name'");
-    names[id] = name;
-  }
-  return names;
 }
 
 }  // namespace vpm::detail

@@ -8,6 +8,7 @@
 #include "vpm/icosphere.hpp"
 #include "vpm/io.hpp"
 #include "vpm/json.hpp"
+#include "vpm/label_names.hpp"
 
 namespace vpm {
 
@@ -221,7 +222,7 @@ CohortView load_cohort_view(const std::string& results_dir, const CohortViewOpti
   });
   const std::string templ = !opt.template_mesh.empty() ? opt.template_mesh : (results / "template" / "template_ball.vtu").string();
   if (!opt.template_mesh.empty() || fs::exists(templ)) v.element_label = detail::element_labels(el, templ);
-  if (!opt.label_names.empty()) v.label_names = detail::read_label_names(opt.label_names);
+  if (!opt.label_names.empty()) v.label_names = read_label_names(opt.label_names);
   return v;
 }
 

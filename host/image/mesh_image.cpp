@@ -383,9 +383,9 @@ TetMesh mesh_image_file(const std::string& path, const MeshImageOptions& o, Mesh
     m = mesh_surface(s, o, report, path);
   } else {
     const Stopwatch t0;
-    const Image img = read_nifti(path);
+    const Image img = read_image(path);
     Image atlas;
-    if (!labels_path.empty()) atlas = read_nifti(labels_path);
+    if (!labels_path.empty()) atlas = read_image(labels_path);
     record(r, "read", t0);
     m = mesh_image(img, o, report, labels_path.empty() ? nullptr : &atlas);
   }

@@ -1,5 +1,6 @@
 #pragma once
-// 3-D images (NIfTI-1/2 volumes): grid, voxel -> world affine, intensities as float.
+// 3-D images (NIfTI-1/2 and FreeSurfer MGH/MGZ volumes): grid, voxel -> world affine, intensities
+// as float.
 #include <Eigen/Dense>
 #include <array>
 #include <functional>
@@ -16,7 +17,8 @@ struct Image {
   /// Voxel index (i, j, k, 1) -> world millimetres (x, y, z, 1). Voxel centres sit at integer
   /// indices.
   Eigen::Matrix4d affine = Eigen::Matrix4d::Identity();
-  /// Where the affine came from: "sform", "qform" or "pixdim" (neither code set: scaling only).
+  /// Where the affine came from: "sform", "qform" or "pixdim" (neither code set: scaling only),
+  /// or "mgh" (an MGH header's direction cosines, voxel sizes and centre).
   std::string affine_source = "pixdim";
   /// dims[0]*dims[1]*dims[2] values, i fastest: value(i,j,k) = data[i + dims[0]*(j + dims[1]*k)].
   /// Scaled by scl_slope/scl_inter when the file sets them.
@@ -43,6 +45,23 @@ struct Image {
 /// truncated (e.g. a cut gzip stream), has more than one volume (4-D), has a complex/RGB data
 /// type, or when vpm was built without nifti_clib.
 Image read_nifti(const std::string& path);
+
+/// Reads a FreeSurfer MGH volume: `.mgh` (raw) or `.mgz` / `.mgh.gz` (gzip). The voxel -> world
+/// (scanner RAS, mm) affine is FreeSurfer's vox2ras, as nibabel's MGHHeader.get_affine() gives it:
+/// columns Mdc_j x delta_j, translation c_ras - M (dims / 2); a header without valid RAS
+/// (goodRASflag <= 0) gets FreeSurfer's default (coronal, 1 mm, centred). Data types uchar,
+/// short, int and float; one frame. Throws InputError("PATH: what") for a file that is missing,
+/// not MGH (version != 1), truncated (fewer voxel bytes than the header says: checked as the
+/// data is read, before the image is allocated), has several frames, another data type, or
+/// sizes that are not positive.
+Image read_mgh(const std::string& path);
+
+/// True when `path` ends in .mgh, .mgz or .mgh.gz (any case): read_image() reads it as MGH.
+bool is_mgh_path(const std::string& path);
+
+/// Reads an image by its name: read_mgh() for .mgh/.mgz/.mgh.gz, read_nifti() otherwise. What
+/// every command that takes an image calls.
+Image read_image(const std::string& path);
 
 /// Writes `image` as NIfTI-1 (float32, sform and qform set from `image.affine`; `.nii.gz`
 /// compresses). Used for tests and fixtures. Throws InputError when it cannot write.

@@ -1,0 +1,184 @@
+"""vpm: volume-preserving mapping and registration of 3-D shapes to the unit ball.
+
+The Python face of the vpm library (docs/python.md): the same C++ code as the `vpm` command,
+with NumPy arrays in and out. Meshes (`vpm.Mesh`) and images (`vpm.Image`) own their memory and
+show it to NumPy as views, so arrays come out without copies and go back in without copies;
+arrays made elsewhere are copied once into the library's layout. Library errors keep their
+messages: bad input raises ValueError, a numerical failure vpm.NumericalError. Long calls release
+the GIL. Every call runs on the device `device=` names ('host', 'cpu', 'gpu', 'P:D' or part of a
+name), else on select_device()'s, else on VPM_DEVICE's (docs/design.md 3).
+
+    import vpm
+    mesh, _ = vpm.mesh_image("/usr/share/mricron/templates/ch2bet.nii.gz",
+                             labels="/usr/share/mricron/templates/aal.nii.gz")
+    ball, report = vpm.map_to_ball(mesh)
+    print(report.final.vertex_volume_ratio.mean_abs_dev)
+"""
+import os
+import sys
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ._vpm import (Elements, ElementTable, Image, InitialMapReport, MapMetrics, MapReport, Mesh,  # noqa: F401
+                   NumericalError, RatioStats, RegistrationReport, Report, __version__, device_name, devices,
+                   read_image, read_label_names, read_mesh, read_table, select_device, to_image, to_native,
+                   validate, write_mesh, write_nifti)
+from . import _vpm
+
+__all__ = ["Mesh", "Image", "Elements", "ElementTable", "Comparison", "NumericalError", "MapReport",
+           "InitialMapReport", "RegistrationReport", "MapMetrics", "RatioStats", "Report",
+           "read_mesh", "write_mesh", "validate", "read_image", "write_nifti", "image", "mesh_image",
+           "initial_map", "map_to_ball", "register", "elements", "sample", "compare", "read_table",
+           "to_native", "to_image", "read_label_names", "devices", "select_device", "device_name"]
+
+
+def _progress(progress, what):
+    """(callback for the library, bar to close) for progress=None | False | True | callable."""
+    if progress is None or progress is False:
+        return None, None
+    if callable(progress):
+        return progress, None
+    try:
+        from tqdm.auto import tqdm
+    except ImportError:  # no tqdm: the library's lines on stderr
+        return (lambda line: print(f"vpm {what}: {line}", file=sys.stderr)), None
+    bar = tqdm(desc=f"vpm {what}", unit=" step")
+
+    def step(line):
+        bar.set_postfix_str(line[:70], refresh=False)
+        bar.update(1)
+    return step, bar
+
+
+def _call(fn, progress, what, *args, **kwargs):
+    callback, bar = _progress(progress, what)
+    try:
+        return fn(*args, progress=callback, **kwargs)
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def image(source, affine=None):
+    """A vpm.Image from a path (NIfTI .nii/.nii.gz or FreeSurfer .mgh/.mgz, read by vpm), a
+    nibabel image (its data and affine; one copy), a vpm.Image (as it is) or a 3-D array with
+    its 4 x 4 voxel -> world (mm) `affine`."""
+    if isinstance(source, Image):
+        return source
+    if isinstance(source, (str, os.PathLike)):
+        return read_image(os.fspath(source))
+    if hasattr(source, "affine") and hasattr(source, "dataobj"):  # nibabel
+        return Image(np.asanyarray(source.dataobj), np.asarray(source.affine, dtype=float))
+    if affine is None:
+        raise ValueError("image: an array needs affine= (4 x 4 voxel -> world mm)")
+    return Image(np.asarray(source), np.asarray(affine, dtype=float))
+
+
+def _optional_image(source):
+    return None if source is None else image(source)
+
+
+def mesh_image(source, labels=None, *, affine=None, progress=None, **options):
+    """Meshes an image mask (voxels > threshold) or a closed surface (.off/.obj/.stl path) into a
+    quality tet mesh, as `vpm mesh-image` does; `labels` (an atlas on the same grid) adds the
+    `label` fields. `source` and `labels`: a path, a nibabel image, a vpm.Image, or an array
+    with `affine`. Options: threshold, select_labels, target_vertices (5200), max_volume,
+    smooth, close_at_border, radius_edge, min_dihedral. Returns (vpm.Mesh, report dict)."""
+    if isinstance(source, (str, os.PathLike)) and (labels is None or isinstance(labels, (str, os.PathLike))):
+        return _call(_vpm._mesh_image, progress, "mesh-image", os.fspath(source),
+                     None if labels is None else os.fspath(labels), **options)
+    return _call(_vpm._mesh_image, progress, "mesh-image", image(source, affine),
+                 None if labels is None else image(labels, affine), **options)
+
+
+def initial_map(vertices, tets=None, **options):
+    """The fold-free initial map to the unit ball (paper 4.1; `vpm initial-map`). `vertices` is a
+    vpm.Mesh (then no `tets`) or an (n, 3) array with `tets` (m, 4). The mesh is validated
+    first (negatively oriented tets turned in place). Options: sphere ('area'|'conformal'),
+    sphere_start, sphere_solve, untangle ('never'|'if-folded'|'always'), split, source, device.
+    Returns (ball mesh: refined connectivity, ball positions, point field original_position;
+    InitialMapReport)."""
+    return _vpm._initial_map(vertices, tets, **options)
+
+
+def map_to_ball(vertices, tets=None, *, progress=None, **options):
+    """Maps a tet mesh to the unit ball preserving local volumes: the whole `vpm map`.
+
+    `vertices`: a vpm.Mesh (then no `tets`) or an (n, 3) array with `tets` (m, 4). Options (as
+    `vpm map`'s): rounds (-1: until tolerance), tolerance (0.01), method ('moser'|'paper'|'vsem'),
+    sphere, sphere_start, sphere_solve, boundary, solver, preconditioner, rk_steps, max_seconds
+    (a time budget: the map reached so far, report.converged False), source (the name used in
+    messages), device. `progress`: a callable given each round's line, or True for
+    a tqdm bar (lines on stderr without tqdm).
+
+    Returns (ball, report): `ball` a vpm.Mesh (input vertices first, then the inserted ones; point
+    fields original_position, vertex_volume_ratio; cell field tet_volume_ratio), `report` a
+    vpm.MapReport (report.final.vertex_volume_ratio.mean_abs_dev, ..., report.to_dict()).
+    Raises ValueError for an input that is not a valid solid ball, vpm.NumericalError when no
+    fold-free map could be made."""
+    return _call(_vpm._map_to_ball, progress, "map", vertices, tets, **options)
+
+
+def register(mesh, *, landmarks=None, targets=None, template=None, image=None, template_image=None, progress=None,
+             **options):
+    """Registers a mapped mesh inside the ball (paper 5; `vpm register`).
+
+    Either `landmarks` and `targets` ((N, 3) ball coordinates or (N,) vertex ids of `mesh`), or a
+    mapped `template` mesh: landmarks are then the centroids of the atlas regions both carry
+    (template_landmarks='regions', the default), or, for a subject without atlas labels, points
+    paired by the affine that matches the two native solids' moments (template_landmarks=
+    'moments'; use dense_force='image'). Dense iterations (dense_iterations=12,
+    dense_force='labels'|'image'|'both') pull the subject onto the template; the image force
+    reads `image` and `template_image` (path, nibabel image, vpm.Image) through both maps.
+    Other options: exclude_labels, steps, width, width_factor, boundary, field, rigid,
+    untangle, restore, max_seconds (a time budget for the dense iterations), device; `progress`
+    as map_to_ball's (one line per dense iteration). Returns (registered vpm.Mesh,
+    vpm.RegistrationReport)."""
+    return _call(_vpm._register, progress, "register", mesh, landmarks=landmarks, targets=targets, template=template,
+                 image=_optional_image(image), template_image=_optional_image(template_image), **options)
+
+
+def elements(level=3, shells=8, samples=64, layout="shells"):
+    """The canonical volume elements (paper 6.2): level-L icosphere x K shells (layout 'shells')
+    or near-cubic elements (layout 'graded', K from L), S samples each."""
+    return Elements(level=level, shells=shells, samples=samples, layout=layout)
+
+
+def sample(mesh, images=None, labels=None, *, elements=None, subject=""):
+    """Per-element features of one subject (`vpm sample`): each element's samples pulled back
+    through the registered `mesh` into native space and read in `images` ({name: path, nibabel
+    image, vpm.Image}; trilinear) and `labels` (fractions per label). Returns a vpm.ElementTable."""
+    named = {k: image(v) for k, v in (images or {}).items()}
+    return _vpm._sample(mesh, named, _optional_image(labels), elements, subject)
+
+
+@dataclass
+class Comparison:
+    """A patient against the normals (`vpm compare`): per-element arrays and the foci."""
+    z: np.ndarray
+    patient: np.ndarray
+    cluster: np.ndarray
+    reference_mean: np.ndarray
+    reference_std: np.ndarray
+    clusters: list = field(default_factory=list)
+    threshold_used: float = 0.0
+    summary: dict = field(default_factory=dict)
+
+    def to_dict(self):
+        """The comparison's JSON (as the library writes it) with the arrays as lists."""
+        d = dict(self.summary)
+        for k in ("z", "patient", "cluster", "reference_mean", "reference_std"):
+            d[k] = getattr(self, k).tolist()
+        return d
+
+
+def compare(normals, patient, feature, **options):
+    """Compares a patient's table with the normals' (`vpm compare`): proportional scaling, the
+    normals' per-element mean and std, z and foci. `normals`: ElementTables or paths; options:
+    normalisation, threshold (3), fdr, min_cluster (3), extend, peak, sign, test, smooth.
+    Returns a Comparison."""
+    d = _vpm._compare(list(normals), patient, feature, **options)
+    arrays = {k: d.pop(k) for k in ("z", "patient", "cluster", "reference_mean", "reference_std")}
+    return Comparison(**arrays, clusters=d.get("clusters", []), threshold_used=d.get("threshold", 0.0),
+                      summary=d)
