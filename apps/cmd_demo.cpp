@@ -207,8 +207,9 @@ Registration register_subject(vpm::Device& dev, const Subject& tmpl, const Subje
   images.subject_native = vpm::native_positions(sm, "demo: the subject's ball map");
   images.templ = &tmpl_image;
   images.template_native = vpm::native_positions(tmpl.map.mesh, "demo: colin27's ball map");
-  r.dense = vpm::register_dense(dev, r.registered, sm.tets, r.subj_labels, tmpl.map.mesh.vertices,
-                                tmpl.map.mesh.tets, r.tmpl_labels, src, dst, st.registration, dense, &images);
+  r.dense = vpm::register_dense(dev, {r.registered, sm.tets, r.subj_labels},
+                                {tmpl.map.mesh.vertices, tmpl.map.mesh.tets, r.tmpl_labels}, src, dst, st.registration,
+                                dense, &images);
   r.result = r.dense.landmark;
   r.result.landmark_rms_error = r.dense.landmark_rms_error;
   r.result.landmark_max_error = r.dense.landmark_max_error;

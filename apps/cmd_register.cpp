@@ -190,8 +190,9 @@ std::vector<int> labels_or_none(const Inputs& io, const TetMesh& mesh) {
 // of its force; the landmark stage's result carries the final landmark errors.
 RegistrationResult register_densely(Device& dev, const Inputs& io, Points& ball, const RegistrationOptions& opt,
                                     std::optional<DenseRegistrationResult>& dense) {
-  dense = register_dense(dev, ball, io.mesh.tets, labels_or_none(io, io.mesh), io.templ_mesh.vertices,
-                         io.templ_mesh.tets, labels_or_none(io, io.templ_mesh), io.landmarks.points, io.targets.points, opt, io.dense,
+  dense = register_dense(dev, {ball, io.mesh.tets, labels_or_none(io, io.mesh)},
+                         {io.templ_mesh.vertices, io.templ_mesh.tets, labels_or_none(io, io.templ_mesh)},
+                         io.landmarks.points, io.targets.points, opt, io.dense,
                          io.image.empty() ? nullptr : &io.images);
   RegistrationResult res = dense->landmark;
   res.landmark_rms_error = dense->landmark_rms_error;

@@ -94,7 +94,7 @@ DenseRegistrationResult run_dense(Device& dev, const Case& c, Points& ball, int 
   RegistrationOptions lo;
   lo.restore_volumes = restore;
   ball = c.subject.vertices;
-  return register_dense(dev, ball, c.subject.tets, c.labels, c.templ.vertices, c.templ.tets, c.labels,
+  return register_dense(dev, {ball, c.subject.tets, c.labels}, {c.templ.vertices, c.templ.tets, c.labels},
                         c.landmarks.source, c.landmarks.target, lo, o, images);
 }
 
@@ -315,7 +315,7 @@ TEST_CASE("dense registration: the restoration's polish on the OpenCL device, im
     RegistrationOptions lo;
     lo.restore_polish = place;
     Points ball = c.subject.vertices;
-    r = register_dense(*cl, ball, c.subject.tets, c.labels, c.templ.vertices, c.templ.tets, c.labels,
+    r = register_dense(*cl, {ball, c.subject.tets, c.labels}, {c.templ.vertices, c.templ.tets, c.labels},
                        c.landmarks.source, c.landmarks.target, lo, o, &images);
     return ball;
   };
@@ -359,7 +359,7 @@ TEST_CASE("dense registration: held-out regions stay out of the force and bad op
   CHECK((plain - ball).cwiseAbs().maxCoeff() == 0.0);
   auto refused = [&](DenseRegistrationOptions o, std::vector<int> labels) {
     Points b = c.subject.vertices;
-    CHECK_THROWS_AS(register_dense(dev, b, c.subject.tets, labels, c.templ.vertices, c.templ.tets, c.labels,
+    CHECK_THROWS_AS(register_dense(dev, {b, c.subject.tets, labels}, {c.templ.vertices, c.templ.tets, c.labels},
                                    c.landmarks.source, c.landmarks.target, RegistrationOptions{}, o),
                     InputError);
     CHECK((b - c.subject.vertices).cwiseAbs().maxCoeff() == 0.0);

@@ -313,11 +313,16 @@ void finish(Device& dev, DenseRegistrationResult& r, const DenseState& st, const
 
 }  // namespace
 
-DenseRegistrationResult register_dense(Device& dev, Points& ball, const Tets& tets, const std::vector<int>& labels,
-                                       const Points& tball, const Tets& ttets, const std::vector<int>& tlabels,
+DenseRegistrationResult register_dense(Device& dev, const DenseSubject& subject, const DenseTemplate& templ,
                                        const Points& landmarks, const Points& targets,
                                        const RegistrationOptions& lo, const DenseRegistrationOptions& o,
                                        const DenseImages* images) {
+  Points& ball = subject.ball;
+  const Tets& tets = subject.tets;
+  const std::vector<int>& labels = subject.labels;
+  const Points& tball = templ.ball;
+  const Tets& ttets = templ.tets;
+  const std::vector<int>& tlabels = templ.labels;
   const auto t_start = Clock::now();
   check_dense(tets, labels, ttets, tlabels, o);
   DenseRegistrationResult r;

@@ -163,19 +163,30 @@ struct DenseRegistrationResult {
 ///  "timings_s": {"landmark", "dense", "correction", "restore", "total"}}
 Json to_json(const DenseRegistrationResult& result);
 
-/// Registers the labelled mapped mesh `ball` (n x 3, in/out; `tets` m x 4, `labels` m tet
-/// labels) to the labelled template (`template_ball`, `template_tets`, `template_labels`):
-/// landmark registration of `landmarks` onto `targets` with `landmark_options` (their volume
-/// restoration deferred to the end when dense iterations run), then the dense iterations.
+/// The mapped mesh being registered: `ball` n x 3 (in: the mapped positions; out: the
+/// registered ones), `tets` m x 4, `labels` m tet labels (atlas regions; empty: none).
+struct DenseSubject {
+  Points& ball;
+  const Tets& tets;
+  const std::vector<int>& labels;
+};
+
+/// The labelled mapped template the subject is registered to.
+struct DenseTemplate {
+  const Points& ball;
+  const Tets& tets;
+  const std::vector<int>& labels;
+};
+
+/// Registers the labelled mapped mesh `subject` to the labelled `templ`: landmark registration
+/// of `landmarks` onto `targets` with `landmark_options` (their volume restoration deferred to
+/// the end when dense iterations run), then the dense iterations.
 /// `images` is required for DenseForce::image and both (and unused for labels).
 /// Throws what register_landmarks throws, InputError for label counts that do not match the
 /// tets, invalid options (widths <= 0, step outside (0, 1], iterations < 0), an image force
 /// without images or with native positions that do not match the meshes, and
-/// NumericalError when the final result would have inverted tets (`ball` then unchanged).
-DenseRegistrationResult register_dense(Device& device, Points& ball, const Tets& tets,
-                                       const std::vector<int>& labels, const Points& template_ball,
-                                       const Tets& template_tets,
-                                       const std::vector<int>& template_labels,
+/// NumericalError when the final result would have inverted tets (subject.ball then unchanged).
+DenseRegistrationResult register_dense(Device& device, const DenseSubject& subject, const DenseTemplate& templ,
                                        const Points& landmarks, const Points& targets,
                                        const RegistrationOptions& landmark_options,
                                        const DenseRegistrationOptions& options,

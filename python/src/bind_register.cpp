@@ -63,8 +63,9 @@ RegistrationResult run(const Request& r, Device& dev, Points& ball) {
               native_positions(*r.templ, "template")};
   }
   const DenseRegistrationResult d =
-      register_dense(dev, ball, r.mesh->tets, labels_or_none(r, *r.mesh, "mesh"), r.templ->vertices, r.templ->tets,
-                     labels_or_none(r, *r.templ, "template"), r.landmarks, r.targets, r.options, r.dense,
+      register_dense(dev, {ball, r.mesh->tets, labels_or_none(r, *r.mesh, "mesh")},
+                     {r.templ->vertices, r.templ->tets, labels_or_none(r, *r.templ, "template")}, r.landmarks, r.targets,
+                     r.options, r.dense,
                      r.dense.force == DenseForce::labels ? nullptr : &images);
   RegistrationResult res = d.landmark;
   res.landmark_rms_error = d.landmark_rms_error;
