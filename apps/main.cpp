@@ -1,7 +1,10 @@
 // vpm: volume-preserving mapping and registration of 3-D shapes. See README.md.
+#include <csignal>
 #include <exception>
 #include <iostream>
 #include <new>
+
+#include <boost/compute/exception/opencl_error.hpp>
 
 #include "cli.hpp"
 #include "vpm/config.hpp"
@@ -17,6 +20,9 @@ void usage(std::ostream& out) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // a file size limit (ulimit -f, RLIMIT_FSIZE) makes write(2) fail with EFBIG instead of killing
+  // the process: the output is then refused with a message and nothing is left (AtomicFile)
+  std::signal(SIGXFSZ, SIG_IGN);
   std::vector<std::string> args(argv + 1, argv + argc);
   if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
     usage(args.empty() ? std::cerr : std::cout);
@@ -40,6 +46,13 @@ int main(int argc, char** argv) {
     } catch (const vpm::NumericalError& e) {
       std::cerr << "vpm " << c.name << ": numerical failure: " << e.what() << '\n';
       return vpm::kExitNumerical;
+    } catch (const vpm::DeviceError& e) {
+      std::cerr << "vpm " << c.name << ": device error: " << e.what() << '\n';
+      return vpm::kExitDevice;
+    } catch (const boost::compute::opencl_error& e) {  // a call no stage turned into a DeviceError
+      std::cerr << "vpm " << c.name << ": device error: OpenCL error " << e.error_code() << " (" << e.error_string()
+                << "); VPM_DEVICE=host runs without OpenCL\n";
+      return vpm::kExitDevice;
     } catch (const std::bad_alloc&) {
       std::cerr << "vpm " << c.name << ": error: out of memory\n";
       return vpm::kExitInternal;

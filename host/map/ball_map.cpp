@@ -1,11 +1,13 @@
 #include "vpm/ball_map.hpp"
 
+#include <algorithm>
 #include <cstdio>
 
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/timing.hpp"
 #include "vpm/format.hpp"
+#include "vpm/memory.hpp"
 
 namespace vpm {
 
@@ -20,8 +22,22 @@ std::string quality(const ValidationReport& v) {
 }
 }  // namespace
 
+// Measured peaks (docs/robustness.md, "Limits"): a fixed part (the program, OpenCL, PoCL's
+// compiled kernels) and a part per input tet.
+constexpr double kMapBaseBytes = 100e6;
+constexpr double kMapBytesPerTet = 900;
+
+double map_memory_estimate(long long tets) { return kMapBaseBytes + kMapBytesPerTet * double(std::max(0LL, tets)); }
+
+void require_map_memory(long long tets, const std::string& source) {
+  require_memory(map_memory_estimate(tets), source,
+                 "vpm map on " + std::to_string(tets) + " tets: " + format_bytes(kMapBaseBytes) + " + " +
+                     format_sig(kMapBytesPerTet, 4) + " bytes a tet");
+}
+
 BallMap map_to_ball(Device& device, const TetMesh& input, const ValidationReport& validation,
                     const std::string& source, const BallMapOptions& options) {
+  require_map_memory(input.num_tets(), source);
   const auto t_start = Clock::now();
   const auto say = [&](const std::string& line) {
     if (options.volume.progress) options.volume.progress(line);
