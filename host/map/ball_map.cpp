@@ -22,10 +22,11 @@ std::string quality(const ValidationReport& v) {
 }
 }  // namespace
 
-// Measured peaks (docs/robustness.md, "Limits"): a fixed part (the program, OpenCL, PoCL's
-// compiled kernels) and a part per input tet.
-constexpr double kMapBaseBytes = 100e6;
-constexpr double kMapBytesPerTet = 900;
+// Measured peaks (docs/robustness.md, "Limits"; 2-core AMD EPYC VM, 2026-11-27): PoCL's peak
+// resident size at 10k-1.1M tets fits 120 MB + 902 bytes a tet within 15 MB (the host's: 24 MB
+// + 657 bytes a tet); a cold PoCL kernel cache adds 145 MB (LLVM compiling the programs).
+constexpr double kMapBaseBytes = 270e6;
+constexpr double kMapBytesPerTet = 905;
 
 double map_memory_estimate(long long tets) { return kMapBaseBytes + kMapBytesPerTet * double(std::max(0LL, tets)); }
 
