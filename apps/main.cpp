@@ -15,7 +15,10 @@ void usage(std::ostream& out) {
   out << "vpm " VPM_VERSION ": volume-preserving mapping and registration of 3-D shapes\n"
          "usage:\n";
   for (const auto& c : vpm::cli::commands()) out << "  " << vpm::cli::synopsis(c) << "\n      " << c.summary << '\n';
-  out << "environment: VPM_DEVICE=host|cpu|gpu|P:D|name-substring selects the compute device\n";
+  out << "environment: VPM_DEVICE=host|cpu|gpu|P:D|name-substring selects the compute device;\n"
+         "  VPM_MAX_MEMORY=SIZE|off replaces the measured free memory work is checked against\n"
+         "exit status: 0 ok, 2 bad input or usage, 3 numerical failure, 4 written but not converged,\n"
+         "  5 device fault, 1 internal error\n";
 }
 }  // namespace
 

@@ -22,11 +22,13 @@ std::string quality(const ValidationReport& v) {
 }
 }  // namespace
 
-// Measured peaks (docs/robustness.md, "Limits"; 2-core AMD EPYC VM, 2026-11-27): PoCL's peak
-// resident size at 10k-1.1M tets fits 120 MB + 902 bytes a tet within 15 MB (the host's: 24 MB
-// + 657 bytes a tet); a cold PoCL kernel cache adds 145 MB (LLVM compiling the programs).
+// Measured peaks (docs/robustness.md, "Limits"; 2-core AMD EPYC VM, 2026-11-27), PoCL's being
+// the larger at every size: 121 MB at 10k tets, 218 MB at 120k, 480 MB at 383k, 1.11 GB at 1.1M
+// (902 bytes a tet over 120 MB fits these within 15 MB), 2.53 GB at 2.18M (AMG from 2M tets on
+// CPUs: 1,160 bytes a tet), 8.9 GB at 9.85M (docs/volume_map.md); a cold PoCL kernel cache adds
+// 145 MB. The line below lies above every one of them (by 5 % at 2.18M, 25-33 % at 1.1M and 10M).
 constexpr double kMapBaseBytes = 270e6;
-constexpr double kMapBytesPerTet = 905;
+constexpr double kMapBytesPerTet = 1100;
 
 double map_memory_estimate(long long tets) { return kMapBaseBytes + kMapBytesPerTet * double(std::max(0LL, tets)); }
 
