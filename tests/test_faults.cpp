@@ -54,15 +54,25 @@ struct Output {
   std::function<bool(const std::string& path)> valid;    // a complete file
 };
 
+// The output name `e` is a hidden temporary of (".NAME.tmp.*"), or "" if none.
+std::string temporary_of(const Output& o, const std::string& e) {
+  for (const auto& f : o.files)
+    if (e.rfind("." + f + ".tmp.", 0) == 0) return f;
+  return "";
+}
+
 // Writes `o` in a loop in a child process killed after a random delay, `trials` times (every
 // other trial over the files left by the one before: the replacing path). After each kill the
-// folder holds only the output's own names, each complete; `named` files (the fallback) may
-// also leave hidden ".NAME.tmp.*" files, never a partial file under the final name.
+// folder holds the output's own names, each complete, and at most, for a file being replaced, a
+// complete hidden ".NAME.tmp.*" copy: the microseconds between linking the finished file under
+// that name and renaming it over the old one (docs/robustness.md). With `named` (the fallback)
+// a kill may leave a partial hidden temporary, never a partial file under the final name.
 void kill_while_writing(const Output& o, int trials, double max_delay_s, unsigned seed, bool named = false) {
   const std::string dir = fresh_dir("kill_" + o.kind + (named ? "_named" : ""));
+  const std::string check = fresh_dir("kill_" + o.kind + "_check");
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> delay(0.0, max_delay_s);
-  int present = 0;
+  int present = 0, windows = 0;
   for (int t = 0; t < trials; ++t) {
     if (t % 2 == 0)
       for (const auto& f : o.files) fs::remove(dir + "/" + f);
@@ -73,20 +83,25 @@ void kill_while_writing(const Output& o, int trials, double max_delay_s, unsigne
     REQUIRE(test::kill_after(pid, delay(rng)));
     for (const auto& e : test::folder_entries(dir)) {
       INFO(o.kind << " trial " << t << ": " << e);
-      const bool own = std::find(o.files.begin(), o.files.end(), e) != o.files.end();
-      if (named && !own) {
-        CHECK(e.rfind(".", 0) == 0);
-        CHECK(e.find(".tmp.") != std::string::npos);
+      const std::string of = temporary_of(o, e);
+      if (!of.empty()) {  // a hidden temporary: partial only in the named fallback
+        if (!named) {
+          REQUIRE(fs::exists(dir + "/" + of));  // only while replacing a file
+          fs::copy_file(dir + "/" + e, check + "/" + of, fs::copy_options::overwrite_existing);
+          CHECK(o.valid(check + "/" + of));
+          ++windows;
+        }
         fs::remove(dir + "/" + e);
         continue;
       }
-      REQUIRE(own);
+      REQUIRE(std::find(o.files.begin(), o.files.end(), e) != o.files.end());
       CHECK(o.valid(dir + "/" + e));
       ++present;
     }
   }
   INFO(o.kind << ": output present after " << present << " of " << trials << " kills");
   CHECK(present > 0);  // the kills did not all land before the first write finished
+  if (windows) WARN(o.kind << ": " << windows << " kills fell between the link and the rename (a whole hidden copy left)");
 }
 
 template <class F>
