@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "cli.hpp"
+#include "vpm/ball_map.hpp"
 #include "vpm/format.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
@@ -36,6 +37,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
 
   vpm::Device& dev = vpm::Device::current();
   vpm::TetMesh mesh = vpm::read_mesh(in);
+  vpm::require_map_memory(mesh.num_tets(), in);  // the initial map is part of the map: an upper bound
   const vpm::ValidationReport vr = vpm::validate_mesh(mesh, in);
   vpm::cli::progress("read " + in + ": " + std::to_string(mesh.num_vertices()) + " vertices, " +
                      std::to_string(mesh.num_tets()) + " tets, smallest dihedral angle " +

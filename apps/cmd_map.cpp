@@ -47,6 +47,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   vpm::Device& dev = vpm::Device::current();
   auto t0 = Clock::now();
   vpm::TetMesh mesh = vpm::read_mesh(in);
+  vpm::require_map_memory(mesh.num_tets(), in);  // before validation: refuse what cannot fit up front
   const vpm::ValidationReport vr = vpm::validate_mesh(mesh, in);
   const double t_read = seconds_since(t0);
   vpm::cli::progress("read " + in + ": " + std::to_string(mesh.num_vertices()) + " vertices, " +

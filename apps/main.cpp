@@ -1,7 +1,10 @@
 // vpm: volume-preserving mapping and registration of 3-D shapes. See README.md.
+#include <csignal>
 #include <exception>
 #include <iostream>
 #include <new>
+
+#include <boost/compute/exception/opencl_error.hpp>
 
 #include "cli.hpp"
 #include "vpm/config.hpp"
@@ -12,11 +15,17 @@ void usage(std::ostream& out) {
   out << "vpm " VPM_VERSION ": volume-preserving mapping and registration of 3-D shapes\n"
          "usage:\n";
   for (const auto& c : vpm::cli::commands()) out << "  " << vpm::cli::synopsis(c) << "\n      " << c.summary << '\n';
-  out << "environment: VPM_DEVICE=host|cpu|gpu|P:D|name-substring selects the compute device\n";
+  out << "environment: VPM_DEVICE=host|cpu|gpu|P:D|name-substring selects the compute device;\n"
+         "  VPM_MAX_MEMORY=SIZE|off replaces the measured free memory work is checked against\n"
+         "exit status: 0 ok, 2 bad input or usage, 3 numerical failure, 4 written but not converged,\n"
+         "  5 device fault, 1 internal error\n";
 }
 }  // namespace
 
 int main(int argc, char** argv) {
+  // a file size limit (ulimit -f, RLIMIT_FSIZE) makes write(2) fail with EFBIG instead of killing
+  // the process: the output is then refused with a message and nothing is left (AtomicFile)
+  std::signal(SIGXFSZ, SIG_IGN);
   std::vector<std::string> args(argv + 1, argv + argc);
   if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
     usage(args.empty() ? std::cerr : std::cout);
@@ -40,6 +49,13 @@ int main(int argc, char** argv) {
     } catch (const vpm::NumericalError& e) {
       std::cerr << "vpm " << c.name << ": numerical failure: " << e.what() << '\n';
       return vpm::kExitNumerical;
+    } catch (const vpm::DeviceError& e) {
+      std::cerr << "vpm " << c.name << ": device error: " << e.what() << '\n';
+      return vpm::kExitDevice;
+    } catch (const boost::compute::opencl_error& e) {  // a call no stage turned into a DeviceError
+      std::cerr << "vpm " << c.name << ": device error: OpenCL error " << e.error_code() << " (" << e.error_string()
+                << "); VPM_DEVICE=host runs without OpenCL\n";
+      return vpm::kExitDevice;
     } catch (const std::bad_alloc&) {
       std::cerr << "vpm " << c.name << ": error: out of memory\n";
       return vpm::kExitInternal;

@@ -94,6 +94,9 @@ std::vector<RawDevice> enumerate(std::string* error) {
       cl_ulong mem = 0;
       clGetDeviceInfo(ids[d], CL_DEVICE_GLOBAL_MEM_SIZE, sizeof mem, &mem, nullptr);
       r.desc.global_memory_bytes = mem;
+      cl_ulong max_alloc = 0;
+      clGetDeviceInfo(ids[d], CL_DEVICE_MAX_MEM_ALLOC_SIZE, sizeof max_alloc, &max_alloc, nullptr);
+      r.desc.max_alloc_bytes = max_alloc;
       out.push_back(r);
     }
   }
@@ -217,22 +220,46 @@ bc::kernel Device::kernel(const std::string& program, const std::string& kernel_
     const auto& sources = detail::embedded_kernel_sources();
     auto s = sources.find(program);
     if (s == sources.end()) throw std::runtime_error("no embedded kernel program '" + program + "'");
-    const std::string preamble =
-        "#pragma OPENCL EXTENSION cl_khr_fp64 : enable\n"
-        "typedef double real;\ntypedef double2 real2;\ntypedef double3 real3;\ntypedef double4 real4;\n";
-    const std::string common = sources.at("common");  // kernels/common.clh
-    bc::program prog = bc::program::create_with_source(preamble + common + "\n#line 1\n" + s->second, context_);
-    std::string build_options = "-cl-std=CL1.2 -DLS=" + std::to_string(local_size_);
-    if (group_reduce()) build_options += " -DGROUP_REDUCE";
-    try {
-      prog.build(build_options + " " + options);
-    } catch (const bc::opencl_error&) {
-      throw std::runtime_error("OpenCL build of kernels/" + program + ".cl failed on " + name() +
-                               ":\n" + prog.build_log());
-    }
-    it = programs_.emplace(key, prog).first;
+    it = programs_.emplace(key, build_program("kernels/" + program + ".cl", s->second, options)).first;
   }
   return it->second.create_kernel(kernel_name);
+}
+
+bc::program Device::build_program(const std::string& name, const std::string& source, const std::string& options) {
+  const std::string preamble =
+      "#pragma OPENCL EXTENSION cl_khr_fp64 : enable\n"
+      "typedef double real;\ntypedef double2 real2;\ntypedef double3 real3;\ntypedef double4 real4;\n";
+  const std::string common = detail::embedded_kernel_sources().at("common");  // kernels/common.clh
+  bc::program prog = bc::program::create_with_source(preamble + common + "\n#line 1\n" + source, context_);
+  std::string build_options = "-cl-std=CL1.2 -DLS=" + std::to_string(local_size_);
+  if (group_reduce()) build_options += " -DGROUP_REDUCE";
+  if (!options.empty()) build_options += " " + options;
+  try {
+    prog.build(build_options);
+  } catch (const bc::opencl_error& e) {
+    // one line: the log's first non-empty lines (the first error and its context), joined by " | "
+    std::istringstream log(prog.build_log());
+    std::string line, first;
+    for (int kept = 0; kept < 6 && std::getline(log, line);) {
+      line = trim(line);
+      if (line.empty()) continue;
+      first += (kept++ ? " | " : "") + line;
+    }
+    throw DeviceError(name + ": OpenCL build failed on " + this->name() + " (" + e.error_string() + ", options '" +
+                      build_options + "'): " + (first.empty() ? "(empty build log)" : first));
+  }
+  return prog;
+}
+
+void Device::check_buffer(unsigned long long bytes, const std::string& what) const {
+  if (host_) return;
+  const auto limit = std::min(desc_.max_alloc_bytes ? desc_.max_alloc_bytes : ~0ULL,
+                              desc_.global_memory_bytes ? desc_.global_memory_bytes : ~0ULL);
+  if (bytes <= limit) return;
+  const bool one = desc_.max_alloc_bytes && desc_.max_alloc_bytes <= desc_.global_memory_bytes;
+  throw DeviceError(what + ": a buffer of " + std::to_string(bytes) + " bytes is larger than " + name() +
+                    (one ? " allows for one buffer (CL_DEVICE_MAX_MEM_ALLOC_SIZE = " : " has memory (") +
+                    std::to_string(limit) + " bytes); use a smaller input or VPM_DEVICE=host");
 }
 
 }  // namespace vpm

@@ -11,6 +11,7 @@
 #include <ostream>
 
 #include "vpm/error.hpp"
+#include "vpm/memory.hpp"
 
 namespace vpm::detail {
 
@@ -26,6 +27,7 @@ std::string read_whole_file(const std::string& path) {
   in.seekg(0, std::ios::end);
   const auto size = in.tellg();
   if (size < 0) throw InputError(path + ": cannot read");
+  require_memory(double(size), path, "the whole file is read before parsing");  // before allocating it
   data.resize(static_cast<size_t>(size));
   in.seekg(0, std::ios::beg);
   in.read(data.data(), static_cast<std::streamsize>(data.size()));

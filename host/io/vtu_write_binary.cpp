@@ -111,7 +111,7 @@ void write_vtu_binary(const std::string& path, const TetMesh& mesh) {
                       write_generated<std::uint8_t>(o, static_cast<size_t>(m), [](size_t) { return std::uint8_t{10}; });
                     }});
   AtomicFile file(path, true);
-  std::ofstream& out = file.stream();
+  std::ostream& out = file.stream();
   {
     TextOut o(out);
     write_header(o, blocks, mesh.point_data.size(), mesh.cell_data.size(), n, m);

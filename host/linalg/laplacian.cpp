@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <string>
 
+#include "core/device_alloc.hpp"
 #include "core/parallel.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
@@ -161,29 +162,36 @@ void CotanLaplacian::assemble(Device& device, const Points& x) {
   }
   auto& q = device.queue();
   if (!dev_ || dev_->device != &device) {
-    dev_ = std::make_shared<DeviceState>(device);
-    auto& s = *dev_;
+    auto fresh = std::make_shared<DeviceState>(device);  // kept only once every buffer exists
+    auto& s = *fresh;
     s.device = &device;
     const Incidence inc = vertex_tet_incidence(n, tets_);
-    s.tets = bc::vector<int>(tets_.data(), tets_.data() + tets_.size(), q);
-    s.row_ptr = bc::vector<int>(pattern_.row_ptr.begin(), pattern_.row_ptr.end(), q);
-    s.col = bc::vector<int>(pattern_.col.begin(), pattern_.col.end(), q);
-    s.inc_offset = bc::vector<int>(inc.offset.begin(), inc.offset.end(), q);
-    s.inc_tet = bc::vector<int>(std::max<size_t>(inc.tet_of.size(), 1), device.context());
-    if (!inc.tet_of.empty()) bc::copy(inc.tet_of.begin(), inc.tet_of.end(), s.inc_tet.begin(), q);
-    s.slot = bc::vector<int>(std::max<size_t>(slot_.size(), 1), device.context());
-    if (!slot_.empty()) bc::copy(slot_.begin(), slot_.end(), s.slot.begin(), q);
-    s.diag = bc::vector<int>(diag_.begin(), diag_.end(), q);
-    s.x = bc::vector<double>(static_cast<size_t>(n) * 3, device.context());
-    s.w = bc::vector<double>(std::max<size_t>(static_cast<size_t>(m) * 6, 1), device.context());
-    s.vol = bc::vector<double>(std::max<size_t>(static_cast<size_t>(m), 1), device.context());
-    s.val = bc::vector<double>(std::max<size_t>(pattern_.col.size(), 1), device.context());
-    s.mass = bc::vector<double>(static_cast<size_t>(n), device.context());
+    // per tet: 4 ints (tets), 4 (incidence), 12 (slots), 6 doubles (weights), 1 (volume); per
+    // vertex 2 ints and 4 doubles; per matrix entry an int and a double
+    const unsigned long long mt = static_cast<unsigned long long>(m), nv = static_cast<unsigned long long>(n);
+    const unsigned long long bytes = mt * 136 + nv * 40 + pattern_.col.size() * 12;
+    detail::allocate_on_device(device, "Laplacian of " + std::to_string(m) + " tets", mt * 48, bytes, [&] {
+      s.tets = bc::vector<int>(tets_.data(), tets_.data() + tets_.size(), q);
+      s.row_ptr = bc::vector<int>(pattern_.row_ptr.begin(), pattern_.row_ptr.end(), q);
+      s.col = bc::vector<int>(pattern_.col.begin(), pattern_.col.end(), q);
+      s.inc_offset = bc::vector<int>(inc.offset.begin(), inc.offset.end(), q);
+      s.inc_tet = bc::vector<int>(std::max<size_t>(inc.tet_of.size(), 1), device.context());
+      if (!inc.tet_of.empty()) bc::copy(inc.tet_of.begin(), inc.tet_of.end(), s.inc_tet.begin(), q);
+      s.slot = bc::vector<int>(std::max<size_t>(slot_.size(), 1), device.context());
+      if (!slot_.empty()) bc::copy(slot_.begin(), slot_.end(), s.slot.begin(), q);
+      s.diag = bc::vector<int>(diag_.begin(), diag_.end(), q);
+      s.x = bc::vector<double>(static_cast<size_t>(n) * 3, device.context());
+      s.w = bc::vector<double>(std::max<size_t>(static_cast<size_t>(m) * 6, 1), device.context());
+      s.vol = bc::vector<double>(std::max<size_t>(static_cast<size_t>(m), 1), device.context());
+      s.val = bc::vector<double>(std::max<size_t>(pattern_.col.size(), 1), device.context());
+      s.mass = bc::vector<double>(static_cast<size_t>(n), device.context());
+    });
     s.k_weights = device.kernel("laplacian", "tet_weights");
     s.k_rows = device.kernel("laplacian", "assemble_rows");
     s.k_weights.set_args(static_cast<int>(m), s.x, s.tets, s.w, s.vol);
     s.k_rows.set_args(n, s.row_ptr, s.inc_offset, s.inc_tet, s.tets, s.slot, s.diag, s.w, s.vol,
                       s.val, s.mass);
+    dev_ = fresh;
   }
   auto& s = *dev_;
   bc::copy(x.data(), x.data() + x.size(), s.x.begin(), q);

@@ -1,11 +1,13 @@
 #include "vpm/ball_map.hpp"
 
+#include <algorithm>
 #include <cstdio>
 
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/timing.hpp"
 #include "vpm/format.hpp"
+#include "vpm/memory.hpp"
 
 namespace vpm {
 
@@ -20,8 +22,25 @@ std::string quality(const ValidationReport& v) {
 }
 }  // namespace
 
+// Measured peaks (docs/robustness.md, "Limits"; 2-core AMD EPYC VM, 2026-11-27), PoCL's being
+// the larger at every size: 121 MB at 10k tets, 218 MB at 120k, 480 MB at 383k, 1.11 GB at 1.1M
+// (902 bytes a tet over 120 MB fits these within 15 MB), 2.53 GB at 2.18M (AMG from 2M tets on
+// CPUs: 1,160 bytes a tet), 8.9 GB at 9.85M (docs/volume_map.md); a cold PoCL kernel cache adds
+// 145 MB. The line below lies above every one of them (by 5 % at 2.18M, 25-33 % at 1.1M and 10M).
+constexpr double kMapBaseBytes = 270e6;
+constexpr double kMapBytesPerTet = 1100;
+
+double map_memory_estimate(long long tets) { return kMapBaseBytes + kMapBytesPerTet * double(std::max(0LL, tets)); }
+
+void require_map_memory(long long tets, const std::string& source) {
+  require_memory(map_memory_estimate(tets), source,
+                 "vpm map on " + std::to_string(tets) + " tets: " + format_bytes(kMapBaseBytes) + " + " +
+                     format_sig(kMapBytesPerTet, 4) + " bytes a tet");
+}
+
 BallMap map_to_ball(Device& device, const TetMesh& input, const ValidationReport& validation,
                     const std::string& source, const BallMapOptions& options) {
+  require_map_memory(input.num_tets(), source);
   const auto t_start = Clock::now();
   const auto say = [&](const std::string& line) {
     if (options.volume.progress) options.volume.progress(line);

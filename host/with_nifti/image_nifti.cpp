@@ -1,17 +1,21 @@
 // NIfTI-1/2 reading and writing with nifti_clib (Debian libnifti2-dev).
 #include <nifti2_io.h>
+#include <zlib.h>
 
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <algorithm>
+#include <vector>
 #include <filesystem>
 #include <fstream>
 #include <memory>
-#include <unistd.h>
 #include <string>
 
+#include "core/atomic_file.hpp"
 #include "vpm/error.hpp"
 #include "vpm/image.hpp"
+#include "with_nifti/nifti_header.hpp"
 
 namespace vpm {
 
@@ -45,23 +49,6 @@ bool gzip_magic(const std::string& path) {
 }  // namespace
 
 namespace {
-
-// Dimensions (one 3-D volume), data type (real scalars) and size checks of a read header.
-void check_header(const std::string& path, const nifti_image& nim) {
-  if (nim.ndim < 1 || nim.ndim > 7 || nim.nx < 1)
-    throw InputError(path + ": header: invalid dimensions (dim[0] = " + std::to_string(nim.ndim) + ")");
-  for (int d = 4; d <= nim.ndim; ++d)
-    if (nim.dim[d] > 1)
-      throw InputError(path + ": header: a " + std::to_string(nim.ndim) + "-D image (dim[" + std::to_string(d) +
-                       "] = " + std::to_string(nim.dim[d]) + "); mesh-image needs one 3-D volume: extract it first");
-  switch (nim.datatype) {
-    case DT_UINT8: case DT_INT8: case DT_INT16: case DT_UINT16: case DT_INT32: case DT_UINT32:
-    case DT_INT64: case DT_UINT64: case DT_FLOAT32: case DT_FLOAT64: break;
-    default:
-      throw InputError(path + ": header: unsupported data type " + std::to_string(nim.datatype) + " (" +
-                       nifti_datatype_string(nim.datatype) + "); need a real scalar type");
-  }
-}
 
 // Loads the voxels after comparing the declared data size with the file (uncompressed files).
 void load_voxels(const std::string& path, nifti_image* nim) {
@@ -136,13 +123,15 @@ Image read_nifti(const std::string& path) {
     throw InputError(path + ": header: not a NIfTI-1/2 file (no 'n+1'/'ni1'/'n+2' magic" +
                      std::string(gzip_magic(path) ? " in the decompressed stream" : "") +
                      "; file too short or not an image)");
+  // the header is checked before nifti_clib allocates anything from it (sizes, NaNs, file size)
+  const detail::NiftiHeaderSizes sizes = detail::check_nifti_header(path);
   NimPtr nim(nifti_image_read(path.c_str(), 0));
   if (!nim) throw InputError(path + ": header: nifti_clib cannot read the NIfTI header");
-  check_header(path, *nim);
-  const int64_t nx = nim->nx, ny = nim->ndim >= 2 ? nim->ny : 1, nz = nim->ndim >= 3 ? nim->nz : 1;
-  if (nx > 100000 || ny > 100000 || nz > 100000 || nx * ny * nz > (int64_t(1) << 31))
-    throw InputError(path + ": header: image too large (" + std::to_string(nx) + "x" + std::to_string(ny) + "x" +
-                     std::to_string(nz) + ")");
+  const int64_t nx = sizes.nx, ny = sizes.ny, nz = sizes.nz;
+  if (int64_t(nim->nvox) != nx * ny * nz || nim->nbyper != sizes.bytes_per_voxel)
+    throw InputError(path + ": header: nifti_clib reads " + std::to_string(int64_t(nim->nvox)) + " voxels of " +
+                     std::to_string(nim->nbyper) + " bytes, the header check " + std::to_string(nx * ny * nz) + " of " +
+                     std::to_string(sizes.bytes_per_voxel));
   load_voxels(path, nim.get());
   Image img;
   img.path = path;
@@ -152,11 +141,54 @@ Image read_nifti(const std::string& path) {
   return img;
 }
 
+namespace {
+
+// Appends `n` bytes to `out`, gzip-compressed through `zs` when it is given (flush: the last piece).
+void put(std::ostream& out, z_stream* zs, const void* data, size_t n, bool flush, const std::string& path) {
+  if (!zs) {
+    out.write(static_cast<const char*>(data), std::streamsize(n));
+    return;
+  }
+  unsigned char buf[1 << 16];
+  zs->next_in = static_cast<Bytef*>(const_cast<void*>(data));
+  zs->avail_in = static_cast<uInt>(n);
+  int rc = Z_OK;
+  do {
+    zs->next_out = buf;
+    zs->avail_out = sizeof buf;
+    rc = deflate(zs, flush ? Z_FINISH : Z_NO_FLUSH);
+    if (rc == Z_STREAM_ERROR) throw InputError(path + ": gzip compression failed");
+    out.write(reinterpret_cast<const char*>(buf), std::streamsize(sizeof buf - zs->avail_out));
+  } while (zs->avail_out == 0 || (flush && rc != Z_STREAM_END));
+}
+
+// The NIfTI-1 header (nifti_clib fills it from the image), a 4-byte empty extender, then the
+// float32 voxels from vox_offset on.
+void write_nifti_stream(std::ostream& out, z_stream* zs, nifti_image& nim, const Image& image, const std::string& path) {
+  nifti_set_iname_offset(&nim, 1);
+  nifti_1_header h;
+  if (nifti_convert_nim2n1hdr(&nim, &h) != 0) throw InputError(path + ": cannot make a NIfTI-1 header");
+  std::vector<char> head(static_cast<size_t>(nim.iname_offset), 0);
+  std::memcpy(head.data(), &h, sizeof h);
+  put(out, zs, head.data(), head.size(), false, path);
+  const char* bytes = reinterpret_cast<const char*>(image.data.data());
+  const size_t total = image.data.size() * sizeof(float), piece = size_t(1) << 24;
+  for (size_t at = 0; at < total || at == 0; at += piece)
+    put(out, zs, bytes + at, std::min(piece, total - at), at + piece >= total, path);
+}
+
+}  // namespace
+
 void write_nifti(const std::string& path, const Image& image) {
+  const bool gz = path.size() > 7 && path.substr(path.size() - 7) == ".nii.gz";
+  if (!gz && (path.size() < 4 || path.substr(path.size() - 4) != ".nii"))
+    throw InputError(path + ": write_nifti needs a .nii or .nii.gz name");
   const int64_t dims[8] = {3, image.dims[0], image.dims[1], image.dims[2], 1, 1, 1, 1};
-  NimPtr nim(nifti_make_new_nim(dims, DT_FLOAT32, 1));
-  if (!nim || !nim->data) throw InputError(path + ": cannot create a NIfTI image");
-  std::memcpy(nim->data, image.data.data(), image.data.size() * sizeof(float));
+  if (image.data.size() != size_t(dims[1] * dims[2] * dims[3]))
+    throw InputError(path + ": the image has " + std::to_string(image.data.size()) + " values for " +
+                     std::to_string(dims[1] * dims[2] * dims[3]) + " voxels");
+  NimPtr nim(nifti_make_new_nim(dims, DT_FLOAT32, 0));
+  if (!nim) throw InputError(path + ": cannot create a NIfTI image");
   nifti_dmat44 m;
   for (int r = 0; r < 4; ++r)
     for (int c = 0; c < 4; ++c) m.m[r][c] = image.affine(r, c);
@@ -171,24 +203,18 @@ void write_nifti(const std::string& path, const Image& image) {
   nim->dy = nim->pixdim[2] = dy;
   nim->dz = nim->pixdim[3] = dz;
   nim->qto_xyz = m;
-  // Write under a temporary name in the same folder, then rename (no partial outputs).
-  std::string ext = ".nii";
-  if (path.size() > 7 && path.substr(path.size() - 7) == ".nii.gz") ext = ".nii.gz";
-  else if (path.size() < 4 || path.substr(path.size() - 4) != ".nii")
-    throw InputError(path + ": write_nifti needs a .nii or .nii.gz name");
-  const std::string stem = path.substr(0, path.size() - ext.size());
-  const std::string tmp = stem + ".tmp" + std::to_string(::getpid()) + ext;
-  if (nifti_set_filenames(nim.get(), tmp.c_str(), 0, 1) != 0)
-    throw InputError(path + ": cannot set NIfTI file names");
   nim->nifti_type = NIFTI_FTYPE_NIFTI1_1;
-  nifti_image_write(nim.get());
-  std::error_code ec;
-  if (!std::filesystem::exists(tmp, ec)) throw InputError(path + ": cannot write the NIfTI file");
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw InputError(path + ": cannot rename the written NIfTI file into place");
-  }
+  // through AtomicFile like every output (no partial file under any name), gzip by zlib here
+  detail::AtomicFile file(path, true);
+  z_stream zs{};
+  if (gz && deflateInit2(&zs, Z_DEFAULT_COMPRESSION, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK)
+    throw InputError(path + ": cannot start gzip compression");
+  struct End {
+    z_stream* z;
+    ~End() { if (z) deflateEnd(z); }
+  } end{gz ? &zs : nullptr};
+  write_nifti_stream(file.stream(), gz ? &zs : nullptr, *nim, image, path);
+  file.commit();
 }
 
 }  // namespace vpm

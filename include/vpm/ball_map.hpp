@@ -75,8 +75,18 @@ struct BallMap {
 /// `vpm map` adds "read"/"write" to "timings_s".
 Json to_json(const BallMap& map);
 
+/// The whole-process peak memory (bytes) of reading, validating and mapping a mesh of `tets`
+/// tets with `vpm map`: a line fitted to measured peaks (docs/robustness.md, "Limits"), the
+/// largest of the host and the PoCL device at every size measured.
+double map_memory_estimate(long long tets);
+
+/// Refuses (InputError naming `source`, exit status 2) a map whose map_memory_estimate() does
+/// not fit in memory_budget() (vpm/memory.hpp; VPM_MAX_MEMORY overrides), before any work.
+void require_map_memory(long long tets, const std::string& source);
+
 /// Maps `input` (validated by validate_mesh, whose report is `validation`) to the unit ball so
 /// that local volumes are preserved. `source` names the input in messages. Runs on `device`.
+/// Calls require_map_memory() first.
 /// Throws InputError for a mesh that is not a ball topologically and NumericalError (message
 /// naming `source`, what was reached and the input's smallest dihedral angle) when no fold-free
 /// map could be made: a folded map is never returned.

@@ -40,6 +40,7 @@ struct DeviceDescription {
   bool fp64 = false;      ///< cl_khr_fp64 or CL_DEVICE_DOUBLE_FP_CONFIG non-zero
   unsigned compute_units = 0;
   unsigned long long global_memory_bytes = 0;
+  unsigned long long max_alloc_bytes = 0;  ///< CL_DEVICE_MAX_MEM_ALLOC_SIZE: the largest one buffer
   std::string label() const;  ///< "P:D platform: name"
 };
 
@@ -76,9 +77,19 @@ class Device {
   /// Kernel `kernel_name` of kernels/<program>.cl. Programs are built once per
   /// (program, options) and cached for the life of the device. The build prepends the fp64
   /// pragma and `#define real double`; `options` adds -D definitions. A build failure throws
-  /// std::runtime_error with the build log.
+  /// DeviceError (see build_program).
   boost::compute::kernel kernel(const std::string& program, const std::string& kernel_name,
                                 const std::string& options = "");
+  /// Builds `source` as program `name` (e.g. "kernels/solver.cl") the way kernel() builds the
+  /// embedded ones: fp64 preamble and kernels/common.clh first, -cl-std=CL1.2 -DLS=<local size>
+  /// [-DGROUP_REDUCE] and `options`. Not cached. A build failure throws DeviceError, one line:
+  /// the program, the device, the options and the first lines of the compiler's log.
+  boost::compute::program build_program(const std::string& name, const std::string& source,
+                                        const std::string& options = "");
+
+  /// Throws DeviceError naming `what` when one buffer of `bytes` exceeds what this device allows
+  /// (CL_DEVICE_MAX_MEM_ALLOC_SIZE) or its global memory. Does nothing on the host.
+  void check_buffer(unsigned long long bytes, const std::string& what) const;
 
   /// Work-group size used for every 1-D launch (fixed so PoCL compiles each kernel once).
   size_t local_size() const { return local_size_; }

@@ -19,9 +19,26 @@ class NumericalError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// The compute device failed: an OpenCL program did not build, a buffer larger than the device
+/// allows or than it has free, an OpenCL call that returned an error. Exit status 5. The message
+/// names the device, the program or buffer, and the OpenCL error (or the first lines of the
+/// build log); VPM_DEVICE=host runs the same work without OpenCL.
+class DeviceError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 /// Exit status the command-line program uses for each error kind.
 /// 4: the output was written but missed its tolerance by a wide margin (vpm map, vpm register;
 /// `--allow-partial` turns it into 0; the warning and the report's "converged": false stay).
-enum ExitCode : int { kExitOk = 0, kExitInternal = 1, kExitInput = 2, kExitNumerical = 3, kExitNotConverged = 4 };
+/// 5: DeviceError, or any other OpenCL error. 1: anything else ("internal error", a bug).
+enum ExitCode : int {
+  kExitOk = 0,
+  kExitInternal = 1,
+  kExitInput = 2,
+  kExitNumerical = 3,
+  kExitNotConverged = 4,
+  kExitDevice = 5
+};
 
 }  // namespace vpm
