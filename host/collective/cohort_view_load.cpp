@@ -136,15 +136,11 @@ void add_feature(CohortView& v, const CanonicalElements& el, const std::vector<c
   for (const std::string& p : first.normal_tables) normals.push_back(tables.get(p));
   const Reference ref = build_reference(el, normals, first.normal_tables, first.feature, first.normalisation, first.smoothing);
   v.features.push_back({first.feature, first.normalisation, first.smoothing, first.options, ref.subjects, to_float(ref.mean),
-                        to_float(ref.std)});
-  std::vector<std::vector<double>> x;
-  for (const ElementTable& t : normals)
-    x.push_back(smooth_over_elements(el, normalised_feature(t, first.feature, first.normalisation), first.smoothing));
-  const std::vector<std::vector<double>> z = leave_one_out_z(x);
+                        to_float(ref.std), ref.count});
   for (size_t i = 0; i < normals.size(); ++i) {
     ViewSubject& s = subject_for(v, index, subject_id(normals[i], first.normal_tables[i]), false);
-    s.values[first.feature] = to_float(x[i]);
-    s.z[first.feature] = to_float(z[i]);
+    s.values[first.feature] =
+        to_float(smooth_over_elements(el, normalised_feature(normals[i], first.feature, first.normalisation), first.smoothing));
   }
   for (const ComparisonFile* c : comps) {
     if (c->normal_tables != first.normal_tables || c->normalisation != first.normalisation ||
