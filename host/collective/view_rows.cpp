@@ -37,18 +37,21 @@ Json native_entry(ChunkPack& pack, const std::string& key, const ViewSubject& s,
   return j;
 }
 
-/// The element where the page turns a row to face focus `id`: on the outermost shell the focus
-/// reaches (the one closest to the brain's surface), its element of the largest |z|.
+/// The element where the page turns a row to face focus `id`: on the shell where the focus is
+/// widest (most elements; the outer one of a tie), its element of the largest |z| there.
 int face_element(const std::vector<std::int32_t>& cluster, const std::vector<float>& z, const std::vector<long>& offsets, int id) {
-  int best = -1, best_shell = -1;
-  for (size_t e = 0; e < cluster.size(); ++e) {
-    if (cluster[e] != id) continue;
-    const int k = static_cast<int>(std::upper_bound(offsets.begin(), offsets.end(), static_cast<long>(e)) - offsets.begin()) - 1;
-    if (k > best_shell || (k == best_shell && std::abs(z[e]) > std::abs(z[static_cast<size_t>(best)]))) {
+  const auto shell = [&](size_t e) {
+    return static_cast<int>(std::upper_bound(offsets.begin(), offsets.end(), static_cast<long>(e)) - offsets.begin()) - 1;
+  };
+  std::vector<int> count(offsets.size(), 0);
+  for (size_t e = 0; e < cluster.size(); ++e)
+    if (cluster[e] == id) ++count[static_cast<size_t>(shell(e))];
+  const int widest = static_cast<int>(std::max_element(count.rbegin(), count.rend()) - count.rbegin());
+  const int k = static_cast<int>(count.size()) - 1 - widest;
+  int best = -1;
+  for (size_t e = 0; e < cluster.size(); ++e)
+    if (cluster[e] == id && shell(e) == k && (best < 0 || std::abs(z[e]) > std::abs(z[static_cast<size_t>(best)])))
       best = static_cast<int>(e);
-      best_shell = k;
-    }
-  }
   return best;
 }
 

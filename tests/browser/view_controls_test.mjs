@@ -61,6 +61,26 @@ try {
     t.check(dir.test(legend), `the legend names the direction searched (sign ${sign})`);
   });
 
+  await t.step('at the start each patient faces its strongest focus; the hover marker is large', async () => {
+    const patients = await page.evaluate(() => window.vpmView.cells().filter((c) => c.group === 'patient' && c.kind === 'z'));
+    for (const c of patients) {
+      const has = manifest.subjects.find((s) => s.id === c.subject).foci_table?.[c.feature]?.length;
+      if (!has) continue;
+      await page.evaluate((i) => document.querySelectorAll('#table-area .cell')[i].scrollIntoView({ block: 'center' }), c.i);
+      await page.evaluate(() => window.vpmView.settled());
+      const r = await page.evaluate((i) => document.querySelectorAll('#table-area .cell')[i].getBoundingClientRect().toJSON(), c.i);
+      // the middle of the cell: a row facing its focus has it there
+      const px = await shot(page, { x: r.x + 0.3 * r.width, y: r.y + 0.3 * r.height, width: 0.4 * r.width, height: 0.4 * r.height });
+      t.check(px.red + px.blue >= 40, `${c.subject}'s z cell shows its strongest focus in its middle (${px.red + px.blue} saturated pixels)`);
+      await page.mouse.move(r.x + r.width / 2, r.y + r.height / 2);
+      await page.waitForTimeout(150);
+      const lit = await shot(page, r);
+      t.check(lit.greenBox[0] >= 18 && lit.greenBox[1] >= 18, `the hover marker is ${lit.greenBox.join(' x ')} px`);
+      await page.screenshot({ path: path.join(shots, 'marker.png') });
+    }
+    await page.mouse.move(5, 5);
+  });
+
   await t.step('the shell slider stays under the pointer while dragged', async () => {
     const s = await rectOf(page, '#shell');
     const y = s.y + s.height / 2;
@@ -119,25 +139,6 @@ try {
     await page.keyboard.press('Escape');
     t.check(await page.evaluate(() => document.getElementById('detail').hidden), 'Escape closes the detail');
     t.check(await page.evaluate(() => document.activeElement?.classList.contains('cell')), 'the keyboard focus goes back to the cell');
-  });
-
-  await t.step('at the start each patient faces its strongest focus; the hover marker is large', async () => {
-    const patients = await page.evaluate(() => window.vpmView.cells().filter((c) => c.group === 'patient' && c.kind === 'z'));
-    for (const c of patients) {
-      const has = manifest.subjects.find((s) => s.id === c.subject).foci_table?.[c.feature]?.length;
-      if (!has) continue;
-      await page.evaluate((i) => document.querySelectorAll('#table-area .cell')[i].scrollIntoView({ block: 'center' }), c.i);
-      await page.evaluate(() => window.vpmView.settled());
-      const r = await page.evaluate((i) => document.querySelectorAll('#table-area .cell')[i].getBoundingClientRect().toJSON(), c.i);
-      const px = await shot(page, r);
-      t.check(px.red + px.blue > 0.004 * px.total, `${c.subject}'s z cell shows its focus (${px.red + px.blue} saturated pixels of ${px.total})`);
-      await page.mouse.move(r.x + r.width / 2, r.y + r.height / 2);
-      await page.waitForTimeout(150);
-      const lit = await shot(page, r);
-      t.check(lit.greenBox[0] >= 18 && lit.greenBox[1] >= 18, `the hover marker is ${lit.greenBox.join(' x ')} px`);
-      await page.screenshot({ path: path.join(shots, 'marker.png') });
-    }
-    await page.mouse.move(5, 5);
   });
 
   await t.step('Ctrl + wheel zooms', async () => {

@@ -48,7 +48,7 @@ try {
 
   const patientZ = cells.find((c) => c.group === 'patient' && c.kind === 'z').i;
   await t.step('a drag turns every cell', async () => {
-    const other = cells.find((c) => c.subject !== cells[patientZ].subject && c.group === 'normal' && c.rect.top > 0 && c.rect.bottom < 800).i;
+    const other = cells.find((c) => c.subject !== cells[patientZ].subject && c.rect.top > 0 && c.rect.bottom < 800).i;
     const before = await page.evaluate((i) => Promise.all([window.vpmView.camera(), window.vpmView.pixels(i)]), other);
     const b0 = await cellBox(page, patientZ);
     await page.mouse.move(b0.x + b0.width / 2, b0.y + b0.height / 2);
@@ -97,8 +97,9 @@ try {
     }
   });
 
-  let fociRows = 0;
+  let fociRows = 0, shellBefore = -1;
   await t.step('a click opens the detail; the tooltip goes', async () => {
+    shellBefore = await page.evaluate(() => window.vpmView.state.shell);
     const bz = await cellBox(page, patientZ);
     await page.mouse.move(bz.x + bz.width / 2, bz.y + bz.height / 2);
     await page.mouse.click(bz.x + bz.width / 2, bz.y + bz.height / 2);
@@ -179,7 +180,7 @@ try {
 
   if (fociRows > 0) {
     await t.step('a foci row jumps to its focus and is marked chosen; closing restores the shell', async () => {
-      const before = await page.evaluate(() => window.vpmView.state.shell);
+      const before = shellBefore;
       // a row whose peak is on another shell than the one shown, if any
       const pick = await page.evaluate(() => {
         const v = window.vpmView, d = v.state.detail, rows = d.subject.foci_table[d.feature];

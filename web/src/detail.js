@@ -36,8 +36,9 @@ export class Detail {
     document.body.classList.add('with-detail');
     Object.assign(this.cell, { row, subject, hidden: false, column: { kind: 'z', feature, label: 'detail' } });
     const k = e >= 0 ? this.model.ids.shellOf(e) : -1;
+    if (e >= 0 && row.shell !== null && row.shell !== k) row.shell = null;  // the row shows the element's shell
     if (e >= 0 && k !== this.state.shell) {
-      this.setShell(k);
+      this.setShell(k, { rows: false });
       this.before.setShell = k;
     }
     if (turn && e >= 0) this.face(row, e);
@@ -65,7 +66,7 @@ export class Detail {
     this.cell.hidden = true;
     document.body.classList.remove('with-detail');
     // the shell the detail moved to goes back, unless the shell was changed since
-    if (this.before?.setShell !== undefined && this.state.shell === this.before.setShell) this.setShell(this.before.shell);
+    if (this.before?.setShell !== undefined && this.state.shell === this.before.setShell) this.setShell(this.before.shell, { rows: false });
     const opener = this.before?.opener;
     this.before = null;
     this.relayout();

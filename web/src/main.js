@@ -60,7 +60,9 @@ function updateLabels() {
   const outer = state.shell === K - 1;
   $('#shell-value').textContent = `${state.shell + 1} of ${K}${outer ? ' (outer)' : ''}`;
   shellInput.setAttribute('aria-valuetext', `shell ${state.shell + 1} of ${K}${outer ? ', the outer one' : ''}`);
-  for (const f of features) document.querySelectorAll('.spread-max').forEach((el) => { el.textContent = fmt(f.spread_range[1]); });
+  document.querySelectorAll('.spread-max').forEach((el) => {
+    el.textContent = features.map((f) => `${fmt(f.spread_range[1])} (${f.name})`).join(', ');
+  });
 }
 
 let app = null;
@@ -107,12 +109,13 @@ async function start() {
   document.body.dataset.ready = 'true';
 }
 
-/** Shows shell k (0-based) in every row (rows facing a focus on their own shell follow too). */
-function setShell(k) {
-  if (k === state.shell) return;
+/** Shows shell k (0-based); `rows`: rows facing a focus on a shell of their own follow too (the
+ *  slider), else they keep theirs (the detail moving to its element's shell). */
+function setShell(k, { rows: all = true } = {}) {
+  if (all) for (const r of rows) r.shell = null;
+  if (k === state.shell) return app.requestRender();
   state.shell = k;
   shellInput.value = String(k + 1);
-  for (const r of rows) r.shell = null;
   app.detail.refresh();
   updateLabels();
   app.requestRender();

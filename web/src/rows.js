@@ -64,6 +64,7 @@ export class Rows {
         ready.push(v);
         this.built.add(v.cell.row);
         this.faceNow(v.cell.row);
+        this.showShell(v.cell.row);
       } else {
         missing.add(v.cell.row.subject);
       }
@@ -113,7 +114,17 @@ export class Rows {
       scene.own.add(row.view);
     }
     row.el.querySelector('.face')?.setAttribute('aria-pressed', String(!!row.view));
+    this.showShell(row);
     this.requestRender();
+  }
+
+  /** The row header names the shell a row shows when it is its own. */
+  showShell(row) {
+    if (row.shownShell === row.shell) return;
+    row.shownShell = row.shell;
+    const el = row.el.querySelector('.row-shell');
+    if (!el) return;
+    el.textContent = row.shell === null ? '' : `shows shell ${row.shell + 1} of ${this.app.model.K} (its focus)`;
   }
 
   /** Points a row's pending view at its focus once its surface is here. */

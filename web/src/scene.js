@@ -187,6 +187,7 @@ export class TableScene {
     const ndc = new Vector2(((x - rect.left) / rect.width) * 2 - 1, -((y - rect.top) / rect.height) * 2 + 1);
     this.setCamera(this.viewOf(cell), rect.width / rect.height);
     this.mesh.geometry = cell.geometry;
+    cell.geometry.boundingSphere = null;  // the surface may have changed since (shell, mode)
     this.raycaster.setFromCamera(ndc, this.camera);
     const hit = this.raycaster.intersectObject(this.mesh, false)[0];
     return hit ? hit.faceIndex : -1;

@@ -50,7 +50,8 @@ function subjectRow(s, columns, features) {
       head += `<div class="foci" data-subject="${esc(s.id)}" data-feature="${esc(f.name)}" data-count="${s.foci[f.name]}">` +
         `${s.foci[f.name]} foci (${esc(f.name)})</div>`;
     if (features.some((f) => s.foci_table?.[f.name]?.length))
-      head += `<button class="face" type="button" aria-pressed="false" aria-label="${esc(s.id)}: turn this row to face its strongest focus">face focus</button>`;
+      head += `<button class="face" type="button" aria-pressed="false" aria-label="${esc(s.id)}: turn this row to face its strongest focus">face focus</button>` +
+        '<div class="row-shell"></div>';
   }
   row.innerHTML = head + '</div>';
   const cells = columns.map((c) => {
