@@ -97,3 +97,20 @@ export function unnamed(page, selector) {
     return !String(name).trim();
   }).map((el) => el.id || `${el.tagName.toLowerCase()}.${el.className}`), selector);
 }
+
+/** The page's cells (window.vpmView.cells()) with group and kind filled in where a page's hooks
+ *  give only the column's label (pages before issue 37: the tests run on them too, to show what
+ *  they catch). */
+export async function cellsOf(page) {
+  return page.evaluate(() => {
+    const v = window.vpmView;
+    const group = Object.fromEntries(v.manifest.subjects.map((s) => [s.id, s.group]));
+    return v.cells().map((c) => ({ ...c, group: c.group ?? group[c.subject], kind: c.kind ?? (/z-score/.test(c.column) ? 'z' : 'value'),
+      feature: c.feature ?? c.column.split(' ')[0] }));
+  });
+}
+
+/** Waits until every cell on screen is drawn (pages without the hook: a short pause). */
+export async function settled(page) {
+  await page.evaluate(async () => (window.vpmView.settled ? window.vpmView.settled() : new Promise((r) => setTimeout(r, 200))));
+}

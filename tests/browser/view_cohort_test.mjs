@@ -10,7 +10,7 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { launch, openPage } from './browser.mjs';
-import { Checks, shot } from './check.mjs';
+import { Checks, shot, cellsOf, settled } from './check.mjs';
 
 const [pagePath, results, shots] = process.argv.slice(2);
 if (!shots) {
@@ -35,7 +35,7 @@ try {
   });
 
   await t.step('the reference row draws the normals\' mean and spread', async () => {
-    const ref = await page.evaluate(() => window.vpmView.cells().filter((c) => c.group === 'reference'));
+    const ref = (await cellsOf(page)).filter((c) => c.group === 'reference');
     t.check(ref.length === 2 * manifest.features.length, `${ref.length} reference cells`);
     for (const c of ref) {
       const p = await page.evaluate((i) => window.vpmView.pixels(i), c.i);
@@ -44,13 +44,13 @@ try {
   });
 
   await t.step('each patient faces its strongest focus at the start', async () => {
-    const patients = await page.evaluate(() => window.vpmView.cells().filter((c) => c.group === 'patient' && c.kind === 'z'));
+    const patients = (await cellsOf(page)).filter((c) => c.group === 'patient' && c.kind === 'z');
     let shown = 0, tried = 0;
     for (const c of patients) {
       if (!manifest.subjects.find((s) => s.id === c.subject).foci_table?.[c.feature]?.length) continue;
       ++tried;
       await page.evaluate((i) => document.querySelectorAll('#table-area .cell')[i].scrollIntoView({ block: 'center' }), c.i);
-      await page.evaluate(() => window.vpmView.settled());
+      await settled(page);
       const r = await cellRect(page, c.i);
       const px = await shot(page, { x: r.x + 0.3 * r.width, y: r.y + 0.3 * r.height, width: 0.4 * r.width, height: 0.4 * r.height });
       if (px.red + px.blue >= 40) ++shown;
@@ -60,9 +60,9 @@ try {
   });
 
   await t.step("a normal's detail plots the other normals; its z agrees", async () => {
-    const n = await page.evaluate(() => window.vpmView.cells().find((c) => c.group === 'normal' && c.kind === 'value'));
+    const n = (await cellsOf(page)).find((c) => c.group === 'normal' && c.kind === 'value');
     await page.evaluate((i) => document.querySelectorAll('#table-area .cell')[i].scrollIntoView({ block: 'center' }), n.i);
-    await page.evaluate(() => window.vpmView.settled());
+    await settled(page);
     const r = await cellRect(page, n.i);
     await page.mouse.click(r.x + r.width / 2, r.y + r.height / 2);
     await page.waitForSelector('#plot[data-state=drawn]', { timeout: 15000 });
@@ -91,8 +91,8 @@ try {
 
   await t.step('rows further down load and draw when scrolled to', async () => {
     await page.evaluate(() => { const a = document.getElementById('table-area'); a.scrollTo(0, a.scrollHeight); });
-    await page.evaluate(() => window.vpmView.settled());
-    const last = await page.evaluate(() => window.vpmView.cells().at(-1));
+    await settled(page);
+    const last = (await cellsOf(page)).at(-1);
     const p = await page.evaluate((i) => window.vpmView.pixels(i), last.i);
     t.check(p.covered > 0.05 * p.total, `the last normal (${last.subject}) draws (${p.covered} px)`);
     const read = await page.evaluate(() => window.vpmView.bytes());

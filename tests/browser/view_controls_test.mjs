@@ -10,7 +10,7 @@
 import fs from 'node:fs';
 import path from 'node:path';
 import { launch, openPage } from './browser.mjs';
-import { Checks, shot, unnamed } from './check.mjs';
+import { Checks, shot, unnamed, cellsOf, settled } from './check.mjs';
 
 const [pagePath, results, shots] = process.argv.slice(2);
 if (!shots) {
@@ -62,12 +62,12 @@ try {
   });
 
   await t.step('at the start each patient faces its strongest focus; the hover marker is large', async () => {
-    const patients = await page.evaluate(() => window.vpmView.cells().filter((c) => c.group === 'patient' && c.kind === 'z'));
+    const patients = (await cellsOf(page)).filter((c) => c.group === 'patient' && c.kind === 'z');
     for (const c of patients) {
       const has = manifest.subjects.find((s) => s.id === c.subject).foci_table?.[c.feature]?.length;
       if (!has) continue;
       await page.evaluate((i) => document.querySelectorAll('#table-area .cell')[i].scrollIntoView({ block: 'center' }), c.i);
-      await page.evaluate(() => window.vpmView.settled());
+      await settled(page);
       const r = await page.evaluate((i) => document.querySelectorAll('#table-area .cell')[i].getBoundingClientRect().toJSON(), c.i);
       // the middle of the cell: a row facing its focus has it there
       const px = await shot(page, { x: r.x + 0.3 * r.width, y: r.y + 0.3 * r.height, width: 0.4 * r.width, height: 0.4 * r.height });
@@ -119,10 +119,8 @@ try {
     const after = await page.evaluate(() => window.vpmView.camera());
     t.check(Math.abs(after.yaw - before.yaw) > 0.1, `arrow keys turn the view (yaw ${before.yaw.toFixed(2)} -> ${after.yaw.toFixed(2)})`);
     // a patient's z cell: Enter opens its detail at its strongest focus
-    await page.evaluate(() => {
-      const v = window.vpmView, i = v.cells().find((c) => c.group === 'patient' && c.kind === 'z').i;
-      document.querySelectorAll('#table-area .cell')[i].focus();
-    });
+    const pz = (await cellsOf(page)).find((c) => c.group === 'patient' && c.kind === 'z').i;
+    await page.evaluate((i) => document.querySelectorAll('#table-area .cell')[i].focus(), pz);
     await page.keyboard.press('Enter');
     const open = await page.evaluate(() => !document.getElementById('detail').hidden);
     t.check(open, 'Enter opens the detail');
@@ -136,13 +134,17 @@ try {
       await page.keyboard.press('Enter');
       t.check(await page.evaluate(() => document.activeElement?.getAttribute('aria-selected') === 'true'), 'Enter on a foci row chooses it');
     }
+    if (!(await page.evaluate(() => !document.getElementById('detail').hidden))) {  // opened by a click then
+      const r = await page.evaluate((i) => document.querySelectorAll('#table-area .cell')[i].getBoundingClientRect().toJSON(), pz);
+      await page.mouse.click(r.x + r.width / 2, r.y + r.height / 2);
+    }
     await page.keyboard.press('Escape');
     t.check(await page.evaluate(() => document.getElementById('detail').hidden), 'Escape closes the detail');
     t.check(await page.evaluate(() => document.activeElement?.classList.contains('cell')), 'the keyboard focus goes back to the cell');
   });
 
   await t.step('Ctrl + wheel zooms', async () => {
-    const c = await page.evaluate(() => window.vpmView.cells().find((x) => x.rect.top > 0 && x.rect.bottom < innerHeight && x.group !== 'reference'));
+    const c = (await cellsOf(page)).find((x) => x.rect.top > 0 && x.rect.bottom < 800 && x.group !== 'reference');
     const before = await page.evaluate(async (i) => [window.vpmView.camera(), await window.vpmView.pixels(i)], c.i);
     await page.mouse.move(c.rect.x + c.rect.width / 2, c.rect.y + c.rect.height / 2);
     await page.keyboard.down('Control');
@@ -151,12 +153,12 @@ try {
     await page.waitForTimeout(250);
     const after = await page.evaluate(async (i) => [window.vpmView.camera(), await window.vpmView.pixels(i)], c.i);
     t.check(after[1].covered > 1.15 * before[1].covered, `the brain grows in its cell (${before[1].covered} -> ${after[1].covered} px)`);
-    await page.evaluate(() => { window.vpmView.scene.zoom = 1; window.vpmView.render(); });
+    await page.evaluate(() => { window.vpmView.scene.zoom = 1; window.vpmView.render?.(); });
   });
 
   await t.step('headers and colour bars stay on screen while the table scrolls', async () => {
     await page.evaluate(() => { const a = document.getElementById('table-area'); a.scrollTo(0, Math.min(700, a.scrollHeight)); });
-    await page.evaluate(() => window.vpmView.settled());
+    await settled(page);
     const bar = await page.evaluate(() => {
       const area = document.getElementById('table-area').getBoundingClientRect();
       const bars = [...document.querySelectorAll('.bar')].map((b) => b.getBoundingClientRect()).filter((r) => r.top >= area.top - 1 && r.bottom <= area.bottom && r.width > 0);
@@ -183,7 +185,7 @@ try {
         return { used: (right - left) / a.width, cell };
       });
       t.check(use.used > 0.75 && use.cell > 150, `${vp.width}x${vp.height}: the rows use ${(100 * use.used).toFixed(0)} % of the table's width, cells ${use.cell.toFixed(0)} px`);
-      await page.evaluate(() => window.vpmView.settled());
+      await settled(page);
       await page.screenshot({ path: path.join(shots, `table_${vp.width}.png`) });
     }
     await page.selectOption('#cell-size', '180');
