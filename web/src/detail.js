@@ -42,7 +42,7 @@ export class Detail {
       this.before.setShell = k;
     }
     if (turn && e >= 0) this.face(row, e);
-    if (wasHidden) this.relayout();
+    if (wasHidden) this.relayout(row.el);
     this.refresh();
   }
 
@@ -69,7 +69,7 @@ export class Detail {
     if (this.before?.setShell !== undefined && this.state.shell === this.before.setShell) this.setShell(this.before.shell, { rows: false });
     const opener = this.before?.opener;
     this.before = null;
-    this.relayout();
+    this.relayout(opener?.closest?.('.row'));
     this.requestRender();
     if (opener?.isConnected && opener.focus) opener.focus();
   }

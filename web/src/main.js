@@ -121,8 +121,10 @@ function setShell(k, { rows: all = true } = {}) {
   app.requestRender();
 }
 
-/** Refits the cells after the table's width changed (the detail panel opened or closed). */
-function relayout() {
+/** Refits the cells after the table's width changed (the detail panel opened or closed),
+ *  keeping `keep` (the row in use) on screen. */
+function relayout(keep) {
   fit();
+  keep?.scrollIntoView({ block: 'nearest' });
   app.requestRender();
 }

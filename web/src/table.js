@@ -116,7 +116,7 @@ export function buildTables(area, { cohort, columns, features }) {
   return rows;
 }
 
-/** Sizes the cells to the window: `size` 'auto' (about 2.6 rows in the table's height, lanes to
+/** Sizes the cells to the window: `size` 'auto' (about 3.4 rows in the table's height, lanes to
  *  fill its width) or a width in px; repeats the sticky header once per lane. Returns the size. */
 export function fitCells(area, rows, columns, size) {
   const style = getComputedStyle(area);
@@ -125,7 +125,7 @@ export function fitCells(area, rows, columns, size) {
   const n = columns.length;
   let cell, lanes;
   if (size === 'auto') {
-    const target = Math.max(120, Math.min(480, (height - 90) / 2.6));
+    const target = Math.max(120, Math.min(480, (height - 90) / 3.4));
     const rowWidth = HEAD + n * (target + GAP);
     lanes = Math.max(1, Math.round((width + LANE_GAP) / (rowWidth + LANE_GAP)));
     cell = Math.floor(((width + LANE_GAP) / lanes - LANE_GAP - HEAD) / n - GAP);
