@@ -76,7 +76,19 @@ try {
       await page.waitForTimeout(150);
       const lit = await shot(page, r);
       t.check(lit.greenBox[0] >= 18 && lit.greenBox[1] >= 18, `the hover marker is ${lit.greenBox.join(' x ')} px`);
+      // and in the other cell of the row (the value column), where the pointer is not
+      const v = (await cellsOf(page)).find((x) => x.subject === c.subject && x.kind === 'value');
+      const other = await shot(page, v.rect);
+      t.check(other.greenBox[0] >= 18 && other.greenBox[1] >= 18, `the marker in ${c.subject}'s value cell is ${other.greenBox.join(' x ')} px`);
       await page.screenshot({ path: path.join(shots, 'marker.png') });
+      // the row's button turns it to the shared view and back
+      const face = `.row[data-subject="${c.subject}"] .face`;
+      const pressed = () => page.evaluate((sel) => document.querySelector(sel)?.getAttribute('aria-pressed'), face);
+      const was = await pressed();
+      await page.click(face).catch(() => {});
+      const off = await pressed();
+      await page.click(face).catch(() => {});
+      t.check(was === 'true' && off === 'false' && (await pressed()) === 'true', `${c.subject}'s "face focus" button toggles its own view (${was} -> ${off} -> ${await pressed()})`);
     }
     await page.mouse.move(5, 5);
   });

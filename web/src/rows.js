@@ -69,13 +69,14 @@ export class Rows {
         missing.add(v.cell.row.subject);
       }
     }
+    const onScreen = [...missing];
     // load the near rows too (a chunk holds several), so that scrolling finds them here
     for (const r of this.near) if (r.subject.kind !== 'reference' && !cohort.ready(r.subject)) missing.add(r.subject);
     if (missing.size) cohort.load([...missing]).then(this.requestRender, this.app.showError);
     const drawn = scene.draw(ready);
     marks.draw(ready);
     this.trim();
-    return { drawn, waiting: shown.length - ready.length };
+    return { drawn, waiting: shown.length - ready.length, missing: onScreen };
   }
 
   /** Rows far from the screen give their geometry back above KEEP_ROWS. */
@@ -92,10 +93,9 @@ export class Rows {
   /** Resolves after a frame with every cell on screen drawn (data loaded). */
   async firstFrame() {
     for (let i = 0; i < 600; ++i) {
-      const { waiting } = this.render();
+      const { waiting, missing } = this.render();
       if (!waiting) return;
-      const need = [...this.near].filter((r) => r.subject.kind !== 'reference').map((r) => r.subject);
-      await this.app.cohort.load(need);
+      await this.app.cohort.load(missing);  // the rows on screen; the near ones follow
     }
     throw new Error('the rows on screen did not load');
   }

@@ -126,11 +126,10 @@ export function fitCells(area, rows, columns, size) {
   let cell, lanes;
   if (size === 'auto') {
     const target = Math.max(120, Math.min(480, (height - 90) / 3.4));
-    const rowWidth = HEAD + n * (target + GAP);
-    lanes = Math.max(1, Math.round((width + LANE_GAP) / (rowWidth + LANE_GAP)));
-    cell = Math.floor(((width + LANE_GAP) / lanes - LANE_GAP - HEAD) / n - GAP);
-    cell = Math.max(90, Math.min(Math.round(1.35 * target), cell));
-    while (lanes > 1 && lanes * (HEAD + n * (cell + GAP)) + (lanes - 1) * LANE_GAP > width) --lanes;
+    const fitting = (l) => Math.floor(((width + LANE_GAP) / l - LANE_GAP - HEAD) / n - GAP);  // cells filling l lanes
+    lanes = Math.max(1, Math.floor((width + LANE_GAP) / (HEAD + n * (target + GAP) + LANE_GAP)));
+    if (fitting(lanes + 1) >= 0.8 * target) ++lanes;  // one lane more of cells a little smaller
+    cell = Math.max(90, Math.min(Math.round(1.35 * target), fitting(lanes)));
   } else {
     cell = Number(size);
     lanes = Math.max(1, Math.floor((width + LANE_GAP) / (HEAD + n * (cell + GAP) + LANE_GAP)));
