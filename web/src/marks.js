@@ -10,6 +10,11 @@ export class Marks {
     this.rings = [];   // what was drawn last: {cell, x, y, r}
   }
 
+  elementAt(cell, at) {
+    const f = this.scene.pick(cell, at.x, at.y);
+    return f < 0 ? -1 : this.model.element(this.painter.shellOf(cell.row), f);
+  }
+
   /** Rings for the cells drawn this frame (`shown`: from TableScene.visible, prepared). */
   draw(shown) {
     const rings = [];
@@ -20,6 +25,8 @@ export class Marks {
       const { p, n } = this.model.elementPoint(cell.row.surf, e);
       const at = this.scene.project(cell, v.rect, p, n);
       if (!at.facing || at.x < v.left || at.x > v.right || at.y < v.top || at.y > v.bottom) continue;
+      // seen at an angle it may be behind a fold: at rest, only where the surface there is its own
+      if (at.cos < 0.7 && (this.scene.moving || this.elementAt(cell, at) !== e)) continue;
       rings.push({ cell, x: at.x, y: at.y, r: Math.max(10, Math.min(22, 0.06 * v.rect.width)), clip: v });
     }
     if (!rings.length && !this.rings.length) return;

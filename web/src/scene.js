@@ -200,8 +200,9 @@ export class TableScene {
     const v = new Vector3(...p);
     const toEye = this.camera.position.clone().sub(v);
     v.project(this.camera);
-    return { x: rect.left + ((v.x + 1) / 2) * rect.width, y: rect.top + ((1 - v.y) / 2) * rect.height,
-      facing: toEye.dot(new Vector3(...n)) > 0 };
+    const normal = new Vector3(...n);
+    const cos = toEye.dot(normal) / (toEye.length() * normal.length() || 1);
+    return { x: rect.left + ((v.x + 1) / 2) * rect.width, y: rect.top + ((1 - v.y) / 2) * rect.height, facing: cos > 0, cos };
   }
 
   /** What `cell` shows right now, drawn at full resolution (for tests): pixels differing from the
