@@ -2,7 +2,7 @@
 // of patients and of normals, which direction was searched for foci and how), written from the
 // options vpm compare used (the manifest's features).
 import { esc } from './table.js';
-import { fmt } from './plot.js';
+import { fmt, thousands } from './plot.js';
 
 function direction(sign) {
   if (sign < 0) return { short: 'below the normals only', long: 'decreases only (z below \u2212threshold; increases were not searched)' };
@@ -45,7 +45,7 @@ export function buildLegend(el, manifest) {
         `<b>Foci</b> (saturated colours; other elements beyond the threshold are faded): ${threshold(f)}, ` +
         `searched for ${d.long}` + (f.smoothing > 0 ? `, after averaging over ${f.smoothing} ring(s) of neighbouring elements` : '') + '.</dd>';
     }).join('') +
-    `<dt>elements</dt><dd>${manifest.elements.toLocaleString('en')} canonical volume elements of the unit ball (level ${manifest.definition.level}, ` +
+    `<dt>elements</dt><dd>${thousands(manifest.elements)} canonical volume elements of the unit ball (level ${manifest.definition.level}, ` +
     `${manifest.shells} shells of equal volume); every subject is mapped to the ball, so an element is the same ` +
     'anatomical place in every brain. The shell slider shows one shell (the outer one is the brain\u2019s surface).</dd>' +
     '<dt>reference row</dt><dd>the normals\u2019 mean (value columns) and spread, their standard deviation (z columns), on their mean shape.</dd>' +

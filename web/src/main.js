@@ -15,7 +15,7 @@ import { buildTables, fitCells, drawBars } from './table.js';
 import { buildLegend } from './legend.js';
 import { Rows } from './rows.js';
 import { interact } from './interaction.js';
-import { fmt } from './plot.js';
+import { fmt, thousands } from './plot.js';
 import { testHooks } from './hooks.js';
 
 performance.mark('vpm:script');
@@ -25,6 +25,9 @@ const K = manifest.shells;
 const features = manifest.features;
 const store = new Store(manifest);
 const cohort = new Cohort(manifest, store);
+// read the base data and the first rows (the top of the table) while the page is laid out
+const base = store.chunk('base');
+if (cohort.subjects.length) store.chunk(cohort.subjects[0].chunk).catch(() => {});
 const columns = features.flatMap((f) => [
   { kind: 'value', feature: f.name, label: `${f.name} (${f.normalisation === 'proportional' ? 'proportional: 1 = subject mean' : 'as sampled'})` },
   { kind: 'z', feature: f.name, label: `${f.name} z-score` },
@@ -35,13 +38,13 @@ const state = { mode: 'native', shell: K - 1, threshold: features[0]?.threshold 
 document.title = manifest.title;
 $('#title').textContent = manifest.title;
 $('#summary').textContent = `${cohort.patients.length} patients, ${cohort.normals.length} normals; ` +
-  `${manifest.elements.toLocaleString('en')} elements (level ${manifest.definition.level}, ${K} shells)`;
+  `${thousands(manifest.elements)} elements (level ${manifest.definition.level}, ${K} shells)`;
 const shellInput = $('#shell');
 shellInput.max = String(K);
 shellInput.value = String(K);
 $('#threshold').value = String(state.threshold);
 const loading = $('#loading');
-loading.textContent = `Loading ${cohort.subjects.length.toLocaleString('en')} subjects\u2026`;
+loading.textContent = `Loading ${thousands(cohort.subjects.length)} subjects\u2026`;
 buildLegend($('#legend'), manifest);
 const area = $('#table-area');
 const rows = buildTables(area, { cohort, columns, features });
@@ -77,7 +80,7 @@ function showError(e) {
 }
 
 async function start() {
-  await store.chunk('base');
+  await base;
   performance.mark('vpm:decoded');
   const model = new SurfaceModel(manifest, store);
   model.buildCorners();
