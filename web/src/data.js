@@ -33,7 +33,7 @@ const domReady = (doc) => doc.readyState !== 'loading' ? Promise.resolve()
 
 export class Store {
   /** `budget`: bytes of droppable chunks (rows, columns, details) held at most. */
-  constructor(manifest, { doc = document, budget = 384e6 } = {}) {
+  constructor(manifest, { doc = document, budget = 160e6 } = {}) {
     this.m = manifest;
     this.doc = doc;
     this.budget = budget;
@@ -71,12 +71,17 @@ export class Store {
   /** Every chunk in `names`. */
   need(names) { return Promise.all([...new Set(names)].map((n) => this.chunk(n))); }
 
+  /** An embedded chunk, as soon as the parser is past it (the page's first rows come first, so
+   *  the table draws while the rest of a large file is still being read). */
   async embedded(name) {
-    await domReady(this.doc);
-    await new Promise((resolve) => setTimeout(resolve, 0));  // let the page paint between chunks
-    const el = this.doc.getElementById(`vpm-chunk-${name}`);
-    if (!el) throw new Error(`the page has no data chunk '${name}'`);
-    return decodeBase64(el.textContent);
+    const id = `vpm-chunk-${name}`;
+    for (;;) {
+      await new Promise((resolve) => setTimeout(resolve, 0));  // let the parser and the page go on
+      const el = this.doc.getElementById(id);
+      if (el && (el.nextSibling || this.doc.readyState !== 'loading')) return decodeBase64(el.textContent);
+      if (!el && this.doc.readyState !== 'loading') throw new Error(`the page has no data chunk '${name}'`);
+      if (!el || !el.nextSibling) await Promise.race([domReady(this.doc), new Promise((resolve) => setTimeout(resolve, 15))]);
+    }
   }
 
   fromFolder(name) {
