@@ -64,7 +64,7 @@ function updateLabels() {
   $('#shell-value').textContent = `${state.shell + 1} of ${K}${outer ? ' (outer)' : ''}`;
   shellInput.setAttribute('aria-valuetext', `shell ${state.shell + 1} of ${K}${outer ? ', the outer one' : ''}`);
   document.querySelectorAll('.spread-max').forEach((el) => {
-    el.textContent = features.map((f) => `${fmt(f.spread_range[1])} (${f.name})`).join(', ');
+    el.textContent = features.map((f) => `${fmt(f.spread_range[1])}${features.length > 1 ? ` (${f.name})` : ''}`).join(', ');
   });
 }
 

@@ -23,6 +23,8 @@ export class Rows {
       if (b.bottom > box.top && b.top < box.bottom + 0.5 * box.height) this.near.add(r);
     }
     app.scene.onRest = this.requestRender;
+    // the chunks of rows near the screen and of the detail's subject are never dropped (data.js)
+    app.store.pinned = (chunk) => chunk === app.state.detail?.subject.chunk || [...this.near].some((r) => r.subject.chunk === chunk);
   }
 
   changed(entries) {

@@ -42,13 +42,14 @@ function subjectRow(s, columns, features) {
   row.className = `row ${s.group}`;
   row.setAttribute('role', 'group');
   row.dataset.subject = s.id;
-  const foci = s.group === 'patient' ? features.map((f) => `${s.foci[f.name]} foci (${f.name})`).join(', ') : '';
+  const count = (n) => `${n} ${n === 1 ? 'focus' : 'foci'}`;
+  const foci = s.group === 'patient' ? features.map((f) => `${count(s.foci[f.name])} (${f.name})`).join(', ') : '';
   row.setAttribute('aria-label', `${s.id}, ${s.group}${foci ? ', ' + foci : ''}`);
   let head = `<div class="rowhead"><div class="sid">${esc(s.id)}</div><div class="group">${esc(s.group)}</div>`;
   if (s.group === 'patient') {
     for (const f of features)
       head += `<div class="foci" data-subject="${esc(s.id)}" data-feature="${esc(f.name)}" data-count="${s.foci[f.name]}">` +
-        `${s.foci[f.name]} foci (${esc(f.name)})</div>`;
+        `${count(s.foci[f.name])} (${esc(f.name)})</div>`;
     if (features.some((f) => s.foci_table?.[f.name]?.length))
       head += `<button class="face" type="button" aria-pressed="false" aria-label="${esc(s.id)}: turn this row to face its strongest focus">face focus</button>` +
         '<div class="row-shell"></div>';
@@ -68,20 +69,16 @@ function referenceRow(cohort, columns) {
   row.className = 'row reference';
   row.setAttribute('role', 'group');
   row.setAttribute('aria-label', `the normals' reference: mean and spread of ${n} normals`);
-  row.innerHTML = `<div class="rowhead"><div class="sid">reference</div>` +
-    `<div class="group">${n} normals: mean, spread</div></div>`;
+  row.innerHTML = `<div class="rowhead" title="the normals in one row: their mean on their mean shape (value columns) and their ` +
+    `spread, the standard deviation (z columns); every normal is listed under Normals"><div class="sid">reference</div>` +
+    `<div class="group">${n} normals: mean; spread (sd)</div><div class="ref-scale"><span class="spread-bar" style="background:${spreadCss()}"></span> ` +
+    `0 to <span class="spread-max"></span></div></div>`;
   const cells = columns.map((c) => {
     const what = c.kind === 'value' ? `mean of the ${n} normals` : `spread (standard deviation) of the ${n} normals`;
     const el = cellElement(`reference, ${c.feature} ${what} on their mean shape: ${HINT}`);
     row.appendChild(el);
     return { el, column: c, spread: c.kind === 'z' };
   });
-  const note = document.createElement('div');
-  note.className = 'ref-note';
-  note.innerHTML = `The normals in one row: their mean on their mean shape (value columns) and their spread, ` +
-    `the standard deviation (z columns, <span class="spread-bar" style="background:${spreadCss()}"></span> 0 to ` +
-    `<span class="spread-max"></span>). Every normal is listed under Normals below.`;
-  row.appendChild(note);
   return { el: row, subject: cohort.reference, cells, view: null, shell: null };
 }
 
