@@ -1,18 +1,20 @@
 // The cohort page's speed and memory in headless Chromium with software WebGL (SwiftShader), as
 // on a machine without a GPU (docs/view.md):
-//   node bench/view/bench.mjs PAGE.html [RUNS=3] [OUT.json] [WIDTHxHEIGHT=1280x800]
+//   node bench/view/bench.mjs PAGE.html [RUNS=3] [OUT.json] [WIDTHxHEIGHT=1280x800] [CELL_PX]
 // Per run, a fresh browser and page: time from navigation to the first frame with every cell on
 // screen drawn (the page's performance marks vpm:decoded, vpm:first-frame), the data read by then,
 // the frame rate while the shared view turns a step every animation frame (120 frames at the top
 // of the table and scrolled to the middle, cells at their element-level surface as while a person
 // drags; once more at the top with the full surfaces throughout), and the browser's memory: the
 // proportional set size (PSS) of all its processes after the first frame and the most seen while
-// scrolling through the whole table in 12 steps. Prints a table of medians; writes the runs as JSON.
+// scrolling through the whole table in 12 steps. CELL_PX: the frame rates with cells of that size
+// (the page's size control; pages before issue 37 have 150 px cells). Prints a table of medians;
+// writes the runs as JSON.
 import fs from 'node:fs';
 import path from 'node:path';
 import { launch, openPage } from '../../tests/browser/browser.mjs';
 
-const [pagePath, runsArg, outJson, sizeArg] = process.argv.slice(2);
+const [pagePath, runsArg, outJson, sizeArg, cellArg] = process.argv.slice(2);
 if (!pagePath) {
   console.error('usage: bench.mjs PAGE.html [RUNS] [OUT.json] [WIDTHxHEIGHT]');
   process.exit(2);
@@ -54,7 +56,10 @@ function dataBytes(page) {
   return { html: html.length, folder, layout: manifest.layout || 'file' };
 }
 
+const loadAverage = () => fs.readFileSync('/proc/loadavg', 'utf8').split(' ').slice(0, 3).map(Number);
+
 async function run(r) {
+  const load = loadAverage();
   const browser = await launch();
   try {
     const { page, errors } = await openPage(browser, pagePath, { width, height });
@@ -64,6 +69,8 @@ async function run(r) {
         read: typeof v.bytes === 'function' ? v.bytes() : v.bytes };
     });
     const pssFirst = browserPss();
+    if (cellArg) await page.selectOption('#cell-size', cellArg).catch(() => {});  // pages without the control: 150 px
+    await page.evaluate(() => window.vpmView.settled?.());
     await page.evaluate(() => window.vpmView.benchRotate(20));  // warm-up
     const top = await page.evaluate(() => window.vpmView.benchRotate(120));
     const full = await page.evaluate(() => window.vpmView.benchRotate(120, false));
@@ -77,7 +84,7 @@ async function run(r) {
       pssMax = Math.max(pssMax, browserPss());
     }
     const heap = await page.evaluate(() => performance.memory?.usedJSHeapSize ?? null);
-    return { run: r + 1, ...info, first_frame_ms: info.marks['vpm:first-frame'], decoded_ms: info.marks['vpm:decoded'],
+    return { run: r + 1, load_average: load, ...info, first_frame_ms: info.marks['vpm:first-frame'], decoded_ms: info.marks['vpm:decoded'],
       read_at_first_frame: info.read, fps_top: top.fps, fps_middle: middle.fps, fps_top_full_detail: full.fps,
       cells_drawn: top.cells_drawn, pss_first_frame: pssFirst, pss_max_scrolling: pssMax, js_heap_end: heap, console_errors: errors.length };
   } finally {
@@ -91,16 +98,17 @@ const size = dataBytes(pagePath);
 const med = (k) => median(rows.map((r) => r[k]));
 const summary = {
   page: path.resolve(pagePath), page_bytes: size.html, data_folder_bytes: size.folder, layout: size.layout, runs: rows.length,
-  viewport: `${width}x${height}`, subjects: rows[0].subjects, features: rows[0].features, cells: rows[0].cells, cells_drawn: rows[0].cells_drawn,
+  viewport: `${width}x${height}`, cell_px: cellArg ? Number(cellArg) : 'fit window', load_average_end: loadAverage(), subjects: rows[0].subjects, features: rows[0].features, cells: rows[0].cells, cells_drawn: rows[0].cells_drawn,
   median_first_frame_ms: med('first_frame_ms'), median_decoded_ms: med('decoded_ms'), median_read_at_first_frame: med('read_at_first_frame'),
   median_fps_top: med('fps_top'), median_fps_middle: med('fps_middle'), median_fps_top_full_detail: med('fps_top_full_detail'),
   median_pss_first_frame: med('pss_first_frame'), median_pss_max_scrolling: med('pss_max_scrolling'), rows,
 };
 const mb = (b) => (b / 1e6).toFixed(1);
-console.log('| page (+ folder) | subjects | cells (drawn) | first frame (ms) | read by then | fps top | fps middle | fps full detail | memory first / max (MB) | runs |');
-console.log('|---|---|---|---|---|---|---|---|---|---|');
+console.log('| page (+ folder) | subjects | cells (drawn) | first frame (ms) | read by then | fps top | fps middle | fps full detail | memory first / max (MB) | runs | load |');
+console.log('|---|---|---|---|---|---|---|---|---|---|---|');
 console.log(`| ${mb(size.html)}${size.folder ? ` + ${mb(size.folder)}` : ''} MB | ${summary.subjects} | ${summary.cells} (${summary.cells_drawn}) | ` +
   `${summary.median_first_frame_ms.toFixed(0)} | ${mb(summary.median_read_at_first_frame)} MB | ${summary.median_fps_top.toFixed(1)} | ` +
   `${summary.median_fps_middle.toFixed(1)} | ${summary.median_fps_top_full_detail.toFixed(1)} | ` +
-  `${mb(summary.median_pss_first_frame)} / ${mb(summary.median_pss_max_scrolling)} | ${rows.length} |`);
+  `${mb(summary.median_pss_first_frame)} / ${mb(summary.median_pss_max_scrolling)} | ${rows.length} | ` +
+  `${rows.map((r) => r.load_average[0].toFixed(1)).join(', ')} |`);
 if (outJson) fs.writeFileSync(outJson, JSON.stringify(summary, null, 2) + '\n');

@@ -107,7 +107,8 @@ std::vector<float> native_element_centres(const CanonicalElements& elements, con
 /// Each normal's z against the reference of the other normals (leave-one-out; sample standard
 /// deviation): x[i][e] is normal i's value at element e. NaN where fewer than 4 normals have a
 /// finite value or the others' spread is 0. A normal compared with a reference that holds it
-/// would look closer to the normals than a patient does.
+/// would look closer to the normals than a patient does. The cohort page computes the same from
+/// a normal's value and the reference's mean, standard deviation and count (web/src/cohort.js).
 std::vector<std::vector<double>> leave_one_out_z(const std::vector<std::vector<double>>& x);
 
 /// Reads a cohort from the workflow's results folder (docs/cohort.md): the comparisons

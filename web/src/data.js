@@ -43,6 +43,7 @@ export class Store {
     this.loadedBytes = 0;      // every chunk's bytes read so far
     this.waiting = new Map();  // folder: chunk name -> { resolve, reject }
     this.clock = 0;
+    this.pending = 0;          // chunks being read
     if (manifest.layout === 'folder') window.vpmChunk = (id, name, text) => this.arrived(id, name, text);
   }
 
@@ -54,7 +55,10 @@ export class Store {
     let c = this.chunks.get(name);
     if (!c) {
       c = { buffer: null, used: 0 };
-      c.promise = (this.m.layout === 'folder' ? this.fromFolder(name) : this.embedded(name)).then((buffer) => {
+      ++this.pending;
+      const read = this.m.layout === 'folder' ? this.fromFolder(name) : this.embedded(name);
+      read.finally(() => --this.pending).catch(() => {});
+      c.promise = read.then((buffer) => {
         c.buffer = buffer;
         this.loadedBytes += buffer.byteLength;
         if (name !== 'base') this.held += buffer.byteLength;

@@ -46,9 +46,9 @@ export function testHooks(app) {
     rowView: (i) => all[i].row.view && { ...all[i].row.view },
     pick: (i, x, y) => { const f = scene.pick(all[i], x, y); return f < 0 ? -1 : model.element(painter.shellOf(all[i].row), f); },
     render: () => rowsView.render(),
-    settled: async () => {  // every cell on screen drawn
-      for (let k = 0; k < 200; ++k) {
-        if (!rowsView.render().waiting) return true;
+    settled: async () => {  // every cell on screen drawn, and the rows near it read
+      for (let k = 0; k < 400; ++k) {
+        if (!rowsView.render().waiting && !store.pending) return true;
         await new Promise((r) => setTimeout(r, 20));
       }
       return false;
