@@ -246,11 +246,13 @@ TEST_CASE("a large cohort's page reads its data from a folder beside it") {
   const Json m = Json::parse(between(page, "<script id=\"vpm-manifest\" type=\"application/json\">", "</script>"));
   CHECK(m.find("layout")->string() == "folder");
   CHECK(m.find("data_dir")->string() == "cohort_data");
-  const std::string id = m.find("id")->string();
-  const auto chunk = [&](const std::string& name) {
+  const auto chunk = [&](const std::string& name) {  // each file names the hash of its content, as the manifest does
     const std::string text = test::slurp(dir + "/cohort_data/" + name + ".js");
-    CHECK(text.rfind("vpmChunk(\"" + id + "\",\"" + name + "\",\"", 0) == 0);
-    return unbase64(between(text, "\",\"" + name + "\",\"", "\");"));
+    const std::string hash = m.find("chunks")->find(name)->find("hash")->string();
+    CHECK(text.rfind("vpmChunk(\"" + hash + "\",\"" + name + "\",\"", 0) == 0);
+    const std::string bytes = unbase64(between(text, "\",\"" + name + "\",\"", "\");"));
+    CHECK(bytes.size() == static_cast<size_t>(m.find("chunks")->find(name)->find("bytes")->number()));
+    return bytes;
   };
   // the normals' values by element: one column per element of the chunk, a normal per entry
   const Json& cols = *m.find("columns")->find("pet");
@@ -263,7 +265,10 @@ TEST_CASE("a large cohort's page reads its data from a folder beside it") {
   // written again: the folder is replaced whole (a chunk file of the old one is gone); a folder
   // holding other files is left alone and refused
   std::ofstream(dir + "/cohort_data/rows-999.js") << "old";
+  const std::string rows = test::slurp(dir + "/cohort_data/rows-000.js");
   write_view_page(dir + "/cohort.html", v, o);
+  CHECK(test::slurp(dir + "/cohort.html") == page);  // the same data, the same files, byte for byte
+  CHECK(test::slurp(dir + "/cohort_data/rows-000.js") == rows);
   CHECK(!fs::exists(dir + "/cohort_data/rows-999.js"));
   CHECK(fs::exists(dir + "/cohort_data/base.js"));
   CHECK(!fs::exists(dir + "/cohort_data.old"));

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "vpm/error.hpp"
 
@@ -30,9 +31,10 @@ void ChunkPack::end() {
   if (chunk_.empty()) return;
   Json c = Json::object();
   c["bytes"] = static_cast<long long>(blob_.size());
+  c["hash"] = content_hash(blob_);
   chunks_[chunk_] = c;
   bytes_ += static_cast<long long>(blob_.size());
-  sink_.put(chunk_, blob_);
+  sink_.put(chunk_, blob_, c["hash"].string());
   chunk_.clear();
   blob_.clear();
 }
@@ -59,6 +61,14 @@ std::string ChunkPack::add_q16(const std::string& name, const std::vector<float>
   buffers_[name]["base"] = q.base;
   buffers_[name]["step"] = q.step;
   return name;
+}
+
+std::string content_hash(const std::string& bytes) {
+  std::uint64_t h = 14695981039346656037ull;
+  for (unsigned char c : bytes) h = (h ^ c) * 1099511628211ull;
+  char buf[20];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
 }
 
 std::string base64(const std::string& in) {

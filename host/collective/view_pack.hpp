@@ -11,12 +11,16 @@
 
 namespace vpm::detail {
 
-/// Where finished chunks go.
+/// Where finished chunks go; `hash` names the chunk's content (content_hash).
 class ChunkSink {
  public:
   virtual ~ChunkSink() = default;
-  virtual void put(const std::string& name, const std::string& bytes) = 0;
+  virtual void put(const std::string& name, const std::string& bytes, const std::string& hash) = 0;
 };
+
+/// FNV-1a (64 bits) of `bytes` in hexadecimal: a chunk file carries it, so that the page knows a
+/// file of another write (the same data gives the same page, byte for byte).
+std::string content_hash(const std::string& bytes);
 
 /// 16-bit codes of float values: value = base + step * code, code 65535 = NaN.
 struct Quantiser {
@@ -42,7 +46,7 @@ class ChunkPack {
   std::string add_q16(const std::string& name, const std::vector<float>& values, const Quantiser& q);
 
   Json& buffers() { return buffers_; }
-  /// {name: {bytes}} of every chunk finished.
+  /// {name: {bytes, hash}} of every chunk finished.
   const Json& chunks() const { return chunks_; }
   long long bytes() const { return bytes_; }
   int count() const { return count_; }

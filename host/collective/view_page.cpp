@@ -3,13 +3,11 @@
 // it or in a folder beside it (layout: docs/view.md).
 #include "vpm/view_page.hpp"
 
-#include <chrono>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <memory>
-#include <random>
 #include <regex>
 
 #include "collective/view_manifest.hpp"
@@ -74,21 +72,21 @@ std::string fill(const std::string& page, const std::map<std::string, std::strin
 /// Chunks as <script> elements of the page (base64).
 class EmbeddedSink : public detail::ChunkSink {
  public:
-  void put(const std::string& name, const std::string& bytes) override {
+  void put(const std::string& name, const std::string& bytes, const std::string&) override {
     text += "<script type=\"application/octet-stream\" id=\"vpm-chunk-" + name + "\">" + detail::base64(bytes) + "</script>\n";
   }
   std::string text;
 };
 
-/// Chunks as files NAME.js of a folder, each calling vpmChunk(id, name, base64): a <script>
-/// element reads them from file:// (fetch cannot).
+/// Chunks as files NAME.js of a folder, each calling vpmChunk(hash, name, base64): a <script>
+/// element reads them from file:// (fetch cannot); the page checks the hash against its manifest.
 class FolderSink : public detail::ChunkSink {
  public:
-  FolderSink(fs::path dir, std::string id) : dir_(std::move(dir)), id_(std::move(id)) {}
-  void put(const std::string& name, const std::string& bytes) override {
+  explicit FolderSink(fs::path dir) : dir_(std::move(dir)) {}
+  void put(const std::string& name, const std::string& bytes, const std::string& hash) override {
     const fs::path path = dir_ / (name + ".js");
     std::ofstream out(path, std::ios::binary);
-    out << "vpmChunk(\"" << id_ << "\",\"" << name << "\",\"" << detail::base64(bytes) << "\");\n";
+    out << "vpmChunk(\"" << hash << "\",\"" << name << "\",\"" << detail::base64(bytes) << "\");\n";
     out.close();
     if (!out) throw InputError(path.string() + ": cannot be written");
     bytes_ += static_cast<long long>(fs::file_size(path));
@@ -97,7 +95,6 @@ class FolderSink : public detail::ChunkSink {
 
  private:
   fs::path dir_;
-  std::string id_;
   long long bytes_ = 0;
 };
 
@@ -110,15 +107,6 @@ void remove_data_folder(const fs::path& dir) {
   std::error_code ec;
   fs::remove(dir, ec);
   if (ec) throw InputError(dir.string() + ": holds files vpm view did not write; move them, or the folder, away");
-}
-
-/// A token naming this write: the page refuses chunk files of another.
-std::string write_id() {
-  std::random_device rd;
-  const auto now = std::chrono::system_clock::now().time_since_epoch().count();
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%llx-%08x", static_cast<unsigned long long>(now), rd());
-  return buf;
 }
 
 std::string page_text(const Json& manifest, const std::string& title, const std::string& chunks) {
@@ -153,7 +141,6 @@ ViewPageStats write_view_page(const std::string& html_path, const CohortView& v,
   const fs::path page = fs::absolute(html_path).lexically_normal();
   const std::string dir_name = page.stem().string() + "_data";
   const fs::path data = page.parent_path() / dir_name, tmp = page.parent_path() / (dir_name + ".tmp");
-  const std::string id = write_id();
   detail::ManifestOptions mo;
   mo.rows_per_chunk = o.rows_per_chunk;
   mo.column_elements = o.column_elements;
@@ -165,7 +152,7 @@ ViewPageStats write_view_page(const std::string& html_path, const CohortView& v,
     remove_data_folder(tmp);
     std::error_code ec;
     if (!fs::create_directories(tmp, ec)) throw InputError(tmp.string() + ": cannot be created");
-    files = std::make_unique<FolderSink>(tmp, id);
+    files = std::make_unique<FolderSink>(tmp);
   }
   detail::ChunkPack pack(folder ? static_cast<detail::ChunkSink&>(*files) : embedded);
   Json m;
@@ -175,7 +162,6 @@ ViewPageStats write_view_page(const std::string& html_path, const CohortView& v,
     if (folder) remove_data_folder(tmp);
     throw;
   }
-  m["id"] = id;
   m["layout"] = folder ? "folder" : "file";
   if (folder) m["data_dir"] = dir_name;
   m["chunks"] = pack.chunks();

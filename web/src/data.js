@@ -1,7 +1,7 @@
 // The page's data (format vpm-view-2; written by vpm view, host/collective/view_page.cpp; layout in
 // docs/view.md): a JSON manifest and named binary chunks. A chunk is either embedded in the page
 // (<script type="application/octet-stream" id="vpm-chunk-NAME">, base64) or a file NAME.js in the
-// folder beside the page (manifest.data_dir) that calls vpmChunk(id, name, base64): a <script>
+// folder beside the page (manifest.data_dir) that calls vpmChunk(hash, name, base64): a <script>
 // element loads from file:// where fetch() does not, so the folder opens from disk too. Chunks
 // are read when first needed (the rows on screen), and the least recently used ones are dropped
 // above a budget, so the browser holds what is shown, not the whole cohort.
@@ -44,7 +44,7 @@ export class Store {
     this.waiting = new Map();  // folder: chunk name -> { resolve, reject }
     this.clock = 0;
     this.pending = 0;          // chunks being read
-    if (manifest.layout === 'folder') window.vpmChunk = (id, name, text) => this.arrived(id, name, text);
+    if (manifest.layout === 'folder') window.vpmChunk = (hash, name, text) => this.arrived(hash, name, text);
   }
 
   /** Whether chunk `name` is in memory. */
@@ -103,13 +103,13 @@ export class Store {
     });
   }
 
-  /** Called by a chunk file of the folder. */
-  arrived(id, name, text) {
+  /** Called by a chunk file of the folder, with the hash of its content. */
+  arrived(hash, name, text) {
     const w = this.waiting.get(name);
     if (!w) return;
     this.waiting.delete(name);
     w.script.remove();
-    if (id !== this.m.id) {
+    if (hash !== this.m.chunks[name]?.hash) {
       w.reject(new Error(`${this.m.data_dir}/${name}.js was written for another page (run vpm view again)`));
       return;
     }
