@@ -276,6 +276,17 @@ TEST_CASE("a large cohort's page reads its data from a folder beside it") {
   std::ofstream(dir + "/cohort_data.tmp/notes.txt") << "mine";
   CHECK_THROWS_AS(write_view_page(dir + "/cohort.html", v, o), InputError);
   CHECK(fs::exists(dir + "/cohort_data.tmp/notes.txt"));
+  fs::remove_all(dir + "/cohort_data.tmp");
+  std::ofstream(dir + "/cohort_data/notes.txt") << "mine";  // refused before anything is written
+  CHECK_THROWS_AS(write_view_page(dir + "/cohort.html", v, o), InputError);
+  CHECK(test::slurp(dir + "/cohort.html") == page);
+  CHECK(fs::exists(dir + "/cohort_data/notes.txt"));
+  CHECK(!fs::exists(dir + "/cohort_data.tmp"));
+  // one file instead: the page's earlier folder goes with it (unless it holds other files)
+  fs::remove(dir + "/cohort_data/notes.txt");
+  o.data = ViewData::embedded;
+  write_view_page(dir + "/cohort.html", v, o);
+  CHECK(!fs::exists(dir + "/cohort_data"));
 }
 
 TEST_CASE("normals' z-scores are against the other normals") {

@@ -1,6 +1,6 @@
 // The cohort page's speed and memory in headless Chromium with software WebGL (SwiftShader), as
 // on a machine without a GPU (docs/view.md):
-//   node bench/view/bench.mjs PAGE.html [RUNS=3] [OUT.json] [WIDTHxHEIGHT=1280x800] [CELL_PX]
+//   node bench/view/bench.mjs PAGE.html[,PAGE2.html...] [RUNS=3] [OUT.json] [WIDTHxHEIGHT=1280x800] [CELL_PX]
 // Per run, a fresh browser and page: time from navigation to the first frame with every cell on
 // screen drawn (the page's performance marks vpm:decoded, vpm:first-frame), the data read by then,
 // the frame rate while the shared view turns a step every animation frame (120 frames at the top
@@ -9,14 +9,15 @@
 // proportional set size (PSS) of all its processes after the first frame and the most seen while
 // scrolling through the whole table in 12 steps. CELL_PX: the frame rates with cells of that size
 // (the page's size control; pages before issue 37 have 150 px cells). Prints a table of medians;
-// writes the runs as JSON.
+// writes the runs as JSON. Several pages (comma-separated) are run in turn, run by run, so that
+// they meet the same load on a shared machine; OUT.json then holds a list.
 import fs from 'node:fs';
 import path from 'node:path';
 import { launch, openPage } from '../../tests/browser/browser.mjs';
 
-const [pagePath, runsArg, outJson, sizeArg, cellArg] = process.argv.slice(2);
-if (!pagePath) {
-  console.error('usage: bench.mjs PAGE.html [RUNS] [OUT.json] [WIDTHxHEIGHT]');
+const [pagesArg, runsArg, outJson, sizeArg, cellArg] = process.argv.slice(2);
+if (!pagesArg) {
+  console.error('usage: bench.mjs PAGE.html[,PAGE2.html...] [RUNS] [OUT.json] [WIDTHxHEIGHT] [CELL_PX]');
   process.exit(2);
 }
 const runs = Number(runsArg || 3);
@@ -58,7 +59,7 @@ function dataBytes(page) {
 
 const loadAverage = () => fs.readFileSync('/proc/loadavg', 'utf8').split(' ').slice(0, 3).map(Number);
 
-async function run(r) {
+async function run(pagePath, r) {
   const load = loadAverage();
   const browser = await launch();
   try {
@@ -92,23 +93,31 @@ async function run(r) {
   }
 }
 
-const rows = [];
-for (let r = 0; r < runs; ++r) rows.push(await run(r));
-const size = dataBytes(pagePath);
-const med = (k) => median(rows.map((r) => r[k]));
-const summary = {
-  page: path.resolve(pagePath), page_bytes: size.html, data_folder_bytes: size.folder, layout: size.layout, runs: rows.length,
-  viewport: `${width}x${height}`, cell_px: cellArg ? Number(cellArg) : 'fit window', load_average_end: loadAverage(), subjects: rows[0].subjects, features: rows[0].features, cells: rows[0].cells, cells_drawn: rows[0].cells_drawn,
-  median_first_frame_ms: med('first_frame_ms'), median_decoded_ms: med('decoded_ms'), median_read_at_first_frame: med('read_at_first_frame'),
-  median_fps_top: med('fps_top'), median_fps_middle: med('fps_middle'), median_fps_top_full_detail: med('fps_top_full_detail'),
-  median_pss_first_frame: med('pss_first_frame'), median_pss_max_scrolling: med('pss_max_scrolling'), rows,
-};
+const pages = pagesArg.split(',');
+const runsOf = pages.map(() => []);
+for (let r = 0; r < runs; ++r)
+  for (let p = 0; p < pages.length; ++p) runsOf[p].push(await run(pages[p], r));
+
+function summarise(pagePath, rows) {
+  const size = dataBytes(pagePath);
+  const med = (k) => median(rows.map((r) => r[k]));
+  return {
+    page: path.resolve(pagePath), page_bytes: size.html, data_folder_bytes: size.folder, layout: size.layout, runs: rows.length,
+    viewport: `${width}x${height}`, cell_px: cellArg ? Number(cellArg) : 'fit window', load_average_end: loadAverage(),
+    subjects: rows[0].subjects, features: rows[0].features, cells: rows[0].cells, cells_drawn: rows[0].cells_drawn,
+    median_first_frame_ms: med('first_frame_ms'), median_decoded_ms: med('decoded_ms'), median_read_at_first_frame: med('read_at_first_frame'),
+    median_fps_top: med('fps_top'), median_fps_middle: med('fps_middle'), median_fps_top_full_detail: med('fps_top_full_detail'),
+    median_pss_first_frame: med('pss_first_frame'), median_pss_max_scrolling: med('pss_max_scrolling'), rows,
+  };
+}
+const summaries = pages.map((p, i) => summarise(p, runsOf[i]));
 const mb = (b) => (b / 1e6).toFixed(1);
 console.log('| page (+ folder) | subjects | cells (drawn) | first frame (ms) | read by then | fps top | fps middle | fps full detail | memory first / max (MB) | runs | load |');
 console.log('|---|---|---|---|---|---|---|---|---|---|---|');
-console.log(`| ${mb(size.html)}${size.folder ? ` + ${mb(size.folder)}` : ''} MB | ${summary.subjects} | ${summary.cells} (${summary.cells_drawn}) | ` +
-  `${summary.median_first_frame_ms.toFixed(0)} | ${mb(summary.median_read_at_first_frame)} MB | ${summary.median_fps_top.toFixed(1)} | ` +
-  `${summary.median_fps_middle.toFixed(1)} | ${summary.median_fps_top_full_detail.toFixed(1)} | ` +
-  `${mb(summary.median_pss_first_frame)} / ${mb(summary.median_pss_max_scrolling)} | ${rows.length} | ` +
-  `${rows.map((r) => r.load_average[0].toFixed(1)).join(', ')} |`);
-if (outJson) fs.writeFileSync(outJson, JSON.stringify(summary, null, 2) + '\n');
+for (const s of summaries)
+  console.log(`| ${mb(s.page_bytes)}${s.data_folder_bytes ? ` + ${mb(s.data_folder_bytes)}` : ''} MB | ${s.subjects} | ${s.cells} (${s.cells_drawn}) | ` +
+    `${s.median_first_frame_ms.toFixed(0)} | ${mb(s.median_read_at_first_frame)} MB | ${s.median_fps_top.toFixed(1)} | ` +
+    `${s.median_fps_middle.toFixed(1)} | ${s.median_fps_top_full_detail.toFixed(1)} | ` +
+    `${mb(s.median_pss_first_frame)} / ${mb(s.median_pss_max_scrolling)} | ${s.runs} | ` +
+    `${s.rows.map((r) => r.load_average[0].toFixed(1)).join(', ')} |`);
+if (outJson) fs.writeFileSync(outJson, JSON.stringify(pages.length > 1 ? summaries : summaries[0], null, 2) + '\n');

@@ -98,15 +98,33 @@ class FolderSink : public detail::ChunkSink {
   long long bytes_ = 0;
 };
 
-/// Removes a data folder this function wrote (files NAME.js only); InputError if it holds more.
+/// Whether `dir` holds only files a write of the page's data makes (NAME.js).
+bool ours(const fs::path& dir) {
+  static const std::regex name("[a-z0-9-]+\\.js");
+  for (const auto& entry : fs::directory_iterator(dir))
+    if (!entry.is_regular_file() || !std::regex_match(entry.path().filename().string(), name)) return false;
+  return true;
+}
+
+/// Removes a data folder a write made; InputError, before anything is written, if it holds more.
 void remove_data_folder(const fs::path& dir) {
   if (!fs::exists(dir)) return;
-  static const std::regex ours("[a-z0-9-]+\\.js");
-  for (const auto& entry : fs::directory_iterator(dir))
-    if (entry.is_regular_file() && std::regex_match(entry.path().filename().string(), ours)) fs::remove(entry.path());
-  std::error_code ec;
-  fs::remove(dir, ec);
-  if (ec) throw InputError(dir.string() + ": holds files vpm view did not write; move them, or the folder, away");
+  if (!fs::is_directory(dir) || !ours(dir))
+    throw InputError(dir.string() + ": holds files vpm view did not write; move them, or the folder, away");
+  fs::remove_all(dir);
+}
+
+/// The complete folder `tmp` replaces `data` (the page's earlier one, if any).
+void replace_folder(const fs::path& tmp, const fs::path& data) {
+  const fs::path old = data.string() + ".old";
+  try {
+    remove_data_folder(old);
+    if (fs::exists(data)) fs::rename(data, old);
+    fs::rename(tmp, data);
+    remove_data_folder(old);
+  } catch (const fs::filesystem_error& e) {
+    throw InputError(data.string() + ": cannot be replaced (" + e.code().message() + ")");
+  }
 }
 
 std::string page_text(const Json& manifest, const std::string& title, const std::string& chunks) {
@@ -148,7 +166,9 @@ ViewPageStats write_view_page(const std::string& html_path, const CohortView& v,
   mo.page_dir = page.parent_path().string();
   EmbeddedSink embedded;
   std::unique_ptr<FolderSink> files;
-  if (folder) {
+  if (folder) {  // a folder in the way that holds other files is refused before anything is written
+    if (fs::exists(data) && (!fs::is_directory(data) || !ours(data)))
+      throw InputError(data.string() + ": holds files vpm view did not write; move them, or the folder, away");
     remove_data_folder(tmp);
     std::error_code ec;
     if (!fs::create_directories(tmp, ec)) throw InputError(tmp.string() + ": cannot be created");
@@ -166,13 +186,8 @@ ViewPageStats write_view_page(const std::string& html_path, const CohortView& v,
   if (folder) m["data_dir"] = dir_name;
   m["chunks"] = pack.chunks();
   m["buffers"] = pack.buffers();
-  if (folder) {  // the complete folder replaces the page's earlier one, then the page is written
-    const fs::path old = page.parent_path() / (dir_name + ".old");
-    remove_data_folder(old);
-    if (fs::exists(data)) fs::rename(data, old);
-    fs::rename(tmp, data);
-    remove_data_folder(old);
-  }
+  if (folder) replace_folder(tmp, data);  // then the page
+  else if (fs::is_directory(data) && ours(data)) fs::remove_all(data);  // the page's earlier data folder
   const std::string text = page_text(m, v.title, embedded.text);
   detail::AtomicFile file(html_path);
   file.stream() << text;

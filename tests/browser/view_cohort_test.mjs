@@ -25,12 +25,12 @@ const cellRect = (page, i) => page.evaluate((j) => document.querySelectorAll('#t
 try {
   const { page, errors } = await openPage(browser, pagePath);
   const manifest = await page.evaluate(() => window.vpmView.manifest);
-  const total = Object.values(manifest.chunks).reduce((n, c) => n + c.bytes, 0);
+  const total = Object.values(manifest.chunks ?? {}).reduce((n, c) => n + c.bytes, 0);
 
   await t.step('only the rows on screen are read at first', async () => {
     t.check(manifest.layout === 'folder', `the data is in ${manifest.data_dir}/ beside the page`);
-    const read = await page.evaluate(() => window.vpmView.bytes());
-    t.check(read < 0.6 * total, `the first frame read ${(read / 1e6).toFixed(1)} of ${(total / 1e6).toFixed(1)} MB`);
+    const read = await page.evaluate(() => (typeof window.vpmView.bytes === 'function' ? window.vpmView.bytes() : window.vpmView.bytes));
+    t.check(total > 0 && read < 0.6 * total, `the first frame read ${(read / 1e6).toFixed(1)} of ${(total / 1e6).toFixed(1)} MB`);
     await page.screenshot({ path: path.join(shots, 'cohort.png') });
   });
 
@@ -95,7 +95,7 @@ try {
     const last = (await cellsOf(page)).at(-1);
     const p = await page.evaluate((i) => window.vpmView.pixels(i), last.i);
     t.check(p.covered > 0.05 * p.total, `the last normal (${last.subject}) draws (${p.covered} px)`);
-    const read = await page.evaluate(() => window.vpmView.bytes());
+    const read = await page.evaluate(() => (typeof window.vpmView.bytes === 'function' ? window.vpmView.bytes() : window.vpmView.bytes));
     t.check(read > 0, `${(read / 1e6).toFixed(1)} MB read after scrolling to the end`);
   });
   t.check(errors.length === 0, `no console errors${errors.length ? ': ' + errors.join(' | ') : ''}`);

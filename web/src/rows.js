@@ -45,10 +45,16 @@ export class Rows {
     });
   }
 
-  /** The cells that may be on screen: those of the near rows, and the detail's. */
+  /** The cells that may be on screen: those of the near rows that are in the table's view (a row
+   *  off screen is not looked into: its content is not laid out, content-visibility: auto, and
+   *  asking where its cells are would lay it out every frame), and the detail's. */
   candidates() {
     const out = [];
-    for (const r of this.near) out.push(...r.cells);
+    const box = this.app.area.getBoundingClientRect();
+    for (const r of this.near) {
+      const b = r.el.getBoundingClientRect();
+      if (b.bottom > box.top && b.top < box.bottom) out.push(...r.cells);
+    }
     const d = this.app.detail?.cell;
     if (d && !d.hidden) out.push(d);
     return out;
