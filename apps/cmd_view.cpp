@@ -23,26 +23,30 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   opt.title = args.get("--title", "");
   opt.max_slice_voxels = args.get_int("--max-slice-voxels", static_cast<int>(opt.max_slice_voxels));
   if (opt.max_slice_voxels < 1000) throw vpm::InputError("option --max-slice-voxels: must be >= 1000");
+  vpm::ViewPageOptions page;
+  page.data = vpm::cli::parse_option("--data", [&] { return vpm::parse_view_data(args.get("--data", "auto")); });
   const auto t0 = vpm::Clock::now();
   const vpm::CohortView view = vpm::load_cohort_view(args.positional()[0], opt);
-  const vpm::ViewPageStats st = vpm::write_view_page(*out, view);
+  const vpm::ViewPageStats st = vpm::write_view_page(*out, view, page);
   int patients = 0;
   for (const auto& s : view.subjects) patients += s.patient;
   vpm::cli::info("wrote " + *out + ": " + std::to_string(patients) + " patients, " +
                  std::to_string(view.subjects.size() - patients) + " normals, " + std::to_string(view.features.size()) +
                  " feature(s), " + vpm::strprintf("%.1f MB", st.bytes / 1e6) + " (data " +
-                 vpm::strprintf("%.1f MB", st.data_bytes / 1e6) + "), " + vpm::strprintf("%.1f s", vpm::seconds_since(t0)) +
-                 "; open it in a browser");
+                 vpm::strprintf("%.1f MB", st.data_bytes / 1e6) + " in " + std::to_string(st.chunks) + " chunks" +
+                 (st.data_dir.empty() ? std::string(" inside the page") : ", the folder " + st.data_dir + " beside it") + "), " +
+                 vpm::strprintf("%.1f s", vpm::seconds_since(t0)) + "; open it in a browser");
   return 0;
 }
 
 vpm::cli::Registrar reg(
-    {"view", "RESULTS -o PAGE.html", "the cohort's coordinated table of brains as one self-contained web page",
+    {"view", "RESULTS -o PAGE.html", "the cohort's coordinated table of brains as a web page (one file, or a page and its data folder)",
      {{"--feature", "NAME", "only this feature (default: every feature compared)"},
       {"--template", "TEMPLATE.vtu", "the template's ball mesh naming atlas regions (default RESULTS/template/template_ball.vtu)"},
       {"--label-names", "NAMES.txt", "region names: AAL's table (lines 'id name', e.g. mricron's aal.nii.txt) or a FreeSurfer colour table (FreeSurferColorLUT.txt)"},
       {"--title", "TEXT", "the page's title"},
-      {"--max-slice-voxels", "N", "patients' images are subsampled to at most N voxels for slices (default 400000)"}},
+      {"--max-slice-voxels", "N", "patients' images are subsampled to at most N voxels for slices (default 400000)"},
+      {"--data", "auto|file|folder", "the data inside the page, or in PAGE_data/ beside it, read a row at a time (default auto: a folder above 120 subjects)"}},
      run});
 
 }  // namespace

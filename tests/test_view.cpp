@@ -1,11 +1,13 @@
 // The collective view's data (vpm/cohort_view.hpp) and page (vpm/view_page.hpp): canonical
 // surfaces pulled back exactly through affine maps, display triangles assigned to elements, the
-// page's manifest and binary buffer read back as the browser reads them, and bad results folders.
+// page's manifest and binary chunks read back as the browser reads them (embedded, or in a data
+// folder), and bad results folders.
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 
 #include "support/fixtures.hpp"
 #include "support/process.hpp"
@@ -98,83 +100,193 @@ TEST_CASE("canonical surfaces and element centres are pulled back exactly throug
   }
 }
 
-TEST_CASE("the page carries the manifest and the arrays the browser reads") {
-  if (!view_page_available()) {
-    CHECK_THROWS_AS(write_view_page(VPM_TEST_TMP "/view.html", CohortView{}), InputError);
-    return;
-  }
-  const CanonicalElements el(ElementDefinition{1, 2, 4});
+namespace {
+
+/// Chunk `name` of an embedded page, decoded.
+std::string chunk_of(const std::string& page, const std::string& name) {
+  return unbase64(between(page, "<script type=\"application/octet-stream\" id=\"vpm-chunk-" + name + "\">", "</script>"));
+}
+
+/// Buffer `name` of the manifest as an array of T, read from its chunk.
+template <class T>
+std::vector<T> buffer_of(const Json& m, const std::string& name, const std::function<std::string(const std::string&)>& chunk) {
+  const Json* b = m.find("buffers")->find(name);
+  REQUIRE(b);
+  const size_t off = static_cast<size_t>(b->find("offset")->number());
+  CHECK(off % 8 == 0);
+  const std::string blob = chunk(b->find("chunk")->string());
+  std::vector<T> out(static_cast<size_t>(b->find("length")->number()));
+  REQUIRE(off + out.size() * sizeof(T) <= blob.size());
+  std::memcpy(out.data(), blob.data() + off, out.size() * sizeof(T));
+  return out;
+}
+
+/// A patient (z from e % 7 - 3, a focus reaching shells 0 and 1, slices of a file) and a normal.
+CohortView two_subjects(const CanonicalElements& el) {
   CohortView v;
-  v.title = "test </script> cohort";
+  v.title = "test </script> cohort & co";
   v.definition = el.definition();
   v.mid_radii = shell_mid_radii(el);
   v.display = icosphere(2);
   v.display_triangle_element = display_triangle_elements(el, v.display);
   v.features.push_back({"pet", Normalisation::proportional, 0, {}, 3, std::vector<float>(el.size(), 1.0f),
-                        std::vector<float>(el.size(), 0.1f)});
-  const TetMesh reg = affine_registered(Eigen::Matrix3d::Identity() * 70, Eigen::Vector3d(0, 0, 0));
+                        std::vector<float>(el.size(), 0.1f), std::vector<int>(el.size(), 3)});
   for (int s = 0; s < 2; ++s) {
+    const TetMesh reg = affine_registered(Eigen::Matrix3d::Identity() * (70 + 5 * s), Eigen::Vector3d(3 * s, 0, 0));
     ViewSubject sub;
     sub.id = s ? "sub-N01" : "sub-P01";
     sub.patient = s == 0;
     sub.native = native_shell_surfaces(el, v.display, reg);
-    std::vector<float> z(el.size());
-    for (int e = 0; e < el.size(); ++e) z[e] = static_cast<float>(e % 7) - 3.0f + 0.25f * s;
     sub.values["pet"] = std::vector<float>(el.size(), 1.0f);
-    sub.z["pet"] = z;
     if (sub.patient) {
-      sub.foci_count["pet"] = 2;
+      std::vector<float> z(el.size());
+      for (int e = 0; e < el.size(); ++e) z[e] = static_cast<float>(e % 7) - 3.0f;
+      sub.z["pet"] = z;
+      sub.foci_count["pet"] = 1;
+      sub.cluster["pet"].assign(el.size(), 0);
+      for (int e : {3, 10, 20, el.triangles() + 5, el.triangles() + 6}) sub.cluster["pet"][e] = 1;  // shells 0 and 1
+      ViewFocus f;
+      f.id = 1;
+      f.peak_element = 3;
+      sub.foci["pet"] = {f};
       sub.centres = native_element_centres(el, reg);
+      ViewSlices sl;
+      sl.dims = {2, 2, 2};
+      sl.source = VPM_TEST_TMP "/images/sub-P01_pet.nii.gz";
+      sl.image.assign(8, 7);
+      sl.z.assign(8, 0);
+      sub.slices["pet"] = sl;
     }
     v.subjects.push_back(sub);
   }
+  return v;
+}
+
+}  // namespace
+
+TEST_CASE("the page carries the manifest and the chunks of data the browser reads") {
+  if (!view_page_available()) {
+    CHECK_THROWS_AS(write_view_page(VPM_TEST_TMP "/view.html", CohortView{}), InputError);
+    return;
+  }
+  const CanonicalElements el(ElementDefinition{1, 2, 4});
+  const CohortView v = two_subjects(el);
   const std::string path = VPM_TEST_TMP "/view.html";
   const ViewPageStats st = write_view_page(path, v);
   const std::string page = test::slurp(path);
   CHECK(st.bytes == static_cast<long long>(page.size()));
+  CHECK(st.data_dir.empty());
   CHECK(page.find("test </script> cohort") == std::string::npos);  // escaped inside the script
+  CHECK(page.find("<title>test &lt;/script&gt; cohort &amp; co</title>") != std::string::npos);
   const Json m = Json::parse(between(page, "<script id=\"vpm-manifest\" type=\"application/json\">", "</script>"));
-  CHECK(m.find("format")->string() == "vpm-view-1");
-  CHECK(m.find("title")->string() == "test </script> cohort");
-  CHECK(m.find("subjects")->size() == 2);
-  const std::string blob = unbase64(between(page, "<script id=\"vpm-buffers\" type=\"application/octet-stream\">", "</script>"));
-  CHECK(static_cast<long long>(blob.size()) == st.data_bytes);
+  const auto chunk = [&](const std::string& name) { return chunk_of(page, name); };
+  CHECK(m.find("format")->string() == "vpm-view-2");
+  CHECK(m.find("layout")->string() == "file");
+  CHECK(m.find("title")->string() == "test </script> cohort & co");
+  REQUIRE(m.find("subjects")->size() == 2);
+  long long bytes = 0;
+  for (const char* c : {"base", "rows-000", "detail-000"}) bytes += static_cast<long long>(chunk(c).size());
+  CHECK(bytes == st.data_bytes);
+  const Json& p01 = m.find("subjects")->at(0);
   const Json& n01 = m.find("subjects")->at(1);
   CHECK(n01.find("group")->string() == "normal");
-  const Json* buf = m.find("buffers")->find(n01.find("z")->find("pet")->string());
-  REQUIRE(buf);
-  CHECK(buf->find("type")->string() == "q16");  // 16-bit codes: base + step * code
-  const size_t off = static_cast<size_t>(buf->find("offset")->number());
-  CHECK(off % 8 == 0);
-  std::vector<std::uint16_t> code(el.size());
-  std::memcpy(code.data(), blob.data() + off, code.size() * 2);
-  const double base = buf->find("base")->number(), step = buf->find("step")->number();
-  CHECK(step == Approx(6.0 / 65534));  // z spans -2.75 .. 3.25
-  for (int e = 0; e < el.size(); ++e) CHECK(std::abs(base + step * code[e] - v.subjects[1].z["pet"][e]) <= 0.51 * step);
-  // NaN is code 65535; a constant array decodes exactly
+  CHECK(!n01.find("z"));  // a normal's z is the page's (leave-one-out from the reference)
+  CHECK(buffer_of<std::uint16_t>(m, m.find("reference")->find("pet")->find("count")->string(), chunk)[5] == 3);
+  // z as 16-bit codes: base + step * code, within half a step
+  const Json* zb = m.find("buffers")->find(p01.find("z")->find("pet")->string());
+  CHECK(zb->find("type")->string() == "q16");
+  const double base = zb->find("base")->number(), step = zb->find("step")->number();
+  CHECK(step == Approx(6.0 / 65534));  // z spans -3 .. 3
+  const auto code = buffer_of<std::uint16_t>(m, p01.find("z")->find("pet")->string(), chunk);
+  for (int e = 0; e < el.size(); ++e) CHECK(std::abs(base + step * code[e] - v.subjects[0].z.at("pet")[e]) <= 0.51 * step);
+  // shapes: the normals' mean shape plus 8-bit differences, within half a step of the floats
+  const auto mean = buffer_of<float>(m, m.find("mean_shape")->string(), chunk);
+  for (size_t s = 0; s < 2; ++s) {
+    const Json& nat = *m.find("subjects")->at(s).find("native");
+    const auto q = buffer_of<std::int8_t>(m, nat.find("buffer")->string(), chunk);
+    double worst = 0;
+    for (size_t i = 0; i < q.size(); ++i)
+      worst = std::max(worst, std::abs(nat.find("centre")->at(i % 3).number() + mean[i] + q[i] * nat.find("scale")->number() -
+                                       v.subjects[s].native[i]));
+    CHECK(worst <= 0.51 * nat.find("scale")->number() + 1e-4);
+  }
+  // the focus faces from the shell where it is widest, on the element of the largest |z| there:
+  // elements 3, 10 and 20 (z 0, 0, 3) on shell 0 against 85 and 86 (z -2 and -1) on shell 1
+  const Json& focus = p01.find("foci_table")->find("pet")->at(0);
+  CHECK(focus.find("face_element")->number() == 20);
+  // the image is named relative to the page, never by its absolute path
+  CHECK(p01.find("slices")->find("pet")->find("image_source")->string() == "images/sub-P01_pet.nii.gz");
+  CHECK(page.find(VPM_TEST_TMP "/images") == std::string::npos);
+  // NaN is code 65535
   CohortView w = v;
-  w.subjects[1].z["pet"][3] = std::nanf("");
+  w.subjects[0].z["pet"][3] = std::nanf("");
   write_view_page(path + ".nan.html", w);
   const std::string page2 = test::slurp(path + ".nan.html");
   const Json m2 = Json::parse(between(page2, "<script id=\"vpm-manifest\" type=\"application/json\">", "</script>"));
-  const std::string blob2 = unbase64(between(page2, "<script id=\"vpm-buffers\" type=\"application/octet-stream\">", "</script>"));
-  const Json* b2 = m2.find("buffers")->find(m2.find("subjects")->at(1).find("z")->find("pet")->string());
-  std::uint16_t c3 = 0;
-  std::memcpy(&c3, blob2.data() + static_cast<size_t>(b2->find("offset")->number()) + 6, 2);
-  CHECK(c3 == 65535);
-  const Json* vb = m.find("buffers")->find(n01.find("values")->find("pet")->string());
-  CHECK(vb->find("base")->number() == 1.0);  // all 1.0: base 1, codes 0
-  // native positions quantised to 16 bits: within half a step of the floats
-  const Json& nat = *m.find("subjects")->at(0).find("native");
-  const Json* nb = m.find("buffers")->find(nat.find("buffer")->string());
-  std::vector<std::int16_t> q(v.subjects[0].native.size());
-  std::memcpy(q.data(), blob.data() + static_cast<size_t>(nb->find("offset")->number()), q.size() * 2);
-  double worst = 0;
-  for (size_t i = 0; i < q.size(); ++i)
-    worst = std::max(worst, std::abs(nat.find("offset")->at(i % 3).number() + q[i] * nat.find("scale")->number() -
-                                     v.subjects[0].native[i]));
-  CHECK(worst <= 0.51 * nat.find("scale")->number() + 1e-6);
-  CHECK(m.find("subjects")->at(0).find("foci")->find("pet")->number() == 2);
+  const auto c2 = buffer_of<std::uint16_t>(m2, m2.find("subjects")->at(0).find("z")->find("pet")->string(),
+                                           [&](const std::string& n) { return chunk_of(page2, n); });
+  CHECK(c2[3] == 65535);
+}
+
+TEST_CASE("a large cohort's page reads its data from a folder beside it") {
+  if (!view_page_available()) return;
+  namespace fs = std::filesystem;
+  const CanonicalElements el(ElementDefinition{1, 2, 4});
+  const CohortView v = two_subjects(el);
+  const std::string dir = VPM_TEST_TMP "/view_folder";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  ViewPageOptions o;
+  o.data = ViewData::folder;
+  o.column_elements = 100;
+  const ViewPageStats st = write_view_page(dir + "/cohort.html", v, o);
+  CHECK(st.data_dir == dir + "/cohort_data");
+  const std::string page = test::slurp(dir + "/cohort.html");
+  CHECK(page.find("id=\"vpm-chunk-") == std::string::npos);
+  const Json m = Json::parse(between(page, "<script id=\"vpm-manifest\" type=\"application/json\">", "</script>"));
+  CHECK(m.find("layout")->string() == "folder");
+  CHECK(m.find("data_dir")->string() == "cohort_data");
+  const auto chunk = [&](const std::string& name) {  // each file names the hash of its content, as the manifest does
+    const std::string text = test::slurp(dir + "/cohort_data/" + name + ".js");
+    const std::string hash = m.find("chunks")->find(name)->find("hash")->string();
+    CHECK(text.rfind("vpmChunk(\"" + hash + "\",\"" + name + "\",\"", 0) == 0);
+    const std::string bytes = unbase64(between(text, "\",\"" + name + "\",\"", "\");"));
+    CHECK(bytes.size() == static_cast<size_t>(m.find("chunks")->find(name)->find("bytes")->number()));
+    return bytes;
+  };
+  // the normals' values by element: one column per element of the chunk, a normal per entry
+  const Json& cols = *m.find("columns")->find("pet");
+  CHECK(cols.find("buffers")->size() == static_cast<size_t>((el.size() + 99) / 100));
+  CHECK(cols.find("normals")->at(0).number() == 1);
+  const auto c0 = buffer_of<std::uint16_t>(m, cols.find("buffers")->at(0).string(), chunk);
+  CHECK(c0.size() == 100);
+  const Json& q = *m.find("features")->at(0).find("value_q");
+  CHECK(q.find("base")->number() + q.find("step")->number() * c0[42] == Approx(1.0));
+  // written again: the folder is replaced whole (a chunk file of the old one is gone); a folder
+  // holding other files is left alone and refused
+  std::ofstream(dir + "/cohort_data/rows-999.js") << "old";
+  const std::string rows = test::slurp(dir + "/cohort_data/rows-000.js");
+  write_view_page(dir + "/cohort.html", v, o);
+  CHECK(test::slurp(dir + "/cohort.html") == page);  // the same data, the same files, byte for byte
+  CHECK(test::slurp(dir + "/cohort_data/rows-000.js") == rows);
+  CHECK(!fs::exists(dir + "/cohort_data/rows-999.js"));
+  CHECK(fs::exists(dir + "/cohort_data/base.js"));
+  CHECK(!fs::exists(dir + "/cohort_data.old"));
+  fs::create_directories(dir + "/cohort_data.tmp");
+  std::ofstream(dir + "/cohort_data.tmp/notes.txt") << "mine";
+  CHECK_THROWS_AS(write_view_page(dir + "/cohort.html", v, o), InputError);
+  CHECK(fs::exists(dir + "/cohort_data.tmp/notes.txt"));
+  fs::remove_all(dir + "/cohort_data.tmp");
+  std::ofstream(dir + "/cohort_data/notes.txt") << "mine";  // refused before anything is written
+  CHECK_THROWS_AS(write_view_page(dir + "/cohort.html", v, o), InputError);
+  CHECK(test::slurp(dir + "/cohort.html") == page);
+  CHECK(fs::exists(dir + "/cohort_data/notes.txt"));
+  CHECK(!fs::exists(dir + "/cohort_data.tmp"));
+  // one file instead: the page's earlier folder goes with it (unless it holds other files)
+  fs::remove(dir + "/cohort_data/notes.txt");
+  o.data = ViewData::embedded;
+  write_view_page(dir + "/cohort.html", v, o);
+  CHECK(!fs::exists(dir + "/cohort_data"));
 }
 
 TEST_CASE("normals' z-scores are against the other normals") {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -76,7 +77,7 @@ std::vector<std::uint8_t> scaled_bytes(const Image& image, const std::vector<siz
 ViewSlices read_view_slices(const std::string& image_path, const std::string& z_path, long max_voxels) {
   const Image image = read_image(image_path);
   ViewSlices s;
-  s.source = image_path;
+  s.source = std::filesystem::absolute(image_path).lexically_normal().string();
   const double n = static_cast<double>(image.size());
   s.step = std::max(1, static_cast<int>(std::ceil(std::cbrt(n / std::max(1L, max_voxels)) - 1e-9)));
   for (int a = 0; a < 3; ++a) s.dims[a] = (image.dims[a] + s.step - 1) / s.step;

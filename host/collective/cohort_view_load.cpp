@@ -87,6 +87,24 @@ struct Tables {
     if (it == by_path.end()) it = by_path.emplace(path, read_subject_table(path)).first;
     return it->second;
   }
+  /// The tables of `paths`, moved out of the cache (give them back with put: a thousand normals'
+  /// tables are 640 MB, not to be held twice).
+  std::vector<ElementTable> take(const std::vector<std::string>& paths) {
+    std::vector<ElementTable> out;
+    for (const std::string& p : paths) {
+      get(p);
+      out.push_back(std::move(by_path[p]));
+    }
+    return out;
+  }
+  void put(const std::vector<std::string>& paths, std::vector<ElementTable>& tables) {
+    for (size_t i = 0; i < paths.size(); ++i) by_path[paths[i]] = std::move(tables[i]);
+  }
+  /// Drops the element values (the meshes and image names are what is still read).
+  void release_values() {
+    for (auto& [path, t] : by_path)
+      for (ElementFeature& f : t.features) f.mean = f.std = {}, f.count = {};
+  }
 };
 
 std::string subject_id(const ElementTable& t, const std::string& path) {
@@ -129,24 +147,20 @@ std::vector<std::vector<double>> leave_one_out_z(const std::vector<std::vector<d
 
 namespace {
 
-/// The reference of one feature and every subject's values and z-scores against it.
+/// The reference of one feature, every subject's values and the patients' z-scores against it.
 void add_feature(CohortView& v, const CanonicalElements& el, const std::vector<const ComparisonFile*>& comps,
                  Tables& tables, std::map<std::string, size_t>& index) {
   const ComparisonFile& first = *comps.front();
-  std::vector<ElementTable> normals;
-  for (const std::string& p : first.normal_tables) normals.push_back(tables.get(p));
+  std::vector<ElementTable> normals = tables.take(first.normal_tables);
   const Reference ref = build_reference(el, normals, first.normal_tables, first.feature, first.normalisation, first.smoothing);
   v.features.push_back({first.feature, first.normalisation, first.smoothing, first.options, ref.subjects, to_float(ref.mean),
-                        to_float(ref.std)});
-  std::vector<std::vector<double>> x;
-  for (const ElementTable& t : normals)
-    x.push_back(smooth_over_elements(el, normalised_feature(t, first.feature, first.normalisation), first.smoothing));
-  const std::vector<std::vector<double>> z = leave_one_out_z(x);
+                        to_float(ref.std), ref.count});
   for (size_t i = 0; i < normals.size(); ++i) {
     ViewSubject& s = subject_for(v, index, subject_id(normals[i], first.normal_tables[i]), false);
-    s.values[first.feature] = to_float(x[i]);
-    s.z[first.feature] = to_float(z[i]);
+    s.values[first.feature] =
+        to_float(smooth_over_elements(el, normalised_feature(normals[i], first.feature, first.normalisation), first.smoothing));
   }
+  tables.put(first.normal_tables, normals);
   for (const ComparisonFile* c : comps) {
     if (c->normal_tables != first.normal_tables || c->normalisation != first.normalisation ||
         c->smoothing != first.smoothing)
@@ -216,6 +230,7 @@ CohortView load_cohort_view(const std::string& results_dir, const CohortViewOpti
   for (const auto& [path, t] : tables.by_path)
     if (t.definition != v.definition)
       throw InputError(path + ": element definition differs from " + comps.front().patient_table + "'s");
+  tables.release_values();
   add_geometry(v, el, tables, comps, results, opt);
   std::stable_sort(v.subjects.begin(), v.subjects.end(), [](const ViewSubject& a, const ViewSubject& b) {
     return a.patient != b.patient ? a.patient : a.id < b.id;

@@ -34,7 +34,7 @@ struct ViewSlices {
   std::array<int, 3> dims{0, 0, 0};
   Eigen::Matrix4d affine = Eigen::Matrix4d::Identity();  ///< voxel (of the subsampled grid) -> world mm
   int step = 1;
-  std::string source;                ///< the image file
+  std::string source;                ///< the image file (absolute; the page shows it relative to itself)
   std::vector<std::uint8_t> image;   ///< intensity scaled to 0..255 (0 and the 99.5th percentile)
   std::vector<std::int8_t> z;        ///< round(z * z_scale), clamped to +-127
   double z_scale = 10;
@@ -47,7 +47,10 @@ struct ViewSubject {
   /// sphere(v) * mid_radius(k), pulled back through the registered mesh.
   std::vector<float> native;
   std::map<std::string, std::vector<float>> values;  ///< per feature: normalised value per element
-  std::map<std::string, std::vector<float>> z;       ///< per feature: z per element (normals: leave-one-out)
+  /// patients, per feature: z per element as vpm compare computed it. (A normal's z is leave-one-out,
+  /// leave_one_out_z; the page computes it from the normal's values and the reference's mean,
+  /// standard deviation and count, so it is not held here.)
+  std::map<std::string, std::vector<float>> z;
   std::map<std::string, int> foci_count;             ///< patients: clusters per feature
   std::map<std::string, std::vector<std::int32_t>> cluster;  ///< patients: per feature, focus id per element (0: none)
   std::map<std::string, std::vector<ViewFocus>> foci;  ///< patients: per feature
@@ -62,6 +65,7 @@ struct ViewFeature {
   CompareOptions compare;     ///< the options `vpm compare` used
   int reference_subjects = 0;
   std::vector<float> mean, std;  ///< the reference per element
+  std::vector<int> count;        ///< per element: the normals with data there
 };
 
 struct CohortView {
@@ -103,7 +107,8 @@ std::vector<float> native_element_centres(const CanonicalElements& elements, con
 /// Each normal's z against the reference of the other normals (leave-one-out; sample standard
 /// deviation): x[i][e] is normal i's value at element e. NaN where fewer than 4 normals have a
 /// finite value or the others' spread is 0. A normal compared with a reference that holds it
-/// would look closer to the normals than a patient does.
+/// would look closer to the normals than a patient does. The cohort page computes the same from
+/// a normal's value and the reference's mean, standard deviation and count (web/src/cohort.js).
 std::vector<std::vector<double>> leave_one_out_z(const std::vector<std::vector<double>>& x);
 
 /// Reads a cohort from the workflow's results folder (docs/cohort.md): the comparisons

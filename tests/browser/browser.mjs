@@ -16,12 +16,14 @@ export async function launch() {
   });
 }
 
-/** Opens `page_path` (a file) at the given viewport; collects console errors and page errors. */
-export async function openPage(browser, pagePath, viewport = { width: 1280, height: 800 }) {
+/** Opens `page_path` (a file) at the given viewport; collects console errors and page errors.
+ *  `init`: a function run in the page before its own scripts (page.addInitScript). */
+export async function openPage(browser, pagePath, viewport = { width: 1280, height: 800 }, init = null) {
   const page = await browser.newPage({ viewport });
   const errors = [];
   page.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
   page.on('pageerror', (e) => errors.push(e.message));
+  if (init) await page.addInitScript(init);
   await page.goto('file://' + path.resolve(pagePath));
   await page.waitForSelector('body[data-ready=true]', { timeout: 60000 });
   return { page, errors };

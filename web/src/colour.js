@@ -6,6 +6,7 @@ const SEQ = [[0.267, 0.005, 0.329], [0.230, 0.322, 0.546], [0.128, 0.567, 0.551]
   [0.369, 0.789, 0.383], [0.993, 0.906, 0.144]];
 const NEG = [[0.85, 0.9, 1.0], [0.2, 0.45, 0.95], [0.05, 0.1, 0.55]];
 const POS = [[1.0, 0.88, 0.8], [0.95, 0.3, 0.15], [0.55, 0.0, 0.05]];
+const SPREAD = [[0.16, 0.12, 0.24], [0.55, 0.22, 0.45], [0.96, 0.55, 0.3], [1.0, 0.93, 0.72]];
 export const NO_DATA = [0.25, 0.25, 0.25];
 export const BELOW = [0.78, 0.78, 0.76];
 export const HIGHLIGHT = [0.1, 1.0, 0.35];
@@ -22,6 +23,12 @@ function ramp(stops, t, out) {
 export function sequential(v, lo, hi, out = [0, 0, 0]) {
   if (!Number.isFinite(v)) return Object.assign(out, NO_DATA);
   return ramp(SEQ, (v - lo) / (hi - lo || 1), out);
+}
+
+/** Colour of a spread (standard deviation) `v` on [0, hi]: the normals' reference row. */
+export function spread(v, hi, out = [0, 0, 0]) {
+  if (!Number.isFinite(v)) return Object.assign(out, NO_DATA);
+  return ramp(SPREAD, v / (hi || 1), out);
 }
 
 /** Diverging colour of z: grey when |z| < threshold, else blue (below) or red (above),
@@ -44,26 +51,13 @@ export function faded(c) {
 export function sequentialCss() {
   return `linear-gradient(to right, ${SEQ.map((c) => rgb(c)).join(', ')})`;
 }
+export function spreadCss() {
+  return `linear-gradient(to right, ${SPREAD.map((c) => rgb(c)).join(', ')})`;
+}
 export function divergingCss() {
   const stops = [...NEG].reverse().map(rgb).concat([rgb(BELOW), rgb(BELOW)], POS.map(rgb));
   return `linear-gradient(to right, ${stops.join(', ')})`;
 }
 export function rgb(c) {
   return `rgb(${Math.round(c[0] * 255)}, ${Math.round(c[1] * 255)}, ${Math.round(c[2] * 255)})`;
-}
-
-/** The p-th and (1 - p)-th quantiles of the finite values of several arrays (from at most
- *  about 2^18 of them, evenly strided: 50 subjects x 32,180 elements took 1.4 s to sort whole
- *  with a comparator, the page's largest start-up cost). */
-export function robustRange(arrays, p = 0.02) {
-  const total = arrays.reduce((n, a) => n + a.length, 0);
-  const stride = Math.max(1, Math.floor(total / 262144));
-  const all = new Float64Array(Math.ceil(total / stride) + arrays.length);
-  let n = 0;
-  for (const a of arrays)
-    for (let i = 0; i < a.length; i += stride) if (Number.isFinite(a[i])) all[n++] = a[i];
-  if (!n) return [0, 1];
-  const sorted = all.subarray(0, n).sort();  // typed arrays sort numerically
-  const q = (f) => sorted[Math.min(n - 1, Math.max(0, Math.round(f * (n - 1))))];
-  return [q(p), q(1 - p)];
 }

@@ -7,54 +7,39 @@
 import { ElementIndex } from './elements.js';
 
 export class SurfaceModel {
-  constructor(manifest, array) {
+  /** `store`: the page's data with the base chunk loaded (display sphere, mean shape). */
+  constructor(manifest, store) {
     const d = manifest.display;
     this.V = d.vertices;
     this.D = d.triangles;
     this.K = manifest.shells;
     this.T = manifest.triangles;
-    this.finer = d.finer ?? true;  // pages written before level-4 elements: always one level finer
+    this.finer = d.finer ?? true;
     this.ids = new ElementIndex(manifest);
     this.radii = manifest.radii;
-    this.index = array('display_index');
-    this.sphere = array('display_sphere');
-    this.faceTriangle = array('display_element_triangle');
-    // element triangle -> its display triangles
+    this.shellRadius = manifest.shell_radius;  // per shell: the largest subject's, from its centre (mm)
+    this.store = store;
+    this.index = store.array('display_index');
+    this.sphere = store.array('display_sphere');
+    this.faceTriangle = store.array('display_element_triangle');
+    this.meanShape = store.array(manifest.mean_shape);  // shells x V x 3, mm from the centre
     this.facesOf = Array.from({ length: this.T }, () => []);
     for (let f = 0; f < this.D; ++f) this.facesOf[this.faceTriangle[f]].push(f);
-    this.native = manifest.subjects.map((s) => ({ q: array(s.native.buffer), scale: s.native.scale, offset: s.native.offset }));
-    this.centres = this.native.map((n) => this.centreOf(n));
-    this.radius = new Map();
   }
 
-  /** The largest distance of shell k's native surface from its subject's centre, over all
-   *  subjects: shell k is drawn at this scale, so inner shells fill the cells too. */
-  radiusOf(k) {
-    if (!this.radius.has(k)) {
-      let radius = 0;
-      this.native.forEach((n, i) => {
-        const p = this.vertices(n, k, this.centres[i]);
-        for (let v = 0; v < this.V; ++v) radius = Math.max(radius, Math.hypot(p[3 * v], p[3 * v + 1], p[3 * v + 2]));
-      });
-      this.radius.set(k, radius || 1);
-    }
-    return this.radius.get(k);
-  }
-
-  /** Dequantised native positions (mm) of shell k's surface, minus `centre`. */
-  vertices(n, k, centre = [0, 0, 0]) {
+  /** Native positions (mm, from the subject's centre) of shell k's surface: the normals' mean
+   *  shape plus the subject's own difference from it (8-bit codes times its scale), or the
+   *  mean shape itself for the reference row. */
+  vertices(s, k) {
     const out = new Float32Array(this.V * 3);
-    const base = k * this.V * 3;
-    for (let v = 0; v < this.V; ++v)
-      for (let c = 0; c < 3; ++c) out[3 * v + c] = n.offset[c] + n.q[base + 3 * v + c] * n.scale - centre[c];
+    const base = k * this.V * 3, mean = this.meanShape;
+    if (s.kind === 'reference') {
+      out.set(mean.subarray(base, base + this.V * 3));
+      return out;
+    }
+    const q = this.store.array(s.native.buffer), scale = s.native.scale;
+    for (let j = 0; j < this.V * 3; ++j) out[j] = mean[base + j] + q[base + j] * scale;
     return out;
-  }
-
-  centreOf(n) {
-    const p = this.vertices(n, this.K - 1);
-    const c = [0, 0, 0];
-    for (let v = 0; v < this.V; ++v) for (let a = 0; a < 3; ++a) c[a] += p[3 * v + a] / this.V;
-    return c;
   }
 
   /** Corners: each element triangle's display vertices, its own copies (6 for 4 display
@@ -105,18 +90,18 @@ export class SurfaceModel {
     return out;
   }
 
-  /** Positions and smooth normals at the corners of subject i's shell k in native space
+  /** Positions and smooth normals at the corners of subject s's shell k in native space
    *  (scaled so that the largest subject's shell k fills the unit ball) or in the ball (the
    *  unit sphere: every shell is a sphere there). */
-  surface(i, k, mode) {
+  surface(s, k, mode) {
     if (!this.corners) this.buildCorners();
     let p;
     if (mode === 'ball') {
       p = Float32Array.from(this.sphere);
     } else {
-      p = this.vertices(this.native[i], k, this.centres[i]);
-      const s = 1 / this.radiusOf(k);
-      for (let j = 0; j < p.length; ++j) p[j] *= s;
+      p = this.vertices(s, k);
+      const scale = 1 / (this.shellRadius[k] || 1);
+      for (let j = 0; j < p.length; ++j) p[j] *= scale;
     }
     const vn = new Float32Array(this.V * 3);
     const idx = this.index;
@@ -143,4 +128,15 @@ export class SurfaceModel {
 
   /** Element id of drawn triangle j (a raycast's faceIndex) on shell k. */
   element(k, j) { return this.ids.at(k, this.elementOfDrawn[j]); }
+
+  /** Centroid and mean normal of element e's corners in a surface {pos, nor} of its shell. */
+  elementPoint(surf, e) {
+    const [first, end] = this.ids.drawn(e);
+    const p = [0, 0, 0], n = [0, 0, 0];
+    let count = 0;
+    for (let t = first; t < end; ++t)
+      for (let j = this.cornerStart[t]; j < this.cornerStart[t + 1]; ++j, ++count)
+        for (let c = 0; c < 3; ++c) { p[c] += surf.pos[3 * j + c]; n[c] += surf.nor[3 * j + c]; }
+    return { p: p.map((v) => v / (count || 1)), n };
+  }
 }
