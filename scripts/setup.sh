@@ -14,6 +14,7 @@ PKGS=(
   libhypre-dev openmpi-bin  # bench only: hypre BoomerAMG, the solver benchmark's peer, and its mpirun
   snakemake python3-nibabel python3-scipy
   chromium
+  clang-14 libclang-rt-14-dev llvm-14  # the ASan + UBSan build and libFuzzer (scripts/sanitize.sh, scripts/fuzz.sh); llvm-symbolizer for their stacks
 )
 missing=()
 for p in "${PKGS[@]}"; do
