@@ -34,8 +34,9 @@ std::string make_scratch() {
 }  // namespace
 
 const std::string& scratch_dir() {
-  static const std::string dir = make_scratch();
-  return dir;
+  // never destroyed: remove_scratch runs at exit, after static destructors registered later
+  static const std::string* dir = new std::string(make_scratch());
+  return *dir;
 }
 
 std::string write_scratch(const std::string& name, std::string_view bytes) {

@@ -11,6 +11,7 @@
 #   FUZZ_OUT      logs, findings and summary.json (default build-san/fuzz-run)
 #   FUZZ_CORPUS   a folder kept between runs (<target>/ under it; default: a fresh one in FUZZ_OUT)
 #   FUZZ_MAX_LEN  largest input in bytes (default 16384)
+#   FUZZ_TMPDIR   where the targets write their inputs (default /dev/shm when writable)
 #   SAN_DIR       the build folder (default build-san); FUZZ_NO_BUILD=1 skips the build
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -29,6 +30,10 @@ if [[ "${FUZZ_NO_BUILD:-}" != 1 ]]; then
   cmake --build "$SAN_DIR" -j"${JOBS:-2}" --target fuzz_seeds $(printf 'fuzz_%s ' $FUZZ_TARGETS)
 fi
 source scripts/sanitizers/env.sh
+# the targets write every input to a file: in memory (/dev/shm) that is 20x faster than on this
+# machine's disk (label_names: 5,549 vs 252 executions a second)
+if [[ -z "${FUZZ_TMPDIR:-}" && -d /dev/shm && -w /dev/shm ]]; then FUZZ_TMPDIR=/dev/shm; fi
+export TMPDIR=${FUZZ_TMPDIR:-${TMPDIR:-/tmp}}
 rm -rf "$FUZZ_OUT"
 mkdir -p "$FUZZ_OUT"
 "$SAN_DIR/fuzz/fuzz_seeds" "$FUZZ_OUT/seeds" tests/data
@@ -41,7 +46,7 @@ for t in $FUZZ_TARGETS; do
   echo "fuzz: $t for ${FUZZ_SECONDS}s"
   # libFuzzer reads the corpus and the seeds, adds new inputs to the corpus (the first folder);
   # it runs in the target's output folder so that stray files land there
-  if ! (cd "$FUZZ_OUT/$t" && nice -n 19 "$root/$SAN_DIR/fuzz/fuzz_$t" -max_total_time="$FUZZ_SECONDS" \
+  if ! (cd "$FUZZ_OUT/$t" && nice -n 19 /usr/bin/time -f "%e %U %S" -o "$FUZZ_OUT/$t/time" "$root/$SAN_DIR/fuzz/fuzz_$t" -max_total_time="$FUZZ_SECONDS" \
         -timeout=10 -rss_limit_mb=2048 -max_len="$FUZZ_MAX_LEN" -print_final_stats=1 "${dict[@]}" \
         -artifact_prefix="$FUZZ_OUT/$t/" "$corpus_root/$t" "$FUZZ_OUT/seeds/$t" >"$FUZZ_OUT/$t/log" 2>&1); then
     echo "fuzz: $t FOUND A PROBLEM: $FUZZ_OUT/$t/log"

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Summary of a scripts/fuzz.sh run as JSON on stdout: per target the executions, the coverage
+"""Summary of a scripts/fuzz.sh run as JSON on stdout: per target the executions, the wall and CPU seconds (user + system), the coverage
 (cov: instrumented edges reached; ft: libFuzzer's features), the corpus (inputs and bytes), the
 seconds run, the findings (crash-, timeout-, leak-, oom- and slow-unit- files) and the first
 error line of the log.
@@ -22,9 +22,13 @@ def target_summary(out, corpus, target):
     error = next((line for line in log.splitlines()
                   if line.startswith(("==", "SUMMARY", "vpm fuzz:")) or "runtime error" in line), "")
     last = status[-1] if status else ("0",) * 6
+    times = (out / target / "time").read_text().split() if (out / target / "time").exists() else []
+    wall, cpu = (float(times[-3]), float(times[-2]) + float(times[-1])) if len(times) >= 3 else (None, None)
     return {
         "executions": int(stats.get("number_of_executed_units", last[0])),
         "execs_per_s": int(stats.get("average_exec_per_sec", 0)),
+        "wall_s": wall,
+        "cpu_s": cpu,
         "cov": int(last[1]),
         "ft": int(last[2]),
         "corpus_inputs": len(files),
@@ -39,6 +43,7 @@ def main():
     out, corpus = pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2])
     targets = {t: target_summary(out, corpus, t) for t in sys.argv[3:]}
     total = {"executions": sum(t["executions"] for t in targets.values()),
+             "cpu_s": round(sum(t["cpu_s"] or 0 for t in targets.values()), 1),
              "findings": sum(len(t["findings"]) for t in targets.values())}
     seconds = int(os.environ.get("FUZZ_SECONDS", "0"))
     json.dump({"seconds_per_target": seconds, "targets": targets, "total": total}, sys.stdout, indent=2)
