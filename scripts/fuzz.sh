@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
 # Fuzzes every reader (docs/robustness.md "Fuzzing"): builds the libFuzzer targets of fuzz/ with
 # ASan + UBSan in build-san/ (the tree of scripts/sanitize.sh), writes their seeds (fuzz_seeds:
-# vpm's writers and tests/data), runs each target for FUZZ_SECONDS on one core, one after the
-# other, and writes FUZZ_OUT/summary.json (per target: executions, coverage, features, corpus,
+# vpm's writers and tests/data), runs each target for FUZZ_SECONDS (or FUZZ_CPU_SECONDS) on one
+# core, one after the other, and writes FUZZ_OUT/summary.json (per target: executions, coverage, features, corpus,
 # findings). Exits 1 when a target crashed, hung, leaked or ran out of memory; its input is in
 # FUZZ_OUT/<target>/ (crash-*, timeout-*, leak-*, oom-*): fix the reader, then keep the input in
 # fuzz/regressions/<target>/ (ctest fuzz:replay:<target> replays it in every build).
-#   FUZZ_SECONDS  per target (default 10)
+#   FUZZ_SECONDS  wall seconds per target (default 10)
+#   FUZZ_CPU_SECONDS  instead: CPU seconds per target (a campaign on a busy machine; FUZZ_SECONDS
+#                 then only caps the wall time, set it high)
 #   FUZZ_TARGETS  space-separated targets (default: all of fuzz/CMakeLists.txt)
 #   FUZZ_OUT      logs, findings and summary.json (default build-san/fuzz-run)
 #   FUZZ_CORPUS   a folder kept between runs (<target>/ under it; default: a fresh one in FUZZ_OUT)
@@ -46,7 +48,8 @@ for t in $FUZZ_TARGETS; do
   echo "fuzz: $t for ${FUZZ_SECONDS}s"
   # libFuzzer reads the corpus and the seeds, adds new inputs to the corpus (the first folder);
   # it runs in the target's output folder so that stray files land there
-  if ! (cd "$FUZZ_OUT/$t" && nice -n 19 /usr/bin/time -f "%e %U %S" -o "$FUZZ_OUT/$t/time" "$root/$SAN_DIR/fuzz/fuzz_$t" -max_total_time="$FUZZ_SECONDS" \
+  if ! (cd "$FUZZ_OUT/$t" && nice -n 19 python3 "$root/scripts/fuzz_run.py" --record "$FUZZ_OUT/$t/cost.json" \
+        --cpu "${FUZZ_CPU_SECONDS:-0}" -- "$root/$SAN_DIR/fuzz/fuzz_$t" -max_total_time="$FUZZ_SECONDS" \
         -timeout=10 -rss_limit_mb=2048 -max_len="$FUZZ_MAX_LEN" -print_final_stats=1 "${dict[@]}" \
         -artifact_prefix="$FUZZ_OUT/$t/" "$corpus_root/$t" "$FUZZ_OUT/seeds/$t" >"$FUZZ_OUT/$t/log" 2>&1); then
     echo "fuzz: $t FOUND A PROBLEM: $FUZZ_OUT/$t/log"
@@ -54,6 +57,6 @@ for t in $FUZZ_TARGETS; do
     status=1
   fi
 done
-FUZZ_SECONDS=$FUZZ_SECONDS python3 scripts/fuzz_summary.py "$FUZZ_OUT" "$corpus_root" $FUZZ_TARGETS > "$FUZZ_OUT/summary.json"
+python3 scripts/fuzz_summary.py "$FUZZ_OUT" "$corpus_root" $FUZZ_TARGETS > "$FUZZ_OUT/summary.json"
 cat "$FUZZ_OUT/summary.json"
 exit $status

@@ -1,12 +1,11 @@
 #!/usr/bin/env python3
-"""Summary of a scripts/fuzz.sh run as JSON on stdout: per target the executions, the wall and CPU seconds (user + system), the coverage
-(cov: instrumented edges reached; ft: libFuzzer's features), the corpus (inputs and bytes), the
-seconds run, the findings (crash-, timeout-, leak-, oom- and slow-unit- files) and the first
-error line of the log.
+"""Summary of a scripts/fuzz.sh run as JSON on stdout: per target the executions, the wall and
+CPU seconds (user + system, from fuzz_run.py's cost.json), the coverage (cov: instrumented edges
+reached; ft: libFuzzer's features), the corpus (inputs and bytes), the findings (crash-,
+timeout-, leak-, oom- and slow-unit- files) and the first error line of the log.
 Usage: fuzz_summary.py FUZZ_OUT CORPUS TARGET...
 """
 import json
-import os
 import pathlib
 import re
 import sys
@@ -22,8 +21,9 @@ def target_summary(out, corpus, target):
     error = next((line for line in log.splitlines()
                   if line.startswith(("==", "SUMMARY", "vpm fuzz:")) or "runtime error" in line), "")
     last = status[-1] if status else ("0",) * 6
-    times = (out / target / "time").read_text().split() if (out / target / "time").exists() else []
-    wall, cpu = (float(times[-3]), float(times[-2]) + float(times[-1])) if len(times) >= 3 else (None, None)
+    cost_file = out / target / "cost.json"
+    cost = json.loads(cost_file.read_text()) if cost_file.exists() else {}
+    wall, cpu = cost.get("wall_s"), cost.get("cpu_s")
     return {
         "executions": int(stats.get("number_of_executed_units", last[0])),
         "execs_per_s": int(stats.get("average_exec_per_sec", 0)),
@@ -45,8 +45,7 @@ def main():
     total = {"executions": sum(t["executions"] for t in targets.values()),
              "cpu_s": round(sum(t["cpu_s"] or 0 for t in targets.values()), 1),
              "findings": sum(len(t["findings"]) for t in targets.values())}
-    seconds = int(os.environ.get("FUZZ_SECONDS", "0"))
-    json.dump({"seconds_per_target": seconds, "targets": targets, "total": total}, sys.stdout, indent=2)
+    json.dump({"targets": targets, "total": total}, sys.stdout, indent=2)
     print()
 
 

@@ -15,7 +15,6 @@ PKGS=(
   snakemake python3-nibabel python3-scipy
   chromium
   clang-14 libclang-rt-14-dev llvm-14  # the ASan + UBSan build and libFuzzer (scripts/sanitize.sh, scripts/fuzz.sh); llvm-symbolizer for their stacks
-  time  # scripts/fuzz.sh: CPU seconds per fuzz target
 )
 missing=()
 for p in "${PKGS[@]}"; do
