@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Sets up (Debian packages), builds and runs the whole test suite with ctest.
+# Sets up (Debian packages), builds and runs the whole test suite with ctest; in CI also the
+# sanitizer build's test suite and a short fuzz pass (SANITIZE=1 asks for them outside CI).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -13,5 +14,10 @@ if [[ "${CI:-}" == "true" ]]; then
   export OCL_ICD_VENDORS=/etc/OpenCL/vendors/pocl.icd
   export VPM_TEST_REQUIRE_OPENCL=1
 fi
-cd "$BUILD_DIR"
-ctest --output-on-failure -j"${JOBS:-2}" --timeout 900
+(cd "$BUILD_DIR" && ctest --output-on-failure -j"${JOBS:-2}" --timeout 900)
+# In CI (or with SANITIZE=1): the test suite again under ASan + UBSan, then a short fuzz pass over
+# every reader in the same clang build (docs/robustness.md "Sanitizers" and "Fuzzing").
+if [[ "${SANITIZE:-${CI:-}}" == "true" || "${SANITIZE:-}" == "1" ]]; then
+  bash scripts/sanitize.sh
+  FUZZ_NO_BUILD=1 FUZZ_SECONDS=${FUZZ_SECONDS:-10} bash scripts/fuzz.sh
+fi

@@ -59,7 +59,8 @@ TEST_CASE("split_edges_near: only the tets near the seeds are split, the boundar
 
 TEST_CASE("refine_folds: folds left in a ball map are untangled on a mesh refined around them") {
   TetMesh input = test::ball_mesh(5);
-  Device& dev = *Device::host();
+  const auto host = Device::host();  // held: a reference into the temporary dangled (ASan: heap-use-after-free)
+  Device& dev = *host;
   InitialMapOptions opt;
   InitialMapResult res = initial_map(dev, input, opt);
   REQUIRE(inverted_tets(res.ball, res.mesh.tets).empty());

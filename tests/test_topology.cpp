@@ -175,8 +175,8 @@ TEST_CASE("face matching (boundary faces, non-manifold faces, face neighbours) a
     last = f;
     // oriented as the owner's face: the opposite corner on the negative side
     const int t = owner[static_cast<size_t>(i)], k = it->second[0] % 4;
-    const Eigen::Vector3d a = mesh.vertices.row(bf(i, 0)), b = mesh.vertices.row(bf(i, 1)), c = mesh.vertices.row(bf(i, 2));
-    if (t != m0) {  // the glued tet has no orientation to check
+    if (t != m0) {  // the glued tet has no orientation to check (nor a position for its new vertex n0)
+      const Eigen::Vector3d a = mesh.vertices.row(bf(i, 0)), b = mesh.vertices.row(bf(i, 1)), c = mesh.vertices.row(bf(i, 2));
       const Eigen::Vector3d o = mesh.vertices.row(mesh.tets(t, k));
       CHECK((b - a).cross(c - a).dot(o - a) < 0);
     }

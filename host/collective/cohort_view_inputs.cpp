@@ -27,7 +27,8 @@ std::vector<ViewFocus> read_view_foci(const std::string& path, const Comparison&
     if (it == head.end()) throw InputError(path + ":1: no column '" + name + "'");
     return static_cast<size_t>(it - head.begin());
   };
-  const size_t id = col("focus"), vol = col("volume_mm3"), cx = col("centroid_x"), pz = col("peak_z"), lab = col("label");
+  const size_t id = col("focus"), vol = col("volume_mm3"), pz = col("peak_z"), lab = col("label");
+  const size_t cx[3] = {col("centroid_x"), col("centroid_y"), col("centroid_z")};
   std::vector<ViewFocus> out;
   for (int n = 2; std::getline(in, line); ++n) {
     if (line.empty()) continue;
@@ -39,7 +40,7 @@ std::vector<ViewFocus> read_view_foci(const std::string& path, const Comparison&
     try {
       f.id = std::stoi(cells[id]);
       f.volume_mm3 = std::stod(cells[vol]);
-      for (int a = 0; a < 3; ++a) f.centroid[a] = std::stod(cells[cx + a]);
+      for (int a = 0; a < 3; ++a) f.centroid[a] = std::stod(cells[cx[a]]);
       f.peak_z = std::stod(cells[pz]);
       f.label = std::stoi(cells[lab]);
     } catch (const std::exception&) {

@@ -1,7 +1,9 @@
 // load_cohort_view (vpm/cohort_view.hpp): a cohort read back from the workflow's results folder.
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 
 #include "collective/cohort_view_detail.hpp"
 #include "vpm/error.hpp"
@@ -26,11 +28,13 @@ struct ComparisonFile {
   size_t clusters = 0;
 };
 
-/// `path` as written, or relative to the folder holding the results folder.
+/// `path` as written, or relative to the folder holding the results folder: a file (names too
+/// long for the file system, folders and devices such as /dev/zero are not found).
 std::string resolve(const std::string& path, const fs::path& results, const std::string& what) {
-  if (fs::exists(path)) return path;
+  std::error_code ec;
+  if (fs::is_regular_file(path, ec)) return path;
   const fs::path alt = results.parent_path() / path;
-  if (fs::exists(alt)) return alt.string();
+  if (fs::is_regular_file(alt, ec)) return alt.string();
   throw InputError(path + ": " + what + " not found");
 }
 
@@ -39,6 +43,15 @@ const Json& need(const Json& json, const char* key, const std::string& side) {
   const Json* j = json.find(key);
   if (!j || j->type() == Json::Type::Null) throw InputError(side + ": no '" + key + "'");
   return *j;
+}
+
+/// An integral number (json[key] when present, else `fallback`), or InputError naming the sidecar and the key.
+int integer(const Json& json, const char* key, const std::string& side, std::optional<int> fallback = {}) {
+  const Json* j = json.find(key);
+  if (!j && fallback) return *fallback;
+  const double x = need(json, key, side).number();
+  if (!(x >= INT_MIN && x <= INT_MAX) || x != std::floor(x)) throw InputError(side + ": '" + key + "' is not an integer");
+  return static_cast<int>(x);
 }
 
 std::vector<ComparisonFile> read_comparisons(const fs::path& results, const std::string& only) {
@@ -61,11 +74,11 @@ std::vector<ComparisonFile> read_comparisons(const fs::path& results, const std:
     for (size_t i = 0; i < tables->size(); ++i)
       c.normal_tables.push_back(resolve(tables->at(i).string(), results, "a normal's table named in " + side));
     c.normalisation = parse_normalisation(need(*ref, "normalisation", side).string());
-    if (const Json* smoothing = ref->find("smoothing")) c.smoothing = static_cast<int>(smoothing->number());
+    c.smoothing = integer(*ref, "smoothing", side, 0);
     c.options.threshold = need(*opt, "threshold", side).number();
     c.options.fdr_q = need(*opt, "fdr_q", side).number();
-    c.options.min_cluster = static_cast<int>(need(*opt, "min_cluster", side).number());
-    c.options.sign = static_cast<int>(need(*opt, "sign", side).number());
+    c.options.min_cluster = integer(*opt, "min_cluster", side);
+    c.options.sign = integer(*opt, "sign", side);
     if (const Json* extend = opt->find("extend")) c.options.extend = extend->number();  // absent before 2026-11-26
     if (const Json* peak = opt->find("peak")) c.options.peak = peak->number();        // absent before 2026-11-25
     if (const Json* test = opt->find("test")) c.options.test = parse_single_case_test(test->string());
@@ -190,7 +203,8 @@ void add_geometry(CohortView& v, const CanonicalElements& el, Tables& tables, co
     const ElementTable& t = tables.get(c.patient_table);
     const std::string id = subject_id(t, c.patient_table), z = c.tsv.substr(0, c.tsv.size() - 4) + "_z.nii.gz";
     for (const ElementFeature& f : t.features)
-      if (f.name == c.feature && fs::exists(f.source) && fs::exists(z)) slices_of[id][c.feature] = {f.source, z};
+      if (std::error_code ec; f.name == c.feature && fs::is_regular_file(f.source, ec) && fs::exists(z, ec))
+        slices_of[id][c.feature] = {f.source, z};
   }
   for (ViewSubject& s : v.subjects) {
     const TetMesh reg = read_mesh(mesh_of.at(s.id));

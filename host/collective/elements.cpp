@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <map>
 #include <utility>
@@ -127,7 +128,10 @@ ElementDefinition element_definition_from_json(const Json& j, const std::string&
     const Json* v = j.find(key);
     if (!v || v->type() != Json::Type::Number)
       throw InputError(source + ": element definition has no number \"" + std::string(key) + "\"");
-    return static_cast<int>(v->number());
+    const double x = v->number();
+    if (!(x >= INT_MIN && x <= INT_MAX) || x != std::floor(x))
+      throw InputError(source + ": element definition's \"" + std::string(key) + "\" is not an integer");
+    return static_cast<int>(x);
   };
   ElementDefinition d;
   d.level = num("level");

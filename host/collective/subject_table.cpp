@@ -1,5 +1,8 @@
 // Reading subject tables (vpm/sampling.hpp): the TSV written by write_subject_table and its sidecar.
 #include <charconv>
+#include <climits>
+#include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -26,6 +29,13 @@ double number(const std::string& cell, const std::string& where) {
   return v;
 }
 
+// An integral cell (element id, sample count, label) that fits an int.
+int integer(const std::string& cell, const std::string& where) {
+  const double v = number(cell, where);
+  if (!(v >= INT_MIN && v <= INT_MAX) || v != std::floor(v)) throw InputError(where + ": '" + cell + "' is not an integer");
+  return static_cast<int>(v);
+}
+
 bool ends_with(const std::string& s, const std::string& suffix) {
   return s.size() > suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
@@ -46,7 +56,7 @@ void read_header(const std::string& path, const std::vector<std::string>& h, Ele
   }
   for (; i < h.size(); ++i) {
     if (h[i].rfind("label_", 0) != 0) throw InputError(path + ":1: unexpected column '" + h[i] + "'");
-    labels.push_back(static_cast<int>(number(h[i].substr(6), path + ":1")));
+    labels.push_back(integer(h[i].substr(6), path + ":1"));
   }
 }
 
@@ -84,6 +94,14 @@ ElementTable read_subject_table(const std::string& path) {
   read_header(path, split_tabs(line), t, labels);
   read_sidecar(path, t);
   const int n = t.definition.elements();
+  const size_t columns = 4 + 3 * t.features.size() + labels.size();
+  // a row takes at least two bytes a column: refuse a sidecar's definition of more elements than
+  // the file could hold before allocating for them
+  std::error_code ec;
+  const auto bytes = std::filesystem::file_size(path, ec);
+  if (!ec && static_cast<double>(n) * 2.0 * static_cast<double>(columns) > static_cast<double>(bytes))
+    throw InputError(path + ": its sidecar's element definition has " + std::to_string(n) + " elements, more rows than the file's " +
+                     std::to_string(bytes) + " bytes could hold (truncated table, or the sidecar of another table)");
   for (ElementFeature& f : t.features) {
     f.mean.assign(n, 0);
     f.std.assign(n, 0);
@@ -92,7 +110,6 @@ ElementTable read_subject_table(const std::string& path) {
   ElementLabels lab;
   lab.labels = labels;
   lab.fraction.assign(labels.size(), std::vector<double>(n, 0.0));
-  const size_t columns = 4 + 3 * t.features.size() + labels.size();
   int row = 0;
   for (int ln = 2; std::getline(in, line); ++ln) {
     if (line.empty()) continue;
@@ -100,11 +117,11 @@ ElementTable read_subject_table(const std::string& path) {
     const std::vector<std::string> c = split_tabs(line);
     if (c.size() != columns) throw InputError(where + ": " + std::to_string(c.size()) + " columns, the header has " + std::to_string(columns));
     if (row >= n) throw InputError(where + ": more rows than the " + std::to_string(n) + " elements of the definition");
-    if (static_cast<int>(number(c[0], where)) != row) throw InputError(where + ": element " + c[0] + ", expected " + std::to_string(row));
+    if (integer(c[0], where) != row) throw InputError(where + ": element " + c[0] + ", expected " + std::to_string(row));
     for (size_t f = 0; f < t.features.size(); ++f) {
       t.features[f].mean[row] = number(c[4 + 3 * f], where);
       t.features[f].std[row] = number(c[5 + 3 * f], where);
-      t.features[f].count[row] = static_cast<int>(number(c[6 + 3 * f], where));
+      t.features[f].count[row] = integer(c[6 + 3 * f], where);
     }
     for (size_t l = 0; l < labels.size(); ++l) lab.fraction[l][row] = number(c[4 + 3 * t.features.size() + l], where);
     ++row;

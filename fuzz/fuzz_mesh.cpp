@@ -1,0 +1,25 @@
+// Fuzz target for one tet-mesh or surface reader, chosen at build time: FUZZ_EXT is the file
+// extension read_mesh()/read_surface() dispatches on (".mesh", ".vtu", ".msh" with FUZZ_MESH;
+// ".off", ".obj", ".stl" without). A mesh that reads is validated as `vpm map` does next.
+#include "fuzz_target.hpp"
+#include "vpm/io.hpp"
+#include "vpm/validate.hpp"
+
+#ifndef FUZZ_EXT
+#error "FUZZ_EXT (the file extension to read) must be defined"
+#endif
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using namespace vpm;
+  const std::string path = fuzz::write_scratch("input" FUZZ_EXT, fuzz::bytes(data, size));
+  fuzz::expect_input_error_only([&] {
+#ifdef FUZZ_MESH
+    TetMesh mesh = read_mesh(path);
+    fuzz::require_well_formed(mesh);
+    validate_mesh(mesh, path);
+#else
+    fuzz::require_well_formed(read_surface(path));
+#endif
+  });
+  return 0;
+}
