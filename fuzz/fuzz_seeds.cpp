@@ -2,6 +2,7 @@
 // emptied first): small valid files written by vpm's own writers, and the bad inputs of TESTDATA
 // (tests/data) for the format. Run by scripts/fuzz.sh before fuzzing and by ctest before the replays.
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -101,6 +102,23 @@ void image_seeds(const fs::path& out, const fs::path& tmp) {
   take(out, "nifti", tmp / "image.nii");
   write_nifti((tmp / "image.nii.gz").string(), img);
   take(out, "nifti", tmp / "image.nii.gz");
+  // MGH (big-endian header of 284 bytes, then the voxels): one volume of each voxel type
+  // (0 uchar, 1 int, 3 float, 4 short), 3 x 2 x 2 voxels, LIA direction cosines as FreeSurfer's
+  for (const int type : {0, 1, 3, 4}) {
+    std::string b;
+    const auto be32 = [&b](std::uint32_t v) { for (int s = 24; s >= 0; s -= 8) b.push_back(static_cast<char>(v >> s)); };
+    const auto bef = [&be32](float f) { std::uint32_t u; std::memcpy(&u, &f, 4); be32(u); };
+    for (const int v : {1, 3, 2, 2, 1, type, 0}) be32(static_cast<std::uint32_t>(v));
+    b += std::string("\0\1", 2);  // goodRASflag
+    for (const float v : {1.f, 1.5f, 2.f, -1.f, 0.f, 0.f, 0.f, 0.f, -1.f, 0.f, 1.f, 0.f, 5.f, -7.f, 11.f}) bef(v);
+    b.resize(284, '\0');
+    const int bytes = type == 0 ? 1 : type == 4 ? 2 : 4;
+    for (int i = 0; i < 12; ++i) {
+      b.append(static_cast<size_t>(bytes - 1), '\0');
+      b.push_back(static_cast<char>(i));
+    }
+    put(out, "mgh", "type" + std::to_string(type) + ".mgh", b);
+  }
 }
 
 void landmark_seeds(const fs::path& out, const fs::path& tmp) {
@@ -156,6 +174,9 @@ void view_seeds(const fs::path& out, const fs::path& tmp) {
   write_native_foci((tmp / "sub-P1_pet_foci.tsv").string(), foci);
   take(out, "view_foci", tmp / "sub-P1_pet_foci.tsv");
   put(out, "label_names", "aal.nii.txt", "1 Precentral_L 2001\n2 Precentral_R 2002\n# comment\n\n45 Cuneus_L 5001\r\n");
+  put(out, "label_names", "FreeSurferColorLUT.txt",
+      "#$Id: FreeSurferColorLUT.txt\n0   Unknown            0   0   0   0\n17  Left-Hippocampus  220 216  20   0\n"
+      "1035 ctx-lh-insula     255 192  32   0\n");
 }
 
 }  // namespace

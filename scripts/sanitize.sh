@@ -7,6 +7,10 @@
 #   SAN_TESTS    ctest -R regex of the tests to run (default: all of them)
 #   SAN_EXCLUDE  ctest -E regex of tests to skip (default: the tests that cannot run in this tree,
 #                see below)
+#   SAN_SUITE    "ci": the quick part of the suite that CI runs (the readers, the collective
+#                analysis' tables, the page writer, the limits and faults, the small numerics, the
+#                fuzz replays: about 4 minutes of tests under ASan) and only the targets it needs;
+#                default: the whole suite (about 60 CPU-minutes of tests, docs/robustness.md)
 #   SAN_DIR      the build folder (default build-san); extra arguments go to cmake
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -15,7 +19,18 @@ SAN_DIR=${SAN_DIR:-build-san}
 cmake -S . -B "$SAN_DIR" -DCMAKE_CXX_COMPILER=clang++-14 -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DVPM_SANITIZE=ON -DVPM_BUILD_FUZZ=ON -DVPM_BUILD_TESTS=ON \
   -DVPM_BUILD_BENCH=OFF "$@" >/dev/null
-cmake --build "$SAN_DIR" -j"${JOBS:-2}"
+targets=()
+if [[ "${SAN_SUITE:-}" == ci ]]; then
+  ci_tests=(test_io test_io_vtk_binary test_json test_image_mgh test_limits test_faults test_progress
+            test_elements test_sampling test_statistics test_view test_validate test_topology
+            test_geometry test_laplacian test_sparse_cholesky test_tet_grid test_untangle
+            test_refine_folds test_device test_cli)
+  fuzz_targets=$(sed -n 's/^set(VPM_FUZZ_TARGETS \(.*\))$/\1/p' fuzz/CMakeLists.txt)
+  targets=(--target vpm_cli "${ci_tests[@]}" fuzz_seeds $(printf 'fuzz_%s_replay ' $fuzz_targets)
+           $(printf 'fuzz_%s ' $fuzz_targets))
+  SAN_TESTS=${SAN_TESTS:-"^($(IFS='|'; echo "${ci_tests[*]}")|fuzz):"}
+fi
+cmake --build "$SAN_DIR" -j"${JOBS:-2}" "${targets[@]}"
 source scripts/sanitizers/env.sh
 export POCL_CACHE_DIR="$PWD/$SAN_DIR/pocl-cache"
 mkdir -p "$POCL_CACHE_DIR"

@@ -1,10 +1,12 @@
 // FreeSurfer MGH/MGZ volumes read by vpm (host/image/image_mgh.cpp) and label tables in AAL's
 // and FreeSurfer's formats (host/collective/label_names.cpp). Files from nibabel are compared in
 // tests/python/test_inputs.py; here: hand-made headers, hostile ones included.
+#include <algorithm>
 #include <zlib.h>
 
 #include <catch2/catch.hpp>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <string>
@@ -37,11 +39,12 @@ std::vector<unsigned char> mgh(int nx, int ny, int nz, int frames = 1, int versi
   for (float c : {-1.f, 0.f, 0.f, 0.f, 0.f, -1.f, 0.f, 1.f, 0.f}) putf(b, c);  // LIA, as FreeSurfer's conformed volumes
   for (float c : {5.f, -7.f, 11.f}) putf(b, c);
   b.resize(284, 0);
-  size_t n = 0;
-  for (int k = 0; k < nz; ++k)
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i)
-        if (n++ < keep_voxels) putf(b, static_cast<float>(i + 10 * j + 100 * k));
+  // the first keep_voxels voxels only (not a loop over a hostile header's 2^93 voxels)
+  const size_t total = nx > 0 && ny > 0 && nz > 0 ? size_t(nx) * size_t(ny) * size_t(nz) : 0;  // wraps for the hostile sizes, whose keep_voxels is 0
+  for (size_t n = 0; n < std::min(total, keep_voxels); ++n) {
+    const size_t i = n % size_t(nx), j = n / size_t(nx) % size_t(ny), k = n / (size_t(nx) * size_t(ny));
+    putf(b, static_cast<float>(i + 10 * j + 100 * k));
+  }
   return b;
 }
 
@@ -102,7 +105,12 @@ TEST_CASE("MGH: hostile and broken headers are refused before anything of their 
   fails_with(write("frames.mgz", mgh(2, 2, 2, 3), true), "3 frames");
   // 2^31-1 cubed claimed by a 300-byte file: refused by its size, no allocation
   fails_with(write("huge.mgz", mgh(0x7fffffff, 0x7fffffff, 0x7fffffff, 1, 1, 0), true), "more than vpm reads");
-  fails_with(write("huge2.mgz", mgh(1000, 1000, 1000, 1, 1, 0), true), "truncated");
+  // 400^3 floats (256 MB) claimed by a few hundred bytes: the reader grows only with what it read
+  fails_with(write("huge2.mgz", mgh(400, 400, 400, 1, 1, 0), true), "truncated");
+  // more than the memory allows: refused before reading, with the estimate
+  setenv("VPM_MAX_MEMORY", "100M", 1);
+  fails_with(write("big.mgz", mgh(400, 400, 400, 1, 1, 0), true), "needs about");
+  unsetenv("VPM_MAX_MEMORY");
   fails_with(write("negative.mgh", mgh(-4, 3, 2, 1, 1, 0), false), "dimension 1");
   fails_with(std::string(VPM_TEST_TMP) + "/missing.mgz", "cannot be opened");
 }

@@ -18,6 +18,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "vpm/memory.hpp"
 #include "vpm/error.hpp"
 #include "vpm/image.hpp"
 
@@ -159,6 +160,9 @@ Image read_mgh(const std::string& path) {
   if (voxels > kMaxVoxels)
     throw InputError(path + ": MGH header: " + std::to_string(m.dims[0]) + " x " + std::to_string(m.dims[1]) + " x " +
                      std::to_string(m.dims[2]) + " voxels is more than vpm reads");
+  // the raw voxels and the float image at once: refused up front when more than the memory
+  require_memory(double(voxels) * double(bpv + sizeof(float)), path,
+                 std::to_string(voxels) + " voxels x " + std::to_string(bpv + sizeof(float)) + " bytes");
   buf.clear();
   const size_t want = voxels * bpv;
   const size_t got = read_some(f.get(), path, want, buf);  // grows only with the bytes present
