@@ -178,12 +178,12 @@ void VtuReader::on_data_array(const Tag& tag) {
 }
 
 // The connectivity's length is the last offset; VTK writes connectivity first, so without
-// offsets yet its tokens are counted.
+// offsets yet (or with offsets whose values come later, in <AppendedData>) its tokens are counted.
 void VtuReader::read_connectivity(const Tag& tag) {
   const auto fmt = tag.attrs.find("format");
   if (fmt != tag.attrs.end() && fmt->second != "ascii") {
     conn_ = read_array(path_, w_, tag, -1, layout_);  // its length is checked against the offsets later
-  } else if (!have_offsets_) {
+  } else if (!have_offsets_ || offsets_.values.size() != static_cast<size_t>(std::max(m_, 0LL))) {
     const size_t close = array_close(w_, tag, "DataArray 'connectivity'");
     const AsciiPieces pieces = ascii_pieces(array_text(w_, tag, close));  // counted once, read with them
     conn_ = read_array(path_, w_, tag, pieces.total(), layout_, "(unnamed)", &pieces);
