@@ -21,7 +21,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   }
   std::cout << (selected == "host" ? "* " : "  ") << "host (Eigen reference, no OpenCL)\n";
   for (const auto& d : devs) {
-    std::cout << (selected == d.label() ? "* " : "  ") << d.label() << "  [" << d.type
+    std::cout << (selected == d.label() ? "* " : "  ") << d.label() << "  [" << to_string(d.kind)
               << ", " << d.compute_units << " compute units, "
               << d.global_memory_bytes / (1024 * 1024) << " MiB, fp64 " << (d.fp64 ? "yes" : "no")
               << "]\n";

@@ -78,7 +78,7 @@ Triad measure_triad(Device& dev) {
   }
   auto& q = dev.queue();
   bc::vector<double> a(tn, dev.context()), b(B.data(), B.data() + tn, q), c(C.data(), C.data() + tn, q);
-  auto kernel = dev.kernel("solver", "triad", dev.description().type == "cpu" ? "-DCHUNKED" : "");
+  auto kernel = dev.kernel("solver", "triad", dev.description().kind == DeviceKind::cpu ? "-DCHUNKED" : "");
   kernel.set_args(tn, 0.5, a, b, c);
   dev.launch(kernel, tn);
   q.finish();

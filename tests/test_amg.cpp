@@ -199,7 +199,7 @@ TEST_CASE("AMG-CG: Neumann and Dirichlet on host and device, device V-cycle equa
 TEST_CASE("preconditioner auto: AMG on CPU devices for large meshes, Jacobi below and on GPUs") {
   for (auto& dev : test::devices()) {
     INFO(dev->name());
-    const bool cpu = dev->is_host() || dev->description().type == "cpu";
+    const bool cpu = dev->is_host() || dev->description().kind == DeviceKind::cpu;
     CHECK(choose_preconditioner("auto", *dev, 1000) == Preconditioner::jacobi);
     CHECK(choose_preconditioner("auto", *dev, kAutoAmgTets - 1) == Preconditioner::jacobi);
     CHECK(choose_preconditioner("auto", *dev, kAutoAmgTets) == (cpu ? Preconditioner::amg : Preconditioner::jacobi));

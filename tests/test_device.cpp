@@ -37,8 +37,8 @@ TEST_CASE("OpenCL device selection by type, index and name") {
   CHECK(by_index->name() == dev->name());
   auto by_name = Device::select(d.name.substr(0, 6));
   CHECK_FALSE(by_name->is_host());
-  auto by_type = Device::select(d.type);
-  CHECK(by_type->description().type == d.type);
+  auto by_type = Device::select(to_string(d.kind));
+  CHECK(by_type->description().kind == d.kind);
   CHECK(dev->padded(1) == dev->local_size());
   CHECK(dev->padded(dev->local_size() + 1) == 2 * dev->local_size());
   // kernels are built once and cached: a second request reuses the program

@@ -56,7 +56,7 @@ TEST_CASE("where the equal-area steps solve: automatic takes a GPU for large bou
   CHECK_FALSE(density_solve_on_device(o, host.get(), 10 * kDeviceDensityVertices));
   const std::shared_ptr<Device> dev = test::opencl_device();
   if (!dev) return;
-  const bool gpu = dev->description().type == "gpu";
+  const bool gpu = dev->description().kind == DeviceKind::gpu;
   CHECK_FALSE(density_solve_on_device(o, dev.get(), kDeviceDensityVertices - 1));
   CHECK(density_solve_on_device(o, dev.get(), kDeviceDensityVertices) == gpu);
   o.density_solve = S::host;

@@ -17,6 +17,17 @@ const std::map<std::string, std::string>& embedded_kernel_sources();
 
 namespace bc = boost::compute;
 
+const char* to_string(DeviceKind kind) {
+  switch (kind) {
+    case DeviceKind::host: return "host";
+    case DeviceKind::cpu: return "cpu";
+    case DeviceKind::gpu: return "gpu";
+    case DeviceKind::accelerator: return "accelerator";
+    case DeviceKind::other: break;
+  }
+  return "other";
+}
+
 std::string DeviceDescription::label() const {
   return std::to_string(platform_index) + ":" + std::to_string(device_index) + " " + platform +
          ": " + name;
@@ -80,10 +91,10 @@ std::vector<RawDevice> enumerate(std::string* error) {
       r.desc.name = info_string(ids[d], CL_DEVICE_NAME);
       cl_device_type t = 0;
       clGetDeviceInfo(ids[d], CL_DEVICE_TYPE, sizeof t, &t, nullptr);
-      r.desc.type = (t & CL_DEVICE_TYPE_GPU)           ? "gpu"
-                    : (t & CL_DEVICE_TYPE_CPU)         ? "cpu"
-                    : (t & CL_DEVICE_TYPE_ACCELERATOR) ? "accelerator"
-                                                       : "other";
+      r.desc.kind = (t & CL_DEVICE_TYPE_GPU)           ? DeviceKind::gpu
+                    : (t & CL_DEVICE_TYPE_CPU)         ? DeviceKind::cpu
+                    : (t & CL_DEVICE_TYPE_ACCELERATOR) ? DeviceKind::accelerator
+                                                       : DeviceKind::other;
       cl_device_fp_config fp = 0;
       clGetDeviceInfo(ids[d], CL_DEVICE_DOUBLE_FP_CONFIG, sizeof fp, &fp, nullptr);
       std::string ext = info_string(ids[d], CL_DEVICE_EXTENSIONS);
@@ -106,7 +117,7 @@ std::vector<RawDevice> enumerate(std::string* error) {
 
 std::string device_list_text(const std::vector<RawDevice>& devs, const std::string& why) {
   std::string s = "available: host";
-  for (const auto& d : devs) s += "; " + d.desc.label() + " (" + d.desc.type + ")";
+  for (const auto& d : devs) s += "; " + d.desc.label() + " (" + to_string(d.desc.kind) + ")";
   if (devs.empty() && !why.empty()) s += " (" + why + ")";
   return s;
 }
@@ -123,7 +134,7 @@ std::shared_ptr<Device> Device::host() {
   std::shared_ptr<Device> d(new Device());
   d->host_ = true;
   d->desc_.name = "host";
-  d->desc_.type = "host";
+  d->desc_.kind = DeviceKind::host;
   d->desc_.fp64 = true;
   return d;
 }
@@ -136,14 +147,14 @@ std::shared_ptr<Device> Device::select(const std::string& spec_in) {
   const RawDevice* chosen = nullptr;
   if (spec.empty()) {
     for (auto& d : devs)
-      if (d.desc.type == "gpu" && d.desc.fp64) { chosen = &d; break; }
+      if (d.desc.kind == DeviceKind::gpu && d.desc.fp64) { chosen = &d; break; }
     if (!chosen)
       for (auto& d : devs)
-        if (d.desc.type == "cpu" && d.desc.fp64) { chosen = &d; break; }
+        if (d.desc.kind == DeviceKind::cpu && d.desc.fp64) { chosen = &d; break; }
     if (!chosen) return host();  // the documented default when no fp64 OpenCL device exists
   } else if (spec == "cpu" || spec == "gpu") {
     for (auto& d : devs)
-      if (d.desc.type == spec) { chosen = &d; break; }
+      if (to_string(d.desc.kind) == spec) { chosen = &d; break; }
   } else if (spec.find(':') != std::string::npos &&
              std::all_of(spec.begin(), spec.end(),
                          [](char c) { return std::isdigit(static_cast<unsigned char>(c)) || c == ':'; })) {
@@ -172,7 +183,7 @@ std::shared_ptr<Device> Device::select(const std::string& spec_in) {
   d->device_ = bc::device(chosen->id, true);
   d->context_ = bc::context(d->device_);
   d->queue_ = bc::command_queue(d->context_, d->device_);
-  d->local_size_ = d->desc_.type == "gpu" ? 128 : 64;
+  d->local_size_ = d->desc_.kind == DeviceKind::gpu ? 128 : 64;
   return d;
 }
 
@@ -196,7 +207,7 @@ size_t Device::padded(size_t n) const {
 
 bool Device::group_reduce() const {
   if (host_) return false;
-  return group_reduce_override_ ? *group_reduce_override_ : desc_.type != "cpu";
+  return group_reduce_override_ ? *group_reduce_override_ : desc_.kind != DeviceKind::cpu;
 }
 
 size_t Device::reduction_partials(size_t global) const {

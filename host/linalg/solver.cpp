@@ -34,7 +34,7 @@ Preconditioner parse_preconditioner(const std::string& name) {
 
 Preconditioner choose_preconditioner(const std::string& name, const Device& device, long long tets) {
   if (name != "auto") return parse_preconditioner(name);
-  const bool cpu = device.is_host() || device.description().type == "cpu";
+  const bool cpu = device.is_host() || device.description().kind == DeviceKind::cpu;
   return cpu && tets >= kAutoAmgTets ? Preconditioner::amg : Preconditioner::jacobi;
 }
 

@@ -197,7 +197,7 @@ ClBackend::ClBackend(Device& dev, int n)
       mask_(dev.context()) {
   const size_t ls = dev.local_size();
   const unsigned cu = std::max(1u, dev.description().compute_units);
-  const bool cpu = dev.description().type == "cpu";
+  const bool cpu = dev.description().kind == DeviceKind::cpu;
   // CPU (PoCL): a few work groups per core, each work item a contiguous chunk.
   // GPU: enough work items to fill the device, grid-stride.
   groups_ = cpu ? ls * std::max<size_t>(4, 2 * cu) : ls * std::max<size_t>(64, 4 * cu);

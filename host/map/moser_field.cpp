@@ -160,7 +160,7 @@ struct DeviceAdvector::Impl {
         inc_offset(d.context()),
         inc_tet(d.context()),
         psi(d.context()),
-        zero_copy(d.description().type == "cpu") {}
+        zero_copy(d.description().kind == DeviceKind::cpu) {}
 
   bc::kernel kinv;  // the inverse matrices from x on the device (set_field with psi)
 

@@ -126,7 +126,7 @@ DevicePolisher::DevicePolisher(Device& dev, const Tets& tets, int n, const std::
   impl_ = std::make_unique<Impl>(dev, n, m, rows);
   Impl& I = *impl_;
   auto& queue = dev.queue();
-  const bool cpu = dev.description().type == "cpu";
+  const bool cpu = dev.description().kind == DeviceKind::cpu;
   const size_t ls = dev.local_size();
   const unsigned cu = std::max(1u, dev.description().compute_units);
   I.G = cpu ? ls * std::max<size_t>(4, 2 * cu) : ls * std::max<size_t>(64, 4 * cu);

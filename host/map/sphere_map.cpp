@@ -325,7 +325,7 @@ bool density_solve_on_device(const InitialMapOptions& opt, const Device* device,
   using S = InitialMapOptions::DensitySolve;
   if (!device || device->is_host() || opt.density_solve == S::host) return false;
   return opt.density_solve == S::device ||
-         (device->description().type == "gpu" && boundary_vertices >= kDeviceDensityVertices);
+         (device->description().kind == DeviceKind::gpu && boundary_vertices >= kDeviceDensityVertices);
 }
 
 InitialMapOptions::SphereStart parse_sphere_start(const std::string& name) {

@@ -118,7 +118,7 @@ bool advection_on_device(Device& dev, const VolumeMapOptions& opt) {
 }
 bool polish_on_device(Device& dev, const VolumeMapOptions& opt) {
   if (dev.is_host() || opt.polish == ExecutionPlace::host) return false;
-  return opt.polish == ExecutionPlace::device || dev.description().type == "gpu";
+  return opt.polish == ExecutionPlace::device || dev.description().kind == DeviceKind::gpu;
 }
 
 // Boundary, frozen vertices, neighbours, normalised input volumes, solver and advector.
@@ -152,7 +152,7 @@ void set_up(detail::MapContext& c) {
                                                    opt.preconditioner, opt.poisson);
   if (advection_on_device(c.dev, opt)) {
     c.advector = std::make_unique<detail::DeviceAdvector>(c.dev, tets, c.nbr, c.boundary);
-    c.gradients_on_device = opt.advection == ExecutionPlace::device || c.dev.description().type == "gpu";
+    c.gradients_on_device = opt.advection == ExecutionPlace::device || c.dev.description().kind == DeviceKind::gpu;
   }
   c.polish_on_device = polish_on_device(c.dev, opt);
   if (!c.dev.is_host()) c.volumes = std::make_unique<detail::DeviceVolumes>(c.dev, tets);

@@ -64,7 +64,7 @@ void advect_device(Device& dev, Points& x, const std::vector<DivFreeField>& f, i
   // of double on CPU devices, 1 elsewhere); padding points sit at the origin and are discarded.
   // The Z-order puts close points in one work item, so the kernel skips the centres far from
   // all of them (FIELD_CUT) whatever the caller's numbering.
-  const int lanes = dev.description().type == "cpu" ? 8 : 1;
+  const int lanes = dev.description().kind == DeviceKind::cpu ? 8 : 1;
   const size_t n = static_cast<size_t>(x.rows());
   const size_t nv = (n + lanes - 1) / lanes, np = nv * lanes;
   const std::vector<int> order = spatial_order(x);

@@ -2,8 +2,11 @@
 #include "with_nifti/nifti_header.hpp"
 
 #include <nifti2_io.h>
+#include <zlib.h>
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -47,8 +50,37 @@ Fields fields_of(const H& h, int version) {
   return f;
 }
 
+// The first bytes of the file (decompressed when gzip): nifti_clib's own header readers are
+// only given a header whose size field and magic agree (libnifti2 2.0.0's nifti_read_n1_hdr
+// smashes its stack on a 348-byte header carrying the NIfTI-2 magic, found by fuzz_nifti).
+void check_size_and_magic(const std::string& path) {
+  unsigned char b[540] = {};
+  int got = 0;
+  if (gzFile g = gzopen(path.c_str(), "rb")) {
+    got = gzread(g, b, sizeof b);
+    gzclose(g);
+  }
+  if (got < 348) throw InputError(path + ": header: cannot read the 348-byte NIfTI-1 header (file too short?)");
+  std::uint32_t le = 0;
+  std::memcpy(&le, b, 4);
+  const std::uint32_t be = __builtin_bswap32(le);
+  const auto is = [&](const unsigned char* at, const char* magic, size_t n) { return std::memcmp(at, magic, n) == 0; };
+  if (le == 348 || be == 348) {
+    static const unsigned char none[4] = {0, 0, 0, 0};  // ANALYZE 7.5, which nifti_clib reads too
+    if (is(b + 344, "n+1", 4) || is(b + 344, "ni1", 4) || std::memcmp(b + 344, none, 4) == 0) return;
+    throw InputError(path + ": header: sizeof_hdr is 348 (NIfTI-1) but the magic at byte 344 is not \"n+1\" or \"ni1\"");
+  }
+  if (le == 540 || be == 540) {
+    if (got < 540) throw InputError(path + ": header: cannot read the 540-byte NIfTI-2 header (file too short?)");
+    if (is(b + 4, "n+2\0\r\n\032\n", 8) || is(b + 4, "ni2\0\r\n\032\n", 8)) return;
+    throw InputError(path + ": header: sizeof_hdr is 540 (NIfTI-2) but the magic at byte 4 is not \"n+2\" or \"ni2\"");
+  }
+  throw InputError(path + ": header: sizeof_hdr is " + std::to_string(le) + ", neither 348 (NIfTI-1) nor 540 (NIfTI-2)");
+}
+
 // The header in host byte order (nifti_clib swaps it), version from the sizeof_hdr/magic.
 Fields read_fields(const std::string& path) {
+  check_size_and_magic(path);
   int version = 0;
   std::free(nifti_read_header(path.c_str(), &version, 0));
   if (version == 2) {

@@ -30,13 +30,21 @@ void set_args_at(boost::compute::kernel& k, size_t first, const T&... args) {
   (k.set_arg(i++, args), ...);
 }
 
+/// What kind of processor a Device is: the host (vpm's C++ code, no OpenCL) or an OpenCL
+/// device of CL_DEVICE_TYPE GPU, CPU (PoCL), accelerator or other. Where work runs is decided
+/// from this kind (and the problem size), never from names.
+enum class DeviceKind { host, cpu, gpu, accelerator, other };
+
+/// "host", "cpu", "gpu", "accelerator" or "other" (VPM_DEVICE's words, `vpm devices`, reports).
+const char* to_string(DeviceKind kind);
+
 /// One OpenCL device as the ICD loader reports it.
 struct DeviceDescription {
   int platform_index = -1;
   int device_index = -1;
   std::string platform;   ///< platform name, e.g. "Portable Computing Language"
   std::string name;       ///< device name
-  std::string type;       ///< "gpu", "cpu", "accelerator" or "other"
+  DeviceKind kind = DeviceKind::other;
   bool fp64 = false;      ///< cl_khr_fp64 or CL_DEVICE_DOUBLE_FP_CONFIG non-zero
   unsigned compute_units = 0;
   unsigned long long global_memory_bytes = 0;

@@ -24,7 +24,7 @@ py::dict describe(const DeviceDescription& d, bool selected) {
   r["index"] = std::to_string(d.platform_index) + ":" + std::to_string(d.device_index);
   r["platform"] = d.platform;
   r["name"] = d.name;
-  r["type"] = d.type;
+  r["type"] = to_string(d.kind);
   r["fp64"] = d.fp64;
   r["compute_units"] = d.compute_units;
   r["global_memory_bytes"] = d.global_memory_bytes;
