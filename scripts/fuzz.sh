@@ -32,6 +32,11 @@ if [[ "${FUZZ_NO_BUILD:-}" != 1 ]]; then
   cmake --build "$SAN_DIR" -j"${JOBS:-2}" --target fuzz_seeds $(printf 'fuzz_%s ' $FUZZ_TARGETS)
 fi
 source scripts/sanitizers/env.sh
+# libFuzzer's runtime brings its own, unannotated std::vector<unsigned char> code: mixed with
+# vpm's annotated vectors (_GLIBCXX_SANITIZE_VECTOR) ASan reports container-overflow where there
+# is none (read_mgh's resize, found in the campaign; the replay of the same input under ASan
+# without libFuzzer is clean). The check stays on in the sanitizer test suite and the replays.
+export ASAN_OPTIONS="$ASAN_OPTIONS:detect_container_overflow=0"
 # the targets write every input to a file: in memory (/dev/shm) that is 20x faster than on this
 # machine's disk (label_names: 5,549 vs 252 executions a second)
 if [[ -z "${FUZZ_TMPDIR:-}" && -d /dev/shm && -w /dev/shm ]]; then FUZZ_TMPDIR=/dev/shm; fi
