@@ -34,6 +34,7 @@ LabelTable read_label_table(const std::string& path) {
     std::stringstream ss(line);
     std::vector<std::string> w;
     for (std::string word; ss >> word;) w.push_back(word);
+    if (w.empty()) continue;  // only white space (a vertical tab, a form feed)
     const std::string where = path + ":" + std::to_string(n) + ": ";
     int id = 0;
     if (!parse_int(w[0], id)) throw InputError(where + "label id '" + w[0] + "' is not an integer");
