@@ -123,6 +123,21 @@ float voxel_value(const unsigned char* p, int type) {
   }
 }
 
+// A voxel-to-world matrix vpm can invert: finite (voxel sizes or a centre near the float range
+// overflow), and axes that span space (|det| of the unit axes above 1e-6: no zero or parallel
+// direction cosines).
+void check_affine(const Eigen::Matrix4d& a, const std::string& path) {
+  if (!a.allFinite()) throw InputError(path + ": MGH header: the voxel-to-world matrix is not finite (voxel sizes, centre)");
+  Eigen::Matrix3d unit = a.topLeftCorner<3, 3>();
+  for (int j = 0; j < 3; ++j) {
+    const double n = unit.col(j).norm();
+    if (!(n > 0)) throw InputError(path + ": MGH header: direction cosines of axis " + std::to_string(j + 1) + " are zero");
+    unit.col(j) /= n;
+  }
+  if (!(std::abs(unit.determinant()) > 1e-6))
+    throw InputError(path + ": MGH header: the direction cosines are parallel (the axes do not span space)");
+}
+
 Eigen::Matrix4d mgh_affine(const MghHeader& m) {
   Eigen::Matrix3d md;  // column j: axis j's direction cosines times its voxel size
   for (int j = 0; j < 3; ++j)
@@ -172,6 +187,7 @@ Image read_mgh(const std::string& path) {
   Image img;
   img.dims = {m.dims[0], m.dims[1], m.dims[2]};
   img.affine = mgh_affine(m);
+  check_affine(img.affine, path);
   for (int j = 0; j < 3; ++j) img.spacing[j] = img.affine.block<3, 1>(0, j).norm();
   img.affine_source = "mgh";
   img.path = path;
