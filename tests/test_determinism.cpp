@@ -10,6 +10,7 @@
 #include "support/kill.hpp"
 #include "support/process.hpp"
 #include "support/shapes.hpp"
+#include "support/scratch.hpp"
 #include "vpm/ball_map.hpp"
 #include "vpm/config.hpp"
 #include "vpm/device.hpp"
@@ -23,12 +24,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string fresh_dir(const std::string& name) {
-  const std::string d = std::string(VPM_TEST_TMP) + "/determinism_" + name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+std::string fresh_dir(const std::string& name) { return test::fresh_dir("determinism_" + name); }
 
 // "P:D" of an OpenCL device, for VPM_DEVICE.
 std::string spec_of(const Device& d) {

@@ -18,6 +18,7 @@
 #include "support/shapes.hpp"
 #include "support/kill.hpp"
 #include "support/process.hpp"
+#include "support/scratch.hpp"
 #include "vpm/ball_map.hpp"
 #include "vpm/cohort_view.hpp"
 #include "vpm/config.hpp"
@@ -39,12 +40,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string fresh_dir(const std::string& name) {
-  const std::string d = std::string(VPM_TEST_TMP) + "/faults_" + name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+std::string fresh_dir(const std::string& name) { return test::fresh_dir("faults_" + name); }
 
 // One kind of output: its file names in the folder, how to write them, how to check one.
 struct Output {

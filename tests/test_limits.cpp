@@ -12,6 +12,7 @@
 #include "support/fixtures.hpp"
 #include "support/kill.hpp"
 #include "support/process.hpp"
+#include "support/scratch.hpp"
 #include "vpm/ball_map.hpp"
 #include "vpm/config.hpp"
 #include "vpm/error.hpp"
@@ -24,12 +25,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string fresh_dir(const std::string& name) {
-  const std::string d = std::string(VPM_TEST_TMP) + "/limits_" + name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+std::string fresh_dir(const std::string& name) { return test::fresh_dir("limits_" + name); }
 
 template <class Fn>
 std::string input_error_of(Fn fn) {
