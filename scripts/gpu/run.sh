@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine, from the repository root, out of the folder scripts/gpu/bundle.sh
-# made (docs/gpu.md): the test suite with VPM_DEVICE=$DEV, the solver and harmonic benchmarks,
-# and `vpm map` of Colin27 at 1.1M and 10M tets (meshed there), last a 10M map with AMG-CG.
+# made (docs/gpu.md): the test suite with VPM_DEVICE=$DEV (less the install, architecture,
+# workflow, browser and Python tests, which need tools a bare machine lacks), the solver and
+# harmonic benchmarks, and `vpm map` of Colin27 at 1.1M and 10M tets (meshed there), last a 10M map with AMG-CG.
 # Everything lands in $OUT/res.tgz, refreshed after each step, so a run cut short still returns
 # what it did.
 #   usage: bash .gpu/run.sh [STEPS (tests,bench,map1m,map10m,amg10m,extra)]
@@ -39,7 +40,7 @@ if want map10m || want amg10m; then
 fi
 if want tests; then
   log "ctest${MP:+ (the 10M mesh being made beside it)}"
-  VPM_DEVICE=$DEV VPM_TEST_REQUIRE_OPENCL=1 timeout 300 ctest --test-dir build -E "install|arch|workflow|browser" \
+  VPM_DEVICE=$DEV VPM_TEST_REQUIRE_OPENCL=1 timeout 300 ctest --test-dir build -E "install|arch|workflow|browser|python" \
     -j10 --timeout 200 --output-on-failure > "$W/ctest_gpu.log" 2>&1
   log "ctest rc $?"; grep -E "tests passed|tests failed" "$W/ctest_gpu.log" | tee -a "$W/log.txt"; save
 fi
