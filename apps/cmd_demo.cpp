@@ -248,11 +248,14 @@ vpm::Json demo_json(const std::string& device, const Settings& st, const Subject
     o["dice_image_before"] = ov.image_before[i].dice;
     o["dice_image_after"] = ov.image_after[i].dice;
     o["dice_volume_bound"] = volume_bound(ov.image_before[i]);
+    o["dice_subject_before"] = ov.subject_before[i].dice;
+    o["dice_subject_after"] = ov.subject_after[i].dice;
     jd.push_back(o);
   }
   vpm::Json jo = vpm::Json::object();
   jo["grid_cells_per_axis"] = st.grid;
   jo["sample_points"] = ov.points;
+  jo["subject_voxels"] = ov.subject_voxels;
   jo["held_out"] = jd;
   jo["landmark_regions_mean_dice_before"] = ov.landmark_before;
   jo["landmark_regions_mean_dice_after"] = ov.landmark_after;
@@ -305,6 +308,11 @@ void print_summary(const std::string& device, const Settings& st, const Subject&
   row("mean of the landmark regions",
       strprintf("%.3f", ov.image_landmark_before) + " (" + strprintf("%.3f", ov.landmark_before) + ")",
       strprintf("%.3f", ov.image_landmark_after) + " (" + strprintf("%.3f", ov.landmark_after) + ")");
+  out << "Dice in the subject's image space (" << ov.subject_voxels
+      << " voxels): colin27's atlas carried onto the subject's\nvoxels through the maps, as an image registration's "
+         "transformix carries it:\n";
+  for (size_t i = 0; i < kEvaluated.size(); ++i)
+    row(name_of(names, kEvaluated[i]), strprintf("%.3f", ov.subject_before[i].dice), strprintf("%.3f", ov.subject_after[i].dice));
   out << ideal;
   out << "total " << strprintf("%.1f", total) << " s; wrote " << (st.out / "demo.json").string()
       << " and the meshes (.vtu, open in ParaView) in " << st.out.string() << "\n";

@@ -69,6 +69,7 @@ Json to_json(const IdealReport& r, const std::vector<int>& evaluated) {
     Json o = Json::object();
     o["label"] = evaluated[i];
     o["dice_image"] = r.overlap.image_after[i].dice;
+    o["dice_subject"] = r.overlap.subject_after[i].dice;
     held.push_back(o);
   }
   j["held_out"] = held;
@@ -99,7 +100,11 @@ void write_registered(const std::string& path, const TetMesh& subject, const Poi
 std::string ideal_summary(const IdealReport& r) {
   std::string dice;
   for (const LabelOverlap& o : r.overlap.image_after) dice += (dice.empty() ? "" : " / ") + strprintf("%.3f", o.dice);
-  return "ideal registration (from the known deformation): held-out Dice " + dice +
+  std::string subject;
+  for (const LabelOverlap& o : r.overlap.subject_after)
+    subject += (subject.empty() ? "" : " / ") + strprintf("%.3f", o.dice);
+  return "ideal registration (from the known deformation): held-out Dice " + dice + " (in the subject's space " +
+         subject + ")" +
          ";\nthis registration's vertices are off it by " + strprintf("%.4f", r.error_mean) +
          " ball units on average (p90 " + strprintf("%.4f", r.error_p90) + ")\n";
 }

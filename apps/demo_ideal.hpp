@@ -47,7 +47,7 @@ IdealReport measure_ideal(Device& device, const TetMesh& subject, const TetMesh&
                           const std::function<Eigen::Vector3d(const Eigen::Vector3d&)>& pull,
                           const std::function<Overlap(const Points&)>& overlap_of);
 
-/// {"held_out": [{"label", "dice_image"}], "landmark_regions_mean_dice_image", "vertex_volume_ratio",
+/// {"held_out": [{"label", "dice_image", "dice_subject"}], "landmark_regions_mean_dice_image", "vertex_volume_ratio",
 ///  "tet_volume_ratio", "inverted_tets", "outside_vertices", "error_to_ideal": {"mean", "p90", "max"}}
 Json to_json(const IdealReport& report, const std::vector<int>& evaluated);
 
