@@ -12,6 +12,7 @@ PKGS=(
   libcgal-demo  # bench only: the public surface models of bench/shapes (--models)
   libviennacl-dev python3-vtk9 python3-numpy
   libhypre-dev openmpi-bin  # bench only: hypre BoomerAMG, the solver benchmark's peer, and its mpirun
+  elastix  # bench only: the image registration a user would otherwise pick, bench/register_peers' peer
   snakemake python3-nibabel python3-scipy
   pybind11-dev python3-dev python3-pytest  # the Python package vpm (python/) and its tests (ctest python:*)
   python3-matplotlib python3-nbformat  # the worked example (examples/): plots, and its notebook made from the script
