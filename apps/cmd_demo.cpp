@@ -332,8 +332,10 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   const auto pull = vpm::cli::demo_deformation(centre, st.seed, st.max_rotation, st.incompressible);
   // --ceiling: the subject is Colin27 itself, meshed at 1.3x the vertices, so the overlap after
   // registration is what independent meshing and mapping leave (the best any subject can reach)
-  const vpm::Image image_b = st.ceiling ? image : vpm::resample_image(image, pull, vpm::Interpolation::linear);
-  const vpm::Image atlas_b = st.ceiling ? atlas : vpm::resample_image(atlas, pull, vpm::Interpolation::nearest);
+  const vpm::cli::DeformedSubject deformed =
+      st.ceiling ? vpm::cli::DeformedSubject{image, atlas} : vpm::cli::deformed_subject(image, atlas, pull);
+  const vpm::Image& image_b = deformed.t1;
+  const vpm::Image& atlas_b = deformed.atlas;
   vpm::MeshImageOptions subject_meshing = st.meshing;
   if (st.ceiling) subject_meshing.target_vertices = static_cast<int>(1.3 * st.meshing.target_vertices);
   // a rotated brain can leave the image grid (the brainstem, at the bottom): cap it flat there

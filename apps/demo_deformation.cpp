@@ -86,4 +86,15 @@ std::function<Eigen::Vector3d(const Eigen::Vector3d&)> demo_deformation(const Ei
 
 double demo_rotation_deg(unsigned seed, double max_rotation_deg) { return draw(seed, max_rotation_deg).angle_deg; }
 
+DeformedSubject deformed_subject(const Image& t1, const Image& atlas,
+                                 const std::function<Eigen::Vector3d(const Eigen::Vector3d&)>& pull) {
+  DeformedSubject d{resample_image(t1, pull, Interpolation::linear), resample_image(atlas, pull, Interpolation::nearest)};
+  Image mask = t1;
+  for (float& v : mask.data) v = v > 0 ? 1.0f : 0.0f;
+  const Image carried = resample_image(mask, pull, Interpolation::nearest);
+  for (size_t i = 0; i < d.t1.data.size(); ++i)
+    if (!(carried.data[i] > 0)) d.t1.data[i] = 0;
+  return d;
+}
+
 }  // namespace vpm::cli

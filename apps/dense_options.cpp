@@ -50,6 +50,14 @@ DenseRegistrationOptions dense_options(const Args& args, DenseRegistrationOption
     throw InputError("--dense-restore-image-weight: expected 0 to 1e6");
   o.image_grid = args.get_int("--dense-image-grid", o.image_grid);
   if (o.image_grid < 8 || o.image_grid > 256) throw InputError("--dense-image-grid: expected 8 to 256 cells");
+  o.restore_cycles = args.get_int("--dense-restore-cycles", o.restore_cycles);
+  if (o.restore_cycles < 0 || o.restore_cycles > 100) throw InputError("--dense-restore-cycles: expected 0 to 100");
+  o.fine_iterations = args.get_int("--dense-fine-iterations", o.fine_iterations);
+  if (o.fine_iterations < 0 || o.fine_iterations > 1000) throw InputError("--dense-fine-iterations: expected 0 to 1000");
+  o.fine_sigma = args.get_double("--dense-fine-sigma", o.fine_sigma);
+  if (!(o.fine_sigma > 0 && o.fine_sigma <= 0.5)) throw InputError("--dense-fine-sigma: expected (0, 0.5] ball units");
+  o.fine_smoothness = args.get_double("--dense-fine-smoothness", o.fine_smoothness);
+  if (!(o.fine_smoothness >= 0 && o.fine_smoothness <= 1e6)) throw InputError("--dense-fine-smoothness: expected 0 to 1e6");
   o.image_smoothing = args.get_double("--dense-image-smoothing", o.image_smoothing);
   if (!(o.image_smoothing >= 0 && o.image_smoothing <= 2))
     throw InputError("--dense-image-smoothing: expected 0 to 2 (x the level's width)");
@@ -78,6 +86,16 @@ Command with_dense_options(Command command, const std::string& after, int defaul
           {"--dense-restore-image-weight", "W",
            "with an image force, how firmly the final volume restoration holds the image's edges (0: not; default " +
                format_sig(d.restore_image_weight, 6) + ")", false, 0, true},
+          {"--dense-restore-cycles", "C",
+           "cycles of volume restoration then more dense iterations at the finest width, after the others (default " +
+               std::to_string(d.restore_cycles) + ")", false, 0, true},
+          {"--dense-fine-iterations", "N",
+           "fine steps after the others: image-driven displacements on the mesh itself, each followed by the volume "
+           "restoration (default " + std::to_string(d.fine_iterations) + ")", false, 0, true},
+          {"--dense-fine-sigma", "S", "Gaussian width of the fine steps' image systems, ball units (default " +
+                                          format_sig(d.fine_sigma, 6) + ")", false, 0, true},
+          {"--dense-fine-smoothness", "M", "membrane weight of the fine steps on the mesh's edges (default " +
+                                               format_sig(d.fine_smoothness, 6) + ")", false, 0, true},
           {"--dense-image-grid", "N", "cells across the ball of the image force's grid (default " +
                                           std::to_string(d.image_grid) + ")", false, 0, true},
           {"--dense-image-smoothing", "F", "Gaussian smoothing of the images before the image force, x the level's width (default " +

@@ -297,6 +297,55 @@ TEST_CASE("dense registration by the image force undoes the known flow without l
   CHECK_THROWS_AS(dense_force_from_string("intensity"), InputError);
 }
 
+TEST_CASE("dense registration: restore cycles and fine steps on the mesh keep every guarantee") {
+  const Case c = make_case();
+  const Image image = native_image();
+  const DenseImages images = case_images(c, image);
+  auto run = [&](const Case& k, Points& ball, int cycles, int fine) {
+    DenseRegistrationOptions o;
+    o.iterations = 16;
+    o.widths = {0.5, 0.35};
+    o.force = DenseForce::image;
+    o.image_grid = 32;
+    o.restore_cycles = cycles;
+    o.fine_iterations = fine;
+    o.fine_sigma = 0.15;  // this test mesh's edges are about 0.15 long
+    ball = k.subject.vertices;
+    return register_dense(*Device::host(), {ball, k.subject.tets, k.labels}, {k.templ.vertices, k.templ.tets, k.labels},
+                          k.landmarks.source, k.landmarks.target, RegistrationOptions{}, o, &images);
+  };
+  Points plain, cycled, fine;
+  const DenseRegistrationResult r0 = run(c, plain, 0, 0);
+  const DenseRegistrationResult r1 = run(c, cycled, 2, 0);
+  const DenseRegistrationResult r2 = run(c, fine, 0, 4);
+  for (const auto* r : {&r1, &r2}) {
+    CHECK(r->iterations.size() > r0.iterations.size());
+    CHECK(r->inverted_tets == 0);
+    CHECK(r->landmark_max_error < 1e-6);
+  }
+  for (const Points* p : {&cycled, &fine}) {
+    const MapMetrics m = map_metrics(*Device::host(), c.subject.vertices, *p, c.subject.tets);
+    CHECK(m.inverted_tets == 0);
+    CHECK(m.tet_volume_ratio.mean_abs_dev < 0.02);
+    CHECK(overlap(c, *p) > overlap(c, plain) - 0.01);
+    for (Eigen::Index v = 0; v < p->rows(); ++v)
+      if (std::abs(c.subject.vertices.row(v).norm() - 1) < 1e-9) CHECK(std::abs(p->row(v).norm() - 1) < 1e-9);
+  }
+  // a fine step is kept only when it lowers the mismatch, so they can only lower it further
+  CHECK(r2.mismatch_after <= r0.mismatch_after);
+  int fine_steps = 0;
+  for (const DenseIteration& it : r2.iterations)
+    fine_steps += it.accepted && it.width == 0.15 && it.centres == c.subject.vertices.rows();
+  CHECK(fine_steps >= 1);
+  // a subject against itself: nothing to pull, every fine step refused, the identity stays
+  Case same = c;
+  same.subject = same.templ;
+  same.landmarks = region_landmarks(same.subject, same.templ);
+  Points self;
+  run(same, self, 1, 2);
+  CHECK((self - same.templ.vertices).cwiseAbs().maxCoeff() < 1e-9);
+}
+
 TEST_CASE("dense registration: the restoration's polish on the OpenCL device, image holds included, equals the host's") {
   auto cl = test::opencl_device();
   if (!cl) {

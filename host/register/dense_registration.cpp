@@ -11,6 +11,7 @@
 #include "vpm/format.hpp"
 #include "register/dense_force.hpp"
 #include "register/dense_image_force.hpp"
+#include "register/dense_state.hpp"
 #include "register/rbf_gram.hpp"
 #include "register/registration_steps.hpp"
 #include "vpm/device.hpp"
@@ -27,43 +28,6 @@ namespace {
 
 /// The image force's translations are capped at this fraction of the level's width.
 constexpr double kTranslationCap = 0.5;
-
-/// What every iteration needs and nothing changes: the reference map, its boundary and
-/// volumes, the region faces, the template's boundaries and its labels at the grid points.
-struct DenseState {
-  const Points& reference;
-  const Tets& tets;
-  std::vector<int> labels;
-  std::vector<char> boundary;
-  Eigen::VectorXd v0;
-  RegionFaces faces;
-  RegionSurface templ;
-  Points grid;
-  std::vector<int> grid_templ;
-  std::vector<int> regions;
-  std::unique_ptr<const ImageForce> image;  ///< with DenseForce::image and both
-  DenseForce force = DenseForce::labels;
-
-  double agreement(const Points& ball) const {
-    return mean_dice(grid_templ, sample_labels(ball, tets, labels, grid), regions);
-  }
-};
-
-/// How well `ball` fits the template by the force's own measure (better_than), and the
-/// subject's image values on the image grid there (kept for the next force: one image read per
-/// iteration instead of two).
-struct Fit {
-  double agreement = 0, mismatch = -1;
-  std::vector<double> values;
-  Fit(const DenseState& st, const Points& ball) : agreement(st.agreement(ball)) {
-    if (!st.image) return;
-    values = st.image->subject_values(ball);
-    mismatch = st.image->mismatch(values);
-  }
-  bool better_than(const Fit& o, DenseForce force) const {
-    return force == DenseForce::labels ? agreement > o.agreement : mismatch < o.mismatch;
-  }
-};
 
 void check_dense(const Tets& tets, const std::vector<int>& labels, const Tets& ttets,
                  const std::vector<int>& tlabels, const DenseRegistrationOptions& o) {
@@ -82,12 +46,6 @@ void check_dense(const Tets& tets, const std::vector<int>& labels, const Tets& t
   if (o.force != DenseForce::labels &&
       (!(o.image_grid >= 4 && o.image_grid <= 512) || !(o.image_smoothing >= 0)))
     bad("the image force needs 4 to 512 grid cells and a smoothing >= 0");
-}
-
-int newly_inverted(const Eigen::VectorXd& v0, const Eigen::VectorXd& v1) {
-  int n = 0;
-  for (Eigen::Index t = 0; t < v1.size(); ++t) n += v1(t) <= 0 && v0(t) > 0;
-  return n;
 }
 
 /// The symmetric closest-point matches of the region boundaries with the subject at `ball`;
@@ -217,29 +175,33 @@ DenseIteration dense_step(Device& dev, const DenseState& st, Points& x, const Le
   return it;
 }
 
+/// Up to `n` dense iterations at `level` from `fit`, ending at the first rejected one or when the
+/// deadline passes (r.time_budget_spent).
+void level_iterations(Device& dev, const DenseState& st, Points& x, const Level& level, int n,
+                      const DenseRegistrationOptions& o, Fit& fit, DenseRegistrationResult& r) {
+  for (int i = 0; i < n; ++i) {
+    if (o.deadline.passed()) {
+      r.time_budget_spent = true;
+      return;
+    }
+    r.iterations.push_back(dense_step(dev, st, x, level, o, fit, r.max_normal_velocity));
+    const DenseIteration& it = r.iterations.back();
+    if (o.progress)
+      o.progress(strprintf("dense iteration %d (width %.3g): label agreement %.4f, %s%.2f s",
+                           static_cast<int>(r.iterations.size()), level.width, it.agreement,
+                           it.accepted ? "" : "rejected, ", it.seconds));
+    if (!it.accepted) return;
+  }
+}
+
 /// The dense iterations from `fit` (that of the landmark registration), coarse to fine; a level
-/// ends at its first rejected iteration.
-void dense_iterations(Device& dev, const DenseState& st, Points& x, const DenseRegistrationOptions& o, Fit fit,
+/// ends at its first rejected iteration. `fit` ends as that of x.
+void dense_iterations(Device& dev, const DenseState& st, Points& x, const DenseRegistrationOptions& o, Fit& fit,
                       DenseRegistrationResult& r) {
   const int levels = static_cast<int>(o.widths.size());
-  for (int l = 0; l < levels; ++l) {
+  for (int l = 0; l < levels && !r.time_budget_spent; ++l) {
     const int n = o.iterations / levels + (l < o.iterations % levels ? 1 : 0);
-    if (n == 0) continue;
-    const Level level(o.widths[static_cast<size_t>(l)], o);
-    for (int i = 0; i < n; ++i) {
-      if (o.deadline.passed()) {
-        r.time_budget_spent = true;
-        break;
-      }
-      r.iterations.push_back(dense_step(dev, st, x, level, o, fit, r.max_normal_velocity));
-      const DenseIteration& it = r.iterations.back();
-      if (o.progress)
-        o.progress(strprintf("dense iteration %d/%d (width %.3g): label agreement %.4f, %s%.2f s",
-                             static_cast<int>(r.iterations.size()), o.iterations, level.width, it.agreement,
-                             it.accepted ? "" : "rejected, ", it.seconds));
-      if (!it.accepted) break;
-    }
-    if (r.time_budget_spent) break;
+    if (n > 0) level_iterations(dev, st, x, Level(o.widths[static_cast<size_t>(l)], o), n, o, fit, r);
   }
   r.agreement_after = fit.agreement;
   r.mismatch_after = fit.mismatch;
@@ -264,34 +226,6 @@ DenseState dense_state(Device& dev, const Points& ball, const Tets& tets, const 
     st.image = std::make_unique<const ImageForce>(*images, tball, ttets, ball, tets, o.image_grid);
   }
   return st;
-}
-
-/// The image grid points as holds of the final restoration (VolumeHold): each point inside the
-/// subject's ball mesh at `ball` is held across its image edge (the subject's gradient there,
-/// in template standard deviations per ball unit), all scaled so that the holds' rows weigh
-/// `weight` x the number of tets against the tets' volume rows (sum |direction|^2 = weight x tets).
-std::vector<VolumeHold> image_holds(const DenseState& st, const Points& ball, double weight) {
-  const Points g = st.image->gradients(st.image->subject_values(ball));
-  const Points& grid = st.image->grid();
-  const TetLocator locator(ball, st.tets);
-  std::vector<VolumeHold> holds;
-  double sum = 0;
-  for (Eigen::Index p = 0; p < grid.rows(); ++p) {
-    if (g.row(p).squaredNorm() == 0) continue;
-    const Location l = locator.locate(grid.row(p).transpose());
-    if (l.tet < 0 || !l.inside()) continue;
-    VolumeHold h;
-    for (int k = 0; k < 4; ++k) {
-      h.vertices[static_cast<size_t>(k)] = st.tets(l.tet, k);
-      h.weights[static_cast<size_t>(k)] = l.bary[k];
-    }
-    h.direction = g.row(p).transpose();
-    sum += h.direction.squaredNorm();
-    holds.push_back(h);
-  }
-  const double scale = sum > 0 ? std::sqrt(weight * static_cast<double>(st.tets.rows()) / sum) : 0.0;
-  for (VolumeHold& h : holds) h.direction *= scale;
-  return holds;
 }
 
 /// The final numbers: landmark errors against `targets`, inverted tets against the reference.
@@ -348,7 +282,25 @@ DenseRegistrationResult register_dense(Device& dev, const DenseSubject& subject,
     t0 = Clock::now();
     Points x(work.rows() + lm.rows(), 3);
     x << work, lm;
-    dense_iterations(dev, st, x, o, std::move(after_landmarks), r);
+    Fit fit = std::move(after_landmarks);
+    dense_iterations(dev, st, x, o, fit, r);
+    if (o.restore_cycles > 0 && lo.restore_volumes) {
+      const Level finest(o.widths.back(), o);
+      const int n = std::max(1, o.iterations / static_cast<int>(o.widths.size()));
+      const std::vector<char> pinned = landmark_vertices(ball, landmarks);
+      for (int c = 0; c < o.restore_cycles && !r.time_budget_spent; ++c) {
+        Points now = x.topRows(work.rows());
+        restore_volumes(dev, ball, tets, now, pinned, x.bottomRows(lm.rows()), lo.restore_iterations,
+                        lo.restore_rounds, restore_holds(st, now, o), lo.restore_polish);
+        x.topRows(work.rows()) = now;
+        fit = Fit(st, now);
+        level_iterations(dev, st, x, finest, n, o, fit, r);
+      }
+      r.agreement_after = fit.agreement;
+      r.mismatch_after = fit.mismatch;
+    }
+    if (o.fine_iterations > 0 && st.image && lo.restore_volumes)
+      fine_steps(dev, st, x, ball, landmark_vertices(ball, landmarks), lo, o, fit, r);
     work = x.topRows(work.rows());
     lm = x.bottomRows(lm.rows());
     r.seconds_dense = seconds_since(t0);
@@ -364,10 +316,8 @@ DenseRegistrationResult register_dense(Device& dev, const DenseSubject& subject,
     }
     if (lo.restore_volumes) {
       t0 = Clock::now();
-      const std::vector<VolumeHold> holds =
-          st.image && o.restore_image_weight > 0 ? image_holds(st, work, o.restore_image_weight) : std::vector<VolumeHold>{};
       r.restore = restore_volumes(dev, ball, tets, work, landmark_vertices(ball, landmarks), lm, lo.restore_iterations,
-                                  lo.restore_rounds, holds, lo.restore_polish);
+                                  lo.restore_rounds, restore_holds(st, work, o), lo.restore_polish);
       r.seconds_restore = seconds_since(t0);
     }
   }

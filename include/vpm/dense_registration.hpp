@@ -103,6 +103,21 @@ struct DenseRegistrationOptions {
   int advect_steps = 4;         ///< RK4 steps per iteration
   std::vector<int> exclude_labels;  ///< regions the force never sees (held out)
   int agreement_grid = 40;      ///< cells per axis of the ball grid for the label agreement
+  /// Cycles of (volume restoration, then iterations/widths more dense iterations at the finest
+  /// width) after the coarse-to-fine iterations: each restoration gives back the volume the
+  /// flows lost (they are divergence-free only up to their discretisation), and the iterations
+  /// after it pull the restored mesh onto the template again, so the image force keeps working
+  /// on a volume-preserving configuration (docs/register.md, "Restore cycles"). 0: restore once
+  /// at the end only.
+  int restore_cycles = 0;
+  /// Fine steps after the others (image force only; needs the volume restoration): each a
+  /// displacement on the mesh itself (register/fine_step.hpp: the image's local systems at the
+  /// vertices with Gaussian width `fine_sigma`, smoothed by a membrane of weight
+  /// `fine_smoothness` on the edges), then the volume restoration; kept when it lowers the
+  /// image mismatch without a fold, and the steps end at the first that does not.
+  int fine_iterations = 0;
+  double fine_sigma = 0.03;      ///< ball units
+  double fine_smoothness = 4;    ///< membrane weight against the mean local system (trace 3)
   /// Move the landmarks back exactly onto their targets after the dense iterations.
   bool exact_landmarks = true;
   /// With an image force: the final volume restoration holds the image grid points across

@@ -1,0 +1,77 @@
+#pragma once
+// What the dense registration's stages share (dense_registration.cpp, dense_fine.cpp): the
+// state every iteration reads, the fit of a configuration by the force's own measure, the
+// restoration's holds and the fine steps (vpm/dense_registration.hpp).
+#include <memory>
+#include <vector>
+
+#include "register/dense_force.hpp"
+#include "register/dense_image_force.hpp"
+#include "register/registration_steps.hpp"
+#include "vpm/dense_registration.hpp"
+#include "vpm/labels.hpp"
+#include "vpm/polish.hpp"
+
+namespace vpm {
+
+/// What every iteration needs and nothing changes: the reference map, its boundary and
+/// volumes, the region faces, the template's boundaries and its labels at the grid points.
+struct DenseState {
+  const Points& reference;
+  const Tets& tets;
+  std::vector<int> labels;
+  std::vector<char> boundary;
+  Eigen::VectorXd v0;
+  RegionFaces faces;
+  RegionSurface templ;
+  Points grid;
+  std::vector<int> grid_templ;
+  std::vector<int> regions;
+  std::unique_ptr<const ImageForce> image;  ///< with DenseForce::image and both
+  DenseForce force = DenseForce::labels;
+
+  double agreement(const Points& ball) const {
+    return mean_dice(grid_templ, sample_labels(ball, tets, labels, grid), regions);
+  }
+};
+
+/// How well `ball` fits the template by the force's own measure (better_than), and the
+/// subject's image values on the image grid there (kept for the next force: one image read per
+/// iteration instead of two).
+struct Fit {
+  double agreement = 0, mismatch = -1;
+  std::vector<double> values;
+  Fit(const DenseState& st, const Points& ball) : agreement(st.agreement(ball)) {
+    if (!st.image) return;
+    values = st.image->subject_values(ball);
+    mismatch = st.image->mismatch(values);
+  }
+  bool better_than(const Fit& o, DenseForce force) const {
+    return force == DenseForce::labels ? agreement > o.agreement : mismatch < o.mismatch;
+  }
+};
+
+/// Tets inverted in `v1` that were not in `v0`.
+inline int newly_inverted(const Eigen::VectorXd& v0, const Eigen::VectorXd& v1) {
+  int n = 0;
+  for (Eigen::Index t = 0; t < v1.size(); ++t) n += v1(t) <= 0 && v0(t) > 0;
+  return n;
+}
+
+/// The image grid points as holds of a restoration of the subject at `ball` (VolumeHold): each
+/// point inside the mesh is held across its image edge, all scaled so that the holds' rows weigh
+/// `weight` x the number of tets against the tets' volume rows.
+std::vector<VolumeHold> image_holds(const DenseState& st, const Points& ball, double weight);
+
+/// The holds of a restoration of the subject at `ball`: the image's edges with an image force
+/// and DenseRegistrationOptions::restore_image_weight > 0, none otherwise.
+std::vector<VolumeHold> restore_holds(const DenseState& st, const Points& ball, const DenseRegistrationOptions& o);
+
+/// The fine steps (DenseRegistrationOptions::fine_iterations) on `x` (the vertices, then the
+/// tracked landmarks) from `fit`, each restored against `reference` with `pinned` vertices;
+/// they end at the first refused one or when the deadline passes. Iterations go to `r`,
+/// and `fit` ends as that of x.
+void fine_steps(Device& dev, const DenseState& st, Points& x, const Points& reference, const std::vector<char>& pinned,
+                const RegistrationOptions& lo, const DenseRegistrationOptions& o, Fit& fit, DenseRegistrationResult& r);
+
+}  // namespace vpm
