@@ -5,7 +5,7 @@
 # harmonic benchmarks, and `vpm map` of Colin27 at 1.1M and 10M tets (meshed there), last a 10M map with AMG-CG.
 # Everything lands in $OUT/res.tgz, refreshed after each step, so a run cut short still returns
 # what it did.
-#   usage: bash .gpu/run.sh [STEPS (tests,bench,map1m,map10m,amg10m,extra)]
+#   usage: bash .gpu/run.sh [STEPS (tests,bench,map1m,map10m,amg10m,extra; also pairs)]
 # (extra: the volume-map and registration benchmarks and `vpm demo`, about 30 s on an H200)
 # DEVICE (gpu) and ICD_DIR (the bundle's NVIDIA vendor file) may be set for a dry run elsewhere,
 # e.g. DEVICE=cpu ICD_DIR=/etc/OpenCL/vendors on a machine with PoCL.
@@ -85,6 +85,22 @@ if want extra; then
   VPM_DEVICE=$DEV timeout 200 build/vpm demo --out /tmp/demo > "$W/demo_gpu.txt" 2>&1
   cp /tmp/demo/demo.json "$W/demo_gpu.json" 2>/dev/null
   log "extra done"; tail -3 "$W/demo_gpu.txt" | tee -a "$W/log.txt"; save
+fi
+# step `pairs`: the registration benchmark's pair (seed 1, volume-preserving, 10 degrees) through
+# `vpm demo`, once per setting of DEMO_CONFIGS ("VERTICES[:OPTIONS];..."), mesh + map + register
+# timed by the demo's report (docs/register.md, issue 38)
+if want pairs; then
+  IFS=';' read -ra CONFIGS <<< "${DEMO_CONFIGS:-5200;45000;45000:--dense-widths 0.3,0.2,0.14,0.1 --dense-iterations 32 --dense-restore-cycles 2}"
+  k=0
+  for c in "${CONFIGS[@]}"; do
+    v=${c%%:*}; opts=""; [[ $c == *:* ]] && opts=${c#*:}
+    log "demo pair seed 1, $v vertices $opts"
+    # shellcheck disable=SC2086
+    VPM_DEVICE=$DEV timeout 200 build/vpm demo --out "/tmp/pair$k" --seed 1 --max-rotation 10 --incompressible \
+      --target-vertices "$v" $opts > "$W/pair${k}_gpu.txt" 2>&1
+    log "rc $?"; cp "/tmp/pair$k/demo.json" "$W/pair${k}_gpu.json" 2>/dev/null; save
+    k=$((k + 1))
+  done
 fi
 python3 - <<'PY' | tee -a "$W/log.txt"
 import glob, json
