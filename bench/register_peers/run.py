@@ -19,7 +19,8 @@ and rotation is the demo's own pair). For each pair:
   over the subject's brain (T1 > 0).
 
 usage: bench/register_peers/run.py [--vpm build/vpm] [--seeds 1,2,3,4,5] [--demo-pair]
-         [--target-vertices N[,N...]] [--max-rotation 10] [--threads 2] [--no-elastix]
+         [--target-vertices N[,N...] | --configs "N[:OPTIONS][;N[:OPTIONS]...]"] [--max-rotation 10]
+         [--threads 2] [--no-elastix]
          [--out build/bench-register-peers] [--json FILE]
 Prints a table per pair and the medians; writes FILE (default OUT/register_peers.json).
 """
@@ -56,9 +57,9 @@ def dice(a, b, label):
     return 2.0 * int((x & y).sum()) / s if s else 1.0
 
 
-def vpm_pair(args, seed, vertices, out):
-    d = os.path.join(out, f"vpm_v{vertices}_s{seed}")
-    cmd = [args.vpm, "demo", "--out", d, "--seed", str(seed), "--target-vertices", str(vertices)]
+def vpm_pair(args, seed, vertices, extra, tag, out):
+    d = os.path.join(out, f"vpm_v{vertices}{tag}_s{seed}")
+    cmd = [args.vpm, "demo", "--out", d, "--seed", str(seed), "--target-vertices", str(vertices)] + extra
     if seed > 0:
         cmd += ["--incompressible", "--max-rotation", str(args.max_rotation)]
     wall = run(cmd, d + ".log")
@@ -68,8 +69,9 @@ def vpm_pair(args, seed, vertices, out):
     subj = rep["subjects"]["subject"]
     reg = rep["registration"]
     return d, {
-        "method": f"vpm {vertices}",
+        "method": f"vpm {vertices}{tag}",
         "target_vertices": vertices,
+        "vpm_options": extra,
         "tets": subj["tets"],
         "dice_subject": [h["dice_subject_after"] for h in held],
         "dice_ball": [h["dice_image_after"] for h in held],
@@ -128,6 +130,9 @@ def main():
     ap.add_argument("--seeds", default="1,2,3,4,5")
     ap.add_argument("--demo-pair", action="store_true", help="also the demo's own pair (seed 0)")
     ap.add_argument("--target-vertices", default="5200")
+    ap.add_argument("--configs", help="vpm settings to run, ';'-separated: mesh vertices, then ':' and "
+                    "more `vpm demo` options (e.g. '5200;45000:--dense-restore-cycles 2'); each is labelled "
+                    "'vpm N', or 'vpm N+k' when it has options (k: its place in the list, from 0)")
     ap.add_argument("--max-rotation", type=float, default=10)
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--no-elastix", action="store_true")
@@ -135,7 +140,13 @@ def main():
     ap.add_argument("--json")
     args = ap.parse_args()
     seeds = [int(s) for s in args.seeds.split(",") if s] + ([0] if args.demo_pair else [])
-    sizes = [int(v) for v in args.target_vertices.split(",") if v]
+    configs = []  # (vertices, extra options, tag)
+    if args.configs:
+        for k, item in enumerate(c for c in args.configs.split(";") if c.strip()):
+            v, _, extra = item.partition(":")
+            configs.append((int(v), extra.split(), f"+{k}" if extra.strip() else ""))
+    else:
+        configs = [(int(v), [], "") for v in args.target_vertices.split(",") if v]
     os.makedirs(args.out, exist_ok=True)
     head = (f"{'method':>14s} {'tets':>8} | subject-space Dice CL CR TL TR | ball Dice CL CR TL TR | "
             f"volume folds | seconds")
@@ -143,8 +154,8 @@ def main():
     for seed in seeds:
         rows = []
         pair_dir = None
-        for v in sizes:
-            pair_dir, row = vpm_pair(args, seed, v, args.out)
+        for v, extra, tag in configs:
+            pair_dir, row = vpm_pair(args, seed, v, extra, tag, args.out)
             rows.append(row)
         ideal = dict(rows[-1])
         ideal.update(method="ideal", dice_subject=ideal["ideal_dice_subject"], dice_ball=ideal["ideal_dice_ball"],
@@ -179,6 +190,7 @@ def main():
         summary[method] = m
         print(fmt(m))
     out = {"regions": [n for _, n in HELD_OUT], "max_rotation_deg": args.max_rotation, "threads": args.threads,
+           "configs": [{"label": f"vpm {v}{t}", "target_vertices": v, "options": e} for v, e, t in configs],
            "pairs": pairs, "medians": summary}
     path = args.json or os.path.join(args.out, "register_peers.json")
     with open(path + ".tmp", "w") as f:
