@@ -44,4 +44,8 @@ fi
 # commands the Catch2 tests already run).
 EXCLUDE=${SAN_EXCLUDE:-'^(install:|workflow:|browser:)'}
 cd "$SAN_DIR"
-ctest --output-on-failure -j"${JOBS:-2}" --timeout 1800 -E "$EXCLUDE" ${SAN_TESTS:+-R "$SAN_TESTS"}
+# --repeat until-pass:2: LeakSanitizer's exit-time tracer sometimes dies with "Tracer caught signal 11 ...
+# LeakSanitizer has encountered a fatal error" while PoCL's worker threads are alive (an upstream bug,
+# google/sanitizers#1353; 1 of 24 `vpm map` runs here, and CI failed test_progress on it once). A real
+# ASan/UBSan finding or leak repeats and still fails; the log names any test that needed a second run.
+ctest --output-on-failure -j"${JOBS:-2}" --timeout 1800 --repeat until-pass:2 -E "$EXCLUDE" ${SAN_TESTS:+-R "$SAN_TESTS"}
