@@ -178,7 +178,8 @@ TEST_CASE("smooth_matches: the binned Gaussian average equals the brute-force su
 
 TEST_CASE("device advection through a narrow field equals the host's exact sum over all centres") {
   // width 0.12 over 1,200 centres: most centres are far from any one point, and the device
-  // kernel skips those (FIELD_CUT) for points it groups in Z-order; the points come in random order
+  // kernel visits only the cells of centres near the points it groups in Z-order (advect.cpp,
+  // kFieldCut); the points come in random order
   DivFreeField f;
   f.kernel = RbfKernel::Tangent;
   f.lambda = 1 / (0.12 * 0.12);

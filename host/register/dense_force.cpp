@@ -79,59 +79,100 @@ RegionSurface region_surface(const Points& v, const RegionFaces& rf) {
 
 namespace {
 
-/// Row of the closest point to `p` among rows [b, e) of `pts`.
-long closest(const Points& pts, long b, long e, const Eigen::Vector3d& p) {
-  long best = b;
-  double d = std::numeric_limits<double>::infinity();
-  for (long j = b; j < e; ++j) {
-    const double dj = (pts.row(j).transpose() - p).squaredNorm();
-    if (dj < d) {
-      d = dj;
-      best = j;
-    }
+/// Rows [b, e) of `pts` sorted by x, for exact closest-point queries that scan outwards from
+/// the query's x and stop where the x gap alone exceeds the best distance: the same answer as
+/// a scan of all rows (the lowest row among equally close ones), in about sqrt(n) steps.
+class SortedByX {
+ public:
+  SortedByX(const Points& pts, long b, long e) : pts_(pts) {
+    for (long j = b; j < e; ++j) rows_.push_back(j);
+    std::sort(rows_.begin(), rows_.end(), [&](long i, long j) { return pts(i, 0) < pts(j, 0) || (pts(i, 0) == pts(j, 0) && i < j); });
+    for (long j : rows_) x_.push_back(pts(j, 0));
   }
-  return best;
-}
+
+  /// The row closest to `p` (the lowest of equally close rows); -1 when there are none.
+  long closest(const Eigen::Vector3d& p) const {
+    long best = -1;
+    double d = std::numeric_limits<double>::infinity();
+    auto consider = [&](size_t k) {  // false once the x gap alone is farther than the best
+      const double gap = x_[k] - p(0);
+      if (gap * gap > d) return false;
+      const long j = rows_[k];
+      const double dj = (pts_.row(j).transpose() - p).squaredNorm();  // >= gap^2: sums of squares round up from it
+      if (dj < d || (dj == d && j < best)) {
+        d = dj;
+        best = j;
+      }
+      return true;
+    };
+    const size_t mid = static_cast<size_t>(std::lower_bound(x_.begin(), x_.end(), p(0)) - x_.begin());
+    for (size_t k = mid; k < x_.size() && consider(k); ++k) {
+    }
+    for (size_t k = mid; k-- > 0 && consider(k);) {
+    }
+    return best;
+  }
+
+ private:
+  const Points& pts_;
+  std::vector<long> rows_;
+  std::vector<double> x_;
+};
+
+/// One closest-point query of closest_matches: the point `at` of one side and the other
+/// side's region it is matched against.
+struct MatchQuery {
+  long at;
+  bool from_subject;
+  size_t region;  ///< index into the region pairs
+};
 
 }  // namespace
 
 BoundaryMatches closest_matches(const RegionSurface& s, const RegionSurface& t) {
-  std::vector<Eigen::Vector3d> at, disp;
-  std::vector<double> w;
   BoundaryMatches m;
+  std::vector<SortedByX> sub, tem;  // per matched region: the subject's and the template's faces
+  std::vector<MatchQuery> queries;
   for (size_t rs = 0; rs < s.labels.size(); ++rs) {
     const auto it = std::lower_bound(t.labels.begin(), t.labels.end(), s.labels[rs]);
     if (it == t.labels.end() || *it != s.labels[rs]) continue;
     const size_t rt = static_cast<size_t>(it - t.labels.begin());
     m.regions.push_back(s.labels[rs]);
     const long sb = s.offset[rs], se = s.offset[rs + 1], tb = t.offset[rt], te = t.offset[rt + 1];
-    for (long i = sb; i < se; ++i) {
-      const Eigen::Vector3d p = s.centroid.row(i).transpose();
-      at.push_back(p);
-      disp.push_back(t.centroid.row(closest(t.centroid, tb, te, p)).transpose() - p);
-      w.push_back(s.area(i));
-    }
-    for (long j = tb; j < te; ++j) {
-      const Eigen::Vector3d q = t.centroid.row(j).transpose();
-      const Eigen::Vector3d p = s.centroid.row(closest(s.centroid, sb, se, q)).transpose();
-      at.push_back(p);
-      disp.push_back(q - p);
-      w.push_back(t.area(j));
-    }
+    const size_t r = sub.size();
+    sub.emplace_back(s.centroid, sb, se);
+    tem.emplace_back(t.centroid, tb, te);
+    for (long i = sb; i < se; ++i) queries.push_back({i, true, r});
+    for (long j = tb; j < te; ++j) queries.push_back({j, false, r});
   }
-  const Eigen::Index k = static_cast<Eigen::Index>(at.size());
+  const Eigen::Index k = static_cast<Eigen::Index>(queries.size());
   m.at.resize(k, 3);
   m.displacement.resize(k, 3);
   m.weight.resize(k);
+  detail::parallel_for(static_cast<int>(k), 256, [&](int q0, int q1) {
+    for (int q = q0; q < q1; ++q) {
+      const MatchQuery& mq = queries[static_cast<size_t>(q)];
+      if (mq.from_subject) {  // a subject face to the closest template face of its region
+        const Eigen::Vector3d p = s.centroid.row(mq.at).transpose();
+        m.at.row(q) = p.transpose();
+        m.displacement.row(q) = t.centroid.row(tem[mq.region].closest(p)) - p.transpose();
+        m.weight(q) = s.area(mq.at);
+      } else {  // a template face from the closest subject face of its region
+        const Eigen::Vector3d p = t.centroid.row(mq.at).transpose();
+        const Eigen::Vector3d from = s.centroid.row(sub[mq.region].closest(p)).transpose();
+        m.at.row(q) = from.transpose();
+        m.displacement.row(q) = (p - from).transpose();
+        m.weight(q) = t.area(mq.at);
+      }
+    }
+  });
   double wsum = 0, dsum = 0;
   for (Eigen::Index i = 0; i < k; ++i) {
-    m.at.row(i) = at[static_cast<size_t>(i)].transpose();
-    m.displacement.row(i) = disp[static_cast<size_t>(i)].transpose();
-    wsum += w[static_cast<size_t>(i)];
-    dsum += w[static_cast<size_t>(i)] * disp[static_cast<size_t>(i)].norm();
+    wsum += m.weight(i);
+    dsum += m.weight(i) * m.displacement.row(i).norm();
   }
   const double mean_w = k > 0 && wsum > 0 ? wsum / static_cast<double>(k) : 1.0;
-  for (Eigen::Index i = 0; i < k; ++i) m.weight(i) = w[static_cast<size_t>(i)] / mean_w;
+  m.weight /= mean_w;
   m.mean_distance = wsum > 0 ? dsum / wsum : 0.0;
   return m;
 }
