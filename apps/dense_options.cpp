@@ -52,6 +52,8 @@ DenseRegistrationOptions dense_options(const Args& args, DenseRegistrationOption
   if (o.image_grid < 8 || o.image_grid > 256) throw InputError("--dense-image-grid: expected 8 to 256 cells");
   o.restore_cycles = args.get_int("--dense-restore-cycles", o.restore_cycles);
   if (o.restore_cycles < 0 || o.restore_cycles > 100) throw InputError("--dense-restore-cycles: expected 0 to 100");
+  o.advect_steps = args.get_int("--dense-advect-steps", o.advect_steps);
+  if (o.advect_steps < 1 || o.advect_steps > 64) throw InputError("--dense-advect-steps: expected 1 to 64");
   o.fine_iterations = args.get_int("--dense-fine-iterations", o.fine_iterations);
   if (o.fine_iterations < 0 || o.fine_iterations > 1000) throw InputError("--dense-fine-iterations: expected 0 to 1000");
   o.fine_sigma = args.get_double("--dense-fine-sigma", o.fine_sigma);
@@ -89,6 +91,8 @@ Command with_dense_options(Command command, const std::string& after, int defaul
           {"--dense-restore-cycles", "C",
            "cycles of volume restoration then more dense iterations at the finest width, after the others (default " +
                std::to_string(d.restore_cycles) + ")", false, 0, true},
+          {"--dense-advect-steps", "K", "RK4 steps that carry the vertices through each dense iteration's flow (default " +
+                                           std::to_string(d.advect_steps) + ")", false, 0, true},
           {"--dense-fine-iterations", "N",
            "fine steps after the others: image-driven displacements on the mesh itself, each followed by the volume "
            "restoration (default " + std::to_string(d.fine_iterations) + ")", false, 0, true},

@@ -3,12 +3,15 @@
 // sphere. Region centroids alone cannot undo the flow; the dense iterations must.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <filesystem>
+#include <limits>
 #include <random>
 
 #include "support/devices.hpp"
 #include "support/process.hpp"
 #include "register/dense_force.hpp"
+#include "register/rbf_gram.hpp"
 #include "support/shapes.hpp"
 #include "vpm/collective.hpp"
 #include "vpm/dense_registration.hpp"
@@ -174,6 +177,83 @@ TEST_CASE("smooth_matches: the binned Gaussian average equals the brute-force su
   const Points tiny = smooth_matches(m, centres, 1e-5);
   CHECK(tiny.allFinite());
   CHECK(tiny.cwiseAbs().maxCoeff() < 0.05);
+}
+
+TEST_CASE("closest_matches: the sorted scan finds what a scan of every face finds, ties included") {
+  // two regions (labels 3 and 7) on each side; the subject's region 3 repeats points of the
+  // template's, so distances tie exactly and the lowest row must win
+  std::mt19937 gen(11);
+  std::uniform_real_distribution<double> u(-0.8, 0.8), a(0.1, 1.0);
+  auto surface = [&](int n3, int n7, const Points* copy) {
+    RegionSurface s;
+    s.centroid.resize(n3 + n7, 3);
+    s.area.resize(n3 + n7);
+    for (int i = 0; i < n3 + n7; ++i) {
+      s.centroid.row(i) << u(gen), u(gen), (i < n3 ? 0.1 : 0.5) * u(gen);
+      s.area(i) = a(gen);
+    }
+    if (copy)  // every other face of region 3 on a template face, twice over
+      for (int i = 0; i + 1 < n3; i += 2) s.centroid.row(i) = s.centroid.row(i + 1) = copy->row(i % 50);
+    s.labels = {3, 7};
+    s.offset = {0, n3, n3 + n7};
+    return s;
+  };
+  const RegionSurface t = surface(400, 300, nullptr);
+  const RegionSurface s = surface(500, 250, &t.centroid);
+  const BoundaryMatches m = closest_matches(s, t);
+  REQUIRE(m.at.rows() == 500 + 400 + 250 + 300);
+  auto brute = [](const Points& pts, long b, long e, const Eigen::Vector3d& p) {
+    long best = b;
+    double d = std::numeric_limits<double>::infinity();
+    for (long j = b; j < e; ++j)
+      if ((pts.row(j).transpose() - p).squaredNorm() < d) {
+        d = (pts.row(j).transpose() - p).squaredNorm();
+        best = j;
+      }
+    return best;
+  };
+  Eigen::Index q = 0;
+  int wrong = 0;
+  for (size_t r = 0; r < 2; ++r) {
+    const long sb = s.offset[r], se = s.offset[r + 1], tb = t.offset[r], te = t.offset[r + 1];
+    for (long i = sb; i < se; ++i, ++q) {
+      const Eigen::Vector3d p = s.centroid.row(i).transpose();
+      wrong += (m.displacement.row(q).transpose() - (t.centroid.row(brute(t.centroid, tb, te, p)).transpose() - p)).norm() != 0;
+      wrong += m.at.row(q) != s.centroid.row(i);
+    }
+    for (long j = tb; j < te; ++j, ++q) {
+      const Eigen::Vector3d p = t.centroid.row(j).transpose();
+      const Eigen::Vector3d from = s.centroid.row(brute(s.centroid, sb, se, p)).transpose();
+      wrong += m.at.row(q) != from.transpose();
+      wrong += (m.displacement.row(q).transpose() - (p - from)).norm() != 0;
+    }
+  }
+  CHECK(wrong == 0);
+  CHECK(m.regions == std::vector<int>{3, 7});
+  CHECK(std::abs(m.weight.mean() - 1) < 1e-12);
+}
+
+TEST_CASE("sparse_gram: the compressed rows written in parallel equal the matrix built from triplets") {
+  const Points c = ball_grid(0.09);
+  for (const RbfKernel kind : {RbfKernel::Tangent, RbfKernel::Free}) {
+    const double lambda = 1 / (0.1 * 0.1);
+    const SparseGram a = sparse_gram(c, kind, lambda);
+    std::vector<Eigen::Triplet<double>> t;
+    for (Eigen::Index i = 0; i < c.rows(); ++i)
+      for (Eigen::Index j = 0; j < c.rows(); ++j) {
+        if ((c.row(i) - c.row(j)).squaredNorm() * lambda > 25) continue;
+        const Eigen::Matrix3d k = kernel_block(kind, c.row(i).transpose(), c.row(j).transpose(), lambda);
+        for (int r = 0; r < 3; ++r)
+          for (int s = 0; s < 3; ++s) t.emplace_back(static_cast<int>(3 * i + r), static_cast<int>(3 * j + s), k(r, s));
+      }
+    SparseGram b(3 * c.rows(), 3 * c.rows());
+    b.setFromTriplets(t.begin(), t.end());
+    REQUIRE(a.nonZeros() == b.nonZeros());
+    CHECK(a.nonZeros() < a.rows() * a.cols() / 4);  // sparse: the cut left most pairs out
+    CHECK(std::equal(a.outerIndexPtr(), a.outerIndexPtr() + a.rows() + 1, b.outerIndexPtr()));
+    CHECK(std::equal(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros(), b.innerIndexPtr()));
+    CHECK(std::equal(a.valuePtr(), a.valuePtr() + a.nonZeros(), b.valuePtr()));
+  }
 }
 
 TEST_CASE("device advection through a narrow field equals the host's exact sum over all centres") {

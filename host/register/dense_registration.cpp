@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include "vpm/format.hpp"
@@ -195,16 +196,22 @@ void level_iterations(Device& dev, const DenseState& st, Points& x, const Level&
 }
 
 /// The dense iterations from `fit` (that of the landmark registration), coarse to fine; a level
-/// ends at its first rejected iteration. `fit` ends as that of x.
-void dense_iterations(Device& dev, const DenseState& st, Points& x, const DenseRegistrationOptions& o, Fit& fit,
-                      DenseRegistrationResult& r) {
+/// ends at its first rejected iteration. `fit` ends as that of x. Returns the finest level when
+/// it ran (its Gram matrix is the costliest to build: the restore cycles reuse it).
+std::optional<Level> dense_iterations(Device& dev, const DenseState& st, Points& x, const DenseRegistrationOptions& o,
+                                      Fit& fit, DenseRegistrationResult& r) {
   const int levels = static_cast<int>(o.widths.size());
+  std::optional<Level> finest;
   for (int l = 0; l < levels && !r.time_budget_spent; ++l) {
     const int n = o.iterations / levels + (l < o.iterations % levels ? 1 : 0);
-    if (n > 0) level_iterations(dev, st, x, Level(o.widths[static_cast<size_t>(l)], o), n, o, fit, r);
+    if (n == 0) continue;
+    Level level(o.widths[static_cast<size_t>(l)], o);
+    level_iterations(dev, st, x, level, n, o, fit, r);
+    if (l == levels - 1) finest.emplace(std::move(level));
   }
   r.agreement_after = fit.agreement;
   r.mismatch_after = fit.mismatch;
+  return finest;
 }
 
 DenseState dense_state(Device& dev, const Points& ball, const Tets& tets, const std::vector<int>& labels,
@@ -283,9 +290,9 @@ DenseRegistrationResult register_dense(Device& dev, const DenseSubject& subject,
     Points x(work.rows() + lm.rows(), 3);
     x << work, lm;
     Fit fit = std::move(after_landmarks);
-    dense_iterations(dev, st, x, o, fit, r);
+    std::optional<Level> finest = dense_iterations(dev, st, x, o, fit, r);
     if (o.restore_cycles > 0 && lo.restore_volumes) {
-      const Level finest(o.widths.back(), o);
+      if (!finest) finest.emplace(o.widths.back(), o);
       const int n = std::max(1, o.iterations / static_cast<int>(o.widths.size()));
       const std::vector<char> pinned = landmark_vertices(ball, landmarks);
       for (int c = 0; c < o.restore_cycles && !r.time_budget_spent; ++c) {
@@ -294,11 +301,12 @@ DenseRegistrationResult register_dense(Device& dev, const DenseSubject& subject,
                         lo.restore_rounds, restore_holds(st, now, o), lo.restore_polish);
         x.topRows(work.rows()) = now;
         fit = Fit(st, now);
-        level_iterations(dev, st, x, finest, n, o, fit, r);
+        level_iterations(dev, st, x, *finest, n, o, fit, r);
       }
       r.agreement_after = fit.agreement;
       r.mismatch_after = fit.mismatch;
     }
+    finest.reset();  // its Gram matrix is large (about 230 MB at width 0.1)
     if (o.fine_iterations > 0 && st.image && lo.restore_volumes)
       fine_steps(dev, st, x, ball, landmark_vertices(ball, landmarks), lo, o, fit, r);
     work = x.topRows(work.rows());
