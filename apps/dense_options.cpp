@@ -52,6 +52,8 @@ DenseRegistrationOptions dense_options(const Args& args, DenseRegistrationOption
   if (o.image_grid < 8 || o.image_grid > 256) throw InputError("--dense-image-grid: expected 8 to 256 cells");
   o.restore_cycles = args.get_int("--dense-restore-cycles", o.restore_cycles);
   if (o.restore_cycles < 0 || o.restore_cycles > 100) throw InputError("--dense-restore-cycles: expected 0 to 100");
+  o.fit_tolerance = args.get_double("--dense-fit-tolerance", o.fit_tolerance);
+  if (!(o.fit_tolerance >= 1e-14 && o.fit_tolerance <= 0.1)) throw InputError("--dense-fit-tolerance: expected 1e-14 to 0.1");
   o.advect_steps = args.get_int("--dense-advect-steps", o.advect_steps);
   if (o.advect_steps < 1 || o.advect_steps > 64) throw InputError("--dense-advect-steps: expected 1 to 64");
   o.fine_iterations = args.get_int("--dense-fine-iterations", o.fine_iterations);
@@ -91,6 +93,8 @@ Command with_dense_options(Command command, const std::string& after, int defaul
           {"--dense-restore-cycles", "C",
            "cycles of volume restoration then more dense iterations at the finest width, after the others (default " +
                std::to_string(d.restore_cycles) + ")", false, 0, true},
+          {"--dense-fit-tolerance", "T", "relative residual at which the fit's conjugate gradients stop (default " +
+                                            format_sig(d.fit_tolerance, 6) + ")", false, 0, true},
           {"--dense-advect-steps", "K", "RK4 steps that carry the vertices through each dense iteration's flow (default " +
                                            std::to_string(d.advect_steps) + ")", false, 0, true},
           {"--dense-fine-iterations", "N",

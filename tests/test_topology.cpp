@@ -9,7 +9,10 @@
 
 #include "support/fixtures.hpp"
 #include "mesh/tet_grid.hpp"
+#include "vpm/error.hpp"
 #include "vpm/geometry.hpp"
+#include "vpm/labels.hpp"
+#include "vpm/locate.hpp"
 #include "vpm/mesh_order.hpp"
 #include "vpm/topology.hpp"
 
@@ -191,4 +194,39 @@ TEST_CASE("face matching (boundary faces, non-manifold faces, face neighbours) a
       for (int s : slots) CHECK(nbr[static_cast<size_t>(s)] == -1);
     }
   }
+}
+
+TEST_CASE("tet_topology: the faces sorted once give what each query gives, and a locator built on it locates the same") {
+  TetMesh m = test::ball_mesh(5);
+  std::mt19937 gen(9);
+  std::uniform_real_distribution<double> jitter(-0.02, 0.02), u(-1.05, 1.05);
+  for (Eigen::Index v = 0; v < m.vertices.rows(); ++v)  // a moved embedding of the same tets
+    m.vertices.row(v) += Eigen::RowVector3d(jitter(gen), jitter(gen), jitter(gen));
+  const TetTopology t = tet_topology(m.num_vertices(), m.tets);
+  CHECK(t.boundary == boundary_faces(m.tets));
+  CHECK(t.boundary_vertex == boundary_vertex_mask(m.num_vertices(), boundary_faces(m.tets)));
+  CHECK(t.neighbours == detail::tet_neighbors(m.tets));
+  CHECK(std::count(t.neighbours.begin(), t.neighbours.end(), -1) == t.boundary.rows());
+  Points p(500, 3);
+  for (Eigen::Index i = 0; i < p.rows(); ++i) p.row(i) << u(gen), u(gen), u(gen);
+  const std::vector<Location> a = TetLocator(m.vertices, m.tets).locate_all(p),
+                              b = TetLocator(m.vertices, m.tets, t).locate_all(p);
+  int differ = 0, inside = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    differ += a[i].tet != b[i].tet || a[i].min_bary != b[i].min_bary;
+    inside += a[i].inside();
+  }
+  CHECK(differ == 0);
+  CHECK(inside > 100);
+  // labels and pull-backs through a prepared locator equal those of the one-off calls
+  std::vector<int> labels(static_cast<size_t>(m.tets.rows()));
+  for (size_t k = 0; k < labels.size(); ++k) labels[k] = static_cast<int>(k % 7);
+  const TetLocator at(m.vertices, m.tets, t);
+  CHECK(sample_labels(at, labels, p) == sample_labels(m.vertices, m.tets, labels, p));
+  const Points native = 2.0 * m.vertices;
+  CHECK(pull_back_points(p, at, native) == pull_back_points(p, m.vertices, m.tets, native));
+  // a topology of another mesh is refused
+  const TetMesh small = test::ball_mesh(2);
+  CHECK_THROWS_AS(TetLocator(m.vertices, m.tets, tet_topology(small.num_vertices(), small.tets)), InputError);
+  CHECK_THROWS_AS(tet_topology(4, small.tets), InputError);
 }

@@ -14,8 +14,15 @@ std::vector<int> sample_labels(const Points& vertices, const Tets& tets, const s
   if (static_cast<long>(tet_labels.size()) != tets.rows())
     throw InputError("sample_labels: " + std::to_string(tet_labels.size()) + " labels for " +
                      std::to_string(tets.rows()) + " tets");
-  const TetLocator locator(vertices, tets);
-  const std::vector<Location> loc = locator.locate_all(points);
+  return sample_labels(TetLocator(vertices, tets), tet_labels, points, outside_label, outside_tolerance);
+}
+
+std::vector<int> sample_labels(const TetLocator& at, const std::vector<int>& tet_labels, const Points& points,
+                               int outside_label, double outside_tolerance) {
+  if (static_cast<long>(tet_labels.size()) != at.tets().rows())
+    throw InputError("sample_labels: " + std::to_string(tet_labels.size()) + " labels for " +
+                     std::to_string(at.tets().rows()) + " tets");
+  const std::vector<Location> loc = at.locate_all(points);
   std::vector<int> out(loc.size(), outside_label);
   for (size_t i = 0; i < loc.size(); ++i)
     if (loc[i].tet >= 0 && loc[i].min_bary >= -outside_tolerance) out[i] = tet_labels[loc[i].tet];

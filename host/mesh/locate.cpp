@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "mesh/tet_grid.hpp"
 #include "core/parallel.hpp"
@@ -20,6 +21,16 @@ TetLocator::TetLocator(const Points& vertices, const Tets& tets) : impl_(std::ma
   impl_->x = vertices;
   impl_->tets = tets;
   impl_->nbr = detail::tet_neighbors(impl_->tets);
+  detail::build_background(impl_->background, impl_->x, impl_->tets, impl_->nbr);
+}
+TetLocator::TetLocator(const Points& vertices, const Tets& tets, const TetTopology& topology)
+    : impl_(std::make_unique<Impl>()) {
+  if (topology.neighbours.size() != 4 * static_cast<size_t>(tets.rows()))
+    throw InputError("TetLocator: the topology has " + std::to_string(topology.neighbours.size() / 4) + " tets, the mesh " +
+                     std::to_string(tets.rows()));
+  impl_->x = vertices;
+  impl_->tets = tets;
+  impl_->nbr = topology.neighbours;
   detail::build_background(impl_->background, impl_->x, impl_->tets, impl_->nbr);
 }
 TetLocator::~TetLocator() = default;
@@ -45,6 +56,8 @@ Location TetLocator::locate(const Eigen::Vector3d& p, int hint) const {
   return out;
 }
 
+const Tets& TetLocator::tets() const { return impl_->tets; }
+
 std::vector<Location> TetLocator::locate_all(const Points& points) const {
   const int k = static_cast<int>(points.rows());
   std::vector<Location> out(k);
@@ -62,8 +75,15 @@ Points pull_back_points(const Points& s, const Points& ball, const Tets& tets, c
   if (ball.rows() != native.rows())
     throw InputError("pull_back: the ball mesh has " + std::to_string(ball.rows()) +
                      " vertices but its native positions " + std::to_string(native.rows()));
-  const TetLocator locator(ball, tets);
-  const std::vector<Location> loc = locator.locate_all(s);
+  return pull_back_points(s, TetLocator(ball, tets), native);
+}
+
+Points pull_back_points(const Points& s, const TetLocator& from, const Points& native) {
+  const Tets& tets = from.tets();
+  if (tets.size() > 0 && tets.maxCoeff() >= native.rows())
+    throw InputError("pull_back: the mesh's tets use vertex " + std::to_string(tets.maxCoeff()) + " but its native positions " +
+                     std::to_string(native.rows()));
+  const std::vector<Location> loc = from.locate_all(s);
   Points out(s.rows(), 3);
   detail::parallel_for(static_cast<int>(s.rows()), 4096, [&](int begin, int end) {
     for (int i = begin; i < end; ++i) {

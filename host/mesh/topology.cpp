@@ -3,10 +3,13 @@
 #include <algorithm>
 #include <array>
 #include <numeric>
+#include <string>
 #include <unordered_map>
 
 #include "core/group_by_key.hpp"
 #include "mesh/face_table.hpp"
+#include "mesh/tet_grid.hpp"
+#include "vpm/error.hpp"
 
 namespace vpm {
 
@@ -57,6 +60,15 @@ std::vector<char> boundary_vertex_mask(int num_vertices, const Triangles& faces)
   for (int i = 0; i < faces.rows(); ++i)
     for (int c = 0; c < 3; ++c) m[static_cast<size_t>(faces(i, c))] = 1;
   return m;
+}
+
+TetTopology tet_topology(int num_vertices, const Tets& tets) {
+  if (tets.size() > 0 && (tets.minCoeff() < 0 || tets.maxCoeff() >= num_vertices))
+    throw InputError("tet_topology: the tets use vertices outside 0.." + std::to_string(num_vertices - 1));
+  TetTopology t;
+  t.neighbours = detail::tet_neighbors(tets, &t.boundary);
+  t.boundary_vertex = boundary_vertex_mask(num_vertices, t.boundary);
+  return t;
 }
 
 Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> unique_edges(const Tets& tets) {

@@ -81,7 +81,11 @@ std::vector<double> ImageForce::subject_values(const Points& ball) const {
   if (images_.subject_native.rows() != ball.rows())
     throw InputError("dense registration: the subject has " + std::to_string(ball.rows()) + " vertices but " +
                      std::to_string(images_.subject_native.rows()) + " native positions");
-  std::vector<double> v = read_at(*images_.subject, pull_back_points(grid_, ball, tets_, images_.subject_native));
+  return subject_values(TetLocator(ball, tets_));
+}
+
+std::vector<double> ImageForce::subject_values(const TetLocator& ball) const {
+  std::vector<double> v = read_at(*images_.subject, pull_back_points(grid_, ball, images_.subject_native));
   for (double& x : v) x = scale_ * x + offset_;
   return v;
 }

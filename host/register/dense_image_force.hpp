@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "vpm/dense_registration.hpp"
+#include "vpm/locate.hpp"
 
 namespace vpm {
 
@@ -26,6 +27,8 @@ class ImageForce {
   /// The subject's image read at the grid through its ball mesh at `ball`, scaled by the fixed
   /// linear scale.
   std::vector<double> subject_values(const Points& ball) const;
+  /// The same with the subject's ball mesh already prepared for location.
+  std::vector<double> subject_values(const TetLocator& ball) const;
   /// Mean squared difference to the template's values over the grid, / the template's variance.
   double mismatch(const std::vector<double>& subject) const;
   /// The local translation that moves the subject onto the template at each of `centres`

@@ -43,6 +43,7 @@ void check_dense(const Tets& tets, const std::vector<int>& labels, const Tets& t
     if (!(w > 0) || w > 2) bad("widths must lie in (0, 2]");
   if (!(o.step > 0 && o.step <= 1)) bad("step must lie in (0, 1]");
   if (!(o.centre_spacing >= 0.25) || !(o.smoothing > 0) || !(o.ridge >= 0)) bad("invalid smoothing options");
+  if (!(o.fit_tolerance > 0 && o.fit_tolerance < 1)) bad("the fit tolerance must lie in (0, 1)");
   if (o.advect_steps < 1 || o.agreement_grid < 4) bad("advect steps >= 1 and agreement grid >= 4 required");
   if (o.force != DenseForce::labels &&
       (!(o.image_grid >= 4 && o.image_grid <= 512) || !(o.image_smoothing >= 0)))
@@ -138,6 +139,7 @@ DenseIteration dense_step(Device& dev, const DenseState& st, Points& x, const Le
   fo.kernel = RbfKernel::Tangent;
   fo.lambda = 1 / (width * width);
   fo.ridge = o.ridge;
+  fo.tolerance = o.fit_tolerance;
   const Points ball = x.topRows(nv);
   DivFreeField field =
       o.fit == DenseFit::systems
@@ -217,8 +219,9 @@ std::optional<Level> dense_iterations(Device& dev, const DenseState& st, Points&
 DenseState dense_state(Device& dev, const Points& ball, const Tets& tets, const std::vector<int>& labels,
                        const Points& tball, const Tets& ttets, const std::vector<int>& tlabels,
                        const DenseRegistrationOptions& o, const DenseImages* images) {
-  DenseState st{ball, tets, without_labels(labels, o.exclude_labels), {}, {}, {}, {}, {}, {}, {}, nullptr, o.force};
-  st.boundary = boundary_vertex_mask(static_cast<int>(ball.rows()), boundary_faces(tets));
+  DenseState st{ball, tets, without_labels(labels, o.exclude_labels), tet_topology(static_cast<int>(ball.rows()), tets),
+                {}, {}, {}, {}, {}, {}, {}, nullptr, o.force};
+  st.boundary = st.topology.boundary_vertex;
   st.v0 = tet_volumes(dev, ball, tets);
   st.faces = region_faces(tets, st.labels);
   const std::vector<int> tl = without_labels(tlabels, o.exclude_labels);

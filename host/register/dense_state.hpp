@@ -10,7 +10,9 @@
 #include "register/registration_steps.hpp"
 #include "vpm/dense_registration.hpp"
 #include "vpm/labels.hpp"
+#include "vpm/locate.hpp"
 #include "vpm/polish.hpp"
+#include "vpm/topology.hpp"
 
 namespace vpm {
 
@@ -20,6 +22,7 @@ struct DenseState {
   const Points& reference;
   const Tets& tets;
   std::vector<int> labels;
+  TetTopology topology;  ///< of tets: every Fit locates points in the moving mesh with it
   std::vector<char> boundary;
   Eigen::VectorXd v0;
   RegionFaces faces;
@@ -30,9 +33,9 @@ struct DenseState {
   std::unique_ptr<const ImageForce> image;  ///< with DenseForce::image and both
   DenseForce force = DenseForce::labels;
 
-  double agreement(const Points& ball) const {
-    return mean_dice(grid_templ, sample_labels(ball, tets, labels, grid), regions);
-  }
+  /// Mean Dice of the subject's labels with the template's at the agreement grid; `at` is the
+  /// subject's ball mesh prepared for location.
+  double agreement(const TetLocator& at) const { return mean_dice(grid_templ, sample_labels(at, labels, grid), regions); }
 };
 
 /// How well `ball` fits the template by the force's own measure (better_than), and the
@@ -41,9 +44,11 @@ struct DenseState {
 struct Fit {
   double agreement = 0, mismatch = -1;
   std::vector<double> values;
-  Fit(const DenseState& st, const Points& ball) : agreement(st.agreement(ball)) {
+  Fit(const DenseState& st, const Points& ball) {  // one location structure for both grids
+    const TetLocator at(ball, st.tets, st.topology);
+    agreement = st.agreement(at);
     if (!st.image) return;
-    values = st.image->subject_values(ball);
+    values = st.image->subject_values(at);
     mismatch = st.image->mismatch(values);
   }
   bool better_than(const Fit& o, DenseForce force) const {

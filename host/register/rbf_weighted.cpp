@@ -25,6 +25,7 @@ DivFreeField fit_divfree_weighted(const Points& centres, const SparseGram& k, co
     throw InputError("fit_divfree_weighted: " + std::to_string(n) + " centres but " +
                      std::to_string(local.a.size()) + " local systems");
   if (!(opt.lambda > 0) || !(opt.ridge > 0)) throw InputError("fit_divfree_weighted: lambda and ridge must be positive");
+  if (!(opt.tolerance > 0 && opt.tolerance < 1)) throw InputError("fit_divfree_weighted: the tolerance must lie in (0, 1)");
   if (opt.boundary_samples.rows() > 0) throw InputError("fit_divfree_weighted: boundary samples are not supported");
   DivFreeField f;
   f.kernel = opt.kernel;
@@ -47,7 +48,7 @@ DivFreeField fit_divfree_weighted(const Points& centres, const SparseGram& k, co
   // self-adjoint and positive definite; K p is carried along, so one Gram product per iteration.
   Eigen::VectorXd x = Eigen::VectorXd::Zero(3 * n), r = rhs, kr = multiply(k, r), p = r, kp = kr;
   double rr = r.dot(kr);
-  const double stop = 1e-20 * rr;
+  const double stop = opt.tolerance * opt.tolerance * rr;
   for (Eigen::Index it = 0; it < 3 * n + 100 && rr > stop; ++it) {
     const Eigen::VectorXd tp = apply_a(kp) + mu * p;
     const double alpha = rr / kp.dot(tp);

@@ -4,6 +4,7 @@
 // overlaps).
 #include <vector>
 
+#include "vpm/locate.hpp"
 #include "vpm/mesh.hpp"
 
 namespace vpm {
@@ -14,6 +15,9 @@ namespace vpm {
 /// between the sphere and an inscribed ball mesh take the label of the nearest tet).
 std::vector<int> sample_labels(const Points& vertices, const Tets& tets, const std::vector<int>& tet_labels,
                                const Points& points, int outside_label = 0, double outside_tolerance = 0.05);
+/// The same in a mesh already prepared for location (`at`, with its tets' labels).
+std::vector<int> sample_labels(const TetLocator& at, const std::vector<int>& tet_labels, const Points& points,
+                               int outside_label = 0, double outside_tolerance = 0.05);
 
 /// Overlap of one label between two label samplings of the same points.
 struct LabelOverlap {

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "vpm/mesh.hpp"
+#include "vpm/topology.hpp"
 
 namespace vpm {
 
@@ -27,6 +28,9 @@ class TetLocator {
  public:
   /// `vertices` n x 3, `tets` m x 4 (non-degenerate). Both are copied.
   TetLocator(const Points& vertices, const Tets& tets);
+  /// The same with the mesh's topology (tet_topology of `tets`) given: a mesh that moves, located
+  /// again and again, sorts its faces once.
+  TetLocator(const Points& vertices, const Tets& tets, const TetTopology& topology);
   ~TetLocator();
   TetLocator(TetLocator&&) noexcept;
   TetLocator& operator=(TetLocator&&) noexcept;
@@ -36,6 +40,8 @@ class TetLocator {
   /// Locations of `points` (k x 3), each query starting from the previous result (so nearby
   /// consecutive points are cheap). Runs on the host threads available.
   std::vector<Location> locate_all(const Points& points) const;
+  /// The tets located in (m x 4).
+  const Tets& tets() const;
 
  private:
   struct Impl;
@@ -50,5 +56,7 @@ class TetLocator {
 /// barycentric coordinates. InputError when `from` and `to` differ in rows. Runs on the host
 /// threads.
 Points pull_back_points(const Points& points, const Points& from, const Tets& tets, const Points& to);
+/// The same with the mesh at `from` already prepared: `from` (its locator) and `to` (n x 3).
+Points pull_back_points(const Points& points, const TetLocator& from, const Points& to);
 
 }  // namespace vpm

@@ -71,6 +71,9 @@ struct RbfFitOptions {
   double ridge = 0;
   /// Estimate the 2-norm condition number of the Gram matrix (eigenvalues: O(N^3), for reports).
   bool estimate_condition = false;
+  /// fit_divfree_weighted only: the relative residual (in the K norm) its conjugate gradients
+  /// stop at, in (0, 1).
+  double tolerance = 1e-10;
 };
 
 struct RbfFitInfo {
@@ -104,9 +107,9 @@ struct LocalSystems {
 /// data constrain a direction weakly or not at all, the field there follows from its neighbours
 /// (and, being divergence-free, from what moves around it) instead of being pulled to zero.
 /// Solves (A K + mu I) a = b by conjugate gradients in the K inner product (self-adjoint there),
-/// with the sparse Gram matrix of fit_divfree (pairs beyond 5 widths left out), relative
-/// residual 1e-10. options.kernel and lambda are used; boundary samples are not supported
-/// (InputError), nor a ridge <= 0.
+/// with the sparse Gram matrix of fit_divfree (pairs beyond 5 widths left out), to the relative
+/// residual options.tolerance. options.kernel and lambda are used; boundary samples are not
+/// supported (InputError), nor a ridge <= 0 or a tolerance outside (0, 1).
 DivFreeField fit_divfree_weighted(const Points& centres, const LocalSystems& local, const RbfFitOptions& options,
                                   RbfFitInfo* info = nullptr);
 

@@ -17,6 +17,17 @@ Triangles boundary_faces(const Tets& tets, std::vector<int>* face_tet = nullptr)
 /// (renumbered in increasing order of the mesh's vertex ids), outward for positive tets.
 TriSurface boundary_surface(const TetMesh& mesh);
 
+/// What every stage that walks or restores a tet mesh reads and none changes: the face
+/// neighbours, the boundary faces and the boundary vertices, from one sort of the 4m faces.
+/// Built once per mesh and passed down (TetLocator, the dense registration) instead of each
+/// call re-deriving them from the tets.
+struct TetTopology {
+  std::vector<int> neighbours;        ///< 4m: the tet across the face opposite corner k of tet t, or -1
+  Triangles boundary;                 ///< boundary_faces(tets)
+  std::vector<char> boundary_vertex;  ///< boundary_vertex_mask(num_vertices, boundary)
+};
+TetTopology tet_topology(int num_vertices, const Tets& tets);
+
 /// Number of triangles shared by more than two tets (0 for a manifold tet mesh).
 int nonmanifold_faces(const Tets& tets);
 
