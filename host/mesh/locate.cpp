@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "mesh/tet_grid.hpp"
 #include "core/parallel.hpp"
@@ -15,23 +16,20 @@ struct TetLocator::Impl {
   Tets tets;
   std::vector<int> nbr;
   detail::TetGrid background;
+  Impl(const Points& vertices, const Tets& t, std::vector<int> neighbours)
+      : x(vertices), tets(t), nbr(std::move(neighbours)) {
+    detail::build_background(background, x, tets, nbr);
+  }
 };
 
-TetLocator::TetLocator(const Points& vertices, const Tets& tets) : impl_(std::make_unique<Impl>()) {
-  impl_->x = vertices;
-  impl_->tets = tets;
-  impl_->nbr = detail::tet_neighbors(impl_->tets);
-  detail::build_background(impl_->background, impl_->x, impl_->tets, impl_->nbr);
-}
-TetLocator::TetLocator(const Points& vertices, const Tets& tets, const TetTopology& topology)
-    : impl_(std::make_unique<Impl>()) {
+TetLocator::TetLocator(const Points& vertices, const Tets& tets)
+    : impl_(std::make_unique<Impl>(vertices, tets, detail::tet_neighbors(tets))) {}
+
+TetLocator::TetLocator(const Points& vertices, const Tets& tets, const TetTopology& topology) {
   if (topology.neighbours.size() != 4 * static_cast<size_t>(tets.rows()))
     throw InputError("TetLocator: the topology has " + std::to_string(topology.neighbours.size() / 4) + " tets, the mesh " +
                      std::to_string(tets.rows()));
-  impl_->x = vertices;
-  impl_->tets = tets;
-  impl_->nbr = topology.neighbours;
-  detail::build_background(impl_->background, impl_->x, impl_->tets, impl_->nbr);
+  impl_ = std::make_unique<Impl>(vertices, tets, topology.neighbours);
 }
 TetLocator::~TetLocator() = default;
 TetLocator::TetLocator(TetLocator&&) noexcept = default;

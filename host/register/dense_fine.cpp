@@ -30,12 +30,12 @@ DenseIteration fine_step(Device& dev, const DenseState& st, Points& x, const Poi
   const std::vector<Location> where = TetLocator(now, st.tets).locate_all(x.bottomRows(nl));
   const LocalSystems local = st.image->local_systems(fit.values, now, o.fine_sigma, 0);
   it.image_points = static_cast<long>(st.image->grid().rows());
-  Points after = now + o.step * fine_displacement(local, now, st.tets, st.boundary, o.fine_smoothness, 0.5 * o.fine_sigma);
+  Points after = now + o.step * fine_displacement(local, now, st.tets, st.topology.boundary_vertex, o.fine_smoothness, 0.5 * o.fine_sigma);
   for (Eigen::Index v = 0; v < nv; ++v)
-    if (st.boundary[static_cast<size_t>(v)]) after.row(v).normalize();
+    if (st.topology.boundary_vertex[static_cast<size_t>(v)]) after.row(v).normalize();
   Eigen::VectorXd v1 = tet_volumes(dev, after, st.tets);
   it.folded = newly_inverted(st.v0, v1);
-  if (it.folded > 0) untangle_flow_folds(dev, now, st.tets, after, st.boundary, st.v0, v1, 2);
+  if (it.folded > 0) untangle_flow_folds(dev, now, st.tets, after, st.topology.boundary_vertex, st.v0, v1, 2);
   Points lm(nl, 3);
   for (Eigen::Index l = 0; l < nl; ++l) {
     const Location& w = where[static_cast<size_t>(l)];

@@ -151,7 +151,7 @@ DenseIteration dense_step(Device& dev, const DenseState& st, Points& x, const Le
   advect(dev, y, {field}, o.advect_steps);
   Points after = y.topRows(nv);
   for (Eigen::Index v = 0; v < nv; ++v)
-    if (st.boundary[static_cast<size_t>(v)]) after.row(v).normalize();
+    if (st.topology.boundary_vertex[static_cast<size_t>(v)]) after.row(v).normalize();
   for (Eigen::Index l = nv; l < y.rows(); ++l)  // landmarks on the sphere stay on it exactly
     if (std::abs(x.row(l).norm() - 1) <= 1e-9) y.row(l).normalize();
   Eigen::VectorXd v1 = tet_volumes(dev, after, st.tets);
@@ -162,7 +162,7 @@ DenseIteration dense_step(Device& dev, const DenseState& st, Points& x, const Le
   // level at its second iteration (docs/register.md, "Untangling inside the dense steps").
   if (it.folded > 0) {
     const Points before = x.topRows(nv);
-    untangle_flow_folds(dev, before, st.tets, after, st.boundary, st.v0, v1, 2);
+    untangle_flow_folds(dev, before, st.tets, after, st.topology.boundary_vertex, st.v0, v1, 2);
   }
   it.max_move = (after - x.topRows(nv)).rowwise().norm().maxCoeff();
   Fit now(st, after);
@@ -220,8 +220,7 @@ DenseState dense_state(Device& dev, const Points& ball, const Tets& tets, const 
                        const Points& tball, const Tets& ttets, const std::vector<int>& tlabels,
                        const DenseRegistrationOptions& o, const DenseImages* images) {
   DenseState st{ball, tets, without_labels(labels, o.exclude_labels), tet_topology(static_cast<int>(ball.rows()), tets),
-                {}, {}, {}, {}, {}, {}, {}, nullptr, o.force};
-  st.boundary = st.topology.boundary_vertex;
+                {}, {}, {}, {}, {}, {}, nullptr, o.force};
   st.v0 = tet_volumes(dev, ball, tets);
   st.faces = region_faces(tets, st.labels);
   const std::vector<int> tl = without_labels(tlabels, o.exclude_labels);

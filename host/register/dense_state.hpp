@@ -22,8 +22,7 @@ struct DenseState {
   const Points& reference;
   const Tets& tets;
   std::vector<int> labels;
-  TetTopology topology;  ///< of tets: every Fit locates points in the moving mesh with it
-  std::vector<char> boundary;
+  TetTopology topology;  ///< of tets (its boundary_vertex pins the sphere); every Fit locates with it
   Eigen::VectorXd v0;
   RegionFaces faces;
   RegionSurface templ;
