@@ -196,6 +196,9 @@ TEST_CASE("a ball mask gives a genus-0 mesh with quality bounds") {
   CHECK(rep.topology.closing_radius_cells == 0);
   CHECK(rep.surface.euler == 2);
   CHECK(rep.surface.min_angle_deg >= 20.0);   // remeshed, not marching cubes
+  // a ball has no gap narrower than an edge: remeshed once, at the edge aimed at
+  CHECK(rep.parameters.remesh_retries == 0);
+  CHECK(rep.parameters.edge_mm == rep.parameters.target_edge_mm);
   CHECK(euler_of_boundary(m) == 2);
   CHECK(count_four_boundary_vertex_tets(m) == 0);
   const auto dih = dihedral_angles_deg(m.vertices, m.tets);

@@ -41,6 +41,8 @@ Json parameters_json(const MeshImageReport& r) {
   const MeshImageReport::Parameters& p = r.parameters;
   Json j = Json::object();
   j["target_edge_mm"] = p.target_edge_mm;
+  j["edge_mm"] = p.edge_mm;
+  j["remesh_retries"] = p.remesh_retries;
   if (r.image_input) {
     j["grid_mm"] = p.grid_mm;
     j["smooth_sigma_mm"] = p.smooth_sigma_mm;

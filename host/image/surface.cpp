@@ -208,7 +208,7 @@ std::pair<double, double> triangle_angle_range_deg(const TriSurface& s) {
 }
 
 #if !VPM_HAVE_CGAL
-TriSurface remesh_surface(const TriSurface&, double, int) {
+TriSurface remesh_surface(const TriSurface&, double, int, RemeshInfo*) {
   throw InputError("mesh-image: this vpm was built without CGAL (surface remeshing unavailable)");
 }
 #endif

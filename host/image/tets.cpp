@@ -72,14 +72,20 @@ TetMesh surface_to_tets(const TriSurface& raw, const Resolution& res, const Mesh
   Stopwatch t0;
   if (o.progress) o.progress("remeshing the surface to edge " + format_sig(res.edge, 3) + " mm");
   TriSurface s;
+  RemeshInfo info;
   try {
-    s = remesh_surface(raw, res.edge, o.remesh_iterations);
+    s = remesh_surface(raw, res.edge, o.remesh_iterations, &info);
   } catch (const MeshImageError& e) {
     throw MeshImageError(e.problem(), source + ": " + e.context(), source + ": " + e.what());
   } catch (const InputError& e) {
     throw InputError(source + ": " + e.what());
   }
   record(report, "remesh", t0);
+  report.parameters.edge_mm = info.edge_length;
+  report.parameters.remesh_retries = info.retries;
+  if (o.progress && info.retries)
+    o.progress("remeshed again " + std::to_string(info.retries) + " time(s) with a shorter edge (" +
+               format_sig(info.edge_length, 3) + " mm): the first surface self-intersected");
   check_closed_genus0(s, source, "the remeshed surface");
   report.surface = surface_stats(s);
 

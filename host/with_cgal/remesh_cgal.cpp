@@ -36,9 +36,10 @@ void refuse_self_intersections(const Mesh& mesh, const std::string& what) {
   throw MeshImageError(MeshImageError::Problem::kSurfaceSelfIntersects, fact,
                        fact + "; MeshImageOptions::voxelize_mm > 0 meshes the solid it encloses instead");
 }
-}  // namespace
 
-TriSurface remesh_surface(const TriSurface& surface, double edge_length, int iterations) {
+// The input as a CGAL mesh; InputError when a triangle cannot be added or the surface is open,
+// MeshImageError when it self-intersects.
+Mesh to_cgal(const TriSurface& surface) {
   Mesh mesh;
   std::vector<Mesh::Vertex_index> vid(surface.vertices.rows());
   for (int i = 0; i < surface.vertices.rows(); ++i)
@@ -52,20 +53,25 @@ TriSurface remesh_surface(const TriSurface& surface, double edge_length, int ite
   }
   if (!CGAL::is_closed(mesh)) throw InputError("remesh: the surface is not closed");
   refuse_self_intersections(mesh, "the surface");
+  return mesh;
+}
 
+// One isotropic remeshing of `mesh` to `edge_length`, then angle smoothing with Delaunay flips
+// (lifts the few remaining small angles).
+void remesh_once(Mesh& mesh, double edge_length, int iterations) {
   PMP::isotropic_remeshing(faces(mesh), edge_length, mesh,
                            PMP::parameters::number_of_iterations(iterations)
                                .number_of_relaxation_steps(3)
                                .protect_constraints(false));
-  // Angle smoothing with Delaunay flips lifts the few remaining small angles.
   PMP::angle_and_area_smoothing(mesh, PMP::parameters::number_of_iterations(3)
                                           .use_area_smoothing(false)
                                           .use_Delaunay_flips(true)
                                           .use_safety_constraints(true));
   mesh.collect_garbage();
-  refuse_self_intersections(mesh, "the remeshed surface (edge " + std::to_string(edge_length) +
-                                      "; thin parts need a smaller edge: more --target-vertices)");
+}
 
+// `mesh` (garbage collected) as vpm's surface, vertex and face order kept.
+TriSurface from_cgal(const Mesh& mesh) {
   TriSurface out;
   out.vertices.resize(mesh.number_of_vertices(), 3);
   for (auto v : mesh.vertices()) {
@@ -80,6 +86,23 @@ TriSurface remesh_surface(const TriSurface& surface, double edge_length, int ite
     ++f;
   }
   return out;
+}
+
+}  // namespace
+
+TriSurface remesh_surface(const TriSurface& surface, double edge_length, int iterations, RemeshInfo* info) {
+  const Mesh input = to_cgal(surface);
+  double edge = edge_length;
+  for (int retry = 0;; ++retry, edge *= kRemeshEdgeShrink) {
+    Mesh mesh = input;
+    remesh_once(mesh, edge, iterations);
+    if (retry < kRemeshRetries && PMP::does_self_intersect(mesh)) continue;
+    refuse_self_intersections(mesh, "the remeshed surface (edge " + std::to_string(edge) + " after " +
+                                        std::to_string(retry) +
+                                        " shorter retries; thin parts need a smaller edge: more --target-vertices)");
+    if (info) *info = {edge, retry};
+    return from_cgal(mesh);
+  }
 }
 
 }  // namespace vpm

@@ -121,11 +121,28 @@ TetMesh mesh_surface(const TriSurface& surface, const MeshImageOptions& options,
 /// found (0 included), tets and volume_mm3 (voxels fields left 0).
 std::map<int, LabelVolume> label_mesh(TetMesh& mesh, const Image& atlas);
 
+/// A remeshed surface that self-intersects (isotropic remeshing pulls the two sides of a gap
+/// narrower than about an edge across each other: 1 of 60 synthetic cohort brains at 45,000
+/// vertices) is remeshed again from the input with the edge times kRemeshEdgeShrink, at most
+/// kRemeshRetries times (a slightly finer surface resolves the gap; docs/mesh_image.md).
+constexpr double kRemeshEdgeShrink = 0.95;
+constexpr int kRemeshRetries = 3;
+
+/// What remesh_surface did: the edge length of the surface it returned, and how many shorter
+/// retries it took to get a surface that does not self-intersect (0: the first).
+struct RemeshInfo {
+  double edge_length = 0;
+  int retries = 0;
+};
+
 /// Isotropic remeshing of a closed manifold surface to `edge_length` (CGAL
 /// Polygon_mesh_processing::isotropic_remeshing, then angle-and-area smoothing), keeping its
-/// topology. Throws InputError when vpm was built without CGAL, and when the surface, or the
-/// remeshed surface, self-intersects (how many triangle pairs cross, the first pair and where).
-TriSurface remesh_surface(const TriSurface& surface, double edge_length, int iterations);
+/// topology; retried with shorter edges as above when the result self-intersects (`info`, when
+/// given, says what ran). Throws InputError when vpm was built without CGAL, and
+/// MeshImageError (kSurfaceSelfIntersects) when the surface, or the last retry's remeshed
+/// surface, self-intersects (how many triangle pairs cross, the first pair and where).
+TriSurface remesh_surface(const TriSurface& surface, double edge_length, int iterations,
+                          RemeshInfo* info = nullptr);
 
 /// Smallest and largest triangle angles of a surface, degrees.
 std::pair<double, double> triangle_angle_range_deg(const TriSurface& surface);

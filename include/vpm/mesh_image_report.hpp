@@ -67,6 +67,8 @@ struct MeshImageReport {
 
   struct Parameters {
     double target_edge_mm = 0;     ///< surface edge length aimed at
+    double edge_mm = 0;            ///< the remeshed surface's edge length (shorter after retries)
+    int remesh_retries = 0;        ///< shorter remeshings after self-intersecting ones (remesh_surface)
     double grid_mm = 0;            ///< extraction grid step (image input)
     double smooth_sigma_mm = 0;    ///< Gaussian sigma used (image input)
     double max_volume_mm3 = 0;     ///< TetGen volume bound
