@@ -122,7 +122,7 @@ TetMesh mesh_surface(const TriSurface& surface, const MeshImageOptions& options,
 std::map<int, LabelVolume> label_mesh(TetMesh& mesh, const Image& atlas);
 
 /// A remeshed surface that self-intersects (isotropic remeshing pulls the two sides of a gap
-/// narrower than about an edge across each other: 1 of 60 synthetic cohort brains at 45,000
+/// narrower than about an edge across each other: 2 of 60 synthetic cohort brains at 45,000
 /// vertices) is remeshed again from the input with the edge times kRemeshEdgeShrink, at most
 /// kRemeshRetries times (a slightly finer surface resolves the gap; docs/mesh_image.md).
 constexpr double kRemeshEdgeShrink = 0.95;
