@@ -55,6 +55,7 @@ Location TetLocator::locate(const Eigen::Vector3d& p, int hint) const {
 }
 
 const Tets& TetLocator::tets() const { return impl_->tets; }
+const Points& TetLocator::vertices() const { return impl_->x; }
 
 std::vector<Location> TetLocator::locate_all(const Points& points) const {
   const int k = static_cast<int>(points.rows());

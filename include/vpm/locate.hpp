@@ -40,8 +40,9 @@ class TetLocator {
   /// Locations of `points` (k x 3), each query starting from the previous result (so nearby
   /// consecutive points are cheap). Runs on the host threads available.
   std::vector<Location> locate_all(const Points& points) const;
-  /// The tets located in (m x 4).
+  /// The tets located in (m x 4) and their vertices (n x 3).
   const Tets& tets() const;
+  const Points& vertices() const;
 
  private:
   struct Impl;
