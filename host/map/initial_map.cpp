@@ -168,11 +168,12 @@ TimedSphereMap timed_sphere_map(const TriSurface& surf, const InitialMapOptions&
 
 // Steps 2-4 on the refined mesh m (boundary surface surf, mask res.boundary): sphere map (or
 // `early`, the same map made on the input's vertices while the split ran), harmonic interior,
-// untangling; fills res.ball and rep. False when the sphere map flipped a triangle or folds
-// remain.
+// untangling (without its global run when `global` is false); fills res.ball and rep. False
+// when the sphere map flipped a triangle or folds remain.
 bool map_through_sphere(Device& device, const TetMesh& m, const TriSurface& surf, const InitialMapOptions& opt,
                         const std::string& note, InitialMapResult& res, InitialMapReport& rep,
-                        std::future<std::shared_ptr<PoissonSolver>>& solver, TimedSphereMap* early = nullptr) {
+                        std::future<std::shared_ptr<PoissonSolver>>& solver, TimedSphereMap* early = nullptr,
+                        bool global = true) {
   TimedSphereMap tm = early ? std::move(*early) : timed_sphere_map(surf, opt, device);
   SphereMapResult& sm = tm.map;
   rep.boundary = sm.report;
@@ -195,7 +196,7 @@ bool map_through_sphere(Device& device, const TetMesh& m, const TriSurface& surf
                std::to_string(rep.folds_before_untangle) + " folds" + strprintf(", %.2f s", rep.timings.harmonic));
 
   t0 = Clock::now();
-  rep.folds_after_untangle = untangle_map(device, m, res.boundary, opt, res.ball, rep);
+  rep.folds_after_untangle = untangle_map(device, m, res.boundary, opt, res.ball, rep, global);
   rep.timings.untangle = seconds_since(t0);
   if (rep.folds_before_untangle > 0 || rep.folds_after_untangle > 0)
     say(opt, "untangling: " + std::to_string(rep.folds_before_untangle) + " -> " +
@@ -266,9 +267,10 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
   // kernel-generating algorithms, whose program cache is not)
   std::future<std::shared_ptr<PoissonSolver>> solver = start_harmonic_solver(device, m, opt);
   TimedSphereMap early = early_sphere.get();
-  const bool done = map_through_sphere(device, m, surf, opt, note, res, rep, solver, &early);
-  if (!done && rep.boundary.flipped_triangles == 0 && !opt.deadline.passed() &&
-      opt.sphere_density != InitialMapOptions::SphereDensity::conformal) {
+  // with a fallback to come, the first attempt untangles locally only (untangle_map)
+  const bool can_fall_back = opt.sphere_density != InitialMapOptions::SphereDensity::conformal;
+  const bool done = map_through_sphere(device, m, surf, opt, note, res, rep, solver, &early, !can_fall_back);
+  if (!done && rep.boundary.flipped_triangles == 0 && !opt.deadline.passed() && can_fall_back) {
     say(opt, std::to_string(rep.folds_after_untangle) + " folds left: again from the conformal sphere map");
     // untangling the map from the equal-area boundary left folds: the conformal boundary is
     // the fallback (a flipped sphere map would flip the same way: the flow never flips)

@@ -69,7 +69,7 @@ static InitialMapOptions within_budget(const InitialMapOptions& opt) {
 // Local runs widen the rings this many times (x2 each) while each leaves fewer folds.
 constexpr int kLocalWidenings = 3;
 int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boundary, const InitialMapOptions& options,
-                 Points& ball, InitialMapReport& rep) {
+                 Points& ball, InitialMapReport& rep, bool global) {
   int folds = rep.folds_before_untangle;
   const InitialMapOptions opt = within_budget(options);
   const bool run = opt.untangle == InitialMapOptions::Untangle::Always ||
@@ -89,11 +89,11 @@ int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boun
     folds = left;
     if (folds == 0) ball = std::move(trial);
   }
-  if (!local || folds > 0) {
-    UntangleOptions global = opt.untangle_options;
-    global.max_outer_iterations = std::max(global.max_outer_iterations, opt.global_untangle_max_outer_iterations);
-    global.max_lbfgs_iterations = std::max(global.max_lbfgs_iterations, opt.global_untangle_max_lbfgs_iterations);
-    const UntangleResult ur = untangle(device, m.vertices, m.tets, ball, boundary, global);
+  if (!local || (folds > 0 && global)) {  // Always (or no rings): the global run is what was asked
+    UntangleOptions whole = opt.untangle_options;
+    whole.max_outer_iterations = std::max(whole.max_outer_iterations, opt.global_untangle_max_outer_iterations);
+    whole.max_lbfgs_iterations = std::max(whole.max_lbfgs_iterations, opt.global_untangle_max_lbfgs_iterations);
+    const UntangleResult ur = untangle(device, m.vertices, m.tets, ball, boundary, whole);
     if (local) rep.untangle_local_failed = rep.untangle;
     rep.untangle = InitialUntangle{ur, false, 0};
     folds = ur.inverted_after;

@@ -19,9 +19,13 @@ constexpr int kCleanupMaxFolds = 64;
 /// locally again with twice the rings if the global run left at most kCleanupMaxFolds, and for
 /// what is still left (at most kCleanupMaxFolds) with the boundary vertices of the folded tets
 /// sliding on the sphere. Fills rep.untangle*, starts from rep.folds_before_untangle; returns
-/// the folds left.
+/// the folds left. `global` false skips the global run that would follow local runs leaving
+/// folds, and its cleanup (the sliding still runs), for an attempt with a cheaper fallback:
+/// initial_map's equal-area boundary, whose fallback is the conformal one (the global run over
+/// a 213k-tet brain took 40-90 s and still left a fold on 3 of 60 cohort brains, the conformal
+/// attempt 0.3 s). Untangle::Always runs globally whatever `global` says.
 int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boundary, const InitialMapOptions& opt,
-                 Points& ball, InitialMapReport& rep);
+                 Points& ball, InitialMapReport& rep, bool global = true);
 
 /// Step 5 (vpm/initial_map.hpp): while folds remain, up to opt.max_refine_rounds times, the
 /// interior edges of the tets within 1, 2, 4 rings of the folds split (split_edges_near) and
