@@ -20,12 +20,6 @@ namespace {
 
 using Eigen::Vector3d;
 
-// Barycentric weights of the point where the segment from p (outside tet t: its raw
-// coordinates `raw`, some negative) to the tet's centroid enters the tet. A central projection:
-// points outside a convex corner of the mesh stay apart (the closest point of the tet would take
-// them all onto the corner vertex: measured, two boundary vertices of a 45,000-vertex brain mesh
-// put onto one vertex of a paper-size mesh of it, their tets flat), and a point outside a face
-// moves by about its distance from it.
 // The unclamped barycentric coordinates of p in tet t.
 std::array<double, 4> raw_barycentric(const Points& x, const Tets& tets, int t, const Vector3d& p) {
   Eigen::Matrix3d e;
@@ -34,6 +28,12 @@ std::array<double, 4> raw_barycentric(const Points& x, const Tets& tets, int t, 
   return {1 - l.sum(), l(0), l(1), l(2)};
 }
 
+// Barycentric weights of the point where the segment from p (outside tet t: its raw
+// coordinates `raw`, some negative) to the tet's centroid enters the tet. A central projection:
+// points outside a convex corner of the mesh stay apart (the closest point of the tet would take
+// them all onto the corner vertex: measured, two boundary vertices of a 45,000-vertex brain mesh
+// put onto one vertex of a paper-size mesh of it, their tets flat), and a point outside a face
+// moves by about its distance from it.
 std::array<double, 4> central_projection(const double raw[4]) {
   double t = 1;
   for (int k = 0; k < 4; ++k)
