@@ -96,12 +96,14 @@ TriSurface remesh_surface(const TriSurface& surface, double edge_length, int ite
   for (int retry = 0;; ++retry, edge *= kRemeshEdgeShrink) {
     Mesh mesh = input;
     remesh_once(mesh, edge, iterations);
-    if (retry < kRemeshRetries && PMP::does_self_intersect(mesh)) continue;
-    refuse_self_intersections(mesh, "the remeshed surface (edge " + std::to_string(edge) + " after " +
-                                        std::to_string(retry) +
-                                        " shorter retries; thin parts need a smaller edge: more --target-vertices)");
-    if (info) *info = {edge, retry};
-    return from_cgal(mesh);
+    if (!PMP::does_self_intersect(mesh)) {
+      if (info) *info = {edge, retry};
+      return from_cgal(mesh);
+    }
+    if (retry == kRemeshRetries)  // throws, naming the crossing triangles
+      refuse_self_intersections(mesh, "the remeshed surface (edge " + std::to_string(edge) + " after " +
+                                          std::to_string(retry) +
+                                          " shorter retries; thin parts need a smaller edge: more --target-vertices)");
   }
 }
 
