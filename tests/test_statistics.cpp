@@ -288,6 +288,8 @@ TEST_CASE("statistics: hysteresis grows foci from their core, peaks keep small f
   std::set<int> both = core;
   both.insert(ring.begin(), ring.end());
   CHECK(std::set<int>(grown.clusters[0].elements.begin(), grown.clusters[0].elements.end()) == both);
+  CHECK(grown.clusters[0].candidates == static_cast<int>(core.size()));
+  CHECK(plain.clusters[0].candidates == static_cast<int>(core.size()));
   for (int e : lonely) CHECK(grown.cluster[e] == 0);
   o.min_cluster = 5;  // counts only the core's elements at or beyond the cut
   CHECK(compare_to_reference(el, ref, patient, o).clusters.empty());

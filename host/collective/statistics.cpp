@@ -201,6 +201,7 @@ std::vector<FocusCluster> clusters_of(const CanonicalElements& el, const std::ve
         }
     }
     if (core < min_size && !(peak > 0 && core > 0 && top >= peak)) continue;
+    c.candidates = core;
     std::sort(c.elements.begin(), c.elements.end());
     for (int e : c.elements) {
       c.volume += el.volume(e);
@@ -254,6 +255,7 @@ Json to_json(const Comparison& c) {
     o["id"] = f.id;
     o["sign"] = f.sign;
     o["elements"] = static_cast<long>(f.elements.size());
+    o["candidates"] = f.candidates;
     o["volume"] = f.volume;
     o["peak_element"] = f.peak_element;
     o["peak_z"] = f.peak_z;

@@ -85,6 +85,10 @@ struct FocusCluster {
   int id = 0;                 ///< 1-based, largest first
   int sign = 1;               ///< +1 above the normals, -1 below
   std::vector<int> elements;  ///< ascending
+  /// its elements at or beyond the cut (the rest joined by CompareOptions::extend): the count
+  /// min_cluster is held against, so one comparison at min_cluster 1 tells which clusters any
+  /// larger min_cluster keeps (bench/cohort/lono.py calibrates it that way)
+  int candidates = 0;
   double volume = 0;          ///< ball volume (sum of element volumes; the ball is 4 pi / 3)
   int peak_element = -1;
   double peak_z = 0;
@@ -103,7 +107,7 @@ struct Comparison {
 Comparison compare_to_reference(const CanonicalElements& elements, const Reference& reference,
                                 const ElementTable& patient, const CompareOptions& options = {});
 
-/// {"threshold", "clusters": [{"id","sign","elements","volume","peak_element","peak_z"}]}
+/// {"threshold", "clusters": [{"id","sign","elements","candidates","volume","peak_element","peak_z"}]}
 Json to_json(const Comparison& comparison);
 
 /// Writes the comparison as TSV (one row per element: element, shell, triangle, patient,

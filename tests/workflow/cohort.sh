@@ -46,6 +46,30 @@ assert p["participant_id"] == "sub-P01"
 for m in ("vpm", "baseline"):
     assert 0 <= p[m]["sensitivity"] <= 1 and p[m]["foci_planted"] == 2, p[m]
 PY
+# leave-one-normal-out (bench/cohort/lono.py) with the patient counted among the "normals":
+# its entry is a comparison against the three normals with the workflow's options, so it finds
+# exactly the foci the workflow's comparison found
+/usr/bin/python3 "$src/bench/cohort/lono.py" --results "$r" --normals-glob 'sub-*' --vpm "$build/vpm" \
+  --out-json "$work/lono.json" > "$work/lono.log" 2>&1 || { cat "$work/lono.log"; fail "lono.py failed"; }
+# its calibration derives every min_cluster's count from one pass at min_cluster 1: at the
+# workflow's own it must count what the direct pass counted
+/usr/bin/python3 "$src/bench/cohort/lono.py" --results "$r" --normals-glob 'sub-*' --vpm "$build/vpm" --calibrate 1 \
+  --out-json "$work/lono_calibrated.json" > "$work/lono.log" 2>&1 || { cat "$work/lono.log"; fail "lono.py --calibrate failed"; }
+/usr/bin/python3 - "$r" "$work/lono.json" "$work/lono_calibrated.json" <<'PY' || fail "leave-one-normal-out"
+import json, sys
+c = json.load(open(f"{sys.argv[1]}/compare/sub-P01_pet.json"))
+l = json.load(open(sys.argv[2]))
+k = json.load(open(sys.argv[3]))
+assert [r["clusters"] for r in k["per_normal"]] == [r["clusters"] for r in l["per_normal"]], (k["per_normal"], l["per_normal"])
+curve = k["calibration"]["curve"]
+assert [p["false_clusters"] for p in curve] == sorted((p["false_clusters"] for p in curve), reverse=True), curve
+assert curve[7]["false_clusters"] == l["false_clusters"] and curve[-1]["false_clusters"] == 0, curve
+rows = {row["normal"]: row for row in l["per_normal"]}
+assert l["normals"] == 4 and len(rows) == 4, l
+assert rows["sub-P01_pet.tsv"]["clusters"] == len(c["result"]["clusters"]), (rows["sub-P01_pet.tsv"], c["result"])
+assert "--extend" in l["options"] and l["options"][l["options"].index("--min-cluster") + 1] == "8", l["options"]
+assert abs(l["per_10_normals"] - 10 * l["false_clusters"] / 4) < 1e-12, l
+PY
 # a rerun does nothing
 smk -n > "$work/run2.log" 2>&1
 grep -q "Nothing to be done" "$work/run2.log" || { cat "$work/run2.log"; fail "a rerun would redo work"; }
