@@ -13,6 +13,10 @@ planted truth, for vpm and for a baseline "individual image analysis".
    grid through the affine (nearest neighbour), written to RESULTS/baseline/sub-X_foci.nii.gz and
    scored as in 1.
 
+The benchmark's summary (bench/cohort/summary.py) shows by default, as the individual analysis,
+the stronger peer bench/cohort/voxelwise_elastix.py (elastix, scored by this file's score and
+summarise); the affine baseline stays here for older results (summary.py --individual affine).
+
 Metrics (D = detected voxels, T = planted voxels, native PET grid):
   sensitivity = |D & T| / |T|, precision = |D & T| / |D|, Dice = 2|D & T| / (|D| + |T|),
   Jaccard = |D & T| / |D | T|. "Volume overlap" (Hu et al., TVCG 2014: 94.2 % foci overlap for
@@ -233,21 +237,24 @@ def pct(x):
     return "n/a" if x is None else f"{100 * x:.1f} %"
 
 
-def markdown(report):
-    names = {"vpm": "vpm (elements)", "baseline": "individual voxel-wise after affine"}
+NAMES = {"vpm": "vpm (elements)", "baseline": "individual voxel-wise after affine"}
+
+
+def markdown(report, methods=("vpm", "baseline"), names=NAMES):
+    """Pooled and per-patient tables of report["summary"][m] and report["patients"][i][m], m in methods."""
     head = "| {} | volume overlap (sensitivity) | precision | Dice | foci found | false-positive clusters |\n" \
            "|---|---|---|---|---|---|\n"
     lines = [f"Pooled over {len(report['patients'])} patients (voxel counts summed), threshold z <= "
              f"-{report['threshold']}. Volume overlap = fraction of the planted foci volume covered "
              "by detected foci (sensitivity).\n\n", head.format("method")]
-    for m in ("vpm", "baseline"):
+    for m in methods:
         s = report["summary"][m]
         p = s["pooled"]
         lines.append(f"| {names[m]} | {pct(p['sensitivity'])} | {pct(p['precision'])} | {pct(p['dice'])} | "
                      f"{s['foci_found']}/{s['foci_planted']} | {s['false_positive_clusters']} |\n")
     lines += ["\nPer patient:\n\n", head.format("patient / method")]
     for r in report["patients"]:
-        for m in ("vpm", "baseline"):
+        for m in methods:
             s = r[m]
             lines.append(f"| {r['participant_id']} {names[m]} | {pct(s['sensitivity'])} | {pct(s['precision'])} | "
                          f"{pct(s['dice'])} | {s['foci_found']}/{s['foci_planted']} | "

@@ -38,6 +38,32 @@ def native_of(d, x, iterations=8):
     return y
 
 
+def parse_settings(text):
+    """[(fwhm, threshold, min_mm3, extend)] of "FWHM,THRESHOLD,MIN_MM3,EXTEND;..."."""
+    return [tuple(float(v) for v in item.split(",")) for item in text.split(";") if item.strip()]
+
+
+def smoother(mask, fwhm):
+    """img -> img smoothed by a Gaussian of FWHM mm (2 mm voxels), normalised inside mask, 0 outside."""
+    sig = fwhm / 2.3548 / 2.0  # voxels of 2 mm
+    weight = mask.astype(np.float64)
+
+    def smooth(img):
+        if sig <= 0:
+            return img
+        return np.where(mask, ndimage.gaussian_filter(img, sig) / np.maximum(ndimage.gaussian_filter(weight, sig), 1e-9), 0)
+    return smooth
+
+
+def detect(z, ok, thr, min_mm3, ext, voxel_mm3):
+    """Detected voxels: 26-connected clusters of ok voxels with z <= -extend (or -thr without extend)
+    holding >= min_mm3 of voxels at z <= -thr."""
+    comp, n = ndimage.label(ok & (z <= -(ext if ext > 0 else thr)), structure=ev.CONN26)
+    core = np.bincount(comp.ravel(), weights=(z <= -thr).ravel().astype(np.float64), minlength=n + 1)
+    keep = np.nonzero(core * voxel_mm3 >= min_mm3)[0]
+    return np.isin(comp, keep[keep > 0])
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--bids", required=True)
@@ -56,17 +82,9 @@ def main():
         img = np.zeros(mask.shape)
         img[mask] = v / v.mean()
         imgs[sid] = (img, d)
-    weight = mask.astype(np.float64)
     rows_out = []
-    for item in a.settings.split(";"):
-        fwhm, thr, min_mm3, ext = (float(v) for v in item.split(","))
-        sig = fwhm / 2.3548 / 2.0  # voxels of 2 mm
-
-        def smooth(img):
-            if sig <= 0:
-                return img
-            return np.where(mask, ndimage.gaussian_filter(img, sig) / np.maximum(ndimage.gaussian_filter(weight, sig), 1e-9), 0)
-
+    for fwhm, thr, min_mm3, ext in parse_settings(a.settings):
+        smooth = smoother(mask, fwhm)
         stack = np.array([smooth(imgs[s][0]) for s in normals])
         mean, std = stack.mean(0), stack.std(0, ddof=1)
         del stack
@@ -77,10 +95,7 @@ def main():
             img = smooth(img)
             z = np.zeros_like(img)
             z[ok] = (img[ok] - mean[ok]) / std[ok]
-            comp, n = ndimage.label(ok & (z <= -(ext if ext > 0 else thr)), structure=ev.CONN26)
-            core = np.bincount(comp.ravel(), weights=(z <= -thr).ravel().astype(np.float64), minlength=n + 1)
-            keep = np.nonzero(core * abs(np.linalg.det(aff2[:3, :3])) >= min_mm3)[0]
-            det = np.isin(comp, keep[keep > 0])
+            det = detect(z, ok, thr, min_mm3, ext, abs(np.linalg.det(aff2[:3, :3])))
             grid = nib.load(os.path.join(a.bids, sid, "pet", f"{sid}_pet.nii.gz"))  # header only
             shape = grid.shape[:3]
             vox = np.rint(ev.to_voxel(aff2, d.pull(ev.world(grid.affine, shape)))).astype(np.int64)

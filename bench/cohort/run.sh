@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
 # The planted-foci benchmark (docs/cohort.md): synthesise a cohort, run the whole workflow on it
-# with CORES cores, score the foci against the truth and summarise time and memory per rule.
+# with CORES cores, score the foci against the truth, run the individual-analysis peer (voxel-wise
+# after elastix, bench/cohort/voxelwise_elastix.py, CORES subjects at a time; skipped with a note when
+# elastix is not on PATH) and summarise time and memory per rule.
 # Usage: bench/cohort/run.sh OUT_DIR [NORMALS=50] [PATIENTS=10] [SEED=1]; env MORE_FEATURES (default
 # "{t1w: anat/T1w}"), REGISTER (the workflow's register settings, e.g. "{extra: '--dense-iterations 12',
 # force: labels}"; default the config's), MESH (the meshes, e.g. "{target_vertices: 15000}"), CORES (2),
-# BUILD_DIR (build). Writes OUT_DIR/summary.json and OUT_DIR/summary.md (and prints the latter).
+# BUILD_DIR (build), PEER_SETTINGS (the peer's --settings, default its own "8,3,340,0"). Writes
+# OUT_DIR/summary.json and OUT_DIR/summary.md (and prints the latter).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 out=$1
@@ -27,6 +30,15 @@ snakemake -s workflow/Snakefile --cores "$cores" --directory "$out" \
   --config bids="$out/bids" out="$out/results" "more_features=$more_features" vpm="$build/vpm" \
   ${REGISTER:+"register=$REGISTER"} ${MESH:+"mesh=$MESH"}
 workflow_s=$((SECONDS - synth_s))
+peer_s=
+if command -v elastix >/dev/null && command -v transformix >/dev/null; then
+  /usr/bin/python3 bench/cohort/voxelwise_elastix.py --bids "$out/bids" --results "$out/results" --jobs "$cores" \
+    ${PEER_SETTINGS:+--settings "$PEER_SETTINGS"}
+  peer_s=$((SECONDS - synth_s - workflow_s))
+else
+  echo "run.sh: elastix or transformix not on PATH: the individual analysis is the affine baseline" >&2
+fi
 /usr/bin/python3 bench/cohort/summary.py --results "$out/results" --synth-seconds "$synth_s" \
-  --workflow-seconds "$workflow_s" --cores "$cores" --out-json "$out/summary.json" --out-md "$out/summary.md"
+  --workflow-seconds "$workflow_s" --cores "$cores" ${peer_s:+--peer-seconds "$peer_s"} \
+  --out-json "$out/summary.json" --out-md "$out/summary.md"
 cat "$out/summary.md"
