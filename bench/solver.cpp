@@ -25,6 +25,9 @@
 #include "solver/hypre_run.hpp"
 #include "solver/options.hpp"
 #include "solver/peers.hpp"
+#include <boost/compute/container/vector.hpp>
+
+#include "core/device_cl.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/json.hpp"
@@ -76,16 +79,16 @@ Triad measure_triad(Device& dev) {
     r.device_gbs = r.host_gbs;
     return r;
   }
-  auto& q = dev.queue();
-  bc::vector<double> a(tn, dev.context()), b(B.data(), B.data() + tn, q), c(C.data(), C.data() + tn, q);
-  auto kernel = dev.kernel("solver", "triad", dev.description().kind == DeviceKind::cpu ? "-DCHUNKED" : "");
+  auto& q = dev.cl().queue;
+  bc::vector<double> a(tn, dev.cl().context), b(B.data(), B.data() + tn, q), c(C.data(), C.data() + tn, q);
+  auto kernel = dev.cl().kernel("solver", "triad", dev.description().kind == DeviceKind::cpu ? "-DCHUNKED" : "");
   kernel.set_args(tn, 0.5, a, b, c);
-  dev.launch(kernel, tn);
+  dev.cl().launch(kernel, tn);
   q.finish();
   t.clear();
   for (int k = 0; k < 10; ++k) {
     const Stopwatch w;
-    dev.launch(kernel, tn);
+    dev.cl().launch(kernel, tn);
     q.finish();
     t.push_back(w.seconds());
   }

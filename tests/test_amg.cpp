@@ -9,6 +9,7 @@
 #include "support/devices.hpp"
 #include "support/fixtures.hpp"
 #include "support/shapes.hpp"
+#include "core/device_cl.hpp"
 #include "vpm/amg.hpp"
 #include "vpm/error.hpp"
 #include "vpm/laplacian.hpp"
@@ -188,9 +189,9 @@ TEST_CASE("AMG-CG: Neumann and Dirichlet on host and device, device V-cycle equa
     h.apply(r.data(), z_host.data());
     detail::ClAmg dev_amg(*cl);
     dev_amg.upload(h, true);
-    boost::compute::vector<double> f(r.data(), r.data() + n, cl->queue()), z(n, cl->context());
+    boost::compute::vector<double> f(r.data(), r.data() + n, cl->cl().queue), z(n, cl->cl().context);
     dev_amg.apply(f, z);
-    boost::compute::copy(z.begin(), z.end(), z_dev.data(), cl->queue());
+    boost::compute::copy(z.begin(), z.end(), z_dev.data(), cl->cl().queue);
     CHECK(dev_amg.num_levels() == h.num_levels());
     CHECK((z_dev - z_host).norm() <= 1e-13 * z_host.norm());
   }

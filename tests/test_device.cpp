@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include "support/devices.hpp"
+#include "core/device_cl.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 
@@ -42,8 +43,8 @@ TEST_CASE("OpenCL device selection by type, index and name") {
   CHECK(dev->padded(1) == dev->local_size());
   CHECK(dev->padded(dev->local_size() + 1) == 2 * dev->local_size());
   // kernels are built once and cached: a second request reuses the program
-  auto k1 = dev->kernel("geometry", "tet_volumes");
-  auto k2 = dev->kernel("geometry", "tet_volumes");
+  auto k1 = dev->cl().kernel("geometry", "tet_volumes");
+  auto k2 = dev->cl().kernel("geometry", "tet_volumes");
   CHECK(k1.get_program() == k2.get_program());
-  CHECK_THROWS(dev->kernel("no_such_program", "x"));
+  CHECK_THROWS(dev->cl().kernel("no_such_program", "x"));
 }

@@ -19,6 +19,7 @@
 #include "support/kill.hpp"
 #include "support/process.hpp"
 #include "support/scratch.hpp"
+#include "core/device_cl.hpp"
 #include "vpm/ball_map.hpp"
 #include "vpm/cohort_view.hpp"
 #include "vpm/config.hpp"
@@ -308,7 +309,7 @@ TEST_CASE("faults: an OpenCL program that does not build is a DeviceError naming
   }
   const std::string source = "__kernel void broken(__global real* x) { x[0] = no_such_name_here; }\n";
   try {
-    dev->build_program("kernels/broken.cl", source);
+    dev->cl().build_program("kernels/broken.cl", source);
     FAIL("the broken program built");
   } catch (const DeviceError& e) {
     const std::string m = e.what();
@@ -318,7 +319,7 @@ TEST_CASE("faults: an OpenCL program that does not build is a DeviceError naming
     CHECK(m.find('\n') == std::string::npos);                 // one line
   }
   // the embedded programs still build: the failure is not cached as a success or a poison
-  CHECK_NOTHROW(dev->kernel("solver", "spmv"));
+  CHECK_NOTHROW(dev->cl().kernel("solver", "spmv"));
 }
 
 TEST_CASE("faults: vpm map exits 5 naming the program when the driver cannot build a kernel") {

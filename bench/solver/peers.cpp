@@ -14,9 +14,10 @@
 
 #include "linalg/solver_backend.hpp"
 #include "support/shapes.hpp"
+#include "core/device_cl.hpp"
 #include "vpm/error.hpp"
 #include "vpm/io.hpp"
-#include "vpm/laplacian.hpp"
+#include "linalg/laplacian_device.hpp"
 #include "vpm/timing.hpp"
 
 namespace vpm::bench {
@@ -64,15 +65,15 @@ struct VpmSpmv {
       if (!cl) {
         cl = std::make_unique<detail::ClBackend>(dev, p.n);
         auto L = const_cast<CotanLaplacian*>(&p.solver.laplacian());
-        cl->set_matrix(&L->device_row_ptr(), &L->device_col(), &L->device_values(), nullptr,
-                       nullptr, nullptr);
+        auto& buffers = L->device_state();
+        cl->set_matrix(&buffers.row_ptr, &buffers.col, &buffers.val, nullptr, nullptr, nullptr);
         cl->upload(detail::VP, p.b.data());
         cl->spmv(detail::VQ, detail::VP, false);
-        dev.queue().finish();
+        dev.cl().queue.finish();
       }
       const Stopwatch w;
       for (int k = 0; k < 20; ++k) cl->spmv(detail::VQ, detail::VP, false);
-      dev.queue().finish();
+      dev.cl().queue.finish();
       return w.seconds() / 20;
     }
     if (!host) {
@@ -205,7 +206,7 @@ std::vector<Peer> eigen_peers(const Problem& p, const std::vector<int>& thread_c
 
 std::string setup_viennacl(Device& dev) {
   try {
-    viennacl::ocl::setup_context(7, dev.context().get(), dev.cl_device().id(), dev.queue().get());
+    viennacl::ocl::setup_context(7, dev.cl().context.get(), dev.cl().device.id(), dev.cl().queue.get());
     viennacl::ocl::switch_context(7);
     return "ok";
   } catch (const std::exception& e) {

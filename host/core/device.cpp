@@ -1,4 +1,4 @@
-#include "vpm/device.hpp"
+#include "core/device_cl.hpp"
 
 #include <CL/cl.h>
 
@@ -180,10 +180,8 @@ std::shared_ptr<Device> Device::select(const std::string& spec_in) {
   std::shared_ptr<Device> d(new Device());
   d->host_ = false;
   d->desc_ = chosen->desc;
-  d->device_ = bc::device(chosen->id, true);
-  d->context_ = bc::context(d->device_);
-  d->queue_ = bc::command_queue(d->context_, d->device_);
   d->local_size_ = d->desc_.kind == DeviceKind::gpu ? 128 : 64;
+  d->cl_ = std::make_unique<detail::DeviceCl>(*d, bc::device(chosen->id, true));
   return d;
 }
 
@@ -197,6 +195,17 @@ Device& Device::current() {
   }
   return *dev;
 }
+
+Device::Device() = default;
+Device::~Device() = default;
+
+detail::DeviceCl& Device::cl() {
+  if (!cl_) throw std::logic_error("Device::cl() on the host device");
+  return *cl_;
+}
+
+detail::DeviceCl::DeviceCl(const Device& o, const bc::device& d)
+    : owner(o), device(d), context(device), queue(context, device) {}
 
 std::string Device::name() const { return host_ ? std::string("host") : desc_.label(); }
 
@@ -216,15 +225,17 @@ size_t Device::reduction_partials(size_t global) const {
 
 size_t Device::combine_items() const { return group_reduce() ? local_size_ : 1; }
 
-void Device::launch(bc::kernel& k, size_t n) {
-  size_t global = padded(n);
-  size_t local = local_size_;
-  queue_.enqueue_nd_range_kernel(k, 1, nullptr, &global, &local);
+namespace detail {
+
+void DeviceCl::launch(bc::kernel& k, size_t n) {
+  size_t global = owner.padded(n);
+  size_t local = owner.local_size();
+  queue.enqueue_nd_range_kernel(k, 1, nullptr, &global, &local);
 }
 
-bc::kernel Device::kernel(const std::string& program, const std::string& kernel_name,
-                          const std::string& options) {
-  const std::string key = program + "|" + options + (group_reduce() ? "|group" : "");
+bc::kernel DeviceCl::kernel(const std::string& program, const std::string& kernel_name,
+                            const std::string& options) {
+  const std::string key = program + "|" + options + (owner.group_reduce() ? "|group" : "");
   std::lock_guard<std::mutex> lock(programs_mutex_);
   auto it = programs_.find(key);
   if (it == programs_.end()) {
@@ -236,14 +247,14 @@ bc::kernel Device::kernel(const std::string& program, const std::string& kernel_
   return it->second.create_kernel(kernel_name);
 }
 
-bc::program Device::build_program(const std::string& name, const std::string& source, const std::string& options) {
+bc::program DeviceCl::build_program(const std::string& name, const std::string& source, const std::string& options) {
   const std::string preamble =
       "#pragma OPENCL EXTENSION cl_khr_fp64 : enable\n"
       "typedef double real;\ntypedef double2 real2;\ntypedef double3 real3;\ntypedef double4 real4;\n";
   const std::string common = detail::embedded_kernel_sources().at("common");  // kernels/common.clh
-  bc::program prog = bc::program::create_with_source(preamble + common + "\n#line 1\n" + source, context_);
-  std::string build_options = "-cl-std=CL1.2 -DLS=" + std::to_string(local_size_);
-  if (group_reduce()) build_options += " -DGROUP_REDUCE";
+  bc::program prog = bc::program::create_with_source(preamble + common + "\n#line 1\n" + source, context);
+  std::string build_options = "-cl-std=CL1.2 -DLS=" + std::to_string(owner.local_size());
+  if (owner.group_reduce()) build_options += " -DGROUP_REDUCE";
   if (!options.empty()) build_options += " " + options;
   try {
     prog.build(build_options);
@@ -256,11 +267,13 @@ bc::program Device::build_program(const std::string& name, const std::string& so
       if (line.empty()) continue;
       first += (kept++ ? " | " : "") + line;
     }
-    throw DeviceError(name + ": OpenCL build failed on " + this->name() + " (" + e.error_string() + ", options '" +
+    throw DeviceError(name + ": OpenCL build failed on " + owner.name() + " (" + e.error_string() + ", options '" +
                       build_options + "'): " + (first.empty() ? "(empty build log)" : first));
   }
   return prog;
 }
+
+}  // namespace detail
 
 void Device::check_buffer(unsigned long long bytes, const std::string& what) const {
   if (host_) return;

@@ -1,4 +1,5 @@
 #include "linalg/amg_device.hpp"
+#include "core/device_cl.hpp"
 
 #include <algorithm>
 
@@ -6,8 +7,8 @@ namespace vpm::detail {
 
 namespace bc = boost::compute;
 
-ClAmg::ClAmg(Device& dev) : dev_(dev), coarse_inv_(dev.context()) {
-  auto K = [&](const char* name) { return dev.kernel("amg", name); };
+ClAmg::ClAmg(Device& dev) : dev_(dev), coarse_inv_(dev.cl().context) {
+  auto K = [&](const char* name) { return dev.cl().kernel("amg", name); };
   k_first_ = K("amg_first");
   k_scale_ = K("amg_scale");
   k_sweep_ = K("amg_sweep");
@@ -26,7 +27,7 @@ void put(bc::vector<T>& dst, const std::vector<T>& src, bool resize, bc::command
 }  // namespace
 
 void ClAmg::upload_csr(const CsrMatrix& m, Csr& c, bool pattern) {
-  auto& q = dev_.queue();
+  auto& q = dev_.cl().queue;
   if (pattern) {
     put(c.row_ptr, m.row_ptr, true, q);
     put(c.col, m.col, true, q);
@@ -36,8 +37,8 @@ void ClAmg::upload_csr(const CsrMatrix& m, Csr& c, bool pattern) {
 }
 
 void ClAmg::upload(const AmgHierarchy& h, bool pattern) {
-  auto& q = dev_.queue();
-  auto& ctx = dev_.context();
+  auto& q = dev_.cl().queue;
+  auto& ctx = dev_.cl().context;
   pattern = pattern || num_levels() != h.num_levels();
   for (int l = 0; l < h.num_levels() && !pattern; ++l)
     pattern = levels_[l].n != h.level(l).A.rows || levels_[l].A.val.size() != std::max<size_t>(h.level(l).A.val.size(), 1) ||
@@ -74,34 +75,34 @@ void ClAmg::vcycle(int l, bc::vector<double>& f, bc::vector<double>& out) {
   const int n = lv.n;
   if (l + 1 == num_levels()) {
     k_dense_.set_args(n, coarse_inv_, f, out);
-    dev_.launch(k_dense_, n);
+    dev_.cl().launch(k_dense_, n);
     return;
   }
   const Csr& A = lv.A;
   bc::vector<double>*x = &lv.x, *r = &lv.r, *t = &lv.t;
   auto sweep = [&](bc::vector<double>& in, bc::vector<double>& o) {
     k_sweep_.set_args(n, A.row_ptr, A.col, A.val, lv.d, f, in, o);
-    dev_.launch(k_sweep_, n);
+    dev_.cl().launch(k_sweep_, n);
   };
   if (sweeps_ == 1) {
     k_first_.set_args(n, A.row_ptr, A.col, A.val, lv.d, f, *x, *r);
-    dev_.launch(k_first_, n);
+    dev_.cl().launch(k_first_, n);
   } else {
     k_scale_.set_args(n, lv.d, f, *x);
-    dev_.launch(k_scale_, n);
+    dev_.cl().launch(k_scale_, n);
     for (int s = 1; s < sweeps_; ++s) {
       sweep(*x, *t);
       std::swap(x, t);
     }
     k_residual_.set_args(n, A.row_ptr, A.col, A.val, f, *x, *r);
-    dev_.launch(k_residual_, n);
+    dev_.cl().launch(k_residual_, n);
   }
   Level& next = levels_[l + 1];
   k_spmv_.set_args(next.n, lv.R.row_ptr, lv.R.col, lv.R.val, *r, next.f);
-  dev_.launch(k_spmv_, next.n);
+  dev_.cl().launch(k_spmv_, next.n);
   vcycle(l + 1, next.f, next.out);
   k_prolong_.set_args(n, lv.P.row_ptr, lv.P.col, lv.P.val, next.out, *x, *t);
-  dev_.launch(k_prolong_, n);
+  dev_.cl().launch(k_prolong_, n);
   for (int s = 1; s < sweeps_; ++s) {
     sweep(*t, *r);
     std::swap(t, r);

@@ -5,6 +5,7 @@
 #include <boost/compute/container/vector.hpp>
 #include <vector>
 
+#include "core/device_cl.hpp"
 #include "vpm/amg.hpp"
 #include "vpm/device.hpp"
 

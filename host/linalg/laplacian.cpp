@@ -6,6 +6,7 @@
 #include <string>
 
 #include "core/device_alloc.hpp"
+#include "linalg/laplacian_device.hpp"
 #include "core/parallel.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
@@ -69,18 +70,6 @@ CsrMatrix cotan_laplacian(const Points& x, const Tets& tets) {
   k.setFromTriplets(trip.begin(), trip.end());
   return CsrMatrix::from_eigen(k);
 }
-
-struct CotanLaplacian::DeviceState {
-  explicit DeviceState(Device& d)
-      : tets(d.context()), row_ptr(d.context()), col(d.context()), inc_offset(d.context()),
-        inc_tet(d.context()), slot(d.context()), diag(d.context()), x(d.context()),
-        w(d.context()), vol(d.context()), val(d.context()), mass(d.context()) {}
-  Device* device = nullptr;
-  bc::vector<int> tets, row_ptr, col, inc_offset, inc_tet, slot, diag;
-  bc::vector<double> x, w, vol, val, mass;
-  bc::kernel k_weights, k_rows;
-  Incidence inc;  // kept on the host for the host assembly
-};
 
 CotanLaplacian::CotanLaplacian(int n, const Tets& tets) : tets_(tets) {
   if (n < 0) throw InputError("CotanLaplacian: negative vertex count");
@@ -160,7 +149,7 @@ void CotanLaplacian::assemble(Device& device, const Points& x) {
     device_ = &device;
     return;
   }
-  auto& q = device.queue();
+  auto& q = device.cl().queue;
   if (!dev_ || dev_->device != &device) {
     auto fresh = std::make_shared<DeviceState>(device);  // kept only once every buffer exists
     auto& s = *fresh;
@@ -175,19 +164,19 @@ void CotanLaplacian::assemble(Device& device, const Points& x) {
       s.row_ptr = bc::vector<int>(pattern_.row_ptr.begin(), pattern_.row_ptr.end(), q);
       s.col = bc::vector<int>(pattern_.col.begin(), pattern_.col.end(), q);
       s.inc_offset = bc::vector<int>(inc.offset.begin(), inc.offset.end(), q);
-      s.inc_tet = bc::vector<int>(std::max<size_t>(inc.tet_of.size(), 1), device.context());
+      s.inc_tet = bc::vector<int>(std::max<size_t>(inc.tet_of.size(), 1), device.cl().context);
       if (!inc.tet_of.empty()) bc::copy(inc.tet_of.begin(), inc.tet_of.end(), s.inc_tet.begin(), q);
-      s.slot = bc::vector<int>(std::max<size_t>(slot_.size(), 1), device.context());
+      s.slot = bc::vector<int>(std::max<size_t>(slot_.size(), 1), device.cl().context);
       if (!slot_.empty()) bc::copy(slot_.begin(), slot_.end(), s.slot.begin(), q);
       s.diag = bc::vector<int>(diag_.begin(), diag_.end(), q);
-      s.x = bc::vector<double>(static_cast<size_t>(n) * 3, device.context());
-      s.w = bc::vector<double>(std::max<size_t>(static_cast<size_t>(m) * 6, 1), device.context());
-      s.vol = bc::vector<double>(std::max<size_t>(static_cast<size_t>(m), 1), device.context());
-      s.val = bc::vector<double>(std::max<size_t>(pattern_.col.size(), 1), device.context());
-      s.mass = bc::vector<double>(static_cast<size_t>(n), device.context());
+      s.x = bc::vector<double>(static_cast<size_t>(n) * 3, device.cl().context);
+      s.w = bc::vector<double>(std::max<size_t>(static_cast<size_t>(m) * 6, 1), device.cl().context);
+      s.vol = bc::vector<double>(std::max<size_t>(static_cast<size_t>(m), 1), device.cl().context);
+      s.val = bc::vector<double>(std::max<size_t>(pattern_.col.size(), 1), device.cl().context);
+      s.mass = bc::vector<double>(static_cast<size_t>(n), device.cl().context);
     });
-    s.k_weights = device.kernel("laplacian", "tet_weights");
-    s.k_rows = device.kernel("laplacian", "assemble_rows");
+    s.k_weights = device.cl().kernel("laplacian", "tet_weights");
+    s.k_rows = device.cl().kernel("laplacian", "assemble_rows");
     s.k_weights.set_args(static_cast<int>(m), s.x, s.tets, s.w, s.vol);
     s.k_rows.set_args(n, s.row_ptr, s.inc_offset, s.inc_tet, s.tets, s.slot, s.diag, s.w, s.vol,
                       s.val, s.mass);
@@ -195,15 +184,15 @@ void CotanLaplacian::assemble(Device& device, const Points& x) {
   }
   auto& s = *dev_;
   bc::copy(x.data(), x.data() + x.size(), s.x.begin(), q);
-  if (m > 0) device.launch(s.k_weights, static_cast<size_t>(m));
-  device.launch(s.k_rows, static_cast<size_t>(n));
+  if (m > 0) device.cl().launch(s.k_weights, static_cast<size_t>(m));
+  device.cl().launch(s.k_rows, static_cast<size_t>(n));
   device_ = &device;
   host_stale_ = true;
 }
 
 void CotanLaplacian::download() const {
   if (!host_stale_) return;
-  auto& q = dev_->device->queue();
+  auto& q = dev_->device->cl().queue;
   if (!pattern_.val.empty())
     bc::copy(dev_->val.begin(), dev_->val.begin() + pattern_.val.size(), pattern_.val.begin(), q);
   if (mass_.size() > 0) bc::copy(dev_->mass.begin(), dev_->mass.end(), mass_.data(), q);
@@ -226,21 +215,9 @@ namespace {
 }
 }  // namespace
 
-bc::vector<int>& CotanLaplacian::device_row_ptr() {
+CotanLaplacian::DeviceState& CotanLaplacian::device_state() {
   if (!dev_) no_device_values();
-  return dev_->row_ptr;
-}
-bc::vector<int>& CotanLaplacian::device_col() {
-  if (!dev_) no_device_values();
-  return dev_->col;
-}
-bc::vector<double>& CotanLaplacian::device_values() {
-  if (!dev_) no_device_values();
-  return dev_->val;
-}
-bc::vector<double>& CotanLaplacian::device_mass() {
-  if (!dev_) no_device_values();
-  return dev_->mass;
+  return *dev_;
 }
 
 }  // namespace vpm

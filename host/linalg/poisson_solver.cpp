@@ -7,6 +7,7 @@
 
 #include "linalg/amg_state.hpp"
 #include "linalg/krylov.hpp"
+#include "linalg/laplacian_device.hpp"
 #include "linalg/krylov_block.hpp"
 #include "linalg/solver_backend.hpp"
 #include "vpm/device.hpp"
@@ -56,7 +57,8 @@ struct PoissonSolver::Impl {
   }
   static void give_matrix(HostBackend& b, CotanLaplacian& lap) { b.set_matrix(&lap.matrix(), nullptr); }
   static void give_matrix(ClBackend& b, CotanLaplacian& lap) {
-    b.set_matrix(&lap.device_row_ptr(), &lap.device_col(), &lap.device_values(), nullptr, nullptr, nullptr);
+    auto& s = lap.device_state();
+    b.set_matrix(&s.row_ptr, &s.col, &s.val, nullptr, nullptr, nullptr);
   }
   void set_matrix(CotanLaplacian& lap) {
     matrix = &lap;

@@ -7,6 +7,7 @@
 #include "linalg/csr_ops.hpp"
 #include "linalg/krylov.hpp"
 #include "linalg/solver_backend.hpp"
+#include "core/device_cl.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/timing.hpp"
@@ -79,14 +80,14 @@ SparseSolver::SparseSolver(Device& device, const CsrMatrix& a, SolverOptions opt
     s.host->set_matrix(&s.a, s.symmetric ? nullptr : &s.at);
     s.host->set_mask(s.mask);
   } else {
-    auto& q = device.queue();
+    auto& q = device.cl().queue;
     auto up_i = [&](const std::vector<int>& v) {
-      auto p = std::make_unique<bc::vector<int>>(std::max<size_t>(v.size(), 1), device.context());
+      auto p = std::make_unique<bc::vector<int>>(std::max<size_t>(v.size(), 1), device.cl().context);
       if (!v.empty()) bc::copy(v.begin(), v.end(), p->begin(), q);
       return p;
     };
     auto up_d = [&](const std::vector<double>& v) {
-      auto p = std::make_unique<bc::vector<double>>(std::max<size_t>(v.size(), 1), device.context());
+      auto p = std::make_unique<bc::vector<double>>(std::max<size_t>(v.size(), 1), device.cl().context);
       if (!v.empty()) bc::copy(v.begin(), v.end(), p->begin(), q);
       return p;
     };

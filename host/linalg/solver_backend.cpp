@@ -1,6 +1,7 @@
 #include "linalg/solver_backend.hpp"
 
 #include "linalg/amg_device.hpp"
+#include "core/device_cl.hpp"
 
 #include <cmath>
 #include <stdexcept>
@@ -193,8 +194,8 @@ double HostBackend::read_rr_now() { return s_[S_RR]; }
 // ---------------------------------------------------------------- OpenCL backend ----------
 
 ClBackend::ClBackend(Device& dev, int n)
-    : dev_(dev), n_(n), d_(dev.context()), partial_(dev.context()), s_(dev.context()),
-      mask_(dev.context()) {
+    : dev_(dev), n_(n), d_(dev.cl().context), partial_(dev.cl().context), s_(dev.cl().context),
+      mask_(dev.cl().context) {
   const size_t ls = dev.local_size();
   const unsigned cu = std::max(1u, dev.description().compute_units);
   const bool cpu = dev.description().kind == DeviceKind::cpu;
@@ -202,7 +203,7 @@ ClBackend::ClBackend(Device& dev, int n)
   // GPU: enough work items to fill the device, grid-stride.
   groups_ = cpu ? ls * std::max<size_t>(4, 2 * cu) : ls * std::max<size_t>(64, 4 * cu);
   const std::string opt = cpu ? "-DCHUNKED" : "";
-  auto K = [&](const char* name) { return dev.kernel("solver", name, opt); };
+  auto K = [&](const char* name) { return dev.cl().kernel("solver", name, opt); };
   k_spmv_ = K("spmv");
   k_spmv_t_ = K("spmv");
   k_spmv_scaled_ = K("spmv_scaled");
@@ -222,7 +223,7 @@ ClBackend::ClBackend(Device& dev, int n)
   k_pcg_p_ = K("pcg_update_p");
   k_spmv_block_ = K("spmv_block");
   const size_t nn = std::max(1, n);
-  auto& q = dev.queue();
+  auto& q = dev.cl().queue;
   const std::vector<double> zeros(std::max(nn, 2 * groups_), 0.0);
   const std::vector<char> czeros(nn, 0);
   for (int i = 0; i < kNumVecs; ++i) vec_.emplace_back(zeros.begin(), zeros.begin() + nn, q);
@@ -275,79 +276,79 @@ void ClBackend::set_matrix(bc::vector<int>* row_ptr, bc::vector<int>* col, bc::v
 }
 
 void ClBackend::set_mask(const std::vector<char>& mask) {
-  if (n_ > 0) bc::copy(mask.begin(), mask.end(), mask_.begin(), dev_.queue());
+  if (n_ > 0) bc::copy(mask.begin(), mask.end(), mask_.begin(), dev_.cl().queue);
 }
 
 void ClBackend::set_preconditioner(bool normal) {
-  dev_.launch(normal ? k_inv_rowsq_ : k_inv_diag_, n_);
+  dev_.cl().launch(normal ? k_inv_rowsq_ : k_inv_diag_, n_);
 }
 
 void ClBackend::upload(Vec v, const double* data) {
-  if (n_ > 0) bc::copy(data, data + n_, vec_[v].begin(), dev_.queue());
+  if (n_ > 0) bc::copy(data, data + n_, vec_[v].begin(), dev_.cl().queue);
 }
 void ClBackend::download(Vec v, double* data) {
-  if (n_ > 0) bc::copy(vec_[v].begin(), vec_[v].begin() + n_, data, dev_.queue());
+  if (n_ > 0) bc::copy(vec_[v].begin(), vec_[v].begin() + n_, data, dev_.cl().queue);
 }
 
 void ClBackend::residual(Vec r, Vec b, Vec x) {
   set_args_at(k_residual_, 5, vec_[b], vec_[x], vec_[r]);
-  dev_.launch(k_residual_, n_);
+  dev_.cl().launch(k_residual_, n_);
 }
 
 void ClBackend::spmv(Vec y, Vec x, bool transpose) {
   auto& k = transpose ? k_spmv_t_ : k_spmv_;
   set_args_at(k, 5, vec_[x], vec_[y]);
-  dev_.launch(k, n_);
+  dev_.cl().launch(k, n_);
 }
 
 void ClBackend::spmv_scaled(Vec y, Vec x) {
   set_args_at(k_spmv_scaled_, 6, vec_[x], vec_[y]);
-  dev_.launch(k_spmv_scaled_, n_);
+  dev_.cl().launch(k_spmv_scaled_, n_);
 }
 
 void ClBackend::finalize(Op op) {
   k_finalize_.set_arg(1, static_cast<int>(op));
-  dev_.launch(k_finalize_, dev_.combine_items());
+  dev_.cl().launch(k_finalize_, dev_.combine_items());
 }
 
 void ClBackend::dot(Vec a, Vec b, Op op) {
   set_args_at(k_dot_, 1, vec_[a], vec_[b]);
-  dev_.launch(k_dot_, groups_);
+  dev_.cl().launch(k_dot_, groups_);
   finalize(op);
 }
 
 void ClBackend::dot2(Vec a, Vec b, Vec c, Vec e, Op op) {
   set_args_at(k_dot2_, 1, vec_[a], vec_[b], vec_[c], vec_[e]);
-  dev_.launch(k_dot2_, groups_);
+  dev_.cl().launch(k_dot2_, groups_);
   finalize(op);
 }
 
 void ClBackend::cg_init() {
-  dev_.launch(k_cg_init_, groups_);
+  dev_.cl().launch(k_cg_init_, groups_);
   finalize(OP_CG_INIT);
 }
 void ClBackend::cg_update_xr() {
-  dev_.launch(k_cg_xr_, groups_);
+  dev_.cl().launch(k_cg_xr_, groups_);
   finalize(OP_CG_BETA);
 }
-void ClBackend::cg_update_p() { dev_.launch(k_cg_p_, n_); }
-void ClBackend::bicg_s() { dev_.launch(k_bicg_s_, n_); }
+void ClBackend::cg_update_p() { dev_.cl().launch(k_cg_p_, n_); }
+void ClBackend::bicg_s() { dev_.cl().launch(k_bicg_s_, n_); }
 void ClBackend::bicg_update() {
-  dev_.launch(k_bicg_update_, groups_);
+  dev_.cl().launch(k_bicg_update_, groups_);
   finalize(OP_BI_BETA);
 }
-void ClBackend::bicg_p() { dev_.launch(k_bicg_p_, n_); }
+void ClBackend::bicg_p() { dev_.cl().launch(k_bicg_p_, n_); }
 
 void ClBackend::precondition() { amg_->apply(vec_[VR], vec_[VZ]); }
-void ClBackend::pcg_update_xr() { dev_.launch(k_pcg_xr_, n_); }
-void ClBackend::pcg_update_p() { dev_.launch(k_pcg_p_, n_); }
+void ClBackend::pcg_update_xr() { dev_.cl().launch(k_pcg_xr_, n_); }
+void ClBackend::pcg_update_p() { dev_.cl().launch(k_pcg_p_, n_); }
 
 void ClBackend::copy(Vec dst, Vec src) {
-  if (n_ > 0) bc::copy(vec_[src].begin(), vec_[src].end(), vec_[dst].begin(), dev_.queue());
+  if (n_ > 0) bc::copy(vec_[src].begin(), vec_[src].end(), vec_[dst].begin(), dev_.cl().queue);
 }
 
 void ClBackend::request_rr(int ring) {
-  events_[ring] = dev_.queue().enqueue_read_buffer_async(s_.get_buffer(), S_RR * sizeof(double),
+  events_[ring] = dev_.cl().queue.enqueue_read_buffer_async(s_.get_buffer(), S_RR * sizeof(double),
                                                          sizeof(double), &ring_[ring]);
 }
 
@@ -358,7 +359,7 @@ double ClBackend::wait_rr(int ring) {
 
 double ClBackend::read_rr_now() {
   double r = 0;
-  dev_.queue().enqueue_read_buffer(s_.get_buffer(), S_RR * sizeof(double), sizeof(double), &r);
+  dev_.cl().queue.enqueue_read_buffer(s_.get_buffer(), S_RR * sizeof(double), sizeof(double), &r);
   return r;
 }
 

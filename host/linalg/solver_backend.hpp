@@ -7,6 +7,7 @@
 #include <boost/compute/event.hpp>
 #include <vector>
 
+#include "core/device_cl.hpp"
 #include "vpm/amg.hpp"
 #include "vpm/device.hpp"
 #include "vpm/sparse.hpp"

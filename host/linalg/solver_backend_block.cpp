@@ -1,5 +1,6 @@
 // The block products of the two solver backends (linalg/solver_backend.hpp).
 #include "linalg/solver_backend.hpp"
+#include "core/device_cl.hpp"
 
 #include <stdexcept>
 
@@ -40,7 +41,7 @@ void ClBackend::spmv_block(ClBackend* const* columns, int k, Vec y, Vec x) {
     kr.set_arg(6 + c, bc.vec_[x]);
     kr.set_arg(9 + c, bc.vec_[y]);
   }
-  b0.dev_.launch(kr, b0.n_);
+  b0.dev_.cl().launch(kr, b0.n_);
 }
 
 }  // namespace vpm::detail

@@ -9,6 +9,7 @@
 #include <unordered_map>
 
 #include "core/parallel.hpp"
+#include "core/device_cl.hpp"
 #include "vpm/device.hpp"
 #include "vpm/topology.hpp"
 
@@ -141,25 +142,25 @@ struct DeviceAdvector::Impl {
       : dev(d),
         n(static_cast<int>(b.size())),
         m(static_cast<int>(T.rows())),
-        kvel(d.kernel("moser", "moser_velocity")),
-        kupd(d.kernel("moser", "moser_rk_update")),
-        tets(T.data(), T.data() + T.size(), d.queue()),
-        nbr(nb.begin(), nb.end(), d.queue()),
-        hint(static_cast<size_t>(n), d.context()),
-        cell_start(d.context()),
-        stats(3 * static_cast<size_t>(n), d.context()),
-        boundary(b.begin(), b.end(), d.queue()),
-        grad(3 * static_cast<size_t>(n), d.context()),
-        rho0(static_cast<size_t>(n), d.context()),
-        x(3 * static_cast<size_t>(n), d.context()),
-        k1(3 * static_cast<size_t>(n), d.context()),
-        k2(3 * static_cast<size_t>(n), d.context()),
-        k3(3 * static_cast<size_t>(n), d.context()),
-        k4(3 * static_cast<size_t>(n), d.context()),
+        kvel(d.cl().kernel("moser", "moser_velocity")),
+        kupd(d.cl().kernel("moser", "moser_rk_update")),
+        tets(T.data(), T.data() + T.size(), d.cl().queue),
+        nbr(nb.begin(), nb.end(), d.cl().queue),
+        hint(static_cast<size_t>(n), d.cl().context),
+        cell_start(d.cl().context),
+        stats(3 * static_cast<size_t>(n), d.cl().context),
+        boundary(b.begin(), b.end(), d.cl().queue),
+        grad(3 * static_cast<size_t>(n), d.cl().context),
+        rho0(static_cast<size_t>(n), d.cl().context),
+        x(3 * static_cast<size_t>(n), d.cl().context),
+        k1(3 * static_cast<size_t>(n), d.cl().context),
+        k2(3 * static_cast<size_t>(n), d.cl().context),
+        k3(3 * static_cast<size_t>(n), d.cl().context),
+        k4(3 * static_cast<size_t>(n), d.cl().context),
         bmask(b),
-        inc_offset(d.context()),
-        inc_tet(d.context()),
-        psi(d.context()),
+        inc_offset(d.cl().context),
+        inc_tet(d.cl().context),
+        psi(d.cl().context),
         zero_copy(d.description().kind == DeviceKind::cpu) {}
 
   bc::kernel kinv;  // the inverse matrices from x on the device (set_field with psi)
@@ -172,7 +173,7 @@ struct DeviceAdvector::Impl {
   // lives unchanged: DeviceAdvector::release_field), a copy elsewhere.
   bc::buffer host_array(const void* p, size_t bytes, bool view) {
     const cl_mem_flags how = view && zero_copy ? CL_MEM_USE_HOST_PTR : CL_MEM_COPY_HOST_PTR;
-    return bc::buffer(dev.context(), bytes, CL_MEM_READ_ONLY | how, const_cast<void*>(p));
+    return bc::buffer(dev.cl().context, bytes, CL_MEM_READ_ONLY | how, const_cast<void*>(p));
   }
 };
 
@@ -185,40 +186,40 @@ DeviceAdvector::~DeviceAdvector() = default;
 void DeviceAdvector::set_field(const MoserField& f) {
   Impl& s = *impl_;
   s.upload_background(f);
-  bc::copy(f.grad.begin(), f.grad.end(), s.grad.begin(), s.dev.queue());
+  bc::copy(f.grad.begin(), f.grad.end(), s.grad.begin(), s.dev.cl().queue);
 }
 
 void DeviceAdvector::set_field(const MoserField& f, const Eigen::VectorXd& psi, const Points& x,
                                bool slide) {
   Impl& s = *impl_;
-  auto& q = s.dev.queue();
+  auto& q = s.dev.cl().queue;
   s.upload_background(f, true);
   if (s.inc_offset.size() != static_cast<size_t>(s.n) + 1) {
     const Incidence inc = vertex_tet_incidence(s.n, *f.tets);
     s.inc_offset = bc::vector<int>(inc.offset.begin(), inc.offset.end(), q);
     s.inc_tet = bc::vector<int>(inc.tet_of.begin(), inc.tet_of.end(), q);
-    s.psi = bc::vector<double>(static_cast<size_t>(s.n), s.dev.context());
-    s.kvg = s.dev.kernel("moser", "moser_vertex_gradients");
-    s.kinv = s.dev.kernel("moser", "moser_tet_inverses");
+    s.psi = bc::vector<double>(static_cast<size_t>(s.n), s.dev.cl().context);
+    s.kvg = s.dev.cl().kernel("moser", "moser_vertex_gradients");
+    s.kinv = s.dev.cl().kernel("moser", "moser_tet_inverses");
   }
   bc::copy(psi.data(), psi.data() + psi.size(), s.psi.begin(), q);
   bc::copy(x.data(), x.data() + x.size(), s.x.begin(), q);
   const size_t inv_bytes = 12 * sizeof(double) * static_cast<size_t>(std::max(1, s.m));
   if (s.inv.get() == nullptr || s.inv.size() != inv_bytes || s.inv_is_view) {
-    s.inv = bc::buffer(s.dev.context(), inv_bytes);
+    s.inv = bc::buffer(s.dev.cl().context, inv_bytes);
     s.inv_is_view = false;
   }
   s.kinv.set_args(s.m, s.x, s.tets, s.inv);
-  s.dev.launch(s.kinv, static_cast<size_t>(s.m));
+  s.dev.cl().launch(s.kinv, static_cast<size_t>(s.m));
   s.kvg.set_args(s.n, s.inc_offset, s.inc_tet, s.tets, s.inv, s.psi, s.boundary, static_cast<int>(slide),
                  s.x, s.grad);
-  s.dev.launch(s.kvg, static_cast<size_t>(s.n));
+  s.dev.cl().launch(s.kvg, static_cast<size_t>(s.n));
 }
 
 std::vector<double> DeviceAdvector::gradients() {
   Impl& s = *impl_;
   std::vector<double> g(s.grad.size());
-  bc::copy(s.grad.begin(), s.grad.end(), g.begin(), s.dev.queue());
+  bc::copy(s.grad.begin(), s.grad.end(), g.begin(), s.dev.cl().queue);
   return g;
 }
 
@@ -234,13 +235,13 @@ void DeviceAdvector::release_field() {
 std::vector<double> DeviceAdvector::inverses() {
   Impl& s = *impl_;
   std::vector<double> v(12 * static_cast<size_t>(s.m));
-  if (!v.empty()) s.dev.queue().enqueue_read_buffer(s.inv, 0, v.size() * sizeof(double), v.data());
+  if (!v.empty()) s.dev.cl().queue.enqueue_read_buffer(s.inv, 0, v.size() * sizeof(double), v.data());
   return v;
 }
 
 void DeviceAdvector::Impl::upload_background(const MoserField& f, bool inverses_here) {
   Impl& s = *this;
-  auto& q = s.dev.queue();
+  auto& q = s.dev.cl().queue;
   // the last round's buffers go first: the new ones are not made beside them (12 doubles a tet)
   s.cell_tets = bc::buffer();
   static const double no_tet[12] = {};
@@ -265,7 +266,7 @@ void DeviceAdvector::Impl::upload_background(const MoserField& f, bool inverses_
 void DeviceAdvector::advect(const AdvectParams& prm, Points& x, std::vector<int>& hint,
                             AdvectStats* stats) {
   Impl& s = *impl_;
-  auto& q = s.dev.queue();
+  auto& q = s.dev.cl().queue;
   bc::copy(x.data(), x.data() + x.size(), s.x.begin(), q);
   bc::copy(hint.begin(), hint.end(), s.hint.begin(), q);
   std::vector<int> zeros(3 * static_cast<size_t>(s.n), 0);
@@ -284,7 +285,7 @@ void DeviceAdvector::advect(const AdvectParams& prm, Points& x, std::vector<int>
   auto stage = [&](bc::vector<double>& kin, double c, double t, bc::vector<double>& out) {
     set_args_at(kv, 2, kin, c, t);
     kv.set_arg(22, out);
-    s.dev.launch(kv, static_cast<size_t>(s.n));
+    s.dev.cl().launch(kv, static_cast<size_t>(s.n));
   };
   for (int st = 0; st < prm.steps; ++st) {
     const double t0 = st * dt;
@@ -292,7 +293,7 @@ void DeviceAdvector::advect(const AdvectParams& prm, Points& x, std::vector<int>
     stage(s.k1, 0.5 * dt, t0 + 0.5 * dt, s.k2);
     stage(s.k2, 0.5 * dt, t0 + 0.5 * dt, s.k3);
     stage(s.k3, dt, t0 + dt, s.k4);
-    s.dev.launch(ku, static_cast<size_t>(s.n));
+    s.dev.cl().launch(ku, static_cast<size_t>(s.n));
   }
   bc::copy(s.x.begin(), s.x.end(), x.data(), q);
   bc::copy(s.hint.begin(), s.hint.end(), hint.begin(), q);

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <map>
 
+#include "core/device_cl.hpp"
 #include "vpm/device.hpp"
 
 namespace vpm::detail {
@@ -87,15 +88,15 @@ struct DevicePolisher::Impl {
   bc::vector<double> x, target, sg, b, r, q, dx, p, s, partial, S;
   bc::kernel k_setup, k_apply, k_apply_t, k_scalars, k_update, k_update_p;
   Impl(Device& d, int n_, int m_, int rows_)
-      : dev(d), n(n_), m(m_), rows(rows_), tets(d.context()), inc_ptr(d.context()), inc_slot(d.context()),
-        anchor(d.context()), anchor_row(d.context()), group_ptr(d.context()), group_vertex(d.context()), group_offset(d.context()),
-        group_matrix(d.context()),
-        freedom(d.context()), x(d.context()), target(d.context()), sg(d.context()), b(d.context()),
-        r(d.context()), q(d.context()), dx(d.context()), p(d.context()), s(d.context()),
-        partial(d.context()), S(d.context()) {}
+      : dev(d), n(n_), m(m_), rows(rows_), tets(d.cl().context), inc_ptr(d.cl().context), inc_slot(d.cl().context),
+        anchor(d.cl().context), anchor_row(d.cl().context), group_ptr(d.cl().context), group_vertex(d.cl().context), group_offset(d.cl().context),
+        group_matrix(d.cl().context),
+        freedom(d.cl().context), x(d.cl().context), target(d.cl().context), sg(d.cl().context), b(d.cl().context),
+        r(d.cl().context), q(d.cl().context), dx(d.cl().context), p(d.cl().context), s(d.cl().context),
+        partial(d.cl().context), S(d.cl().context) {}
   void scalars(int op) {
     k_scalars.set_arg(1, op);
-    dev.launch(k_scalars, dev.combine_items());
+    dev.cl().launch(k_scalars, dev.combine_items());
   }
 };
 
@@ -125,7 +126,7 @@ DevicePolisher::DevicePolisher(Device& dev, const Tets& tets, int n, const std::
   const int m = static_cast<int>(tets.rows()), rows = m + static_cast<int>(holds.size());
   impl_ = std::make_unique<Impl>(dev, n, m, rows);
   Impl& I = *impl_;
-  auto& queue = dev.queue();
+  auto& queue = dev.cl().queue;
   const bool cpu = dev.description().kind == DeviceKind::cpu;
   const size_t ls = dev.local_size();
   const unsigned cu = std::max(1u, dev.description().compute_units);
@@ -168,34 +169,34 @@ DevicePolisher::DevicePolisher(Device& dev, const Tets& tets, int n, const std::
   I.group_offset = bc::vector<int>(go.begin(), go.end(), queue);
   I.group_matrix = bc::vector<double>(gm.begin(), gm.end(), queue);
   const size_t n3 = 3 * static_cast<size_t>(std::max(n, 1)), mm = static_cast<size_t>(std::max(rows, 1));
-  I.x = bc::vector<double>(n3, dev.context());
-  I.target = bc::vector<double>(mm, dev.context());
-  I.sg = bc::vector<double>(12 * mm, dev.context());
-  I.b = bc::vector<double>(mm, dev.context());
-  I.r = bc::vector<double>(mm, dev.context());
-  I.q = bc::vector<double>(mm, dev.context());
-  I.dx = bc::vector<double>(n3, dev.context());
-  I.p = bc::vector<double>(n3, dev.context());
-  I.s = bc::vector<double>(n3, dev.context());
-  I.partial = bc::vector<double>(2 * I.G, dev.context());
-  I.S = bc::vector<double>(kPolishSlots, dev.context());
+  I.x = bc::vector<double>(n3, dev.cl().context);
+  I.target = bc::vector<double>(mm, dev.cl().context);
+  I.sg = bc::vector<double>(12 * mm, dev.cl().context);
+  I.b = bc::vector<double>(mm, dev.cl().context);
+  I.r = bc::vector<double>(mm, dev.cl().context);
+  I.q = bc::vector<double>(mm, dev.cl().context);
+  I.dx = bc::vector<double>(n3, dev.cl().context);
+  I.p = bc::vector<double>(n3, dev.cl().context);
+  I.s = bc::vector<double>(n3, dev.cl().context);
+  I.partial = bc::vector<double>(2 * I.G, dev.cl().context);
+  I.S = bc::vector<double>(kPolishSlots, dev.cl().context);
   for (auto* v : {&I.x, &I.target, &I.sg, &I.b, &I.r, &I.q, &I.dx, &I.p, &I.s, &I.partial, &I.S})
     bc::fill(v->begin(), v->end(), 0.0, queue);
   if (!hold_sg.empty()) bc::copy(hold_sg.begin(), hold_sg.end(), I.sg.begin() + 12 * static_cast<size_t>(m), queue);
 
-  I.k_setup = dev.kernel("polish", "polish_setup");
+  I.k_setup = dev.cl().kernel("polish", "polish_setup");
   I.k_setup.set_args(m, I.tets, I.x, I.target, I.sg, I.b, I.r);
-  I.k_apply = dev.kernel("polish", "polish_apply");
+  I.k_apply = dev.cl().kernel("polish", "polish_apply");
   I.k_apply.set_args(rows, I.tets, I.sg, I.p, I.q, I.partial);
-  I.k_apply_t = dev.kernel("polish", "polish_apply_t");
+  I.k_apply_t = dev.cl().kernel("polish", "polish_apply_t");
   I.k_apply_t.set_args(n, m, I.inc_ptr, I.inc_slot, I.sg, I.r, I.freedom, I.x, I.s, I.partial, I.anchor,
                        I.anchor_row, I.group_ptr, I.group_vertex, I.group_offset, I.group_matrix);
-  I.k_scalars = dev.kernel("polish", "polish_scalars");
+  I.k_scalars = dev.cl().kernel("polish", "polish_scalars");
   I.k_scalars.set_arg(0, static_cast<int>(dev.reduction_partials(I.G)));
   set_args_at(I.k_scalars, 2, I.partial, I.S);
-  I.k_update = dev.kernel("polish", "polish_update");
+  I.k_update = dev.cl().kernel("polish", "polish_update");
   I.k_update.set_args(3 * n, rows, I.S, I.dx, I.p, I.r, I.q);
-  I.k_update_p = dev.kernel("polish", "polish_update_p");
+  I.k_update_p = dev.cl().kernel("polish", "polish_update_p");
   I.k_update_p.set_args(3 * n, I.S, I.p, I.s);
 }
 
@@ -203,7 +204,7 @@ DevicePolisher::~DevicePolisher() = default;
 
 PolishDirection DevicePolisher::direction(const Points& x, const Eigen::VectorXd& target, int iterations) {
   Impl& I = *impl_;
-  auto& queue = I.dev.queue();
+  auto& queue = I.dev.cl().queue;
   PolishDirection res;
   res.dx = Points::Zero(I.n, 3);
   if (I.n == 0 || I.m == 0) return res;
@@ -211,19 +212,19 @@ PolishDirection DevicePolisher::direction(const Points& x, const Eigen::VectorXd
   bc::copy(target.data(), target.data() + I.m, I.target.begin(), queue);
   bc::fill(I.dx.begin(), I.dx.end(), 0.0, queue);
   if (I.rows > I.m) bc::fill(I.r.begin() + I.m, I.r.begin() + I.rows, 0.0, queue);  // the holds' residuals
-  I.dev.launch(I.k_setup, static_cast<size_t>(I.m));  // sg, b, r = b of the tets' rows
-  I.dev.launch(I.k_apply_t, I.G);                     // s = P A^T r; |s|^2, |b|^2
+  I.dev.cl().launch(I.k_setup, static_cast<size_t>(I.m));  // sg, b, r = b of the tets' rows
+  I.dev.cl().launch(I.k_apply_t, I.G);                     // s = P A^T r; |s|^2, |b|^2
   I.scalars(P_OP_INIT);
-  I.dev.launch(I.k_update_p, I.G);  // p = s
+  I.dev.cl().launch(I.k_update_p, I.G);  // p = s
   for (int it = 0; it < iterations; ++it) {
-    I.dev.launch(I.k_apply, I.G);  // q = A p; |q|^2
+    I.dev.cl().launch(I.k_apply, I.G);  // q = A p; |q|^2
     I.scalars(P_OP_ALPHA);
-    I.dev.launch(I.k_update, I.G);   // dx += alpha p; r -= alpha q
-    I.dev.launch(I.k_apply_t, I.G);  // s = P A^T r; |s|^2, |r|^2
+    I.dev.cl().launch(I.k_update, I.G);   // dx += alpha p; r -= alpha q
+    I.dev.cl().launch(I.k_apply_t, I.G);  // s = P A^T r; |s|^2, |r|^2
     I.scalars(P_OP_BETA);
-    I.dev.launch(I.k_update_p, I.G);  // p = s + beta p
+    I.dev.cl().launch(I.k_update_p, I.G);  // p = s + beta p
   }
-  if (iterations == 0) I.dev.launch(I.k_apply_t, I.G);  // |r|^2 = |b|^2
+  if (iterations == 0) I.dev.cl().launch(I.k_apply_t, I.G);  // |r|^2 = |b|^2
   I.scalars(P_OP_RR);
   bc::copy(I.dx.begin(), I.dx.begin() + 3 * static_cast<size_t>(I.n), res.dx.data(), queue);
   double sc[kPolishSlots];

@@ -6,6 +6,7 @@
 #include <boost/compute/container/vector.hpp>
 
 #include "map/untangle_problem.hpp"
+#include "core/device_cl.hpp"
 #include "vpm/device.hpp"
 
 namespace vpm {
@@ -21,16 +22,16 @@ struct UntangleDeviceEval::State {
   std::vector<double> he, hd;
 
   State(Device& device, int num_vertices, int active, int free)
-      : dev(device), n(num_vertices), m(active), nfree(free), tv(device.context()), off(device.context()),
-        slot(device.context()), rinv(device.context()), w(device.context()), x(device.context()),
-        e(device.context()), d(device.context()), gt(device.context()), g(device.context()) {}
+      : dev(device), n(num_vertices), m(active), nfree(free), tv(device.cl().context), off(device.cl().context),
+        slot(device.cl().context), rinv(device.cl().context), w(device.cl().context), x(device.cl().context),
+        e(device.cl().context), d(device.cl().context), gt(device.cl().context), g(device.cl().context) {}
 };
 
 UntangleDeviceEval::UntangleDeviceEval(Device& device, const UntangleProblem& p, int num_vertices)
     : s_(std::make_unique<State>(device, num_vertices, static_cast<int>(p.active.size()),
                                  static_cast<int>(p.free_vertices.size()))) {
   State& s = *s_;
-  auto& q = s.dev.queue();
+  auto& q = s.dev.cl().queue;
   const Tets& t = *p.tets;
   const int m = s.m, nfree = s.nfree;
   std::vector<int> htv(4 * static_cast<size_t>(m));
@@ -63,8 +64,8 @@ UntangleDeviceEval::UntangleDeviceEval(Device& device, const UntangleProblem& p,
   s.g.resize(std::max(3 * nfree, 1), q);
   s.he.resize(m);
   s.hd.resize(m);
-  s.ktet = s.dev.kernel("untangle", "untangle_tet");
-  s.kgather = s.dev.kernel("untangle", "untangle_gather");
+  s.ktet = s.dev.cl().kernel("untangle", "untangle_tet");
+  s.kgather = s.dev.cl().kernel("untangle", "untangle_gather");
   // eps (1) and want_grad (3) are set per evaluation
   s.ktet.set_args(m, 0.0, p.theta, 0, s.tv, s.rinv, s.w, s.x, s.e, s.d, s.gt);
   s.kgather.set_args(nfree, s.off, s.slot, s.gt, s.g);
@@ -74,13 +75,13 @@ UntangleDeviceEval::~UntangleDeviceEval() = default;
 
 UntangleEval UntangleDeviceEval::run(const Points& xs, double eps, Eigen::VectorXd* grad) {
   State& s = *s_;
-  auto& q = s.dev.queue();
+  auto& q = s.dev.cl().queue;
   q.enqueue_write_buffer(s.x.get_buffer(), 0, sizeof(double) * 3 * s.n, xs.data());
   s.ktet.set_arg(1, eps);
   s.ktet.set_arg(3, grad ? 1 : 0);
-  s.dev.launch(s.ktet, s.m);
+  s.dev.cl().launch(s.ktet, s.m);
   if (grad && s.nfree > 0) {
-    s.dev.launch(s.kgather, s.nfree);
+    s.dev.cl().launch(s.kgather, s.nfree);
     q.enqueue_read_buffer_async(s.g.get_buffer(), 0, sizeof(double) * 3 * s.nfree, grad->data());
   }
   q.enqueue_read_buffer_async(s.e.get_buffer(), 0, sizeof(double) * s.m, s.he.data());

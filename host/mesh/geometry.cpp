@@ -6,6 +6,7 @@
 
 #include "core/parallel.hpp"
 #include "mesh/device_volumes.hpp"
+#include "core/device_cl.hpp"
 #include "vpm/device.hpp"
 #include "vpm/topology.hpp"
 

@@ -5,6 +5,7 @@
 #include <boost/compute/container/vector.hpp>
 
 #include "register/registration_steps.hpp"
+#include "core/device_cl.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/mesh_order.hpp"
@@ -123,7 +124,7 @@ void advect_device(Device& dev, Points& x, const std::vector<DivFreeField>& f, i
   std::vector<double> soa(3 * np, 0.0);
   for (size_t i = 0; i < n; ++i)
     for (int c = 0; c < 3; ++c) soa[c * np + i] = x(order[i], c);
-  auto& q = dev.queue();
+  auto& q = dev.cl().queue;
   bc::vector<double> dxs(soa.begin(), soa.begin() + np, q);
   bc::vector<double> dys(soa.begin() + np, soa.begin() + 2 * np, q);
   bc::vector<double> dzs(soa.begin() + 2 * np, soa.end(), q);
@@ -131,11 +132,11 @@ void advect_device(Device& dev, Points& x, const std::vector<DivFreeField>& f, i
   bc::vector<int> dcells(pk.cells.begin(), pk.cells.end(), q);
   bc::vector<double> dc(pk.centres.begin(), pk.centres.end(), q);
   bc::vector<double> da(pk.coefs.begin(), pk.coefs.end(), q);
-  auto k = dev.kernel("register", "rk4_advect_soa", "-DLANES=" + std::to_string(lanes));
+  auto k = dev.cl().kernel("register", "rk4_advect_soa", "-DLANES=" + std::to_string(lanes));
   k.set_args(static_cast<int>(nv), dxs, dys, dzs, steps, 1.0 / steps, dslot, dcells, pk.origin(0), pk.origin(1),
              pk.origin(2), pk.side, pk.g, pk.reach, dc, da, f[0].lambda, kFieldCut,
              f[0].kernel == RbfKernel::Tangent ? 1 : 0);
-  dev.launch(k, nv);
+  dev.cl().launch(k, nv);
   bc::copy(dxs.begin(), dxs.end(), soa.begin(), q);
   bc::copy(dys.begin(), dys.end(), soa.begin() + np, q);
   bc::copy(dzs.begin(), dzs.end(), soa.begin() + 2 * np, q);

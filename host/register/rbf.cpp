@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "register/rbf_gram.hpp"
+#include "core/device_cl.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 
@@ -95,7 +96,7 @@ Points evaluate(const DivFreeField& field, const Points& points) {
 
 Points evaluate(Device& dev, const DivFreeField& field, const Points& points) {
   if (dev.is_host() || points.rows() == 0) return evaluate(field, points);
-  auto& q = dev.queue();
+  auto& q = dev.cl().queue;
   const Eigen::Index nc = field.centres.rows();
   // Empty buffers are not allowed: pad with one zero centre.
   Points c = nc ? field.centres : Points::Zero(1, 3);
@@ -103,11 +104,11 @@ Points evaluate(Device& dev, const DivFreeField& field, const Points& points) {
   bc::vector<double> dx(points.data(), points.data() + points.size(), q);
   bc::vector<double> dc(c.data(), c.data() + c.size(), q);
   bc::vector<double> da(a.data(), a.data() + a.size(), q);
-  bc::vector<double> du(static_cast<size_t>(points.size()), dev.context());
-  auto k = dev.kernel("register", "eval_field");
+  bc::vector<double> du(static_cast<size_t>(points.size()), dev.cl().context);
+  auto k = dev.cl().kernel("register", "eval_field");
   k.set_args(static_cast<int>(points.rows()), dx, static_cast<int>(nc), dc, da, field.lambda,
              field.kernel == RbfKernel::Tangent ? 1 : 0, du);
-  dev.launch(k, static_cast<size_t>(points.rows()));
+  dev.cl().launch(k, static_cast<size_t>(points.rows()));
   Points out(points.rows(), 3);
   bc::copy(du.begin(), du.end(), out.data(), q);
   return out;

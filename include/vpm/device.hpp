@@ -9,25 +9,19 @@
 //
 // No match is an InputError listing the devices; there is never a silent fallback.
 // OpenCL devices must support double precision.
-#include <boost/compute/command_queue.hpp>
-#include <boost/compute/context.hpp>
-#include <boost/compute/kernel.hpp>
-#include <boost/compute/program.hpp>
-#include <map>
-#include <mutex>
-#include <optional>
+//
+// This header names no OpenCL type: the context, queue, programs and launches live behind
+// Device::cl() in the library's private host/core/device_cl.hpp (pimpl), so a program that
+// links vpm needs neither Boost.Compute nor the OpenCL headers to select and describe devices.
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 namespace vpm {
 
-/// Sets arguments first, first + 1, ... of kernel `k` to `args`: a run in the middle or at the
-/// end of a kernel's argument list (Boost.Compute's k.set_args(...) sets a run from 0).
-template <class... T>
-void set_args_at(boost::compute::kernel& k, size_t first, const T&... args) {
-  size_t i = first;
-  (k.set_arg(i++, args), ...);
+namespace detail {
+struct DeviceCl;  // host/core/device_cl.hpp: the OpenCL side of a Device
 }
 
 /// What kind of processor a Device is: the host (vpm's C++ code, no OpenCL) or an OpenCL
@@ -71,29 +65,17 @@ class Device {
 
   Device(const Device&) = delete;
   Device& operator=(const Device&) = delete;
+  ~Device();
 
   bool is_host() const { return host_; }
   /// "host" or "P:D platform: device".
   std::string name() const;
   const DeviceDescription& description() const { return desc_; }
 
-  /// OpenCL objects (precondition: !is_host()).
-  boost::compute::context& context() { return context_; }
-  boost::compute::command_queue& queue() { return queue_; }
-  boost::compute::device& cl_device() { return device_; }
-
-  /// Kernel `kernel_name` of kernels/<program>.cl. Programs are built once per
-  /// (program, options) and cached for the life of the device. The build prepends the fp64
-  /// pragma and `#define real double`; `options` adds -D definitions. A build failure throws
-  /// DeviceError (see build_program).
-  boost::compute::kernel kernel(const std::string& program, const std::string& kernel_name,
-                                const std::string& options = "");
-  /// Builds `source` as program `name` (e.g. "kernels/solver.cl") the way kernel() builds the
-  /// embedded ones: fp64 preamble and kernels/common.clh first, -cl-std=CL1.2 -DLS=<local size>
-  /// [-DGROUP_REDUCE] and `options`. Not cached. A build failure throws DeviceError, one line:
-  /// the program, the device, the options and the first lines of the compiler's log.
-  boost::compute::program build_program(const std::string& name, const std::string& source,
-                                        const std::string& options = "");
+  /// The OpenCL side: context, queue, kernels (built and cached per program and options) and
+  /// launches (host/core/device_cl.hpp, private to the library, its tests and benchmarks).
+  /// Precondition: !is_host() (throws std::logic_error on the host device).
+  detail::DeviceCl& cl();
 
   /// Throws DeviceError naming `what` when one buffer of `bytes` exceeds what this device allows
   /// (CL_DEVICE_MAX_MEM_ALLOC_SIZE) or its global memory. Does nothing on the host.
@@ -103,8 +85,6 @@ class Device {
   size_t local_size() const { return local_size_; }
   /// `n` rounded up to a multiple of local_size() (at least one group).
   size_t padded(size_t n) const;
-  /// Enqueues `k` over `n` work items (global size padded; kernels must guard `i < n`).
-  void launch(boost::compute::kernel& k, size_t n);
 
   /// Two-stage reductions (kernels/common.clh): true when each work group sums its work
   /// items' partials in local memory before writing (GPUs), false when every work item writes
@@ -120,16 +100,12 @@ class Device {
   size_t combine_items() const;
 
  private:
-  Device() = default;
+  Device();
   bool host_ = true;
   DeviceDescription desc_;
-  boost::compute::device device_;
-  boost::compute::context context_;
-  boost::compute::command_queue queue_;
   size_t local_size_ = 64;
   std::optional<bool> group_reduce_override_;
-  std::map<std::string, boost::compute::program> programs_;
-  std::mutex programs_mutex_;  ///< kernel() may be called from several threads
+  std::unique_ptr<detail::DeviceCl> cl_;  ///< null on the host device
 };
 
 }  // namespace vpm

@@ -12,7 +12,6 @@
 // connected mesh. Weights can be negative for obtuse dihedral angles (3-D cotangent weights).
 // Tets are used with their signed volume as given (a flat tet gives inf/NaN: validate first).
 #include <Eigen/Core>
-#include <boost/compute/container/vector.hpp>
 #include <memory>
 #include <vector>
 
@@ -46,7 +45,7 @@ class CotanLaplacian {
 
   /// Recomputes K and the lumped mass for `vertices` (n x 3, same length unit throughout) on
   /// `device`. Host device: fills the host values. OpenCL device: the values and mass stay on
-  /// the device (device_values(), device_mass()); the host copies (matrix(), mass()) are
+  /// the device (device_state()); the host copies (matrix(), mass()) are
   /// downloaded lazily on first access after an assemble. The device must outlive this object
   /// until the next assemble on another device.
   void assemble(Device& device, const Points& vertices);
@@ -58,12 +57,11 @@ class CotanLaplacian {
   /// (units^3), length n; sums to the total volume.
   const Eigen::VectorXd& mass() const;
 
-  /// Device buffers of the last OpenCL assemble (precondition: the last assemble ran on an
-  /// OpenCL device): row_ptr (n+1 ints), col (nnz ints), val (nnz doubles), mass (n doubles).
-  boost::compute::vector<int>& device_row_ptr();
-  boost::compute::vector<int>& device_col();
-  boost::compute::vector<double>& device_values();
-  boost::compute::vector<double>& device_mass();
+  /// The OpenCL buffers (row_ptr n+1 ints, col nnz ints, val nnz doubles, mass n doubles) of the
+  /// last OpenCL assemble, defined in the library's private host/linalg/laplacian_device.hpp.
+  /// Throws std::logic_error when no assemble ran on an OpenCL device.
+  struct DeviceState;
+  DeviceState& device_state();
   /// The device of the last assemble (nullptr before any assemble).
   Device* device() const { return device_; }
 
@@ -76,7 +74,6 @@ class CotanLaplacian {
   const std::vector<int>& diagonal_slots() const { return diag_; }
 
  private:
-  struct DeviceState;
   void download() const;
   Tets tets_;
   mutable CsrMatrix pattern_;  // values = last assembled K (downloaded lazily)
