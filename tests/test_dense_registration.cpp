@@ -455,6 +455,9 @@ TEST_CASE("dense registration: the restoration's polish on the OpenCL device, im
   REQUIRE(rd.restore);
   CHECK(rd.restore->held_points > 100);  // the image holds went to the device
   CHECK(rd.restore->held_points == rh.restore->held_points);
+  REQUIRE(rd.restore->placement.polish);  // the report says where the polish ran
+  CHECK(rd.restore->placement.polish->on_device);
+  CHECK_FALSE(rh.restore->placement.polish->on_device);
   const double diff = (host - device).cwiseAbs().maxCoeff();
   INFO("max |host - device| " << diff);
   CHECK(diff < 1e-10);

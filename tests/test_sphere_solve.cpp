@@ -51,18 +51,27 @@ TEST_CASE("where the equal-area steps solve: automatic takes a GPU for large bou
   CHECK(parse_density_solve("auto") == S::automatic);
   CHECK(parse_density_solve("device") == S::device);
   CHECK_THROWS_AS(parse_density_solve("gpu"), InputError);
+  const auto on_device = [&](const Device& d, long long boundary) {
+    return place_work(d, PlacedWork::density_solve, o.density_solve, boundary).on_device;
+  };
   const std::shared_ptr<Device> host = Device::host();
-  CHECK_FALSE(density_solve_on_device(o, nullptr, 10 * kDeviceDensityVertices));
-  CHECK_FALSE(density_solve_on_device(o, host.get(), 10 * kDeviceDensityVertices));
+  CHECK_FALSE(on_device(*host, 10 * kDeviceDensityVertices));
   const std::shared_ptr<Device> dev = test::opencl_device();
   if (!dev) return;
   const bool gpu = dev->description().kind == DeviceKind::gpu;
-  CHECK_FALSE(density_solve_on_device(o, dev.get(), kDeviceDensityVertices - 1));
-  CHECK(density_solve_on_device(o, dev.get(), kDeviceDensityVertices) == gpu);
+  CHECK_FALSE(on_device(*dev, kDeviceDensityVertices - 1));
+  CHECK(on_device(*dev, kDeviceDensityVertices) == gpu);
   o.density_solve = S::host;
-  CHECK_FALSE(density_solve_on_device(o, dev.get(), 10 * kDeviceDensityVertices));
+  CHECK_FALSE(on_device(*dev, 10 * kDeviceDensityVertices));
   o.density_solve = S::device;
-  CHECK(density_solve_on_device(o, dev.get(), 100));
+  CHECK(on_device(*dev, 100));
+  // the sphere map records what it decided: a small boundary stays on the host, and says why
+  const TetMesh box = test::box_mesh(6, 4, 4);
+  const TriSurface s{box.vertices, boundary_faces(box.tets)};
+  const SphereMapResult automatic = sphere_map(s, InitialMapOptions{}, dev.get());
+  REQUIRE(automatic.report.placement.density_solve);
+  CHECK_FALSE(automatic.report.placement.density_solve->on_device);
+  CHECK_FALSE(automatic.report.placement.density_solve->reason.empty());
 }
 
 TEST_CASE("initial map with the sphere map solving on the device beside the Poisson build") {

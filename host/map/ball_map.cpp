@@ -94,6 +94,10 @@ BallMap map_to_ball(Device& device, const TetMesh& input, const ValidationReport
   out.input_sliver_tets = validation.sliver_tets;
   out.refined_vertices = im.mesh.num_vertices();
   out.refined_tets = im.mesh.num_tets();
+  out.placement.device = device.name();
+  out.placement.kind = device.description().kind;
+  out.placement.merge(im.report.boundary.placement);
+  if (out.volume_map) out.placement.merge(out.volume_map->placement);
   out.initial_map = std::move(im.report);
   out.convergence.tolerance = options.volume.tolerance;
   out.convergence.reached = out.final.vertex_volume_ratio.mean_abs_dev;
@@ -149,6 +153,7 @@ Json to_json(const BallMap& b) {
   if (b.volume_map) j["volume_map"] = to_json(*b.volume_map);
   if (b.convergence.checked) j["converged"] = b.convergence.converged;
   j["convergence"] = to_json(b.convergence);
+  j["placement"] = to_json(b.placement);
   return j;
 }
 

@@ -231,7 +231,9 @@ void equalise(const Points& in, const Triangles& f, const InitialMapOptions& opt
   rep.density_target = "area";
   const auto t0 = Clock::now();
   Points q = s;
-  Device* solve_on = density_solve_on_device(opt, device, static_cast<int>(in.rows())) ? device : nullptr;
+  Device* solve_on = nullptr;
+  if (device && rep.placement.decide(*device, PlacedWork::density_solve, opt.density_solve, in.rows()))
+    solve_on = device;
   const EquiarealStats st = equalise_density(in, f, vertex_area_shares(in, f), q, opt.density_max_steps,
                                              opt.density_tolerance, solve_on);
   rep.density_solver = st.solver;
@@ -315,17 +317,7 @@ InitialMapOptions::SphereDensity parse_sphere_density(const std::string& name) {
 }
 
 InitialMapOptions::DensitySolve parse_density_solve(const std::string& name) {
-  if (name == "auto") return InitialMapOptions::DensitySolve::automatic;
-  if (name == "host") return InitialMapOptions::DensitySolve::host;
-  if (name == "device") return InitialMapOptions::DensitySolve::device;
-  throw InputError("sphere solve '" + name + "' is not one of auto, host, device");
-}
-
-bool density_solve_on_device(const InitialMapOptions& opt, const Device* device, int boundary_vertices) {
-  using S = InitialMapOptions::DensitySolve;
-  if (!device || device->is_host() || opt.density_solve == S::host) return false;
-  return opt.density_solve == S::device ||
-         (device->description().kind == DeviceKind::gpu && boundary_vertices >= kDeviceDensityVertices);
+  return parse_execution_place(name, "sphere solve");
 }
 
 InitialMapOptions::SphereStart parse_sphere_start(const std::string& name) {
@@ -366,6 +358,7 @@ Json to_json(const SphereMapReport& r) {
     e["area_distortion"] = r.area_distortion_density;
     e["kept"] = r.density_kept;
     if (!r.density_solver.empty()) e["solver"] = r.density_solver;
+    if (r.placement.density_solve) e["placement"] = to_json(r.placement);
     j["density"] = e;
   }
   j["start"] = r.start;

@@ -77,6 +77,7 @@ Json to_json(const VolumeMapResult& res) {
   j["preconditioner"] = res.preconditioner;
   j["rk_steps"] = res.rk_steps;
   j["advection"] = res.device_advection ? "device" : "host";
+  j["placement"] = to_json(res.placement);
   Json ji = Json::object();
   ji["vertex_mean_abs_dev"] = res.initial_vertex_mean_abs_dev;
   ji["tet_mean_abs_dev"] = res.initial_tet_mean_abs_dev;
@@ -112,15 +113,6 @@ void check_inputs(const Points& reference, const Tets& tets, const Points& ball,
   if (opt.rk_steps < 1) throw InputError("volume map: rk_steps must be >= 1");
 }
 
-// Where the parts run (VolumeMapOptions::advection, ::polish).
-bool advection_on_device(Device& dev, const VolumeMapOptions& opt) {
-  return !dev.is_host() && opt.advection != ExecutionPlace::host && opt.method == VolumeMapMethod::moser;
-}
-bool polish_on_device(Device& dev, const VolumeMapOptions& opt) {
-  if (dev.is_host() || opt.polish == ExecutionPlace::host) return false;
-  return opt.polish == ExecutionPlace::device || dev.description().kind == DeviceKind::gpu;
-}
-
 // Boundary, frozen vertices, neighbours, normalised input volumes, solver and advector.
 void set_up(detail::MapContext& c) {
   const VolumeMapOptions& opt = c.opt;
@@ -150,11 +142,12 @@ void set_up(detail::MapContext& c) {
     for (int k = 0; k < 4; ++k) c.ref_dual(tets(t, k)) += 0.25 * c.ref_tet(t);
   c.solver = std::make_unique<detail::MapSolver>(c.dev, c.n, tets, opt.solver, opt.solver_tolerance,
                                                    opt.preconditioner, opt.poisson);
-  if (advection_on_device(c.dev, opt)) {
+  // where the parts run (VolumeMapOptions::advection, ::polish; the rules: vpm/placement.hpp)
+  if (opt.method == VolumeMapMethod::moser && c.placement.decide(c.dev, PlacedWork::advection, opt.advection)) {
     c.advector = std::make_unique<detail::DeviceAdvector>(c.dev, tets, c.nbr, c.boundary);
-    c.gradients_on_device = opt.advection == ExecutionPlace::device || c.dev.description().kind == DeviceKind::gpu;
+    c.gradients_on_device = c.placement.decide(c.dev, PlacedWork::gradients, opt.advection);
   }
-  c.polish_on_device = polish_on_device(c.dev, opt);
+  c.polish_on_device = c.placement.decide(c.dev, PlacedWork::polish, opt.polish);
   if (!c.dev.is_host()) c.volumes = std::make_unique<detail::DeviceVolumes>(c.dev, tets);
 }
 
@@ -179,6 +172,7 @@ VolumeMapResult detail::map_volumes(Device& dev, const Points& reference, const 
   res.preconditioner = to_string(c.solver->preconditioner());
   res.rk_steps = opt.rk_steps;
   res.device_advection = c.advector != nullptr;
+  res.placement = c.placement;
 
   // The start must be fold-free.
   if (detail::count_folds(c, ball) > 0) {

@@ -51,6 +51,7 @@ struct MapContext {
   Triangles bfaces;  // boundary faces (outward), from the same face sort as nbr
   std::vector<char> freedom;                          // polish: free / tangent / fixed per vertex
   std::unique_ptr<DevicePolisher> polisher;   // polish on the device, built on first use
+  Placement placement;                                // where the parts below run, and why
   bool polish_on_device = false;                      // VolumeMapOptions::polish resolved
   bool gradients_on_device = false;                   // the advector computes the field's gradients
 

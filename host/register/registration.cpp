@@ -69,6 +69,7 @@ Json to_json(const RegistrationRestore& r) {
   j["pinned_vertices"] = r.pinned_vertices;
   j["anchored_landmarks"] = r.anchored_landmarks;
   j["held_points"] = r.held_points;
+  j["placement"] = to_json(r.placement);
   return j;
 }
 

@@ -69,6 +69,7 @@ RegistrationRestore restore_volumes(Device& dev, const Points& before, const Tet
   r.vertex_mean_abs_dev = vm.final_vertex_mean_abs_dev;
   r.tet_mean_abs_dev = vm.final_tet_mean_abs_dev;
   r.rounds = static_cast<long>(vm.rounds.size());
+  r.placement = vm.placement;
   return r;
 }
 

@@ -64,6 +64,9 @@ struct BallMap {
   InitialMapReport initial_map;        ///< what the initial map did
   std::optional<VolumeMapResult> volume_map;  ///< absent when options.volume.rounds == 0
   MapConvergence convergence;
+  /// Where each part of the map ran and why (the equal-area steps, the advection, the field's
+  /// gradients, the polish; vpm/placement.hpp): JSON "placement".
+  Placement placement;
   BallMapTimings timings;
 };
 

@@ -39,6 +39,7 @@
 #include <string>
 #include <vector>
 
+#include "vpm/placement.hpp"
 #include "vpm/json.hpp"
 #include "vpm/mesh.hpp"
 #include "vpm/metrics.hpp"
@@ -76,10 +77,11 @@ struct InitialMapOptions {
   /// Cholesky, an earlier step's factor reused as CG preconditioner; device = AMG-CG on the
   /// OpenCL device sphere_map() is given (the host when it is given none or the host device; a
   /// step whose CG fails is redone on the host); automatic (the default) = device on GPUs for
-  /// boundaries of at least kDeviceDensityVertices vertices, else host (density_solve_on_device):
+  /// boundaries of at least kDeviceDensityVertices vertices, else host (place_work,
+  /// vpm/placement.hpp):
   /// on CPU devices the kernels share the cores with the Poisson solver being built beside
   /// them and lose inside `vpm map` (docs/volume_map.md, docs/gpu.md).
-  enum class DensitySolve { automatic, host, device };
+  using DensitySolve = ExecutionPlace;
   DensitySolve density_solve = DensitySolve::automatic;
   int density_max_steps = 300;
   double density_tolerance = 0.02;  ///< stop at this area distortion (mean |area ratio - 1|)
@@ -147,6 +149,8 @@ struct SphereMapReport {
   // after, the area distortion reached, kept or not
   std::string density_target;
   std::optional<int> density_steps;
+  /// Where the equal-area steps were solved and why (vpm/placement.hpp; density_solve only).
+  Placement placement;
   std::string density_solver;  ///< "cholmod-supernodal", "eigen-simplicial-ldlt" or "device-amg-cg" (the last step's)
   double density_misfit_before = 0, density_misfit_after = 0, area_distortion_density = 0;
   bool density_kept = false;
@@ -287,14 +291,6 @@ const char* to_string(InitialMapOptions::SphereDensity d);
 InitialMapOptions::SphereStart parse_sphere_start(const std::string& name);
 /// "auto", "host" or "device" (InputError otherwise).
 InitialMapOptions::DensitySolve parse_density_solve(const std::string& name);
-
-/// Boundaries of at least this many vertices have their equal-area steps solved on a GPU under
-/// InitialMapOptions::DensitySolve::automatic (at 32k the host and the CPU device tie).
-inline constexpr int kDeviceDensityVertices = 50'000;
-/// Whether the equal-area steps of a boundary of `boundary_vertices` vertices are solved on
-/// `device` (null: none) under `opt.density_solve`: never on the host device or without one;
-/// automatic only on GPUs.
-bool density_solve_on_device(const InitialMapOptions& opt, const Device* device, int boundary_vertices);
 
 /// Result of step 1.
 struct SplitResult {

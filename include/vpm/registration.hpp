@@ -156,9 +156,11 @@ struct RegistrationRestore {
   int pinned_vertices = 0;                ///< vertices held in place
   int anchored_landmarks = 0;             ///< landmarks held as material points (VolumeAnchor)
   int held_points = 0;                    ///< image grid points held across their edges (VolumeHold)
+  Placement placement;                    ///< where the polish ran and why (vpm/placement.hpp)
 };
 /// {"vertex_mean_abs_dev_before", "tet_mean_abs_dev_before", "vertex_mean_abs_dev",
-///  "tet_mean_abs_dev", "rounds", "pinned_vertices", "anchored_landmarks", "held_points"}
+///  "tet_mean_abs_dev", "rounds", "pinned_vertices", "anchored_landmarks", "held_points",
+///  "placement"}
 Json to_json(const RegistrationRestore& restore);
 
 /// Seconds spent in each registration step.

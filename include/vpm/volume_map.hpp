@@ -40,6 +40,7 @@
 #include <string>
 #include <vector>
 
+#include "vpm/placement.hpp"
 #include "vpm/json.hpp"
 #include "vpm/mesh.hpp"
 #include "vpm/metrics.hpp"
@@ -65,12 +66,6 @@ enum class MapBoundary {
 MapBoundary parse_map_boundary(const std::string& name);
 const char* to_string(MapBoundary m);
 
-/// Where a part of a stage runs when the device is an OpenCL device.
-enum class ExecutionPlace {
-  automatic,  ///< the stage's rule (documented at each option)
-  host,       ///< the host reference, even with an OpenCL device
-  device,     ///< the OpenCL kernels (the host reference when the device is `host`)
-};
 
 struct VolumeMapOptions {
   VolumeMapMethod method = VolumeMapMethod::moser;
@@ -188,6 +183,8 @@ struct VolumeMapResult {
   std::string preconditioner = "jacobi";  ///< what VolumeMapOptions::preconditioner resolved to
   int rk_steps = 10;
   bool device_advection = false;  ///< the advection ran on the OpenCL device
+  /// Where the advection, the field's gradients and the polish ran, and why (vpm/placement.hpp).
+  Placement placement;
   VolumeMapTimings timings;
 };
 

@@ -12,7 +12,7 @@ import sys
 
 LAYERS = ["core", "mesh", "io", "linalg", "image", "map", "register", "collective"]
 PUBLIC = {
-    "core": ["device", "error", "json", "timing", "format", "memory"],
+    "core": ["device", "placement", "error", "json", "timing", "format", "memory"],
     "mesh": ["mesh", "topology", "geometry", "validate", "metrics", "locate", "icosphere", "mesh_stats", "labels", "mesh_order"],
     "io": ["io", "landmarks"],
     "linalg": ["sparse", "laplacian", "solver", "amg"],
