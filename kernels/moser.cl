@@ -1,6 +1,7 @@
 // Moser rounds: point location in the round's background mesh, interpolation of the fixed
 // field v(y, t) = grad psi(y) / ((1 - t) rho0(y) + t), and the RK4 stages.
-// Must match host/map/moser_field.cpp and host/mesh/tet_grid.cpp (the host reference) line for line.
+// The point location is shared with the host (kernels/tet_locate.clh); the field interpolation
+// and the RK4 stages must match host/map/moser_field.cpp.
 //
 // Background data (uploaded once per round):
 //   inv   m x 12: corner a (3), then the rows of [b-a, c-a, d-a]^-1 (9): lambda_{1..3} = Minv (p - a)
@@ -11,91 +12,24 @@
 // Per point: x n x 3, hint n (containing tet of the last location), stats n x 3
 // (walk steps, grid fallbacks, clamped-outside count).
 
-#ifndef MAX_WALK
-#define MAX_WALK 64
-#endif
-#define INSIDE_EPS (-1e-12)
-#define OUTSIDE_CLAMP (-0.05)
+#include "tet_locate.clh"
 
-inline void bary(__global const real* inv, int t, real3 p, real* l) {
-  __global const real* q = inv + 12 * t;
-  const real3 d = p - (real3)(q[0], q[1], q[2]);
-  l[1] = q[3] * d.x + q[4] * d.y + q[5] * d.z;
-  l[2] = q[6] * d.x + q[7] * d.y + q[8] * d.z;
-  l[3] = q[9] * d.x + q[10] * d.y + q[11] * d.z;
-  l[0] = 1.0 - l[1] - l[2] - l[3];
-}
-
-inline real min4(const real* l) { return fmin(fmin(l[0], l[1]), fmin(l[2], l[3])); }
-
-inline void clamp_bary(real* l) {
-  real s = 0.0;
-  for (int k = 0; k < 4; ++k) {
-    l[k] = fmax(l[k], 0.0);
-    s += l[k];
-  }
-  if (s <= 0.0) {
-    for (int k = 0; k < 4; ++k) l[k] = 0.25;
-  } else {
-    for (int k = 0; k < 4; ++k) l[k] /= s;
-  }
-}
-
-// Locates p starting from tet `t`; returns the tet and its (clamped if outside) barycentric
-// coordinates in l. st[0..2] count walk steps, grid fallbacks, clamps.
+// Locates p from tet t (kernels/tet_locate.clh, shared with the host's reference).
 inline int locate(real3 p, int t, __global const real* inv, __global const int* nbr,
                   const real lox, const real loy, const real loz, const real inv_h,
                   const int gx, const int gy, const int gz, __global const int* cell_start,
                   __global const int* cell_tets, real* l, int* st) {
-  for (int s = 0; s < MAX_WALK; ++s) {
-    bary(inv, t, p, l);
-    int k = 0;
-    for (int c = 1; c < 4; ++c)
-      if (l[c] < l[k]) k = c;
-    if (l[k] >= INSIDE_EPS) return t;
-    const int nb = nbr[4 * t + k];
-    if (nb < 0) {
-      // Leaving the mesh through a boundary face. Just outside (round-off, or a point on the
-      // sphere beyond the inscribed polyhedron): clamp to this boundary tet. Far outside (a
-      // non-convex boundary): search the grid.
-      if (l[k] > OUTSIDE_CLAMP) {
-        clamp_bary(l);
-        st[2] += 1;
-        return t;
-      }
-      break;
-    }
-    t = nb;
-    st[0] += 1;
-  }
-  // Walk failed (cycle, long way, or left the mesh far from it): search the grid cell of p.
-  st[1] += 1;
-  int ix = (int)floor((p.x - lox) * inv_h);
-  int iy = (int)floor((p.y - loy) * inv_h);
-  int iz = (int)floor((p.z - loz) * inv_h);
-  ix = clamp(ix, 0, gx - 1);
-  iy = clamp(iy, 0, gy - 1);
-  iz = clamp(iz, 0, gz - 1);
-  const int cell = ix + gx * (iy + gy * iz);
-  int best = -1;
-  real best_score = -1e300;
-  real lb[4];
-  for (int j = cell_start[cell]; j < cell_start[cell + 1]; ++j) {
-    const int c = cell_tets[j];
-    bary(inv, c, p, lb);
-    const real sc = min4(lb);
-    if (sc > best_score) {
-      best_score = sc;
-      best = c;
-    }
-  }
-  if (best < 0) best = t;
-  bary(inv, best, p, l);
-  if (min4(l) < INSIDE_EPS) {
-    clamp_bary(l);
-    st[2] += 1;
-  }
-  return best;
+  TlGrid g;
+  g.lo[0] = lox;
+  g.lo[1] = loy;
+  g.lo[2] = loz;
+  g.inv_h = inv_h;
+  g.dims[0] = gx;
+  g.dims[1] = gy;
+  g.dims[2] = gz;
+  g.cell_start = cell_start;
+  g.cell_tets = cell_tets;
+  return tl_locate(p.x, p.y, p.z, t, inv, nbr, &g, l, st);
 }
 
 // vel[i] = v(p, t) at p = x[i] + c * kprev[i] (boundary points renormalised to radius 1 when

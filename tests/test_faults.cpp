@@ -322,6 +322,25 @@ TEST_CASE("faults: an OpenCL program that does not build is a DeviceError naming
   CHECK_NOTHROW(dev->cl().kernel("solver", "spmv"));
 }
 
+TEST_CASE("kernel headers: a shared .clh is expanded from the embedded sources, an unknown one is named") {
+  auto dev = test::opencl_device();
+  if (!dev) {
+    WARN("no OpenCL device: skipped");
+    return;
+  }
+  // kernels/tet_locate.clh compiles on the device as it does on the host
+  const std::string uses = "#include \"tet_locate.clh\"\n"
+                           "__kernel void b(__global const real* inv, __global real* l) {\n"
+                           "  real q[4];\n  tl_bary(inv, 0, 0.25, 0.25, 0.25, q);\n  l[0] = tl_min4(q);\n}\n";
+  CHECK_NOTHROW(dev->cl().build_program("kernels/uses.cl", uses));
+  try {
+    dev->cl().build_program("kernels/missing.cl", "// a header\n#include \"no_such.clh\"\n");
+    FAIL("a program with an unknown header built");
+  } catch (const DeviceError& e) {
+    CHECK(std::string(e.what()) == "kernels/missing.cl:2: no embedded kernel header 'no_such.clh'");
+  }
+}
+
 TEST_CASE("faults: vpm map exits 5 naming the program when the driver cannot build a kernel") {
   auto dev = test::opencl_device();
   if (!dev || dev->description().platform.find("Portable Computing Language") == std::string::npos) {

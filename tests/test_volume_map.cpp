@@ -203,6 +203,18 @@ TEST_CASE("polish_volumes runs only polish rounds and never moves pinned vertice
   bad.iterations = 0;
   CHECK_THROWS_AS(polish_volumes(*host, im.mesh.vertices, im.mesh.tets, y, bad), InputError);
   CHECK(y == im.ball);
+  // a topology built once by the caller gives the same polish, byte for byte; one of other tets
+  // is refused
+  const TetTopology topology = tet_topology(n, im.mesh.tets);
+  PolishOptions given = o;
+  given.topology = &topology;
+  Points z = im.ball;
+  polish_volumes(*host, im.mesh.vertices, im.mesh.tets, z, given);
+  CHECK(z == x);
+  const TetTopology other = tet_topology(n, im.mesh.tets.topRows(im.mesh.tets.rows() / 2));
+  given.topology = &other;
+  CHECK_THROWS_WITH(polish_volumes(*host, im.mesh.vertices, im.mesh.tets, y, given),
+                    Catch::Contains("topology given is not of these tets"));
   // the iteration scaling: as given up to 30,000 tets, times cbrt(tets / 30,000) above
   CHECK(polish_iterations_for(10, 1000) == 10);
   CHECK(polish_iterations_for(10, 30000) == 10);

@@ -247,12 +247,41 @@ bc::kernel DeviceCl::kernel(const std::string& program, const std::string& kerne
   return it->second.create_kernel(kernel_name);
 }
 
+namespace {
+
+// The `#include "name.clh"` lines of a kernel source replaced by the embedded kernels/name.clh
+// (one level: a shared header such as tet_locate.clh, which the host compiles too), each
+// followed by a #line directive so that compiler messages keep the program's own line numbers.
+std::string expand_includes(const std::string& program, const std::string& source) {
+  static const std::string directive = "#include \"";
+  std::istringstream in(source);
+  std::string line, out;
+  for (int number = 1; std::getline(in, line); ++number) {
+    const size_t end = line.find('"', directive.size());
+    if (line.rfind(directive, 0) != 0 || end == std::string::npos) {
+      out += line + "\n";
+      continue;
+    }
+    const std::string file = line.substr(directive.size(), end - directive.size());
+    const auto& sources = embedded_kernel_sources();
+    const auto it = file.size() > 4 && file.compare(file.size() - 4, 4, ".clh") == 0
+                        ? sources.find(file.substr(0, file.size() - 4))
+                        : sources.end();
+    if (it == sources.end())
+      throw DeviceError(program + ":" + std::to_string(number) + ": no embedded kernel header '" + file + "'");
+    out += it->second + "\n#line " + std::to_string(number + 1) + "\n";
+  }
+  return out;
+}
+
+}  // namespace
+
 bc::program DeviceCl::build_program(const std::string& name, const std::string& source, const std::string& options) {
   const std::string preamble =
       "#pragma OPENCL EXTENSION cl_khr_fp64 : enable\n"
       "typedef double real;\ntypedef double2 real2;\ntypedef double3 real3;\ntypedef double4 real4;\n";
   const std::string common = detail::embedded_kernel_sources().at("common");  // kernels/common.clh
-  bc::program prog = bc::program::create_with_source(preamble + common + "\n#line 1\n" + source, context);
+  bc::program prog = bc::program::create_with_source(preamble + common + "\n#line 1\n" + expand_includes(name, source), context);
   std::string build_options = "-cl-std=CL1.2 -DLS=" + std::to_string(owner.local_size());
   if (owner.group_reduce()) build_options += " -DGROUP_REDUCE";
   if (!options.empty()) build_options += " " + options;

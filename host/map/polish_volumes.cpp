@@ -16,9 +16,8 @@ namespace vpm {
 namespace {
 
 // Anchor vertices: in range, interior, not pinned; weights not all zero.
-void check_anchors(const Points& reference, const Tets& tets, const PolishOptions& opt) {
+void check_anchors(const Points& reference, const std::vector<char>& boundary, const PolishOptions& opt) {
   if (opt.anchors.empty()) return;
-  const std::vector<char> boundary = boundary_vertex_mask(static_cast<int>(reference.rows()), boundary_faces(tets));
   for (size_t a = 0; a < opt.anchors.size(); ++a) {
     const VolumeAnchor& an = opt.anchors[a];
     double w2 = 0;
@@ -34,7 +33,7 @@ void check_anchors(const Points& reference, const Tets& tets, const PolishOption
   }
 }
 
-void check_constraints(const Points& reference, const Tets& tets, const PolishOptions& opt) {
+void check_constraints(const Points& reference, const TetTopology& topology, const PolishOptions& opt) {
   if (!opt.pinned.empty() && opt.pinned.size() != static_cast<size_t>(reference.rows()))
     throw InputError("polish: pinned has " + std::to_string(opt.pinned.size()) + " entries for " +
                      std::to_string(reference.rows()) + " vertices");
@@ -43,7 +42,7 @@ void check_constraints(const Points& reference, const Tets& tets, const PolishOp
       if (v < 0 || v >= reference.rows()) throw InputError("polish: a hold's vertex is out of range");
   if (opt.rounds < 0) throw InputError("polish: rounds must be >= 0");
   if (opt.iterations < 1) throw InputError("polish: iterations must be >= 1");
-  check_anchors(reference, tets, opt);
+  check_anchors(reference, topology.boundary_vertex, opt);
 }
 
 }  // namespace
@@ -56,7 +55,13 @@ VolumeMapResult polish_volumes(Device& device, const Points& reference, const Te
                                const PolishOptions& options) {
   if (tets.rows() > 0 && (tets.minCoeff() < 0 || tets.maxCoeff() >= reference.rows()))
     throw InputError("polish: tet vertex index out of range");
-  check_constraints(reference, tets, options);
+  TetTopology built;
+  if (options.topology && (options.topology->neighbours.size() != 4 * static_cast<size_t>(tets.rows()) ||
+                           options.topology->boundary_vertex.size() != static_cast<size_t>(reference.rows())))
+    throw InputError("polish: the topology given is not of these tets");
+  const TetTopology& topology =
+      options.topology ? *options.topology : (built = tet_topology(static_cast<int>(reference.rows()), tets));
+  check_constraints(reference, topology, options);
   VolumeMapOptions vo;
   vo.method = VolumeMapMethod::moser;
   vo.boundary = options.boundary == MapBoundary::automatic ? MapBoundary::slide : options.boundary;
@@ -71,6 +76,7 @@ VolumeMapResult polish_volumes(Device& device, const Points& reference, const Te
   pc.pinned = options.pinned;
   pc.anchors = options.anchors;
   pc.holds = options.holds;
+  pc.topology = &topology;
   return detail::map_volumes(device, reference, tets, x, vo, pc);
 }
 

@@ -123,8 +123,14 @@ void set_up(detail::MapContext& c) {
                              ? opt.boundary
                              : (opt.method == VolumeMapMethod::moser ? MapBoundary::slide : MapBoundary::fixed);
   c.slide = bm == MapBoundary::slide && opt.method != VolumeMapMethod::vsem;  // vsem: boundary frozen
-  c.nbr = detail::tet_neighbors(tets, &c.bfaces);
-  c.boundary = boundary_vertex_mask(c.n, c.bfaces);
+  if (c.pc.topology) {
+    c.nbr = c.pc.topology->neighbours;
+    c.bfaces = c.pc.topology->boundary;
+    c.boundary = c.pc.topology->boundary_vertex;
+  } else {
+    c.nbr = detail::tet_neighbors(tets, &c.bfaces);
+    c.boundary = boundary_vertex_mask(c.n, c.bfaces);
+  }
   c.frozen = c.boundary;
   for (size_t v = 0; v < c.pc.pinned.size(); ++v)
     if (c.pc.pinned[v]) c.frozen[v] = 1;
@@ -143,7 +149,9 @@ void set_up(detail::MapContext& c) {
   c.solver = std::make_unique<detail::MapSolver>(c.dev, c.n, tets, opt.solver, opt.solver_tolerance,
                                                    opt.preconditioner, opt.poisson);
   // where the parts run (VolumeMapOptions::advection, ::polish; the rules: vpm/placement.hpp)
-  if (opt.method == VolumeMapMethod::moser && c.placement.decide(c.dev, PlacedWork::advection, opt.advection)) {
+  // (a polish on its own never advects: no advector, no advection placed)
+  if (!c.pc.only && opt.method == VolumeMapMethod::moser &&
+      c.placement.decide(c.dev, PlacedWork::advection, opt.advection)) {
     c.advector = std::make_unique<detail::DeviceAdvector>(c.dev, tets, c.nbr, c.boundary);
     c.gradients_on_device = c.placement.decide(c.dev, PlacedWork::gradients, opt.advection);
   }

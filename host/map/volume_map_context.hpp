@@ -27,6 +27,7 @@ struct PolishConstraints {
   std::vector<char> pinned;
   std::vector<VolumeAnchor> anchors;
   std::vector<VolumeHold> holds;
+  const TetTopology* topology = nullptr;  ///< of the tets, when the caller built it (else set_up does)
 };
 
 struct MapContext {

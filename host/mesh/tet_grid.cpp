@@ -1,4 +1,5 @@
-// Point location in a tet mesh (mesh/tet_grid.hpp); the OpenCL twin is in kernels/moser.cl.
+// Point location in a tet mesh (mesh/tet_grid.hpp): the background built here, the walk itself
+// in kernels/tet_locate.clh, compiled here and in the kernels (kernels/moser.cl).
 #include "mesh/tet_grid.hpp"
 
 #include <Eigen/Dense>
@@ -99,78 +100,23 @@ void build_background(TetGrid& f, const Points& x, const Tets& tets, const std::
 }
 
 
-namespace {
-constexpr int kMaxWalk = 64;
-constexpr double kInsideEps = -1e-12;
-constexpr double kOutsideClamp = -0.05;
-}  // namespace
+// The walk, shared with the kernels (kernels/moser.cl includes the same file).
+#include "kernels/tet_locate.clh"
 
 void bary(const TetGrid& f, int t, const Eigen::Vector3d& p, double* l) {
-  const double* q = &f.inv[12 * static_cast<size_t>(t)];
-  const double dx = p.x() - q[0], dy = p.y() - q[1], dz = p.z() - q[2];
-  l[1] = q[3] * dx + q[4] * dy + q[5] * dz;
-  l[2] = q[6] * dx + q[7] * dy + q[8] * dz;
-  l[3] = q[9] * dx + q[10] * dy + q[11] * dz;
-  l[0] = 1.0 - l[1] - l[2] - l[3];
+  tl_bary(f.inv.data(), t, p.x(), p.y(), p.z(), l);
 }
-
-namespace {
-inline double min4(const double* l) { return std::min(std::min(l[0], l[1]), std::min(l[2], l[3])); }
-
-inline void clamp_bary(double* l) {
-  double s = 0;
-  for (int k = 0; k < 4; ++k) {
-    l[k] = std::max(l[k], 0.0);
-    s += l[k];
-  }
-  for (int k = 0; k < 4; ++k) l[k] = s <= 0 ? 0.25 : l[k] / s;
-}
-
-}  // namespace
 
 int locate(const TetGrid& f, const Eigen::Vector3d& p, int t, double* l, long long* st) {
-  const std::vector<int>& nbr = *f.nbr;
-  for (int s = 0; s < kMaxWalk; ++s) {
-    bary(f, t, p, l);
-    int k = 0;
-    for (int c = 1; c < 4; ++c)
-      if (l[c] < l[k]) k = c;
-    if (l[k] >= kInsideEps) return t;
-    const int nb = nbr[4 * static_cast<size_t>(t) + k];
-    if (nb < 0) {
-      if (l[k] > kOutsideClamp) {
-        clamp_bary(l);
-        st[2] += 1;
-        return t;
-      }
-      break;
-    }
-    t = nb;
-    st[0] += 1;
+  TlGrid g;
+  for (int c = 0; c < 3; ++c) {
+    g.lo[c] = f.lo[c];
+    g.dims[c] = f.dims[c];
   }
-  st[1] += 1;
-  int idx[3];
-  for (int c = 0; c < 3; ++c)
-    idx[c] = std::clamp(static_cast<int>(std::floor((p(c) - f.lo[c]) * f.inv_h)), 0, f.dims[c] - 1);
-  const size_t cell = idx[0] + f.dims[0] * (idx[1] + static_cast<size_t>(f.dims[1]) * idx[2]);
-  int best = -1;
-  double best_score = -1e300, lb[4];
-  for (int j = f.cell_start[cell]; j < f.cell_start[cell + 1]; ++j) {
-    const int c = f.cell_tets[j];
-    bary(f, c, p, lb);
-    const double sc = min4(lb);
-    if (sc > best_score) {
-      best_score = sc;
-      best = c;
-    }
-  }
-  if (best < 0) best = t;
-  bary(f, best, p, l);
-  if (min4(l) < kInsideEps) {
-    clamp_bary(l);
-    st[2] += 1;
-  }
-  return best;
+  g.inv_h = f.inv_h;
+  g.cell_start = f.cell_start.data();
+  g.cell_tets = f.cell_tets.data();
+  return tl_locate(p.x(), p.y(), p.z(), t, f.inv.data(), f.nbr->data(), &g, l, st);
 }
 
 }  // namespace vpm::detail

@@ -1,8 +1,8 @@
 #pragma once
 // Private: point location in a tet mesh (barycentric coordinates, walks through face
 // neighbours, a uniform grid fallback), used by vpm::TetLocator (vpm/locate.hpp) and by the
-// volume map's Moser field (map/moser_field.hpp). kernels/moser.cl has the same walk on the
-// device, line for line.
+// volume map's Moser field (map/moser_field.hpp). The walk is kernels/tet_locate.clh, compiled
+// both here and in kernels/moser.cl.
 #include <Eigen/Core>
 #include <vector>
 

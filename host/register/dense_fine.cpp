@@ -45,8 +45,7 @@ DenseIteration fine_step(Device& dev, const DenseState& st, Points& x, const Poi
     for (int k = 0; k < 4; ++k) p += w.bary[k] * after.row(st.tets(w.tet, k));
     lm.row(l) = p;
   }
-  restore_volumes(dev, reference, st.tets, after, pinned, lm, lo.restore_iterations, lo.restore_rounds,
-                  restore_holds(st, after, o), lo.restore_polish);
+  restore_volumes(dev, {reference, st.tets, st.topology}, after, pinned, lm, restore_holds(st, after, o), lo);
   v1 = tet_volumes(dev, after, st.tets);
   it.max_move = (after - now).rowwise().norm().maxCoeff();
   Fit next(st, after);

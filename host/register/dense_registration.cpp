@@ -299,8 +299,8 @@ DenseRegistrationResult register_dense(Device& dev, const DenseSubject& subject,
       const std::vector<char> pinned = landmark_vertices(ball, landmarks);
       for (int c = 0; c < o.restore_cycles && !r.time_budget_spent; ++c) {
         Points now = x.topRows(work.rows());
-        restore_volumes(dev, ball, tets, now, pinned, x.bottomRows(lm.rows()), lo.restore_iterations,
-                        lo.restore_rounds, restore_holds(st, now, o), lo.restore_polish);
+        restore_volumes(dev, {ball, tets, st.topology}, now, pinned, x.bottomRows(lm.rows()), restore_holds(st, now, o),
+                        lo);
         x.topRows(work.rows()) = now;
         fit = Fit(st, now);
         level_iterations(dev, st, x, *finest, n, o, fit, r);
@@ -326,8 +326,8 @@ DenseRegistrationResult register_dense(Device& dev, const DenseSubject& subject,
     }
     if (lo.restore_volumes) {
       t0 = Clock::now();
-      r.restore = restore_volumes(dev, ball, tets, work, landmark_vertices(ball, landmarks), lm, lo.restore_iterations,
-                                  lo.restore_rounds, restore_holds(st, work, o), lo.restore_polish);
+      r.restore = restore_volumes(dev, {ball, tets, st.topology}, work, landmark_vertices(ball, landmarks), lm,
+                                  restore_holds(st, work, o), lo);
       r.seconds_restore = seconds_since(t0);
     }
   }

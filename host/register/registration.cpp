@@ -133,9 +133,10 @@ namespace {
 /// The mesh after the flow, checked: landmark errors, boundary drift and projection, normal
 /// velocity, local untangling, fold counts (into `res`); volume restoration when fold-free.
 Points check_and_restore(Device& dev, RegistrationResult& res, const Points& before, const Tets& tets,
-                         Points after, const std::vector<char>& boundary, const Points& landmarks,
+                         Points after, const TetTopology& topology, const Points& landmarks,
                          const Points& targets, const std::vector<DivFreeField>& fields,
                          const RegistrationOptions& opt) {
+  const std::vector<char>& boundary = topology.boundary_vertex;
   RegistrationReport& rep = res.report;
   auto t0 = Clock::now();
   measure_flow(res, after, boundary, targets, opt);
@@ -156,8 +157,7 @@ Points check_and_restore(Device& dev, RegistrationResult& res, const Points& bef
   rep.timings.check = seconds_since(t0);
   if (opt.restore_volumes && res.inverted_tets == 0) {
     t0 = Clock::now();
-    rep.restore = restore_volumes(dev, before, tets, after, landmark_vertex, res.landmarks_final, opt.restore_iterations,
-                                  opt.restore_rounds, {}, opt.restore_polish);
+    rep.restore = restore_volumes(dev, {before, tets, topology}, after, landmark_vertex, res.landmarks_final, {}, opt);
     rep.timings.restore = seconds_since(t0);
   }
   return after;
@@ -178,7 +178,8 @@ Points check_and_restore(Device& dev, RegistrationResult& res, const Points& bef
 RegistrationResult register_landmarks(Device& dev, Points& ball, const Tets& tets, const Points& landmarks_in,
                                       const Points& targets, const RegistrationOptions& opt) {
   const auto t_start = Clock::now();
-  const auto boundary = boundary_vertex_mask(static_cast<int>(ball.rows()), boundary_faces(tets));
+  const TetTopology topology = tet_topology(static_cast<int>(ball.rows()), tets);
+  const std::vector<char>& boundary = topology.boundary_vertex;
   const std::vector<Eigen::Index> keep = check_registration_input(ball, boundary, landmarks_in, targets, opt);
   const Eigen::Index n = static_cast<Eigen::Index>(keep.size());
   Points p(n, 3), q(n, 3);
@@ -207,7 +208,7 @@ RegistrationResult register_landmarks(Device& dev, Points& ball, const Tets& tet
   rep.timings.advect = seconds_since(t0);
 
   res.landmarks_final = x.bottomRows(landmarks_in.rows());
-  Points after = check_and_restore(dev, res, ball, tets, x.topRows(ball.rows()), boundary, landmarks_in, targets,
+  Points after = check_and_restore(dev, res, ball, tets, x.topRows(ball.rows()), topology, landmarks_in, targets,
                                    fields, opt);
   rep.timings.total = seconds_since(t_start);
 

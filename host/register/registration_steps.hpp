@@ -45,15 +45,23 @@ std::optional<RegistrationUntangle> untangle_flow_folds(Device& device, const Po
                                                         const Eigen::VectorXd& v0, Eigen::VectorXd& v1,
                                                         int rings);
 
+/// The mesh a volume restoration works on: the positions whose tet volumes it restores
+/// (`before`, the ball before the flow), the tets, and their topology, built once per mesh by
+/// the caller and used by every restoration of a registration.
+struct RestoreMesh {
+  const Points& before;
+  const Tets& tets;
+  const TetTopology& topology;
+};
+
 /// Gives back the volume lost under the flow (RegistrationOptions::restore_volumes), with the
 /// landmark vertices pinned and each moved landmark held in place (an anchor of the polish, or
-/// its tet's vertices pinned where the tet touches the boundary); `iterations` CGLS iterations
-/// per polish step, at most `rounds` steps; `holds` (VolumeHold) keep points from sliding across
-/// image edges (dense registration with an image force); `place`: where the polish directions
-/// are computed (RegistrationOptions::restore_polish).
-RegistrationRestore restore_volumes(Device& device, const Points& before, const Tets& tets, Points& after,
+/// its tet's vertices pinned where the tet touches the boundary); `holds` (VolumeHold) keep
+/// points from sliding across image edges (dense registration with an image force). The polish
+/// runs opt.restore_iterations CGLS iterations a step, at most opt.restore_rounds steps, its
+/// directions where opt.restore_polish asks (vpm/placement.hpp).
+RegistrationRestore restore_volumes(Device& device, const RestoreMesh& mesh, Points& after,
                                     const std::vector<char>& landmark_vertex, const Points& landmarks_final,
-                                    int iterations, int rounds, const std::vector<VolumeHold>& holds = {},
-                                    ExecutionPlace place = ExecutionPlace::automatic);
+                                    const std::vector<VolumeHold>& holds, const RegistrationOptions& opt);
 
 }  // namespace vpm

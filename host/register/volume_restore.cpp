@@ -10,29 +10,29 @@
 
 namespace vpm {
 
-RegistrationRestore restore_volumes(Device& dev, const Points& before, const Tets& tets, Points& after,
+RegistrationRestore restore_volumes(Device& dev, const RestoreMesh& mesh, Points& after,
                                     const std::vector<char>& landmark_vertex, const Points& landmarks_final,
-                                    int iterations, int rounds, const std::vector<VolumeHold>& holds,
-                                    ExecutionPlace place) {
-  const int n = static_cast<int>(after.rows());
+                                    const std::vector<VolumeHold>& holds, const RegistrationOptions& opt) {
+  const Tets& tets = mesh.tets;
   PolishOptions vo;
-  vo.place = place;
+  vo.place = opt.restore_polish;
+  vo.topology = &mesh.topology;
   vo.boundary = MapBoundary::slide;
   vo.pinned = landmark_vertex;
   vo.holds = holds;
-  vo.iterations = iterations;  // scaled by polish_iterations_for: the same reach on finer meshes
-  vo.rounds = rounds;
+  vo.iterations = opt.restore_iterations;  // scaled by polish_iterations_for: the same reach on finer meshes
+  vo.rounds = opt.restore_rounds;
   // Each landmark inside a tet is held where it is: as an anchor (its barycentric combination of
   // the tet's vertices fixed) when the tet's vertices are interior and not landmark vertices;
   // otherwise by pinning the tet's four vertices. Pinned vertices cannot be anchor vertices, so
   // a tet that shares a vertex with a pinned one is pinned too (repeated until none changes).
-  const TetLocator locator(after, tets);
+  const TetLocator locator(after, tets, mesh.topology);
   std::vector<Location> held;
   for (Eigen::Index i = 0; i < landmarks_final.rows(); ++i) {
     const Location l = locator.locate(landmarks_final.row(i).transpose());
     if (l.tet >= 0 && l.min_bary >= -1e-9) held.push_back(l);
   }
-  const std::vector<char> boundary = boundary_vertex_mask(n, boundary_faces(tets));
+  const std::vector<char>& boundary = mesh.topology.boundary_vertex;
   std::vector<char> pin_tet(held.size(), 0);
   for (bool changed = true; changed;) {
     changed = false;
@@ -63,7 +63,7 @@ RegistrationRestore restore_volumes(Device& dev, const Points& before, const Tet
   r.anchored_landmarks = static_cast<int>(vo.anchors.size());
   r.held_points = static_cast<int>(holds.size());
   for (char c : vo.pinned) r.pinned_vertices += c != 0;
-  const VolumeMapResult vm = polish_volumes(dev, before, tets, after, vo);
+  const VolumeMapResult vm = polish_volumes(dev, mesh.before, tets, after, vo);
   r.vertex_mean_abs_dev_before = vm.initial_vertex_mean_abs_dev;
   r.tet_mean_abs_dev_before = vm.initial_tet_mean_abs_dev;
   r.vertex_mean_abs_dev = vm.final_vertex_mean_abs_dev;

@@ -15,6 +15,7 @@
 
 #include "vpm/mesh.hpp"
 #include "vpm/timing.hpp"
+#include "vpm/topology.hpp"
 #include "vpm/volume_map.hpp"
 
 namespace vpm {
@@ -59,6 +60,10 @@ struct PolishOptions {
   std::vector<VolumeAnchor> anchors;
   /// Soft holds (VolumeHold) added to the least squares (vertices in range).
   std::vector<VolumeHold> holds;
+  /// The topology of `tets` (vpm/topology.hpp) when the caller has built it (it must be
+  /// tet_topology(n, tets) of these tets and outlive the call); nullptr: built here. Callers
+  /// that polish the same mesh again and again (registration's restorations) build it once.
+  const TetTopology* topology = nullptr;
   /// Where the CGLS runs: automatic = the OpenCL kernels (kernels/polish.cl, holds as rows after
   /// the tets') on GPUs, the host threads otherwise; device forces the kernels on any OpenCL
   /// device.
