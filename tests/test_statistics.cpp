@@ -11,6 +11,7 @@
 #include "collective/distributions.hpp"
 #include "support/fixtures.hpp"
 #include "support/process.hpp"
+#include "vpm/calibration.hpp"
 #include "vpm/error.hpp"
 #include "vpm/image.hpp"
 #include "vpm/io.hpp"
@@ -385,4 +386,115 @@ TEST_CASE("statistics: incomplete beta, Student's t tail and the normal quantile
   CHECK(detail::normal_lower_quantile(1e-300) == Approx(-37.0470962993612).epsilon(1e-9));
   CHECK(detail::normal_lower_quantile(0.5) == Approx(0).margin(1e-15));
   CHECK(std::isfinite(detail::normal_lower_quantile(0.0)));
+}
+
+namespace {
+
+// Eight normals with their global factors varied, and their paths in messages.
+std::vector<ElementTable> eight_normals(std::vector<std::string>& names) {
+  std::vector<ElementTable> out;
+  names.clear();
+  for (unsigned i = 0; i < 8; ++i) {
+    out.push_back(subject(200 + i, 0.9 + 0.03 * i));
+    names.push_back("n" + std::to_string(i));
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("calibration: one pass at min_cluster 1 counts the false clusters every min_cluster keeps") {
+  const CanonicalElements el(def());
+  std::vector<std::string> names;
+  const std::vector<ElementTable> normals = eight_normals(names);
+  CalibrationSettings s;
+  s.feature = "pet";
+  s.compare.threshold = 1.8;  // low: many small false clusters in the normals
+  s.compare.extend = 1.2;
+  s.rate = 2;
+  const ClusterCalibration cal = calibrate_min_cluster(el, normals, names, s);
+  REQUIRE(cal.normals == 8);
+  REQUIRE(cal.false_clusters.size() >= 3);
+  CHECK(cal.false_clusters.front() > cal.false_clusters.back());
+  CHECK(cal.false_clusters.back() == 0);
+  // each count equals the direct comparisons at that min_cluster
+  for (int m : {1, 2, 3, static_cast<int>(cal.false_clusters.size())}) {
+    int direct = 0;
+    for (size_t i = 0; i < normals.size(); ++i) {
+      std::vector<ElementTable> others;
+      std::vector<std::string> other_names;
+      for (size_t j = 0; j < normals.size(); ++j)
+        if (j != i) {
+          others.push_back(normals[j]);
+          other_names.push_back(names[j]);
+        }
+      CompareOptions o = s.compare;
+      o.min_cluster = m;
+      const Reference ref = build_reference(el, others, other_names, "pet", s.normalisation, 0);
+      direct += static_cast<int>(compare_to_reference(el, ref, normals[i], o).clusters.size());
+    }
+    INFO("min_cluster " << m);
+    CHECK(cal.false_clusters[static_cast<size_t>(m - 1)] == direct);
+  }
+  // the smallest size at or under the rate
+  REQUIRE(cal.min_cluster >= 1);
+  CHECK(cal.rate_at(cal.min_cluster) <= s.rate);
+  if (cal.min_cluster > 1) CHECK(cal.rate_at(cal.min_cluster - 1) > s.rate);
+  // the JSON gives it back, for the same settings and normals only
+  const Json j = to_json(cal);
+  CHECK(calibrated_min_cluster(j, s, names, "cal.json") == cal.min_cluster);
+  std::vector<std::string> shuffled(names.rbegin(), names.rend());
+  CHECK(calibrated_min_cluster(j, s, shuffled, "cal.json") == cal.min_cluster);
+  CalibrationSettings other = s;
+  other.compare.threshold = 2;
+  CHECK_THROWS_WITH(calibrated_min_cluster(j, other, names, "cal.json"),
+                    Catch::StartsWith("cal.json: calibrated with options.threshold 1.8"));
+  CHECK_THROWS_WITH(calibrated_min_cluster(j, s, {names.begin(), names.end() - 1}, "cal.json"),
+                    Catch::Contains("calibrated on other normals"));
+  CHECK_THROWS_WITH(calibrated_min_cluster(Json::parse("{\"feature\": \"pet\"}"), s, names, "cal.json"),
+                    Catch::Contains("not a calibration"));
+  // a peak rule that keeps clusters of every size: no min_cluster reaches the rate
+  CalibrationSettings peaky = s;
+  peaky.compare.peak = 1.9;
+  peaky.rate = 0;
+  const ClusterCalibration none = calibrate_min_cluster(el, normals, names, peaky);
+  CHECK(none.min_cluster == 0);
+  CHECK_THROWS_WITH(calibrated_min_cluster(to_json(none), peaky, names, "cal.json"), Catch::Contains("no min_cluster"));
+  // three normals are too few to leave one out
+  CHECK_THROWS_AS(calibrate_min_cluster(el, {normals.begin(), normals.begin() + 3}, {names.begin(), names.begin() + 3}, s),
+                  InputError);
+}
+
+TEST_CASE("vpm calibrate writes the calibration and vpm compare --min-cluster-from applies it") {
+  const std::string dir = std::string(VPM_TEST_TMP) + "/cal_";
+  std::vector<std::string> names;
+  const std::vector<ElementTable> normals = eight_normals(names);
+  std::string list;
+  for (size_t i = 0; i < normals.size(); ++i) {
+    write_subject_table(dir + names[i] + ".tsv", normals[i]);
+    list += (i ? "," : "") + dir + names[i] + ".tsv";
+  }
+  write_subject_table(dir + "p.tsv", subject(77, 1.0));
+  const std::string vpm = VPM_BINARY, opts = " --feature pet --threshold 1.8 --extend 1.2 --sign hypo --quiet";
+  REQUIRE(test::run_status(vpm + " calibrate --normals " + list + opts + " --rate 2 -o " + dir + "cal.json") == 0);
+  const Json cal = Json::parse(test::slurp(dir + "cal.json"));
+  const int m = static_cast<int>(cal.find("min_cluster")->number());
+  CHECK(m >= 1);
+  CHECK(cal.find("normals")->number() == 8);
+  REQUIRE(test::run_status(vpm + " compare --normals " + list + " --patient " + dir + "p.tsv" + opts +
+                           " --min-cluster-from " + dir + "cal.json -o " + dir + "out.tsv") == 0);
+  const Json side = Json::parse(test::slurp(dir + "out.json"));
+  CHECK(side.find("options")->find("min_cluster")->number() == m);
+  const std::string err = dir + "err.txt";
+  // other options than the calibration's, both cluster options, too few normals: exit 2 with the reason
+  CHECK(test::run_status(vpm + " compare --normals " + list + " --patient " + dir + "p.tsv" + opts +
+                         " --threshold 2.5 --min-cluster-from " + dir + "cal.json -o " + dir + "bad.tsv 2> " + err) == 2);
+  CHECK_THAT(test::slurp(err), Catch::Contains("cal.json: calibrated with options.threshold"));
+  CHECK(test::run_status(vpm + " compare --normals " + list + " --patient " + dir + "p.tsv" + opts +
+                         " --min-cluster 4 --min-cluster-from " + dir + "cal.json -o " + dir + "bad.tsv 2> " + err) == 2);
+  CHECK_THAT(test::slurp(err), Catch::Contains("exclude each other"));
+  CHECK(test::run_status("test -e " + dir + "bad.tsv") == 1);
+  const std::string three = dir + names[0] + ".tsv," + dir + names[1] + ".tsv," + dir + names[2] + ".tsv";
+  CHECK(test::run_status(vpm + " calibrate --normals " + three + opts + " -o " + dir + "c3.json 2> " + err) == 2);
+  CHECK_THAT(test::slurp(err), Catch::Contains("at least 4"));
 }

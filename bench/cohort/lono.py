@@ -8,11 +8,11 @@ normalisation, sign) of a patient's comparison the workflow wrote (RESULTS/compa
 so the count is that of the workflow's own settings. Every cluster found is a false focus.
 Reported: the clusters per normal, their total and the rate per 10 normals.
 
---calibrate RATE: the comparisons run once at --min-cluster 1 and every cluster's candidate count
-(the elements at or beyond the cut) tells which clusters each larger min_cluster keeps, so the
-false-cluster rate of every min_cluster follows from one pass; reported: that curve and the
-smallest min_cluster at or under RATE false clusters per 10 normals (a cluster-extent threshold
-set by the normals themselves, as a permutation test over them would).
+--calibrate RATE: also `vpm calibrate` on the same tables with the same options (one pass at
+min_cluster 1 whose clusters' candidate counts give the false-cluster rate of every min_cluster;
+vpm/calibration.hpp); reported: that curve and the smallest min_cluster at or under RATE false
+clusters per 10 normals (a cluster-extent threshold set by the normals themselves, as a
+permutation test over them would). The workflow runs the same with compare.min_cluster: auto.
 
 Usage: lono.py --results DIR [--feature pet] [--tables DIR] [--vpm PATH] [--jobs 2] [--calibrate RATE]
               [--out-json PATH]
@@ -71,20 +71,22 @@ def one(vpm, tables, feature, options, normal, scratch):
             "candidates": [c["candidates"] for c in clusters], "peak_z": [c["peak_z"] for c in clusters]}
 
 
-def with_min_cluster(options, m):
-    out = list(options)
-    out[out.index("--min-cluster") + 1] = str(m)
-    return out
+def without_min_cluster(options):
+    i = options.index("--min-cluster")
+    return options[:i] + options[i + 2:]
 
 
-def calibration(rows, normals, rate, used):
-    """False clusters per 10 normals for every min_cluster up to the largest candidate count."""
-    sizes = sorted(c for r in rows for c in r["candidates"])
-    curve = [{"min_cluster": m, "false_clusters": sum(c >= m for c in sizes),
-              "per_10_normals": 10.0 * sum(c >= m for c in sizes) / normals}
-             for m in range(1, (sizes[-1] if sizes else 0) + 2)]
-    meets = [p["min_cluster"] for p in curve if p["per_10_normals"] <= rate]
-    return {"rate": rate, "min_cluster": meets[0], "workflow_min_cluster": used, "curve": curve}
+def vpm_calibration(vpm, tables, feature, options, rate, used, scratch):
+    """`vpm calibrate` over the tables with the comparisons' options: its curve and choice."""
+    out = os.path.join(scratch, "calibration.json")
+    argv = [vpm, "calibrate", "--normals", ",".join(tables), "--feature", feature, *without_min_cluster(options),
+            "--rate", repr(rate), "-o", out]
+    r = subprocess.run(argv, capture_output=True, text=True)
+    if r.returncode not in (0, 3):  # 3: no min_cluster reaches the rate (the JSON says how far it got)
+        fail("vpm calibrate", f"exit {r.returncode}: {r.stderr.strip()[-300:]}")
+    with open(out) as f:
+        j = json.load(f)
+    return {"rate": rate, "min_cluster": j["min_cluster"], "workflow_min_cluster": used, "curve": j["curve"]}
 
 
 def main():
@@ -101,10 +103,8 @@ def main():
     a = ap.parse_args()
     options, source = workflow_options(a.results, a.feature)
     used = int(options[options.index("--min-cluster") + 1])
-    if a.calibrate is not None:
-        if not a.calibrate >= 0:
-            fail("--calibrate", f"{a.calibrate}: must be >= 0")
-        options = with_min_cluster(options, 1)
+    if a.calibrate is not None and not a.calibrate >= 0:
+        fail("--calibrate", f"{a.calibrate}: must be >= 0")
     tables_dir = a.tables or os.path.join(a.results, "tables")
     tables = sorted(glob.glob(os.path.join(glob.escape(tables_dir), f"{a.normals_glob}_{a.feature}.tsv")))
     if len(tables) < 4:
@@ -112,12 +112,8 @@ def main():
     start = time.time()
     with tempfile.TemporaryDirectory(prefix="vpm-lono-") as scratch, ThreadPoolExecutor(a.jobs) as pool:
         rows = list(pool.map(lambda t: one(a.vpm, tables, a.feature, options, t, scratch), tables))
-    if a.calibrate is not None:
-        cal = calibration(rows, len(tables), a.calibrate, used)
-        for r in rows:  # the workflow's own min_cluster, from the same pass
-            keep = [i for i, c in enumerate(r["candidates"]) if c >= used]
-            r.update({k: [r[k][i] for i in keep] for k in ("elements", "candidates", "peak_z")}, clusters=len(keep))
-        options = with_min_cluster(options, used)
+        if a.calibrate is not None:
+            cal = vpm_calibration(a.vpm, tables, a.feature, options, a.calibrate, used, scratch)
     total = sum(r["clusters"] for r in rows)
     report = {"options": options, "options_from": source, "tables": tables_dir, "normals": len(tables),
               "false_clusters": total, "per_10_normals": 10.0 * total / len(tables),

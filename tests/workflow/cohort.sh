@@ -51,8 +51,8 @@ PY
 # exactly the foci the workflow's comparison found
 /usr/bin/python3 "$src/bench/cohort/lono.py" --results "$r" --normals-glob 'sub-*' --vpm "$build/vpm" \
   --out-json "$work/lono.json" > "$work/lono.log" 2>&1 || { cat "$work/lono.log"; fail "lono.py failed"; }
-# its calibration derives every min_cluster's count from one pass at min_cluster 1: at the
-# workflow's own it must count what the direct pass counted
+# with --calibrate it runs vpm calibrate (every min_cluster's count from one pass at min_cluster 1):
+# at the workflow's own min_cluster that must count what the direct comparisons counted
 /usr/bin/python3 "$src/bench/cohort/lono.py" --results "$r" --normals-glob 'sub-*' --vpm "$build/vpm" --calibrate 1 \
   --out-json "$work/lono_calibrated.json" > "$work/lono.log" 2>&1 || { cat "$work/lono.log"; fail "lono.py --calibrate failed"; }
 /usr/bin/python3 - "$r" "$work/lono.json" "$work/lono_calibrated.json" <<'PY' || fail "leave-one-normal-out"
@@ -71,6 +71,11 @@ assert rows["sub-P01_pet.tsv"]["clusters"] == len(c["result"]["clusters"]), (row
 assert "--extend" in l["options"] and l["options"][l["options"].index("--min-cluster") + 1] == "10", l["options"]
 assert abs(l["per_10_normals"] - 10 * l["false_clusters"] / 4) < 1e-12, l
 PY
+# compare.min_cluster: auto (vpm calibrate in the workflow) needs 4 normals: with 3 the workflow
+# stops before any job, saying why
+if smk 'compare={min_cluster: auto}' -n > "$work/auto.log" 2>&1; then fail "min_cluster auto ran with 3 normals"; fi
+grep -q "compare.min_cluster: auto needs at least 4 normals (each left out in turn), got 3" "$work/auto.log" ||
+  { cat "$work/auto.log"; fail "min_cluster auto with 3 normals: no clear refusal"; }
 # a rerun does nothing
 smk -n > "$work/run2.log" 2>&1
 grep -q "Nothing to be done" "$work/run2.log" || { cat "$work/run2.log"; fail "a rerun would redo work"; }

@@ -1,0 +1,51 @@
+// vpm calibrate: the cluster size (min_cluster) at which the normals, each compared with the
+// others, show at most a stated rate of false foci (vpm/calibration.hpp).
+#include "cli.hpp"
+#include "compare_options.hpp"
+#include "vpm/calibration.hpp"
+#include "vpm/error.hpp"
+#include "vpm/format.hpp"
+#include "vpm/json.hpp"
+
+namespace {
+
+int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
+  vpm::cli::Args args(argv, self);
+  args.expect_positional(0, "usage: " + vpm::cli::synopsis(self));
+  const auto out = args.get("-o");
+  if (!out || !args.has("--normals") || !args.has("--feature"))
+    throw vpm::InputError("needs -o, --normals and --feature; usage: " + vpm::cli::synopsis(self));
+  if (args.has("--min-cluster"))
+    throw vpm::InputError("option --min-cluster: not taken (it is what vpm calibrate finds)");
+  vpm::CalibrationSettings s = vpm::cli::comparison_settings(args);
+  s.rate = args.get_double("--rate", 1.0);
+  if (!(s.rate >= 0)) throw vpm::InputError("option --rate: must be >= 0 false clusters per 10 normals");
+  std::vector<std::string> paths;
+  const std::vector<vpm::ElementTable> normals = vpm::cli::read_normals(args, 4, paths);
+  const vpm::CanonicalElements el(normals[0].definition);
+  const vpm::ClusterCalibration c = vpm::calibrate_min_cluster(el, normals, paths, s);
+  vpm::write_json_file(*out, vpm::to_json(c));
+  if (c.min_cluster == 0)
+    throw vpm::NumericalError(*out + ": no min_cluster keeps the normals at or under " + vpm::format_sig(s.rate) +
+                              " false clusters per 10 normals (reached " + vpm::format_sig(c.rate_at(1 << 30)) +
+                              " with clusters of any size: the --peak rule keeps small ones); lower --peak or raise --rate");
+  vpm::cli::info("wrote " + *out + ": min_cluster " + std::to_string(c.min_cluster) + " (" +
+                 vpm::format_sig(c.rate_at(c.min_cluster)) + " false clusters per 10 normals, at most " +
+                 vpm::format_sig(s.rate) + "; min_cluster 1: " + vpm::format_sig(c.rate_at(1)) + ") over " +
+                 std::to_string(c.normals) + " normals left out in turn");
+  return 0;
+}
+
+std::vector<vpm::cli::OptionSpec> rows() {
+  std::vector<vpm::cli::OptionSpec> r = vpm::cli::comparison_option_rows();
+  r.push_back({"--rate", "R", "false clusters allowed per 10 normals (default 1)"});
+  r.push_back({"--normals", "A.tsv,B.tsv,...", "the normals' subject tables (vpm sample), at least 4", true, 0, true});
+  r.push_back({"--feature", "NAME", "the feature compared (a NAME of vpm sample --images)", true, 0, true});
+  return r;
+}
+
+vpm::cli::Registrar reg({"calibrate", "--normals A.tsv,B.tsv,... --feature NAME -o CAL.json",
+                         "the cluster size at which the normals, each compared with the others, show at most R false foci per 10",
+                         rows(), run});
+
+}  // namespace

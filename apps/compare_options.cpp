@@ -1,0 +1,73 @@
+#include "compare_options.hpp"
+
+#include <sstream>
+
+#include "vpm/error.hpp"
+#include "vpm/io.hpp"
+
+namespace vpm::cli {
+
+CompareOptions compare_options(const Args& args) {
+  CompareOptions o;
+  o.threshold = args.get_double("--threshold", o.threshold);
+  if (!(o.threshold > 0)) throw InputError("option --threshold: must be positive");
+  o.fdr_q = args.get_double("--fdr", 0);
+  if (o.fdr_q < 0 || o.fdr_q >= 1) throw InputError("option --fdr: must be in (0, 1)");
+  o.min_cluster = args.get_int("--min-cluster", o.min_cluster);
+  o.extend = args.get_double("--extend", 0);
+  if (o.extend < 0) throw InputError("option --extend: must be positive (or 0: off)");
+  o.test = parse_option("--test", [&] { return parse_single_case_test(args.get("--test", "z")); });
+  o.peak = args.get_double("--peak", 0);
+  if (o.peak < 0) throw InputError("option --peak: must be positive (or 0: off)");
+  if (o.min_cluster < 1) throw InputError("option --min-cluster: must be >= 1");
+  const std::string sign = args.get("--sign", "both");
+  if (sign == "both") o.sign = 0;
+  else if (sign == "hyper") o.sign = 1;
+  else if (sign == "hypo") o.sign = -1;
+  else throw InputError("option --sign: '" + sign + "' is not one of both, hyper, hypo");
+  return o;
+}
+
+CalibrationSettings comparison_settings(const Args& args) {
+  CalibrationSettings s;
+  const auto feature = args.get("--feature");
+  if (!feature) throw InputError("needs --feature");
+  s.feature = *feature;
+  s.normalisation = parse_option(
+      "--normalisation", [&] { return parse_normalisation(args.get("--normalisation", "proportional")); });
+  s.smoothing = args.get_int("--smooth", 0);
+  if (s.smoothing < 0 || s.smoothing > 8) throw InputError("option --smooth: must be in 0..8");
+  s.compare = compare_options(args);
+  return s;
+}
+
+std::vector<ElementTable> read_normals(const Args& args, size_t at_least, std::vector<std::string>& paths) {
+  const auto list = args.get("--normals");
+  if (!list) throw InputError("needs --normals");
+  paths.clear();
+  std::stringstream ss(*list);
+  std::string item;
+  while (std::getline(ss, item, ','))
+    if (!item.empty()) paths.push_back(item);
+  if (paths.size() < at_least)
+    throw InputError("option --normals: needs at least " + std::to_string(at_least) + " tables, got " +
+                     std::to_string(paths.size()));
+  std::vector<ElementTable> normals;
+  for (const std::string& p : paths) normals.push_back(read_subject_table(p));
+  return normals;
+}
+
+std::vector<OptionSpec> comparison_option_rows() {
+  return {
+      {"--normalisation", "proportional|none", "per-subject scaling to the global mean (default proportional)"},
+      {"--threshold", "Z", "|z| of a focus element (default 3)"},
+      {"--fdr", "Q", "Benjamini-Hochberg false discovery rate instead of --threshold"},
+      {"--smooth", "R", "average every subject's feature over R rings of adjacent elements first (default 0)"},
+      {"--extend", "Z2", "grow each focus into adjacent elements with |z| >= Z2 (hysteresis; default off)"},
+      {"--test", "z|crawford-howell", "plain z, or Crawford-Howell's t for one case against n normals as the equivalent z (default z)"},
+      {"--peak", "ZP", "a cluster smaller than --min-cluster is a focus too when its peak |z| >= ZP (default off)"},
+      {"--sign", "both|hyper|hypo", "increases, decreases or both (default both)"},
+  };
+}
+
+}  // namespace vpm::cli

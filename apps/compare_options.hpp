@@ -1,0 +1,28 @@
+#pragma once
+// The comparison options shared by `vpm compare` and `vpm calibrate` (the calibration must use
+// the patients' own options), and reading the normals' tables.
+#include <string>
+#include <vector>
+
+#include "cli.hpp"
+#include "vpm/calibration.hpp"
+#include "vpm/statistics.hpp"
+
+namespace vpm::cli {
+
+/// --threshold, --fdr, --min-cluster, --extend, --test, --peak, --sign over CompareOptions'
+/// defaults; InputError naming the option on a bad value.
+CompareOptions compare_options(const Args& args);
+
+/// The feature (--feature), normalisation (--normalisation), smoothing (--smooth 0..8) and
+/// compare options of a comparison, as a calibration records them (rate left at its default).
+CalibrationSettings comparison_settings(const Args& args);
+
+/// The tables of --normals A.tsv,B.tsv,... (at least `at_least`), read; `paths` receives the names.
+std::vector<ElementTable> read_normals(const Args& args, size_t at_least, std::vector<std::string>& paths);
+
+/// The option-table rows of --normalisation, --threshold, --fdr, --smooth, --extend, --test,
+/// --peak, --sign, --normals and --feature (not --min-cluster), for both commands' Registrar.
+std::vector<OptionSpec> comparison_option_rows();
+
+}  // namespace vpm::cli

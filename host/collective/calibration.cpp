@@ -1,0 +1,193 @@
+// Leave-one-normal-out calibration of the cluster-extent threshold (vpm/calibration.hpp).
+#include "vpm/calibration.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/parallel.hpp"
+#include "vpm/error.hpp"
+
+namespace vpm {
+
+namespace {
+
+// Whether a cluster with `candidates` elements at the cut and peak |z| `peak` is kept at
+// min_cluster m (compare_to_reference's rule: the size, or the peak rule).
+bool kept(int candidates, double peak_z, int m, double peak) {
+  return candidates >= m || (peak > 0 && candidates > 0 && std::abs(peak_z) >= peak);
+}
+
+LeftOutNormal leave_out(const CanonicalElements& el, const std::vector<ElementTable>& normals,
+                        const std::vector<std::string>& names, const CalibrationSettings& s, size_t out) {
+  std::vector<ElementTable> others;
+  std::vector<std::string> other_names;
+  for (size_t i = 0; i < normals.size(); ++i)
+    if (i != out) {
+      others.push_back(normals[i]);
+      other_names.push_back(names[i]);
+    }
+  const Reference ref = build_reference(el, others, other_names, s.feature, s.normalisation, s.smoothing);
+  CompareOptions o = s.compare;
+  o.min_cluster = 1;
+  ElementTable patient = normals[out];
+  patient.subject = names[out];
+  const Comparison c = compare_to_reference(el, ref, patient, o);
+  LeftOutNormal r;
+  r.name = names[out];
+  for (const FocusCluster& f : c.clusters) {
+    r.candidates.push_back(f.candidates);
+    r.peak_z.push_back(f.peak_z);
+  }
+  return r;
+}
+
+}  // namespace
+
+double ClusterCalibration::rate_at(int m) const {
+  if (normals <= 0 || m < 1) return 0;
+  int count = 0;
+  for (const LeftOutNormal& n : per_normal)
+    for (size_t i = 0; i < n.candidates.size(); ++i)
+      count += kept(n.candidates[i], n.peak_z[i], m, settings.compare.peak);
+  return 10.0 * count / normals;
+}
+
+ClusterCalibration calibrate_min_cluster(const CanonicalElements& el, const std::vector<ElementTable>& normals,
+                                         const std::vector<std::string>& names, const CalibrationSettings& s) {
+  if (normals.size() != names.size()) throw InputError("calibration: names and tables differ in number");
+  if (normals.size() < 4)
+    throw InputError("calibration: needs at least 4 normals (3 in each reference), got " +
+                     std::to_string(normals.size()));
+  if (!(s.rate >= 0)) throw InputError("calibration: the rate must be >= 0 false clusters per 10 normals");
+  ClusterCalibration cal;
+  cal.settings = s;
+  cal.normals = static_cast<int>(normals.size());
+  cal.per_normal.resize(normals.size());
+  std::vector<std::string> errors(normals.size());
+  detail::parallel_for(cal.normals, 2, [&](int b, int e) {
+    for (int i = b; i < e; ++i) try {
+        cal.per_normal[static_cast<size_t>(i)] = leave_out(el, normals, names, s, static_cast<size_t>(i));
+      } catch (const std::exception& x) {
+        errors[static_cast<size_t>(i)] = x.what();
+      }
+  });
+  for (const std::string& m : errors)
+    if (!m.empty()) throw InputError(m);
+  int largest = 0;
+  for (const LeftOutNormal& n : cal.per_normal)
+    for (int c : n.candidates) largest = std::max(largest, c);
+  for (int m = 1; m <= largest + 1; ++m) {
+    cal.false_clusters.push_back(static_cast<int>(std::lround(cal.rate_at(m) * cal.normals / 10.0)));
+    if (cal.min_cluster == 0 && cal.rate_at(m) <= s.rate) cal.min_cluster = m;
+  }
+  return cal;
+}
+
+namespace {
+
+Json options_json(const CalibrationSettings& s) {
+  Json o = Json::object();
+  o["threshold"] = s.compare.threshold;
+  o["fdr_q"] = s.compare.fdr_q;
+  o["extend"] = s.compare.extend;
+  o["peak"] = s.compare.peak;
+  o["test"] = to_string(s.compare.test);
+  o["sign"] = s.compare.sign;
+  return o;
+}
+
+}  // namespace
+
+Json to_json(const ClusterCalibration& c) {
+  Json j = Json::object();
+  j["feature"] = c.settings.feature;
+  j["normalisation"] = to_string(c.settings.normalisation);
+  j["smoothing"] = c.settings.smoothing;
+  j["options"] = options_json(c.settings);
+  j["rate"] = c.settings.rate;
+  j["normals"] = c.normals;
+  j["min_cluster"] = c.min_cluster;
+  Json curve = Json::array();
+  for (size_t m = 1; m <= c.false_clusters.size(); ++m) {
+    Json p = Json::object();
+    p["min_cluster"] = static_cast<long>(m);
+    p["false_clusters"] = c.false_clusters[m - 1];
+    p["per_10_normals"] = c.rate_at(static_cast<int>(m));
+    curve.push_back(p);
+  }
+  j["curve"] = curve;
+  Json per = Json::array();
+  for (const LeftOutNormal& n : c.per_normal) {
+    Json o = Json::object();
+    o["normal"] = n.name;
+    Json cand = Json::array(), peak = Json::array();
+    for (int v : n.candidates) cand.push_back(v);
+    for (double v : n.peak_z) peak.push_back(v);
+    o["candidates"] = cand;
+    o["peak_z"] = peak;
+    per.push_back(o);
+  }
+  j["per_normal"] = per;
+  return j;
+}
+
+namespace {
+
+const Json& member(const Json& j, const std::string& key, const std::string& source) {
+  const Json* v = j.find(key);
+  if (!v) throw InputError(source + ": not a calibration (no \"" + key + "\")");
+  return *v;
+}
+
+// The setting `key` of the calibration equals `want` (numbers compared exactly: both written by
+// vpm from the same decimal option).
+void same(const Json& got, const Json& want, const std::string& key, const std::string& source) {
+  const bool equal = got.type() == want.type() &&
+                     (got.type() == Json::Type::String ? got.string() == want.string() : got.number() == want.number());
+  if (!equal)
+    throw InputError(source + ": calibrated with " + key + " " + got.dump(-1) + ", this comparison uses " +
+                     want.dump(-1) + "; calibrate with the comparison's own options");
+}
+
+
+std::vector<std::string> calibrated_normals(const Json& cal, const std::string& source) {
+  const Json& per = member(cal, "per_normal", source);
+  std::vector<std::string> names;
+  for (size_t i = 0; i < per.size(); ++i) {
+    const Json* name = per.at(i).find("normal");
+    if (!name || name->type() != Json::Type::String)
+      throw InputError(source + ": per_normal[" + std::to_string(i) + "] names no normal");
+    names.push_back(name->string());
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+}  // namespace
+
+int calibrated_min_cluster(const Json& cal, const CalibrationSettings& s, const std::vector<std::string>& normals,
+                           const std::string& source) {
+  if (cal.type() != Json::Type::Object) throw InputError(source + ": not a calibration (not a JSON object)");
+  CalibrationSettings probe = s;
+  const Json want = to_json(ClusterCalibration{probe});
+  for (const char* key : {"feature", "normalisation", "smoothing"})
+    same(member(cal, key, source), *want.find(key), key, source);
+  const Json& opts = member(cal, "options", source);
+  for (const char* key : {"threshold", "fdr_q", "extend", "peak", "test", "sign"})
+    same(member(opts, key, source), *want.find("options")->find(key), std::string("options.") + key, source);
+  std::vector<std::string> want_normals = normals;
+  std::sort(want_normals.begin(), want_normals.end());
+  if (calibrated_normals(cal, source) != want_normals)
+    throw InputError(source + ": calibrated on other normals (" + std::to_string(member(cal, "per_normal", source).size()) +
+                     ") than this comparison's " + std::to_string(normals.size()) + "; calibrate on the same --normals");
+  const Json& m = member(cal, "min_cluster", source);
+  const double v = m.type() == Json::Type::Number ? m.number() : -1;
+  if (!(v >= 0 && v <= 1e9 && v == std::floor(v)))
+    throw InputError(source + ": \"min_cluster\" is not a count");
+  if (v == 0)
+    throw InputError(source + ": the calibration found no min_cluster at or under its rate (a --peak rule keeps "
+                              "small clusters in the normals); lower --peak or raise the rate");
+  return static_cast<int>(v);
+}
+
+}  // namespace vpm

@@ -1,0 +1,66 @@
+#pragma once
+// The cluster-extent threshold set by the normals themselves (issue 35): leave-one-normal-out.
+// Each normal is compared, with the patients' own options, against the reference of the other
+// normals; it has no focus, so every cluster found is a false one. One pass at min_cluster 1
+// gives, through each cluster's candidate count (FocusCluster::candidates), the false clusters
+// that every larger min_cluster would keep; the calibration is the smallest min_cluster whose
+// false clusters stay at or under a stated rate per 10 normals. `vpm calibrate` runs it and
+// `vpm compare --min-cluster-from` applies it (docs/cohort.md, "Calibrated cluster size").
+#include <string>
+#include <vector>
+
+#include "vpm/elements.hpp"
+#include "vpm/json.hpp"
+#include "vpm/statistics.hpp"
+
+namespace vpm {
+
+/// What the comparisons are and the rate to hold.
+struct CalibrationSettings {
+  std::string feature;
+  Normalisation normalisation = Normalisation::proportional;
+  int smoothing = 0;          ///< rings, as build_reference's
+  CompareOptions compare;     ///< the patients' options; its min_cluster is what is calibrated (ignored)
+  double rate = 1.0;          ///< false clusters per 10 normals allowed (>= 0)
+};
+
+/// One normal left out: its clusters' candidate counts and peaks at min_cluster 1.
+struct LeftOutNormal {
+  std::string name;
+  std::vector<int> candidates;
+  std::vector<double> peak_z;
+};
+
+struct ClusterCalibration {
+  CalibrationSettings settings;
+  int normals = 0;
+  /// false_clusters[m - 1]: the clusters over all left-out normals that min_cluster m keeps,
+  /// for m = 1 .. (largest candidate count + 1) (the last entry is 0 unless a peak rule keeps
+  /// small clusters).
+  std::vector<int> false_clusters;
+  /// The smallest min_cluster with false_clusters * 10 / normals <= rate; 0 when none is (a
+  /// peak rule keeps clusters at every size: lower CompareOptions::peak or raise the rate).
+  int min_cluster = 0;
+  std::vector<LeftOutNormal> per_normal;
+  /// False clusters per 10 normals at min_cluster m (0 past the curve's end unless a peak rule holds).
+  double rate_at(int m) const;
+};
+
+/// Leave-one-normal-out over `normals` (at least 4; `names` name them in messages and the
+/// result). InputError as build_reference and compare_to_reference, or on a negative rate.
+ClusterCalibration calibrate_min_cluster(const CanonicalElements& elements, const std::vector<ElementTable>& normals,
+                                         const std::vector<std::string>& names, const CalibrationSettings& settings);
+
+/// {"feature", "normalisation", "smoothing", "options": {threshold, fdr_q, extend, peak, sign,
+///  test}, "rate", "normals", "min_cluster", "curve": [{"min_cluster", "false_clusters",
+///  "per_10_normals"}], "per_normal": [{"normal", "candidates", "peak_z"}]}
+Json to_json(const ClusterCalibration& calibration);
+
+/// The min_cluster of a calibration JSON written by to_json (a file from elsewhere: checked),
+/// after checking that it was made with `settings` (feature, normalisation, smoothing and every
+/// compare option but min_cluster) and on the normals named `normals` (the same set, any
+/// order): InputError naming `source` and the first difference.
+int calibrated_min_cluster(const Json& calibration, const CalibrationSettings& settings,
+                           const std::vector<std::string>& normals, const std::string& source);
+
+}  // namespace vpm
