@@ -68,7 +68,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   const vpm::CompareOptions opt = options_with_calibration(args, settings, normal_paths);
   const vpm::CanonicalElements el(normals[0].definition);
   const vpm::Reference ref = vpm::build_reference(el, normals, normal_paths, settings.feature, settings.normalisation,
-                                                  settings.smoothing);
+                                                  settings.smoothing, settings.shrinkage);
   vpm::ElementTable patient = vpm::read_subject_table(*patient_path);
   patient.subject = *patient_path;
   const vpm::Comparison c = vpm::compare_to_reference(el, ref, patient, opt);

@@ -37,6 +37,8 @@ CalibrationSettings comparison_settings(const Args& args) {
       "--normalisation", [&] { return parse_normalisation(args.get("--normalisation", "proportional")); });
   s.smoothing = args.get_int("--smooth", 0);
   if (s.smoothing < 0 || s.smoothing > 8) throw InputError("option --smooth: must be in 0..8");
+  s.shrinkage = args.get_double("--shrink", 0);
+  if (!(s.shrinkage >= 0 && s.shrinkage <= 1)) throw InputError("option --shrink: must be in 0..1");
   s.compare = compare_options(args);
   return s;
 }
@@ -63,6 +65,7 @@ std::vector<OptionSpec> comparison_option_rows() {
       {"--threshold", "Z", "|z| of a focus element (default 3)"},
       {"--fdr", "Q", "Benjamini-Hochberg false discovery rate instead of --threshold"},
       {"--smooth", "R", "average every subject's feature over R rings of adjacent elements first (default 0)"},
+      {"--shrink", "L", "pull each element's variance over the normals towards its neighbours' by L in 0..1 (default 0)"},
       {"--extend", "Z2", "grow each focus into adjacent elements with |z| >= Z2 (hysteresis; default off)"},
       {"--test", "z|crawford-howell", "plain z, or Crawford-Howell's t for one case against n normals as the equivalent z (default z)"},
       {"--peak", "ZP", "a cluster smaller than --min-cluster is a focus too when its peak |z| >= ZP (default off)"},

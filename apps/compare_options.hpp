@@ -14,7 +14,8 @@ namespace vpm::cli {
 /// defaults; InputError naming the option on a bad value.
 CompareOptions compare_options(const Args& args);
 
-/// The feature (--feature), normalisation (--normalisation), smoothing (--smooth 0..8) and
+/// The feature (--feature), normalisation (--normalisation), smoothing (--smooth 0..8),
+/// shrinkage (--shrink 0..1) and
 /// compare options of a comparison, as a calibration records them (rate left at its default).
 CalibrationSettings comparison_settings(const Args& args);
 

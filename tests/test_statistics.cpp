@@ -498,3 +498,50 @@ TEST_CASE("vpm calibrate writes the calibration and vpm compare --min-cluster-fr
   CHECK(test::run_status(vpm + " calibrate --normals " + three + opts + " -o " + dir + "c3.json 2> " + err) == 2);
   CHECK_THAT(test::slurp(err), Catch::Contains("at least 4"));
 }
+
+TEST_CASE("statistics: the spread shrunk across adjacent elements, recorded in the comparison") {
+  const CanonicalElements el(def());
+  std::vector<std::string> names;
+  const std::vector<ElementTable> normals = eight_normals(names);
+  const Reference plain = build_reference(el, normals, names, "pet", Normalisation::proportional, 0);
+  const Reference none = build_reference(el, normals, names, "pet", Normalisation::proportional, 0, 0.0);
+  CHECK(none.std == plain.std);
+  const Reference full = build_reference(el, normals, names, "pet", Normalisation::proportional, 0, 1.0);
+  const Reference half = build_reference(el, normals, names, "pet", Normalisation::proportional, 0, 0.5);
+  CHECK(full.mean == plain.mean);
+  for (int e : {0, 17, el.size() / 2, el.size() - 1}) {
+    double sum = plain.std[e] * plain.std[e];
+    int k = 1;
+    for (int nb : el.neighbours(e)) {
+      sum += plain.std[nb] * plain.std[nb];
+      ++k;
+    }
+    CHECK(full.std[e] == Approx(std::sqrt(sum / k)).epsilon(1e-14));
+    CHECK(half.std[e] * half.std[e] ==
+          Approx(0.5 * plain.std[e] * plain.std[e] + 0.5 * full.std[e] * full.std[e]).epsilon(1e-12));
+  }
+  // pooled spreads vary less between elements than the raw ones
+  const auto spread = [](const std::vector<double>& v) {
+    const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+    return *hi - *lo;
+  };
+  CHECK(spread(full.std) < spread(plain.std));
+  CHECK_THROWS_AS(build_reference(el, normals, names, "pet", Normalisation::proportional, 0, 1.5), InputError);
+  CHECK_THROWS_AS(build_reference(el, normals, names, "pet", Normalisation::proportional, 0, -0.1), InputError);
+  // vpm compare --shrink records it; a calibration made without it is refused
+  const std::string dir = std::string(VPM_TEST_TMP) + "/shrink_";
+  std::string list;
+  for (size_t i = 0; i < normals.size(); ++i) {
+    write_subject_table(dir + names[i] + ".tsv", normals[i]);
+    list += (i ? "," : "") + dir + names[i] + ".tsv";
+  }
+  write_subject_table(dir + "p.tsv", subject(77, 1.0));
+  const std::string vpm = VPM_BINARY, base = " --feature pet --normals " + list + " --quiet";
+  REQUIRE(test::run_status(vpm + " compare --patient " + dir + "p.tsv --shrink 0.8" + base + " -o " + dir + "out.tsv") == 0);
+  CHECK(Json::parse(test::slurp(dir + "out.json")).find("reference")->find("shrinkage")->number() == 0.8);
+  REQUIRE(test::run_status(vpm + " calibrate" + base + " -o " + dir + "cal.json") == 0);
+  CHECK(test::run_status(vpm + " compare --patient " + dir + "p.tsv --shrink 0.8 --min-cluster-from " + dir +
+                         "cal.json" + base + " -o " + dir + "bad.tsv 2> " + dir + "err.txt") == 2);
+  CHECK_THAT(test::slurp(dir + "err.txt"), Catch::Contains("calibrated with shrinkage 0"));
+  CHECK(test::run_status(vpm + " compare --patient " + dir + "p.tsv --shrink 2" + base + " -o " + dir + "bad.tsv 2> /dev/null") == 2);
+}

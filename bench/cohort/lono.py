@@ -45,6 +45,7 @@ def workflow_options(results, feature):
         o, ref = side["options"], side["reference"]
         sign = {-1: "hypo", 1: "hyper", 0: "both"}[int(o["sign"])]
         args = ["--normalisation", str(ref["normalisation"]), "--smooth", str(int(ref["smoothing"])),
+                "--shrink", repr(float(ref.get("shrinkage", 0))),
                 "--min-cluster", str(int(o["min_cluster"])), "--test", str(o["test"]), "--sign", sign]
         if float(o.get("fdr_q", 0)) > 0:
             args += ["--fdr", repr(float(o["fdr_q"]))]

@@ -172,7 +172,7 @@ def main():
     ap.add_argument("--vpm", default="build/vpm")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--elements", default="--layout graded --level 4 --samples 64")
-    ap.add_argument("--compare", default="--normalisation proportional --threshold 3 --min-cluster 8 "
+    ap.add_argument("--compare", default="--normalisation proportional --threshold 3 --min-cluster 10 --shrink 0.8 "
                                          "--extend 2.5 --smooth 0 --sign hypo")
     a = ap.parse_args()
     normals, patients = read_participants(a.bids)

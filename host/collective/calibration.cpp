@@ -26,7 +26,7 @@ LeftOutNormal leave_out(const CanonicalElements& el, const std::vector<ElementTa
       others.push_back(normals[i]);
       other_names.push_back(names[i]);
     }
-  const Reference ref = build_reference(el, others, other_names, s.feature, s.normalisation, s.smoothing);
+  const Reference ref = build_reference(el, others, other_names, s.feature, s.normalisation, s.smoothing, s.shrinkage);
   CompareOptions o = s.compare;
   o.min_cluster = 1;
   ElementTable patient = normals[out];
@@ -103,6 +103,7 @@ Json to_json(const ClusterCalibration& c) {
   j["feature"] = c.settings.feature;
   j["normalisation"] = to_string(c.settings.normalisation);
   j["smoothing"] = c.settings.smoothing;
+  j["shrinkage"] = c.settings.shrinkage;
   j["options"] = options_json(c.settings);
   j["rate"] = c.settings.rate;
   j["normals"] = c.normals;
@@ -170,7 +171,7 @@ int calibrated_min_cluster(const Json& cal, const CalibrationSettings& s, const 
   if (cal.type() != Json::Type::Object) throw InputError(source + ": not a calibration (not a JSON object)");
   CalibrationSettings probe = s;
   const Json want = to_json(ClusterCalibration{probe});
-  for (const char* key : {"feature", "normalisation", "smoothing"})
+  for (const char* key : {"feature", "normalisation", "smoothing", "shrinkage"})
     same(member(cal, key, source), *want.find(key), key, source);
   const Json& opts = member(cal, "options", source);
   for (const char* key : {"threshold", "fdr_q", "extend", "peak", "test", "sign"})

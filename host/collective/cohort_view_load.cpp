@@ -24,6 +24,7 @@ struct ComparisonFile {
   std::vector<std::string> normal_tables;
   Normalisation normalisation = Normalisation::proportional;
   int smoothing = 0;
+  double shrinkage = 0;
   CompareOptions options;
   size_t clusters = 0;
 };
@@ -75,6 +76,7 @@ std::vector<ComparisonFile> read_comparisons(const fs::path& results, const std:
       c.normal_tables.push_back(resolve(tables->at(i).string(), results, "a normal's table named in " + side));
     c.normalisation = parse_normalisation(need(*ref, "normalisation", side).string());
     c.smoothing = integer(*ref, "smoothing", side, 0);
+    if (const Json* sh = ref->find("shrinkage")) c.shrinkage = sh->number();  // absent before 2026-11-28
     c.options.threshold = need(*opt, "threshold", side).number();
     c.options.fdr_q = need(*opt, "fdr_q", side).number();
     c.options.min_cluster = integer(*opt, "min_cluster", side);
@@ -165,8 +167,9 @@ void add_feature(CohortView& v, const CanonicalElements& el, const std::vector<c
                  Tables& tables, std::map<std::string, size_t>& index) {
   const ComparisonFile& first = *comps.front();
   std::vector<ElementTable> normals = tables.take(first.normal_tables);
-  const Reference ref = build_reference(el, normals, first.normal_tables, first.feature, first.normalisation, first.smoothing);
-  v.features.push_back({first.feature, first.normalisation, first.smoothing, first.options, ref.subjects, to_float(ref.mean),
+  const Reference ref = build_reference(el, normals, first.normal_tables, first.feature, first.normalisation, first.smoothing,
+                                        first.shrinkage);
+  v.features.push_back({first.feature, first.normalisation, first.smoothing, first.shrinkage, first.options, ref.subjects, to_float(ref.mean),
                         to_float(ref.std), ref.count});
   for (size_t i = 0; i < normals.size(); ++i) {
     ViewSubject& s = subject_for(v, index, subject_id(normals[i], first.normal_tables[i]), false);
@@ -176,7 +179,7 @@ void add_feature(CohortView& v, const CanonicalElements& el, const std::vector<c
   tables.put(first.normal_tables, normals);
   for (const ComparisonFile* c : comps) {
     if (c->normal_tables != first.normal_tables || c->normalisation != first.normalisation ||
-        c->smoothing != first.smoothing)
+        c->smoothing != first.smoothing || c->shrinkage != first.shrinkage)
       throw InputError(c->tsv + ": compared against other normals than " + first.tsv + "; one reference per feature");
     const ElementTable& t = tables.get(c->patient_table);
     const Comparison cmp = compare_to_reference(el, ref, t, c->options);

@@ -21,6 +21,7 @@ void write_comparison(const std::string& tsv_path, const CanonicalElements& el, 
   r["feature"] = ref.feature;
   r["normalisation"] = to_string(ref.normalisation);
   r["smoothing"] = ref.smoothing;
+  r["shrinkage"] = ref.shrinkage;
   r["subjects"] = ref.subjects;
   Json tables = Json::array();
   for (const std::string& t : normal_tables) tables.push_back(t);

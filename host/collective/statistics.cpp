@@ -79,16 +79,34 @@ std::vector<double> smooth_over_elements(const CanonicalElements& el, const std:
 
 namespace {
 
+// Reference::shrinkage: each variance pulled towards the mean over the element and its neighbours.
+void shrink_spread(const CanonicalElements& el, double shrinkage, std::vector<double>& std) {
+  std::vector<double> var(std.size());
+  for (size_t e = 0; e < std.size(); ++e) var[e] = std[e] * std[e];
+  for (size_t e = 0; e < std.size(); ++e) {
+    if (std::isnan(var[e])) continue;
+    double sum = var[e];
+    int k = 1;
+    for (int nb : el.neighbours(static_cast<int>(e)))
+      if (!std::isnan(var[static_cast<size_t>(nb)])) {
+        sum += var[static_cast<size_t>(nb)];
+        ++k;
+      }
+    std[e] = std::sqrt((1 - shrinkage) * var[e] + shrinkage * sum / k);
+  }
+}
+
 Reference reference_of(const CanonicalElements* el, const std::vector<ElementTable>& normals,
                        const std::vector<std::string>& names, const std::string& feature, Normalisation normalisation,
-                       int smoothing) {
+                       int smoothing, double shrinkage) {
   if (normals.size() < 3) throw InputError("reference: needs at least 3 normals, got " + std::to_string(normals.size()));
   Reference r;
   r.definition = normals[0].definition;
   r.feature = feature;
   r.normalisation = normalisation;
   r.smoothing = smoothing;
-  if (smoothing > 0 && el->definition() != r.definition)
+  r.shrinkage = shrinkage;
+  if ((smoothing > 0 || shrinkage > 0) && el->definition() != r.definition)
     throw InputError("reference: the elements to smooth over differ from the tables' definition");
   r.subjects = static_cast<int>(normals.size());
   std::vector<std::vector<double>> values;
@@ -123,6 +141,7 @@ Reference reference_of(const CanonicalElements* el, const std::vector<ElementTab
     r.mean[e] = mean;
     r.std[e] = std::sqrt(s2 / (c - 1));
   }
+  if (shrinkage > 0) shrink_spread(*el, shrinkage, r.std);
   return r;
 }
 
@@ -130,14 +149,16 @@ Reference reference_of(const CanonicalElements* el, const std::vector<ElementTab
 
 Reference build_reference(const std::vector<ElementTable>& normals, const std::vector<std::string>& names,
                           const std::string& feature, Normalisation normalisation) {
-  return reference_of(nullptr, normals, names, feature, normalisation, 0);
+  return reference_of(nullptr, normals, names, feature, normalisation, 0, 0);
 }
 
 Reference build_reference(const CanonicalElements& elements, const std::vector<ElementTable>& normals,
                           const std::vector<std::string>& names, const std::string& feature, Normalisation normalisation,
-                          int smoothing) {
+                          int smoothing, double shrinkage) {
   if (smoothing < 0) throw InputError("reference: smoothing " + std::to_string(smoothing) + " is negative");
-  return reference_of(&elements, normals, names, feature, normalisation, smoothing);
+  if (!(shrinkage >= 0 && shrinkage <= 1))
+    throw InputError("reference: shrinkage " + std::to_string(shrinkage) + " is not in [0, 1]");
+  return reference_of(&elements, normals, names, feature, normalisation, smoothing, shrinkage);
 }
 
 namespace {

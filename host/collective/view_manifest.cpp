@@ -44,6 +44,7 @@ Json feature_entry(const CohortView& v, const ViewFeature& f, FeatureCodes& code
   j["peak"] = f.compare.peak;
   j["test"] = to_string(f.compare.test);
   j["smoothing"] = f.smoothing;
+  j["shrinkage"] = f.shrinkage;
   j["sign"] = f.compare.sign;
   j["reference_subjects"] = f.reference_subjects;
   std::vector<const std::vector<float>*> normals;

@@ -20,6 +20,7 @@ struct CalibrationSettings {
   std::string feature;
   Normalisation normalisation = Normalisation::proportional;
   int smoothing = 0;          ///< rings, as build_reference's
+  double shrinkage = 0;       ///< Reference::shrinkage
   CompareOptions compare;     ///< the patients' options; its min_cluster is what is calibrated (ignored)
   double rate = 1.0;          ///< false clusters per 10 normals allowed (>= 0)
 };
@@ -51,13 +52,13 @@ struct ClusterCalibration {
 ClusterCalibration calibrate_min_cluster(const CanonicalElements& elements, const std::vector<ElementTable>& normals,
                                          const std::vector<std::string>& names, const CalibrationSettings& settings);
 
-/// {"feature", "normalisation", "smoothing", "options": {threshold, fdr_q, extend, peak, sign,
+/// {"feature", "normalisation", "smoothing", "shrinkage", "options": {threshold, fdr_q, extend, peak, sign,
 ///  test}, "rate", "normals", "min_cluster", "curve": [{"min_cluster", "false_clusters",
 ///  "per_10_normals"}], "per_normal": [{"normal", "candidates", "peak_z"}]}
 Json to_json(const ClusterCalibration& calibration);
 
 /// The min_cluster of a calibration JSON written by to_json (a file from elsewhere: checked),
-/// after checking that it was made with `settings` (feature, normalisation, smoothing and every
+/// after checking that it was made with `settings` (feature, normalisation, smoothing, shrinkage and every
 /// compare option but min_cluster) and on the normals named `normals` (the same set, any
 /// order): InputError naming `source` and the first difference.
 int calibrated_min_cluster(const Json& calibration, const CalibrationSettings& settings,

@@ -62,6 +62,7 @@ struct ViewFeature {
   std::string name;
   Normalisation normalisation = Normalisation::proportional;
   int smoothing = 0;          ///< Reference::smoothing
+  double shrinkage = 0;       ///< Reference::shrinkage
   CompareOptions compare;     ///< the options `vpm compare` used
   int reference_subjects = 0;
   std::vector<float> mean, std;  ///< the reference per element

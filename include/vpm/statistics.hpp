@@ -49,6 +49,10 @@ struct Reference {
   std::string feature;
   Normalisation normalisation = Normalisation::proportional;
   int smoothing = 0;  ///< rings of smooth_over_elements applied to every subject's normalised feature
+  /// Variance shrinkage across adjacent elements, in [0, 1]: each element's variance is
+  /// (1 - shrinkage) s_e^2 + shrinkage * (the mean of s^2 over e and its adjacent elements), a
+  /// spread that few normals estimate more steadily (docs/cohort.md, "Shrunken spread").
+  double shrinkage = 0;
   int subjects = 0;
   std::vector<double> mean, std;  ///< per element (sample standard deviation, n - 1); NaN without data
   std::vector<int> count;         ///< per element: the normals with data there
@@ -59,11 +63,12 @@ struct Reference {
 Reference build_reference(const std::vector<ElementTable>& normals, const std::vector<std::string>& names,
                           const std::string& feature, Normalisation normalisation);
 /// As above, every normal's normalised feature first smoothed over `smoothing` rings of
-/// `elements` (which must have the tables' definition); compare_to_reference then smooths the
-/// patient's the same way.
+/// `elements` (which must have the tables' definition; compare_to_reference then smooths the
+/// patient's the same way), and the spread shrunk across adjacent elements by `shrinkage`
+/// (Reference::shrinkage; InputError outside [0, 1]).
 Reference build_reference(const CanonicalElements& elements, const std::vector<ElementTable>& normals,
                           const std::vector<std::string>& names, const std::string& feature, Normalisation normalisation,
-                          int smoothing);
+                          int smoothing, double shrinkage = 0);
 
 struct CompareOptions {
   double threshold = 3.0;  ///< |z| beyond which an element is a candidate (ignored with fdr_q > 0)
