@@ -67,7 +67,7 @@ std::vector<ElementTable> tables_of(const py::list& items) {
 // long: the keyword arguments of `vpm compare`, one line each
 py::dict compare_py(const py::list& normals, const py::object& patient, const std::string& feature,
                     const std::string& normalisation, double threshold, double fdr, int min_cluster, double extend,
-                    double peak, const std::string& sign, const std::string& test, int smooth) {
+                    double peak, const std::string& sign, const std::string& test, int smooth, double shrink) {
   const std::vector<ElementTable> ns = tables_of(normals);
   py::list one;
   one.append(patient);
@@ -85,7 +85,7 @@ py::dict compare_py(const py::list& normals, const py::object& patient, const st
   for (size_t i = 0; i < ns.size(); ++i) names.push_back(ns[i].subject.empty() ? "normal " + std::to_string(i) : ns[i].subject);
   const auto [c, ref] = without_gil(nullptr, [&] {
     const CanonicalElements el(p.definition);
-    Reference r = build_reference(el, ns, names, feature, n, smooth);
+    Reference r = build_reference(el, ns, names, feature, n, smooth, shrink);
     return std::make_pair(compare_to_reference(el, r, p, o), r);
   });
   py::dict out = json_to_python(to_json(c)).cast<py::dict>();
@@ -152,7 +152,7 @@ void bind_collective(py::module_& m) {
   m.def("_compare", &compare_py, py::arg("normals"), py::arg("patient"), py::arg("feature"), py::kw_only(),
         py::arg("normalisation") = "proportional", py::arg("threshold") = 3.0, py::arg("fdr") = 0.0,
         py::arg("min_cluster") = 3, py::arg("extend") = 0.0, py::arg("peak") = 0.0, py::arg("sign") = "both",
-        py::arg("test") = "z", py::arg("smooth") = 0);
+        py::arg("test") = "z", py::arg("smooth") = 0, py::arg("shrink") = 0.0);
   m.def("to_native", [](const py::object& mesh, const py::object& points) {
     auto msh = mesh_argument(mesh, py::none());
     Points p = to_points(points, "points");

@@ -176,7 +176,7 @@ class Comparison:
 def compare(normals, patient, feature, **options):
     """Compares a patient's table with the normals' (`vpm compare`): proportional scaling, the
     normals' per-element mean and std, z and foci. `normals`: ElementTables or paths; options:
-    normalisation, threshold (3), fdr, min_cluster (3), extend, peak, sign, test, smooth.
+    normalisation, threshold (3), fdr, min_cluster (3), extend, peak, sign, test, smooth, shrink (0).
     Returns a Comparison."""
     d = _vpm._compare(list(normals), patient, feature, **options)
     arrays = {k: d.pop(k) for k in ("z", "patient", "cluster", "reference_mean", "reference_std")}

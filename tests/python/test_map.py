@@ -78,6 +78,11 @@ def test_sample_and_compare(vpm, ball, image_array):
     assert c.z.shape == (160,) and np.nanmin(c.z) < -3
     assert c.clusters and all(k["sign"] == -1 for k in c.clusters)
     assert c.to_dict()["clusters"] == c.clusters
+    # the spread shrunk across adjacent elements: the same means, steadier spreads
+    s = vpm.compare(tables[:3], tables[3], "pet", threshold=3, min_cluster=2, sign="hypo", shrink=1.0)
+    assert np.allclose(s.reference_mean, c.reference_mean, equal_nan=True)
+    ok = np.isfinite(c.reference_std) & np.isfinite(s.reference_std)
+    assert ok.sum() > 100 and np.ptp(s.reference_std[ok]) < np.ptp(c.reference_std[ok])
     zimg = vpm.to_image(out, el, np.nan_to_num(c.z), vpm.Image(data, affine))
     assert zimg.shape == data.shape and zimg.data.min() < -3
     native = vpm.to_native(out, np.zeros((1, 3)))
