@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 
 #include "core/parallel.hpp"
 #include "vpm/error.hpp"
@@ -43,14 +44,15 @@ LeftOutNormal leave_out(const CanonicalElements& el, const std::vector<ElementTa
 
 }  // namespace
 
-double ClusterCalibration::rate_at(int m) const {
-  if (normals <= 0 || m < 1) return 0;
+int ClusterCalibration::clusters_at(int m) const {
   int count = 0;
   for (const LeftOutNormal& n : per_normal)
     for (size_t i = 0; i < n.candidates.size(); ++i)
-      count += kept(n.candidates[i], n.peak_z[i], m, settings.compare.peak);
-  return 10.0 * count / normals;
+      count += kept(n.candidates[i], n.peak_z[i], std::max(m, 1), settings.compare.peak);
+  return count;
 }
+
+double ClusterCalibration::rate_at(int m) const { return normals > 0 ? 10.0 * clusters_at(m) / normals : 0; }
 
 ClusterCalibration calibrate_min_cluster(const CanonicalElements& el, const std::vector<ElementTable>& normals,
                                          const std::vector<std::string>& names, const CalibrationSettings& s) {
@@ -63,21 +65,21 @@ ClusterCalibration calibrate_min_cluster(const CanonicalElements& el, const std:
   cal.settings = s;
   cal.normals = static_cast<int>(normals.size());
   cal.per_normal.resize(normals.size());
-  std::vector<std::string> errors(normals.size());
+  std::vector<std::exception_ptr> errors(normals.size());  // the first normal's is rethrown as it was
   detail::parallel_for(cal.normals, 2, [&](int b, int e) {
     for (int i = b; i < e; ++i) try {
         cal.per_normal[static_cast<size_t>(i)] = leave_out(el, normals, names, s, static_cast<size_t>(i));
-      } catch (const std::exception& x) {
-        errors[static_cast<size_t>(i)] = x.what();
+      } catch (...) {
+        errors[static_cast<size_t>(i)] = std::current_exception();
       }
   });
-  for (const std::string& m : errors)
-    if (!m.empty()) throw InputError(m);
+  for (const std::exception_ptr& x : errors)
+    if (x) std::rethrow_exception(x);
   int largest = 0;
   for (const LeftOutNormal& n : cal.per_normal)
     for (int c : n.candidates) largest = std::max(largest, c);
   for (int m = 1; m <= largest + 1; ++m) {
-    cal.false_clusters.push_back(static_cast<int>(std::lround(cal.rate_at(m) * cal.normals / 10.0)));
+    cal.false_clusters.push_back(cal.clusters_at(m));
     if (cal.min_cluster == 0 && cal.rate_at(m) <= s.rate) cal.min_cluster = m;
   }
   return cal;

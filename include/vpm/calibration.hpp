@@ -43,7 +43,9 @@ struct ClusterCalibration {
   /// peak rule keeps clusters at every size: lower CompareOptions::peak or raise the rate).
   int min_cluster = 0;
   std::vector<LeftOutNormal> per_normal;
-  /// False clusters per 10 normals at min_cluster m (0 past the curve's end unless a peak rule holds).
+  /// The false clusters min_cluster m keeps over all left-out normals (0 past the curve's end
+  /// unless a peak rule keeps small ones), and that per 10 normals.
+  int clusters_at(int m) const;
   double rate_at(int m) const;
 };
 
