@@ -36,7 +36,8 @@ def fail(path, problem):
 
 def workflow_options(results, feature):
     """The compare options and smoothing of the first patient's sidecar, as CLI arguments."""
-    sidecars = sorted(glob.glob(os.path.join(glob.escape(results), "compare", f"*_{feature}.json")))
+    sidecars = sorted(p for p in glob.glob(os.path.join(glob.escape(results), "compare", f"*_{feature}.json"))
+                      if not os.path.basename(p).startswith("calibration_"))  # vpm calibrate's, not a comparison
     if not sidecars:
         fail(os.path.join(results, "compare"), f"no comparison sidecar *_{feature}.json")
     try:
