@@ -4,8 +4,6 @@
 #include <iostream>
 #include <new>
 
-#include <boost/compute/exception/opencl_error.hpp>
-
 #include "cli.hpp"
 #include "vpm/config.hpp"
 #include "vpm/error.hpp"
@@ -52,14 +50,15 @@ int main(int argc, char** argv) {
     } catch (const vpm::DeviceError& e) {
       std::cerr << "vpm " << c.name << ": device error: " << e.what() << '\n';
       return vpm::kExitDevice;
-    } catch (const boost::compute::opencl_error& e) {  // a call no stage turned into a DeviceError
-      std::cerr << "vpm " << c.name << ": device error: OpenCL error " << e.error_code() << " (" << e.error_string()
-                << "); VPM_DEVICE=host runs without OpenCL\n";
-      return vpm::kExitDevice;
     } catch (const std::bad_alloc&) {
       std::cerr << "vpm " << c.name << ": error: out of memory\n";
       return vpm::kExitInternal;
     } catch (const std::exception& e) {
+      const std::string cl = vpm::opencl_error_description(e);  // a call no stage turned into a DeviceError
+      if (!cl.empty()) {
+        std::cerr << "vpm " << c.name << ": device error: " << cl << "; VPM_DEVICE=host runs without OpenCL\n";
+        return vpm::kExitDevice;
+      }
       std::cerr << "vpm " << c.name << ": internal error: " << e.what() << '\n';
       return vpm::kExitInternal;
     }

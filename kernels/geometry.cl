@@ -1,16 +1,22 @@
 // Geometry kernels: per-tet signed volumes and per-vertex dual volumes.
 // Positions are n x 3 row-major doubles; tets are m x 4 row-major ints.
 
-// vol[t] = det[b-a, c-a, d-a] / 6
+#include "tet_geometry.clh"
+
+// vol[t] = det[b-a, c-a, d-a] / 6 (tg_volume, as the host's tet_volumes)
 __kernel void tet_volumes(const int m, __global const real* x, __global const int* tets,
                           __global real* vol) {
   const int t = get_global_id(0);
   if (t >= m) return;
-  const real3 a = load3(x, tets[4 * t]);
-  const real3 e1 = load3(x, tets[4 * t + 1]) - a;
-  const real3 e2 = load3(x, tets[4 * t + 2]) - a;
-  const real3 e3 = load3(x, tets[4 * t + 3]) - a;
-  vol[t] = dot(e1, cross(e2, e3)) / 6.0;
+  __global const int* T = tets + 4 * t;
+  real e1[3], e2[3], e3[3];
+  for (int c = 0; c < 3; ++c) {
+    const real a = x[3 * T[0] + c];
+    e1[c] = x[3 * T[1] + c] - a;
+    e2[c] = x[3 * T[2] + c] - a;
+    e3[c] = x[3 * T[3] + c] - a;
+  }
+  vol[t] = tg_volume(e1, e2, e3);
 }
 
 // dual[v] = sum over tets t touching v of vol[t] / 4 (gather through the CSR incidence,

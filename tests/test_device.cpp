@@ -1,6 +1,8 @@
 #include <catch2/catch.hpp>
 
 #include "support/devices.hpp"
+#include <boost/compute/exception/opencl_error.hpp>
+
 #include "core/device_cl.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
@@ -47,4 +49,15 @@ TEST_CASE("OpenCL device selection by type, index and name") {
   auto k2 = dev->cl().kernel("geometry", "tet_volumes");
   CHECK(k1.get_program() == k2.get_program());
   CHECK_THROWS(dev->cl().kernel("no_such_program", "x"));
+}
+
+TEST_CASE("an OpenCL error that escapes a stage is described through vpm/error.hpp, other errors are not") {
+  // the vpm program reports such an error (exit 5) without including OpenCL headers
+  const boost::compute::opencl_error cl(CL_OUT_OF_RESOURCES);
+  const std::string d = vpm::opencl_error_description(cl);
+  CHECK(d.find("OpenCL error -5 (") == 0);
+  CHECK(d.size() > std::string("OpenCL error -5 ()").size());  // the error's name in the parentheses
+  CHECK(d.back() == ')');
+  CHECK(vpm::opencl_error_description(std::runtime_error("x")).empty());
+  CHECK(vpm::opencl_error_description(vpm::DeviceError("y")).empty());
 }

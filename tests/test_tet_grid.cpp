@@ -3,12 +3,14 @@
 // grown bounding box overlaps it, in ascending order (the order the location's fallback search
 // and its device twin rely on for identical maps).
 #include <catch2/catch.hpp>
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <random>
 
 #include "mesh/face_table.hpp"
+#include "mesh/tet_geometry.hpp"
 #include "mesh/tet_grid.hpp"
 #include "vpm/topology.hpp"
 #include "support/shapes.hpp"
@@ -120,4 +122,41 @@ TEST_CASE("face table: every slot, ordered by (sorted triple, slot), grouped by 
   ft.for_each_group([&](int, int count) { (count == 2 ? pairs : singles) += 1; });
   CHECK(2 * pairs + singles == static_cast<int>(ref.size()));
   CHECK(singles == static_cast<int>(boundary_faces(mesh.tets).rows()));
+}
+
+TEST_CASE("tet geometry (kernels/tet_geometry.clh) on the host: Eigen's volume and 3x3 inverse, bit for bit") {
+  // The header's host branch replaced Eigen's e1.dot(e2.cross(e3)) / 6 and M.inverse() in
+  // geometry.cpp and tet_grid.cpp; maps stay byte for byte the same only while these agree
+  // exactly (the volume map is not stable at round-off: 1e-16 becomes 1e-4 after the polish).
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int checked = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    double e[3][3];
+    Eigen::Matrix3d M;
+    for (int k = 0; k < 3; ++k)
+      for (int c = 0; c < 3; ++c) M(c, k) = e[k][c] = u(rng) * (trial % 2 ? 1e-3 : 1.0);
+    if (std::abs(M.determinant()) < 1e-12) continue;
+    const Eigen::Vector3d e1 = M.col(0), e2 = M.col(1), e3 = M.col(2);
+    REQUIRE(detail::tg_volume(e[0], e[1], e[2]) == e1.dot(e2.cross(e3)) / 6.0);
+    double q[9];
+    detail::tg_inverse_rows(e[0], e[1], e[2], q);
+    const Eigen::Matrix3d Mi = M.inverse();
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) REQUIRE(q[3 * r + c] == Mi(r, c));
+    REQUIRE(detail::tg_length(e[0]) == e1.norm());
+    ++checked;
+  }
+  CHECK(checked > 1900);
+  // and the rows are M^-1's: M^-1 M = I
+  Points x(4, 3);
+  x << 0, 0, 0, 1, 0.1, 0, 0.2, 1, 0, 0.1, 0.3, 1;
+  Tets t(1, 4);
+  t << 0, 1, 2, 3;
+  double e[3][3], q[9];
+  detail::tet_edges(x, t, 0, e);
+  detail::tg_inverse_rows(e[0], e[1], e[2], q);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      CHECK(q[3 * r] * e[c][0] + q[3 * r + 1] * e[c][1] + q[3 * r + 2] * e[c][2] == Approx(r == c ? 1.0 : 0.0).margin(1e-14));
 }

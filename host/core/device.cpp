@@ -315,4 +315,10 @@ void Device::check_buffer(unsigned long long bytes, const std::string& what) con
                     std::to_string(limit) + " bytes); use a smaller input or VPM_DEVICE=host");
 }
 
+std::string opencl_error_description(const std::exception& e) {
+  const auto* cl = dynamic_cast<const bc::opencl_error*>(&e);
+  if (!cl) return {};
+  return "OpenCL error " + std::to_string(cl->error_code()) + " (" + cl->error_string() + ")";
+}
+
 }  // namespace vpm

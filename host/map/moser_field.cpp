@@ -10,12 +10,16 @@
 
 #include "core/parallel.hpp"
 #include "core/device_cl.hpp"
+#include "mesh/tet_geometry.hpp"
 #include "vpm/device.hpp"
 #include "vpm/topology.hpp"
 
 namespace vpm::detail {
 
 namespace bc = boost::compute;
+
+// the field's expressions, shared with kernels/moser.cl (after tet_geometry's products)
+#include "kernels/moser_field.clh"
 
 
 Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> tet_gradients(const MoserField& f,
@@ -25,10 +29,8 @@ Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> tet_gradients(const Mo
   parallel_for(f.m, 8192, [&](int t0, int t1) {
     for (int t = t0; t < t1; ++t) {
       const double* q = &f.inv[12 * static_cast<size_t>(t)];
-      const double d1 = psi(T(t, 1)) - psi(T(t, 0)), d2 = psi(T(t, 2)) - psi(T(t, 0)),
-                   d3 = psi(T(t, 3)) - psi(T(t, 0));
-      // grad psi = sum_j (psi_j - psi_0) grad lambda_j, grad lambda_j = row j of Minv
-      for (int c = 0; c < 3; ++c) g(t, c) = d1 * q[3 + c] + d2 * q[6 + c] + d3 * q[9 + c];
+      mf_tet_gradient(q, psi(T(t, 1)) - psi(T(t, 0)), psi(T(t, 2)) - psi(T(t, 0)), psi(T(t, 3)) - psi(T(t, 0)),
+                      &g(t, 0));
     }
   });
   return g;
@@ -47,16 +49,11 @@ std::vector<double> vertex_gradients(const Tets& tets, const Points& x,
       for (int d = 0; d < 3; ++d) g[3 * v + d] += vol(t) * G(t, d);
     }
   for (int v = 0; v < n; ++v) {
-    Eigen::Map<Eigen::Vector3d> gv(&g[3 * static_cast<size_t>(v)]);
-    if (w[v] > 0) gv /= w[v];
-    if (boundary[v]) {
-      if (!slide) {
-        gv.setZero();
-      } else {
-        const Eigen::Vector3d nrm = x.row(v).transpose().normalized();
-        gv -= gv.dot(nrm) * nrm;
-      }
-    }
+    double* gv = &g[3 * static_cast<size_t>(v)];
+    if (w[v] > 0)
+      for (int d = 0; d < 3; ++d) gv[d] /= w[v];
+    const double p[3] = {x(v, 0), x(v, 1), x(v, 2)};
+    mf_boundary_gradient(boundary[v], slide, p, gv);
   }
   return g;
 }
@@ -67,20 +64,12 @@ namespace {
 Eigen::Vector3d velocity(const MoserField& f, bool on_b, bool slide, Eigen::Vector3d p, double t,
                          int& hint, long long* st) {
   if (on_b && !slide) return Eigen::Vector3d::Zero();
-  if (on_b) p /= p.norm();
+  if (on_b) mf_unit(p.data());
   double l[4];
   const int tet = locate(f, p, hint, l, st);
   hint = tet;
-  const Tets& T = *f.tets;
-  Eigen::Vector3d g = Eigen::Vector3d::Zero();
-  double r = 0;
-  for (int k = 0; k < 4; ++k) {
-    const int v = T(tet, k);
-    g += l[k] * Eigen::Vector3d(f.grad[3 * v], f.grad[3 * v + 1], f.grad[3 * v + 2]);
-    r += l[k] * f.rho0[v];
-  }
-  Eigen::Vector3d u = g / ((1.0 - t) * r + t);
-  if (on_b) u -= u.dot(p) * p;
+  Eigen::Vector3d u;
+  mf_velocity(&(*f.tets)(tet, 0), l, f.grad.data(), f.rho0.data(), t, on_b, p.data(), u.data());
   return u;
 }
 
@@ -102,8 +91,7 @@ void advect_host(const MoserField& f, const std::vector<char>& boundary, const A
       const Eigen::Vector3d k2 = velocity(f, on_b, prm.slide, xi + 0.5 * dt * k1, t0 + 0.5 * dt, h, st);
       const Eigen::Vector3d k3 = velocity(f, on_b, prm.slide, xi + 0.5 * dt * k2, t0 + 0.5 * dt, h, st);
       const Eigen::Vector3d k4 = velocity(f, on_b, prm.slide, xi + dt * k3, t0 + dt, h, st);
-      xi += (dt / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
-      if (on_b) xi /= xi.norm();
+      mf_rk4_step(xi.data(), k1.data(), k2.data(), k3.data(), k4.data(), dt, on_b);
     }
     x.row(i) = xi.transpose();
     hint[i] = h;

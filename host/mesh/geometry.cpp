@@ -6,6 +6,7 @@
 
 #include "core/parallel.hpp"
 #include "mesh/device_volumes.hpp"
+#include "mesh/tet_geometry.hpp"
 #include "core/device_cl.hpp"
 #include "vpm/device.hpp"
 #include "vpm/topology.hpp"
@@ -18,11 +19,9 @@ Eigen::VectorXd tet_volumes(const Points& x, const Tets& t) {
   Eigen::VectorXd vol(t.rows());
   detail::parallel_for(static_cast<int>(t.rows()), 32768, [&](int i0, int i1) {
     for (int i = i0; i < i1; ++i) {
-      const Eigen::Vector3d a = x.row(t(i, 0));
-      const Eigen::Vector3d e1 = x.row(t(i, 1)).transpose() - a;
-      const Eigen::Vector3d e2 = x.row(t(i, 2)).transpose() - a;
-      const Eigen::Vector3d e3 = x.row(t(i, 3)).transpose() - a;
-      vol(i) = e1.dot(e2.cross(e3)) / 6.0;
+      double e[3][3];
+      detail::tet_edges(x, t, i, e);
+      vol(i) = detail::tg_volume(e[0], e[1], e[2]);
     }
   });
   return vol;

@@ -11,6 +11,7 @@
 #include "core/group_by_key.hpp"
 #include "core/parallel.hpp"
 #include "mesh/face_table.hpp"
+#include "mesh/tet_geometry.hpp"
 
 namespace vpm::detail {
 
@@ -85,16 +86,11 @@ void build_background(TetGrid& f, const Points& x, const Tets& tets, const std::
   f.inv.resize(12 * static_cast<size_t>(f.m));  // every entry written below, by the thread that owns it
   parallel_for(f.m, 8192, [&](int t0, int t1) {
     for (int t = t0; t < t1; ++t) {
-      const Eigen::Vector3d a = x.row(tets(t, 0)).transpose();
-      Eigen::Matrix3d M;
-      for (int c = 0; c < 3; ++c) M.col(c) = x.row(tets(t, c + 1)).transpose() - a;
-      const Eigen::Matrix3d Mi = M.inverse();
+      double e[3][3];
+      tet_edges(x, tets, t, e);
       double* q = &f.inv[12 * static_cast<size_t>(t)];
-      q[0] = a.x();
-      q[1] = a.y();
-      q[2] = a.z();
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) q[3 + 3 * r + c] = Mi(r, c);
+      for (int c = 0; c < 3; ++c) q[c] = x(tets(t, 0), c);
+      tg_inverse_rows(e[0], e[1], e[2], q + 3);
     }
   });
 }

@@ -1,5 +1,6 @@
 #pragma once
 // Error kinds and the exit status each maps to in the `vpm` program.
+#include <exception>
 #include <stdexcept>
 #include <string>
 
@@ -27,6 +28,11 @@ class DeviceError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
+
+/// The description of an OpenCL error that reached the caller without being turned into a
+/// DeviceError (a stage that missed one): "OpenCL error -5 (CL_OUT_OF_RESOURCES)". Empty when
+/// `e` is not an OpenCL error. Lets programs report it without including OpenCL headers.
+std::string opencl_error_description(const std::exception& e);
 
 /// Exit status the command-line program uses for each error kind.
 /// 4: the output was written but missed its tolerance by a wide margin (vpm map, vpm register;
