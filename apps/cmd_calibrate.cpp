@@ -23,7 +23,9 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   std::vector<std::string> paths;
   const std::vector<vpm::ElementTable> normals = vpm::cli::read_normals(args, 4, paths);
   const vpm::CanonicalElements el(normals[0].definition);
-  const vpm::ClusterCalibration c = vpm::calibrate_min_cluster(el, normals, paths, s);
+  const std::optional<vpm::Covariates> cov = vpm::cli::read_participants(args, s);
+  const vpm::ClusterCalibration c = vpm::calibrate_min_cluster(
+      el, normals, paths, s, cov ? vpm::covariate_design(*cov, normals, paths) : vpm::CovariateDesign{});
   vpm::write_json_file(*out, vpm::to_json(c));
   if (c.min_cluster == 0)
     throw vpm::NumericalError(*out + ": no min_cluster keeps the normals at or under " + vpm::format_sig(s.rate) +

@@ -6,6 +6,7 @@
 #include "cli.hpp"
 #include "compare_options.hpp"
 #include "vpm/calibration.hpp"
+#include "vpm/covariates.hpp"
 #include "vpm/json.hpp"
 #include "vpm/error.hpp"
 #include "vpm/io.hpp"
@@ -67,11 +68,14 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   const std::vector<vpm::ElementTable> normals = vpm::cli::read_normals(args, 3, normal_paths);
   const vpm::CompareOptions opt = options_with_calibration(args, settings, normal_paths);
   const vpm::CanonicalElements el(normals[0].definition);
-  const vpm::Reference ref = vpm::build_reference(el, normals, normal_paths, settings.feature, settings.normalisation,
-                                                  settings.smoothing, settings.shrinkage);
+  const std::optional<vpm::Covariates> cov = vpm::cli::read_participants(args, settings);
+  const vpm::Reference ref =
+      vpm::build_reference(el, normals, normal_paths, settings.feature, settings.normalisation, settings.smoothing,
+                           settings.shrinkage, cov ? vpm::covariate_design(*cov, normals, normal_paths) : vpm::CovariateDesign{});
   vpm::ElementTable patient = vpm::read_subject_table(*patient_path);
+  const std::vector<double> row = cov ? vpm::covariate_row(*cov, patient.subject, *patient_path) : std::vector<double>{};
   patient.subject = *patient_path;
-  const vpm::Comparison c = vpm::compare_to_reference(el, ref, patient, opt);
+  const vpm::Comparison c = vpm::compare_to_reference(el, ref, patient, opt, row);
   map_back(args, *out, el, c);  // first: OUT.tsv, written last, marks a complete run
   vpm::write_comparison(*out, el, ref, normal_paths, *patient_path, opt, c);
   vpm::cli::info("wrote " + *out + ": " + std::to_string(c.clusters.size()) + " foci (|z| >= " +

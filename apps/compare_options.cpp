@@ -40,7 +40,24 @@ CalibrationSettings comparison_settings(const Args& args) {
   s.shrinkage = args.get_double("--shrink", 0);
   if (!(s.shrinkage >= 0 && s.shrinkage <= 1)) throw InputError("option --shrink: must be in 0..1");
   s.compare = compare_options(args);
+  if (const auto names = args.get("--covariates")) {
+    std::stringstream ss(*names);
+    std::string item;
+    while (std::getline(ss, item, ','))
+      if (!item.empty()) s.covariates.push_back(item);
+    if (s.covariates.empty()) throw InputError("option --covariates: names no covariate");
+  }
   return s;
+}
+
+std::optional<Covariates> read_participants(const Args& args, const CalibrationSettings& settings) {
+  const auto table = args.get("--participants");
+  if (settings.covariates.empty()) {
+    if (table) throw InputError("option --participants needs --covariates (the columns to model)");
+    return std::nullopt;
+  }
+  if (!table) throw InputError("option --covariates needs --participants (the table that holds them)");
+  return read_covariates(*table, settings.covariates);
 }
 
 std::vector<ElementTable> read_normals(const Args& args, size_t at_least, std::vector<std::string>& paths) {
@@ -70,6 +87,8 @@ std::vector<OptionSpec> comparison_option_rows() {
       {"--test", "z|crawford-howell", "plain z, or Crawford-Howell's t for one case against n normals as the equivalent z (default z)"},
       {"--peak", "ZP", "a cluster smaller than --min-cluster is a focus too when its peak |z| >= ZP (default off)"},
       {"--sign", "both|hyper|hypo", "increases, decreases or both (default both)"},
+      {"--covariates", "NAME,...", "model the normals' values on these participant covariates (e.g. age,sex); each subject compared with its own prediction"},
+      {"--participants", "TABLE.tsv", "with --covariates: the table with participant_id and those columns (BIDS participants.tsv)"},
   };
 }
 

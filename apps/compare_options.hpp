@@ -1,11 +1,13 @@
 #pragma once
 // The comparison options shared by `vpm compare` and `vpm calibrate` (the calibration must use
 // the patients' own options), and reading the normals' tables.
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "cli.hpp"
 #include "vpm/calibration.hpp"
+#include "vpm/covariates.hpp"
 #include "vpm/statistics.hpp"
 
 namespace vpm::cli {
@@ -19,11 +21,16 @@ CompareOptions compare_options(const Args& args);
 /// compare options of a comparison, as a calibration records them (rate left at its default).
 CalibrationSettings comparison_settings(const Args& args);
 
+/// --participants TABLE.tsv read for settings.covariates (--covariates NAME,...); nullopt
+/// without covariates. InputError when one option comes without the other.
+std::optional<Covariates> read_participants(const Args& args, const CalibrationSettings& settings);
+
 /// The tables of --normals A.tsv,B.tsv,... (at least `at_least`), read; `paths` receives the names.
 std::vector<ElementTable> read_normals(const Args& args, size_t at_least, std::vector<std::string>& paths);
 
-/// The option-table rows of --normalisation, --threshold, --fdr, --smooth, --extend, --test,
-/// --peak, --sign, --normals and --feature (not --min-cluster), for both commands' Registrar.
+/// The option-table rows of --normalisation, --threshold, --fdr, --smooth, --shrink, --extend,
+/// --test, --peak, --sign, --covariates and --participants (not --min-cluster, --normals,
+/// --feature), for both commands' Registrar.
 std::vector<OptionSpec> comparison_option_rows();
 
 }  // namespace vpm::cli

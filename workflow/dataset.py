@@ -80,6 +80,29 @@ def read_participants(path):
     return rows
 
 
+COVARIATE = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,63}")
+
+
+def check_covariates(path, names, subjects):
+    """The covariate columns `names` exist in the participants table at `path` (names: letters,
+    digits, '_') and every one of `subjects` has a value for each (not empty, not 'n/a');
+    DatasetError names the file, the line and the first problem."""
+    for name in names:
+        if not COVARIATE.fullmatch(name):
+            raise DatasetError(f"compare.covariates: {ascii(name)} is not a column name (letters, digits, '_')")
+    rows = {row["participant_id"]: row for row in read_participants(path)}
+    for name in names:
+        if name not in next(iter(rows.values()), {}):
+            raise DatasetError(f"{path}:1: no column '{name}' (compare.covariates)")
+    for sid in subjects:
+        row = rows.get(sid)
+        if row is None:
+            raise DatasetError(f"{path}: no row for {sid} (compare.covariates)")
+        for name in names:
+            if (row.get(name) or "").strip() in ("", "n/a", "NA"):
+                raise DatasetError(f"{path}:{row['_line']}: {sid} has no {name} (compare.covariates)")
+
+
 def find_one(folder, pattern, what, root, required=True):
     """The one file matching `pattern` (a glob of file names) in `folder`, checked by
     check_path against `root`; "" when none and not required."""

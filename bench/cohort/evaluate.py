@@ -25,6 +25,14 @@ Metrics (D = detected voxels, T = planted voxels, native PET grid):
   in it; a false-positive cluster is a 26-connected component of D with no truth voxel.
   Pooled figures sum the voxel counts over patients; means average the per-patient ratios.
 
+Patients planted with no focus (synth_cohort.py --foci-free: an all-zero truth mask) are scored
+like the others: every cluster detected there is a false-positive cluster, and its voxels count
+in the pooled precision, Dice and Jaccard (the pooled sensitivity is unchanged: they add no truth
+voxels); their own ratios with |T| = 0 are null (n/a), or 0 where something was detected. Each
+method's summary adds foci_free_patients (how many) and false_clusters_in_foci_free (the
+false-positive clusters in them, also counted in false_positive_clusters), and the pooled table
+shows them in a column when the cohort has such patients.
+
 Usage: evaluate.py --bids DIR --results DIR [--threshold 3] [--min-cluster-mm3 420]
                    [--out-json PATH] [--out-md PATH] [--template-data DIR]
 Exit 2 (one line on stderr) on a missing or malformed input.
@@ -191,7 +199,18 @@ def summarise(scores):
         vals = [s[k] for s in scores if s[k] is not None]
         means[k] = float(np.mean(vals)) if vals else None
     totals = {k: sum(s[k] for s in scores) for k in ("foci_found", "foci_planted", "false_positive_clusters")}
-    return {"mean_over_patients": means, "pooled": pooled, **totals}
+    free = [s for s in scores if s["foci_planted"] == 0]  # planted with nothing: an empty truth mask
+    return {"mean_over_patients": means, "pooled": pooled, **totals, "foci_free_patients": len(free),
+            "false_clusters_in_foci_free": sum(s["false_positive_clusters"] for s in free)}
+
+
+def foci_free(summary, scores):
+    """(foci-free patients, false-positive clusters in them) of a method: from its summary, or
+    counted from its per-patient `scores` for a summary written before these keys existed."""
+    if "foci_free_patients" in summary:
+        return summary["foci_free_patients"], summary["false_clusters_in_foci_free"]
+    free = [s for s in scores if s["foci_planted"] == 0]
+    return len(free), sum(s["false_positive_clusters"] for s in free)
 
 
 def baseline(bids, results, normals, patients, tmpl, threshold, min_mm3):
@@ -241,17 +260,28 @@ NAMES = {"vpm": "vpm (elements)", "baseline": "individual voxel-wise after affin
 
 
 def markdown(report, methods=("vpm", "baseline"), names=NAMES):
-    """Pooled and per-patient tables of report["summary"][m] and report["patients"][i][m], m in methods."""
+    """Pooled and per-patient tables of report["summary"][m] and report["patients"][i][m], m in methods.
+    With patients planted with no focus, the pooled table gets a column of the false-positive
+    clusters found in them."""
     head = "| {} | volume overlap (sensitivity) | precision | Dice | foci found | false-positive clusters |\n" \
            "|---|---|---|---|---|---|\n"
-    lines = [f"Pooled over {len(report['patients'])} patients (voxel counts summed), threshold z <= "
+    free = {m: foci_free(report["summary"][m], [r[m] for r in report["patients"]]) for m in methods}
+    nfree = max(n for n, _ in free.values())
+    pooled_head = head.format("method")
+    if nfree:
+        pooled_head = ("| method | volume overlap (sensitivity) | precision | Dice | foci found | false-positive "
+                       f"clusters | of them in the {nfree} foci-free patients |\n|---|---|---|---|---|---|---|\n")
+    lines = [f"Pooled over {len(report['patients'])} patients"
+             + (f" ({nfree} of them planted with no focus)" if nfree else "")
+             + f" (voxel counts summed), threshold z <= "
              f"-{report['threshold']}. Volume overlap = fraction of the planted foci volume covered "
-             "by detected foci (sensitivity).\n\n", head.format("method")]
+             "by detected foci (sensitivity).\n\n", pooled_head]
     for m in methods:
         s = report["summary"][m]
         p = s["pooled"]
         lines.append(f"| {names[m]} | {pct(p['sensitivity'])} | {pct(p['precision'])} | {pct(p['dice'])} | "
-                     f"{s['foci_found']}/{s['foci_planted']} | {s['false_positive_clusters']} |\n")
+                     f"{s['foci_found']}/{s['foci_planted']} | {s['false_positive_clusters']} |"
+                     + (f" {free[m][1]} |" if nfree else "") + "\n")
     lines += ["\nPer patient:\n\n", head.format("patient / method")]
     for r in report["patients"]:
         for m in methods:
@@ -298,6 +328,9 @@ def main():
                           "(our reading of Hu et al., TVCG 2014)",
         "foci_found": "planted foci with >= 1 detected voxel",
         "false_positive_clusters": "26-connected components of D with no truth voxel",
+        "foci_free_patients": "patients planted with no focus (an all-zero truth mask)",
+        "false_clusters_in_foci_free": "false_positive_clusters summed over the foci-free patients "
+                                       "(every cluster detected in them)",
         "pooled": "ratios of voxel counts summed over patients",
         "baseline": "AAL-centroid least-squares affine to Colin27, 2 mm template grid, proportional "
                     "scaling, voxel-wise z vs normals (ddof=1), clusters >= min_cluster_mm3, "

@@ -60,13 +60,17 @@ def peer_tables(ev, peer, peer_path):
     md = evaluate.markdown(report, ("vpm", "peer"), {"vpm": evaluate.NAMES["vpm"], "peer": chosen["label"]})
     others = [s for s in settings if s is not chosen]
     if others:
+        free = [evaluate.foci_free(s["summary"], s["patients"]) for s in others]
+        nfree = max(n for n, _ in free)
         md += ("\nFurther settings of the elastix peer, pooled:\n\n| setting | volume overlap (sensitivity) | "
-               "precision | Dice | foci found | false-positive clusters |\n|---|---|---|---|---|---|\n")
-        for s in others:
+               "precision | Dice | foci found | false-positive clusters |"
+               + (f" of them in the {nfree} foci-free patients |" if nfree else "")
+               + "\n|---|---|---|---|---|---|" + ("---|" if nfree else "") + "\n")
+        for s, (_, fc) in zip(others, free):
             p = s["summary"]["pooled"]
             md += (f"| {s['label']} | {evaluate.pct(p['sensitivity'])} | {evaluate.pct(p['precision'])} | "
                    f"{evaluate.pct(p['dice'])} | {s['summary']['foci_found']}/{s['summary']['foci_planted']} | "
-                   f"{s['summary']['false_positive_clusters']} |\n")
+                   f"{s['summary']['false_positive_clusters']} |" + (f" {fc} |" if nfree else "") + "\n")
     return md
 
 

@@ -25,7 +25,9 @@ voxel y of the patient reads the detection at the nearest template voxel of T^-1
 the fixed-point iteration x <- x + (y - T(x)) (u interpolated linearly, constant outside the
 grid); the native masks (cluster ids) go to RESULTS/peer_elastix/sub-X_foci.nii.gz for the
 default setting 8,3,340,0 and sub-X_foci_fwhmF_zT_minM_extE.nii.gz for others, and are scored
-against derivatives/truth/sub-X_foci.nii.gz by evaluate.py's score and summarise.
+against derivatives/truth/sub-X_foci.nii.gz by evaluate.py's score and summarise (patients planted
+with no focus, synth_cohort.py --foci-free, included: whatever is found in them is a false positive,
+counted in the summary's false_clusters_in_foci_free as well).
 
 RESULTS/peer_elastix/evaluation.json: per setting the summary and per-patient scores; seconds per
 subject (elastix + transformix + warping the PET; cached steps keep the seconds of the run that
@@ -305,7 +307,9 @@ def main():
         p = s["pooled"]
         print(f"{label(setting)}: overlap {ev.pct(p['sensitivity'])}, precision {ev.pct(p['precision'])}, "
               f"Dice {ev.pct(p['dice'])}, {s['foci_found']}/{s['foci_planted']} found, "
-              f"{s['false_positive_clusters']} false clusters", flush=True)
+              f"{s['false_positive_clusters']} false clusters"
+              + (f" ({s['false_clusters_in_foci_free']} in the {s['foci_free_patients']} foci-free patients)"
+                 if s["foci_free_patients"] else ""), flush=True)
         out_settings.append({"setting": key(setting), "fwhm_mm": fwhm, "threshold": thr, "min_mm3": min_mm3,
                              "extend": ext, "label": label(setting), "file_suffix": suffix(setting),
                              "summary": s, "patients": rows})

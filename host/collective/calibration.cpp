@@ -19,20 +19,25 @@ bool kept(int candidates, double peak_z, int m, double peak) {
 }
 
 LeftOutNormal leave_out(const CanonicalElements& el, const std::vector<ElementTable>& normals,
-                        const std::vector<std::string>& names, const CalibrationSettings& s, size_t out) {
+                        const std::vector<std::string>& names, const CalibrationSettings& s, const CovariateDesign& design,
+                        size_t out) {
   std::vector<ElementTable> others;
   std::vector<std::string> other_names;
+  CovariateDesign other_rows = design;
+  other_rows.rows.clear();
   for (size_t i = 0; i < normals.size(); ++i)
     if (i != out) {
       others.push_back(normals[i]);
       other_names.push_back(names[i]);
+      if (!design.empty()) other_rows.rows.push_back(design.rows[i]);
     }
-  const Reference ref = build_reference(el, others, other_names, s.feature, s.normalisation, s.smoothing, s.shrinkage);
+  const Reference ref =
+      build_reference(el, others, other_names, s.feature, s.normalisation, s.smoothing, s.shrinkage, other_rows);
   CompareOptions o = s.compare;
   o.min_cluster = 1;
   ElementTable patient = normals[out];
   patient.subject = names[out];
-  const Comparison c = compare_to_reference(el, ref, patient, o);
+  const Comparison c = compare_to_reference(el, ref, patient, o, design.empty() ? std::vector<double>{} : design.rows[out]);
   LeftOutNormal r;
   r.name = names[out];
   for (const FocusCluster& f : c.clusters) {
@@ -55,8 +60,11 @@ int ClusterCalibration::clusters_at(int m) const {
 double ClusterCalibration::rate_at(int m) const { return normals > 0 ? 10.0 * clusters_at(m) / normals : 0; }
 
 ClusterCalibration calibrate_min_cluster(const CanonicalElements& el, const std::vector<ElementTable>& normals,
-                                         const std::vector<std::string>& names, const CalibrationSettings& s) {
+                                         const std::vector<std::string>& names, const CalibrationSettings& s,
+                                         const CovariateDesign& design) {
   if (normals.size() != names.size()) throw InputError("calibration: names and tables differ in number");
+  if (design.names != s.covariates || (!design.empty() && design.rows.size() != normals.size()))
+    throw InputError("calibration: the covariate design does not match the settings' covariates or the normals");
   if (normals.size() < 4)
     throw InputError("calibration: needs at least 4 normals (3 in each reference), got " +
                      std::to_string(normals.size()));
@@ -68,7 +76,7 @@ ClusterCalibration calibrate_min_cluster(const CanonicalElements& el, const std:
   std::vector<std::exception_ptr> errors(normals.size());  // the first normal's is rethrown as it was
   detail::parallel_for(cal.normals, 2, [&](int b, int e) {
     for (int i = b; i < e; ++i) try {
-        cal.per_normal[static_cast<size_t>(i)] = leave_out(el, normals, names, s, static_cast<size_t>(i));
+        cal.per_normal[static_cast<size_t>(i)] = leave_out(el, normals, names, s, design, static_cast<size_t>(i));
       } catch (...) {
         errors[static_cast<size_t>(i)] = std::current_exception();
       }
@@ -106,6 +114,9 @@ Json to_json(const ClusterCalibration& c) {
   j["normalisation"] = to_string(c.settings.normalisation);
   j["smoothing"] = c.settings.smoothing;
   j["shrinkage"] = c.settings.shrinkage;
+  Json cov = Json::array();
+  for (const std::string& n : c.settings.covariates) cov.push_back(n);
+  j["covariates"] = cov;
   j["options"] = options_json(c.settings);
   j["rate"] = c.settings.rate;
   j["normals"] = c.normals;
@@ -175,6 +186,10 @@ int calibrated_min_cluster(const Json& cal, const CalibrationSettings& s, const 
   const Json want = to_json(ClusterCalibration{probe});
   for (const char* key : {"feature", "normalisation", "smoothing", "shrinkage"})
     same(member(cal, key, source), *want.find(key), key, source);
+  const Json* cov = cal.find("covariates");  // absent before 2026-11-28: none
+  if ((cov ? cov->dump(-1) : "[]") != want.find("covariates")->dump(-1))
+    throw InputError(source + ": calibrated with covariates " + (cov ? cov->dump(-1) : "[]") + ", this comparison uses " +
+                     want.find("covariates")->dump(-1) + "; calibrate with the comparison's own --covariates");
   const Json& opts = member(cal, "options", source);
   for (const char* key : {"threshold", "fdr_q", "extend", "peak", "test", "sign"})
     same(member(opts, key, source), *want.find("options")->find(key), std::string("options.") + key, source);

@@ -25,6 +25,8 @@ struct ComparisonFile {
   Normalisation normalisation = Normalisation::proportional;
   int smoothing = 0;
   double shrinkage = 0;
+  std::string covariate_table;               ///< the participants table (empty: no covariates)
+  std::vector<std::string> covariate_names;
   CompareOptions options;
   size_t clusters = 0;
 };
@@ -55,6 +57,21 @@ int integer(const Json& json, const char* key, const std::string& side, std::opt
   return static_cast<int>(x);
 }
 
+/// reference.covariates {table, names} of a sidecar into c (absent: none).
+void read_covariate_names(const Json& ref, const fs::path& results, const std::string& side, ComparisonFile& c) {
+  const Json* cov = ref.find("covariates");
+  if (!cov) return;
+  const Json& table = need(*cov, "table", side);
+  const Json& names = need(*cov, "names", side);
+  if (table.type() != Json::Type::String || names.type() != Json::Type::Array || names.size() == 0)
+    throw InputError(side + ": 'covariates' needs a table path and a list of names");
+  c.covariate_table = resolve(table.string(), results, "the participants table named in " + side);
+  for (size_t i = 0; i < names.size(); ++i) {
+    if (names.at(i).type() != Json::Type::String) throw InputError(side + ": a covariate name is not a string");
+    c.covariate_names.push_back(names.at(i).string());
+  }
+}
+
 std::vector<ComparisonFile> read_comparisons(const fs::path& results, const std::string& only) {
   const fs::path dir = results / "compare";
   if (!fs::is_directory(dir)) throw InputError(dir.string() + ": no such folder; run the workflow's group level (vpm compare) first");
@@ -77,6 +94,7 @@ std::vector<ComparisonFile> read_comparisons(const fs::path& results, const std:
     c.normalisation = parse_normalisation(need(*ref, "normalisation", side).string());
     c.smoothing = integer(*ref, "smoothing", side, 0);
     if (const Json* sh = ref->find("shrinkage")) c.shrinkage = sh->number();  // absent before 2026-11-28
+    read_covariate_names(*ref, results, side, c);
     c.options.threshold = need(*opt, "threshold", side).number();
     c.options.fdr_q = need(*opt, "fdr_q", side).number();
     c.options.min_cluster = integer(*opt, "min_cluster", side);
@@ -167,9 +185,13 @@ void add_feature(CohortView& v, const CanonicalElements& el, const std::vector<c
                  Tables& tables, std::map<std::string, size_t>& index) {
   const ComparisonFile& first = *comps.front();
   std::vector<ElementTable> normals = tables.take(first.normal_tables);
+  std::optional<Covariates> cov;
+  if (!first.covariate_names.empty()) cov = read_covariates(first.covariate_table, first.covariate_names);
   const Reference ref = build_reference(el, normals, first.normal_tables, first.feature, first.normalisation, first.smoothing,
-                                        first.shrinkage);
-  v.features.push_back({first.feature, first.normalisation, first.smoothing, first.shrinkage, first.options, ref.subjects, to_float(ref.mean),
+                                        first.shrinkage,
+                                        cov ? covariate_design(*cov, normals, first.normal_tables) : CovariateDesign{});
+  v.features.push_back({first.feature, first.normalisation, first.smoothing, first.shrinkage, first.covariate_names,
+                        first.options, ref.subjects, to_float(ref.mean),
                         to_float(ref.std), ref.count});
   for (size_t i = 0; i < normals.size(); ++i) {
     ViewSubject& s = subject_for(v, index, subject_id(normals[i], first.normal_tables[i]), false);
@@ -179,10 +201,12 @@ void add_feature(CohortView& v, const CanonicalElements& el, const std::vector<c
   tables.put(first.normal_tables, normals);
   for (const ComparisonFile* c : comps) {
     if (c->normal_tables != first.normal_tables || c->normalisation != first.normalisation ||
-        c->smoothing != first.smoothing || c->shrinkage != first.shrinkage)
+        c->smoothing != first.smoothing || c->shrinkage != first.shrinkage ||
+        c->covariate_names != first.covariate_names || c->covariate_table != first.covariate_table)
       throw InputError(c->tsv + ": compared against other normals than " + first.tsv + "; one reference per feature");
     const ElementTable& t = tables.get(c->patient_table);
-    const Comparison cmp = compare_to_reference(el, ref, t, c->options);
+    const Comparison cmp =
+        compare_to_reference(el, ref, t, c->options, cov ? covariate_row(*cov, t.subject, c->patient_table) : std::vector<double>{});
     if (cmp.clusters.size() != c->clusters)
       throw InputError(c->tsv + ": its " + std::to_string(c->clusters) + " foci differ from the " +
                        std::to_string(cmp.clusters.size()) + " its tables give now; rerun vpm compare");

@@ -13,7 +13,7 @@ void write_comparison(const std::string& tsv_path, const CanonicalElements& el, 
   std::ostream& out = file.stream();
   out << "element\tshell\ttriangle\tpatient\treference_mean\treference_std\tz\tcluster\n" << std::setprecision(10);
   for (int e = 0; e < el.size(); ++e)
-    out << e << '\t' << el.shell_of(e) << '\t' << el.triangle_of(e) << '\t' << c.patient[e] << '\t' << ref.mean[e] << '\t'
+    out << e << '\t' << el.shell_of(e) << '\t' << el.triangle_of(e) << '\t' << c.patient[e] << '\t' << c.expected[e] << '\t'
         << ref.std[e] << '\t' << c.z[e] << '\t' << c.cluster[e] << '\n';
   Json j = Json::object();
   j["definition"] = to_json(ref.definition);
@@ -26,6 +26,20 @@ void write_comparison(const std::string& tsv_path, const CanonicalElements& el, 
   Json tables = Json::array();
   for (const std::string& t : normal_tables) tables.push_back(t);
   r["tables"] = tables;
+  if (!ref.covariates.empty()) {
+    Json cov = Json::object();
+    cov["table"] = ref.covariate_table;
+    Json names = Json::array(), columns = Json::array(), centre = Json::array(), patient = Json::array();
+    for (const std::string& n : ref.covariate_names) names.push_back(n);
+    for (const std::string& n : ref.covariates) columns.push_back(n);
+    for (double v : ref.covariate_centre) centre.push_back(v);
+    for (double v : c.covariates) patient.push_back(v);
+    cov["names"] = names;
+    cov["columns"] = columns;
+    cov["centre"] = centre;
+    cov["patient"] = patient;
+    r["covariates"] = cov;
+  }
   j["reference"] = r;
   j["patient"] = patient_table;
   Json o = Json::object();

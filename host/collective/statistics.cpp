@@ -6,6 +6,7 @@
 #include <limits>
 #include <numeric>
 
+#include "collective/covariate_model.hpp"
 #include "collective/distributions.hpp"
 #include "vpm/error.hpp"
 
@@ -98,7 +99,7 @@ void shrink_spread(const CanonicalElements& el, double shrinkage, std::vector<do
 
 Reference reference_of(const CanonicalElements* el, const std::vector<ElementTable>& normals,
                        const std::vector<std::string>& names, const std::string& feature, Normalisation normalisation,
-                       int smoothing, double shrinkage) {
+                       int smoothing, double shrinkage, const CovariateDesign& design) {
   if (normals.size() < 3) throw InputError("reference: needs at least 3 normals, got " + std::to_string(normals.size()));
   Reference r;
   r.definition = normals[0].definition;
@@ -120,6 +121,11 @@ Reference reference_of(const CanonicalElements* el, const std::vector<ElementTab
     named.subject = names[i];
     values.push_back(normalised_feature(named, feature, normalisation));
     if (smoothing > 0) values.back() = smooth_over_elements(*el, values.back(), smoothing);
+  }
+  if (!design.empty()) {
+    detail::fit_covariate_model(values, design, r);
+    if (shrinkage > 0) shrink_spread(*el, shrinkage, r.std);
+    return r;
   }
   const size_t n = values[0].size();
   r.mean.assign(n, kNaN);
@@ -149,27 +155,46 @@ Reference reference_of(const CanonicalElements* el, const std::vector<ElementTab
 
 Reference build_reference(const std::vector<ElementTable>& normals, const std::vector<std::string>& names,
                           const std::string& feature, Normalisation normalisation) {
-  return reference_of(nullptr, normals, names, feature, normalisation, 0, 0);
+  return reference_of(nullptr, normals, names, feature, normalisation, 0, 0, {});
 }
 
 Reference build_reference(const CanonicalElements& elements, const std::vector<ElementTable>& normals,
                           const std::vector<std::string>& names, const std::string& feature, Normalisation normalisation,
-                          int smoothing, double shrinkage) {
+                          int smoothing, double shrinkage, const CovariateDesign& covariates) {
   if (smoothing < 0) throw InputError("reference: smoothing " + std::to_string(smoothing) + " is negative");
   if (!(shrinkage >= 0 && shrinkage <= 1))
     throw InputError("reference: shrinkage " + std::to_string(shrinkage) + " is not in [0, 1]");
-  return reference_of(&elements, normals, names, feature, normalisation, smoothing, shrinkage);
+  return reference_of(&elements, normals, names, feature, normalisation, smoothing, shrinkage, covariates);
 }
 
 namespace {
+
+// The z with the same tail probability as Student's t with `dof` degrees of freedom.
+double t_as_z(double t, double dof) {
+  const double z = detail::normal_lower_quantile(detail::student_t_tail(t, dof));  // <= 0
+  return t < 0 ? z : -z;
+}
 
 // The z with the same tail probability as Crawford and Howell's t of a single case against n
 // normals (n - 1 degrees of freedom); plain z when n is 0 (a reference written before counts).
 double crawford_howell_z(double x, double mean, double std, int n) {
   if (n < 2) return (x - mean) / std;
-  const double t = (x - mean) / (std * std::sqrt((n + 1.0) / n));
-  const double z = detail::normal_lower_quantile(detail::student_t_tail(t, n - 1.0));  // <= 0
-  return t < 0 ? z : -z;
+  return t_as_z((x - mean) / (std * std::sqrt((n + 1.0) / n)), n - 1.0);
+}
+
+// z of the patient's values x against a reference with covariates (its design row `row`).
+void covariate_z(const Reference& ref, const std::vector<double>& row, SingleCaseTest test, Comparison& c) {
+  const std::vector<double>& x = c.patient;
+  const double q = static_cast<double>(ref.covariates.size()) + 1;
+  for (size_t e = 0; e < x.size(); ++e) {
+    if (std::isnan(ref.mean[e])) continue;
+    const detail::ModelPrediction p = detail::predict(ref, static_cast<int>(e), row);
+    c.expected[e] = p.expected;
+    if (std::isnan(x[e]) || !(ref.std[e] > 0)) continue;
+    c.z[e] = test == SingleCaseTest::z
+                 ? (x[e] - p.expected) / ref.std[e]
+                 : t_as_z((x[e] - p.expected) / (ref.std[e] * std::sqrt(1.0 + p.leverage)), ref.count[e] - q);
+  }
 }
 
 // Benjamini-Hochberg: the smallest |z| whose two-sided p-value passes at rate q (infinity when
@@ -239,18 +264,28 @@ std::vector<FocusCluster> clusters_of(const CanonicalElements& el, const std::ve
 }  // namespace
 
 Comparison compare_to_reference(const CanonicalElements& el, const Reference& ref, const ElementTable& patient,
-                                const CompareOptions& opt) {
+                                const CompareOptions& opt, const std::vector<double>& covariates) {
   if (patient.definition != ref.definition || el.definition() != ref.definition)
     throw InputError(patient.subject + ": element definition differs from the reference's");
+  if (covariates.size() != ref.covariates.size())
+    throw InputError(patient.subject + ": " + std::to_string(covariates.size()) + " covariate values for a reference of " +
+                     std::to_string(ref.covariates.size()) + " covariates");
   Comparison c;
   c.patient = smooth_over_elements(el, normalised_feature(patient, ref.feature, ref.normalisation), ref.smoothing);
   const std::vector<double>& x = c.patient;
   c.z.assign(x.size(), kNaN);
-  for (size_t e = 0; e < x.size(); ++e)
-    if (!std::isnan(x[e]) && !std::isnan(ref.mean[e]) && ref.std[e] > 0)
-      c.z[e] = opt.test == SingleCaseTest::z ? (x[e] - ref.mean[e]) / ref.std[e]
-                                             : crawford_howell_z(x[e], ref.mean[e], ref.std[e],
-                                                                 ref.count.empty() ? 0 : ref.count[e]);
+  if (!ref.covariates.empty()) {
+    c.covariates = covariates;
+    c.expected.assign(x.size(), kNaN);
+    covariate_z(ref, covariates, opt.test, c);
+  } else {
+    c.expected = ref.mean;
+    for (size_t e = 0; e < x.size(); ++e)
+      if (!std::isnan(x[e]) && !std::isnan(ref.mean[e]) && ref.std[e] > 0)
+        c.z[e] = opt.test == SingleCaseTest::z ? (x[e] - ref.mean[e]) / ref.std[e]
+                                               : crawford_howell_z(x[e], ref.mean[e], ref.std[e],
+                                                                   ref.count.empty() ? 0 : ref.count[e]);
+  }
   c.threshold_used = opt.fdr_q > 0 ? fdr_threshold(c.z, opt.fdr_q, opt.sign) : opt.threshold;
   for (int sign : {1, -1}) {
     if (opt.sign != 0 && opt.sign != sign) continue;

@@ -6,21 +6,13 @@
 #include <fstream>
 #include <sstream>
 
+#include "io/text.hpp"
 #include "vpm/error.hpp"
 #include "vpm/sampling.hpp"
 
 namespace vpm {
 
 namespace {
-
-std::vector<std::string> split_tabs(const std::string& line) {
-  std::vector<std::string> out;
-  std::stringstream ss(line);
-  std::string cell;
-  while (std::getline(ss, cell, '\t')) out.push_back(cell);
-  if (!line.empty() && line.back() == '\t') out.emplace_back();
-  return out;
-}
 
 double number(const std::string& cell, const std::string& where) {
   double v = 0;
@@ -91,7 +83,7 @@ ElementTable read_subject_table(const std::string& path) {
   std::string line;
   if (!std::getline(in, line)) throw InputError(path + ":1: empty file");
   std::vector<int> labels;
-  read_header(path, split_tabs(line), t, labels);
+  read_header(path, detail::split_tabs(line), t, labels);
   read_sidecar(path, t);
   const int n = t.definition.elements();
   const size_t columns = 4 + 3 * t.features.size() + labels.size();
@@ -114,7 +106,7 @@ ElementTable read_subject_table(const std::string& path) {
   for (int ln = 2; std::getline(in, line); ++ln) {
     if (line.empty()) continue;
     const std::string where = path + ":" + std::to_string(ln);
-    const std::vector<std::string> c = split_tabs(line);
+    const std::vector<std::string> c = detail::split_tabs(line);
     if (c.size() != columns) throw InputError(where + ": " + std::to_string(c.size()) + " columns, the header has " + std::to_string(columns));
     if (row >= n) throw InputError(where + ": more rows than the " + std::to_string(n) + " elements of the definition");
     if (integer(c[0], where) != row) throw InputError(where + ": element " + c[0] + ", expected " + std::to_string(row));

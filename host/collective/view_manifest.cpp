@@ -45,6 +45,9 @@ Json feature_entry(const CohortView& v, const ViewFeature& f, FeatureCodes& code
   j["test"] = to_string(f.compare.test);
   j["smoothing"] = f.smoothing;
   j["shrinkage"] = f.shrinkage;
+  Json cov = Json::array();
+  for (const std::string& n : f.covariates) cov.push_back(n);
+  j["covariates"] = cov;
   j["sign"] = f.compare.sign;
   j["reference_subjects"] = f.reference_subjects;
   std::vector<const std::vector<float>*> normals;

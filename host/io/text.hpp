@@ -20,6 +20,10 @@ std::string extension_of(const std::string& path);
 /// `tok` quoted for messages: at most 24 characters, non-printable bytes as '?'.
 std::string show(std::string_view tok);
 
+/// The tab-separated cells of one line of a TSV table (an empty last cell after a trailing tab
+/// kept; a line ending "\r\n" read without its '\r').
+std::vector<std::string> split_tabs(std::string_view line);
+
 /// The whitespace that separates tokens (Scanner's, and the threaded .vtu array reader's).
 inline bool is_token_space(char c) {
   return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v';

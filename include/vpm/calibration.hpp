@@ -22,6 +22,7 @@ struct CalibrationSettings {
   int smoothing = 0;          ///< rings, as build_reference's
   double shrinkage = 0;       ///< Reference::shrinkage
   CompareOptions compare;     ///< the patients' options; its min_cluster is what is calibrated (ignored)
+  std::vector<std::string> covariates;  ///< Covariates::names of the reference's model (empty: none)
   double rate = 1.0;          ///< false clusters per 10 normals allowed (>= 0)
 };
 
@@ -50,17 +51,21 @@ struct ClusterCalibration {
 };
 
 /// Leave-one-normal-out over `normals` (at least 4; `names` name them in messages and the
-/// result). InputError as build_reference and compare_to_reference, or on a negative rate.
+/// result); with covariates, `design` has the normals' rows (covariate_design) and each normal
+/// left out is compared at its own. InputError as build_reference and compare_to_reference, or
+/// on a negative rate, or a design that does not match settings.covariates.
 ClusterCalibration calibrate_min_cluster(const CanonicalElements& elements, const std::vector<ElementTable>& normals,
-                                         const std::vector<std::string>& names, const CalibrationSettings& settings);
+                                         const std::vector<std::string>& names, const CalibrationSettings& settings,
+                                         const CovariateDesign& design = {});
 
-/// {"feature", "normalisation", "smoothing", "shrinkage", "options": {threshold, fdr_q, extend, peak, sign,
+/// {"feature", "normalisation", "smoothing", "shrinkage", "covariates" (names), "options": {threshold, fdr_q, extend, peak, sign,
 ///  test}, "rate", "normals", "min_cluster", "curve": [{"min_cluster", "false_clusters",
 ///  "per_10_normals"}], "per_normal": [{"normal", "candidates", "peak_z"}]}
 Json to_json(const ClusterCalibration& calibration);
 
 /// The min_cluster of a calibration JSON written by to_json (a file from elsewhere: checked),
-/// after checking that it was made with `settings` (feature, normalisation, smoothing, shrinkage and every
+/// after checking that it was made with `settings` (feature, normalisation, smoothing, shrinkage,
+/// covariates (absent in a file: none) and every
 /// compare option but min_cluster) and on the normals named `normals` (the same set, any
 /// order): InputError naming `source` and the first difference.
 int calibrated_min_cluster(const Json& calibration, const CalibrationSettings& settings,

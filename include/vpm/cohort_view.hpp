@@ -63,6 +63,10 @@ struct ViewFeature {
   Normalisation normalisation = Normalisation::proportional;
   int smoothing = 0;          ///< Reference::smoothing
   double shrinkage = 0;       ///< Reference::shrinkage
+  /// Reference::covariate_names (empty: none). Patients' z are then against their own
+  /// predictions; `mean` is the model at the normals' mean covariates, so the page's
+  /// leave-one-out z of a normal is exact only for a normal at those covariates.
+  std::vector<std::string> covariates;
   CompareOptions compare;     ///< the options `vpm compare` used
   int reference_subjects = 0;
   std::vector<float> mean, std;  ///< the reference per element

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "vpm/covariates.hpp"
 #include "vpm/elements.hpp"
 #include "vpm/json.hpp"
 #include "vpm/sampling.hpp"
@@ -56,6 +57,18 @@ struct Reference {
   int subjects = 0;
   std::vector<double> mean, std;  ///< per element (sample standard deviation, n - 1); NaN without data
   std::vector<int> count;         ///< per element: the normals with data there
+  /// The design's columns when the reference models covariates (vpm/covariates.hpp; empty:
+  /// none). Then, per element, `mean` is the model's value at the normals' mean covariates and
+  /// `std` the residual spread (n - p - 1 degrees of freedom, p = covariates.size(); shrunk as
+  /// above), and an element needs more than p + 1 normals with data.
+  std::vector<std::string> covariates;
+  std::string covariate_table;                ///< CovariateDesign::source
+  std::vector<std::string> covariate_names;   ///< CovariateDesign::names
+  std::vector<double> covariate_centre;  ///< the normals' mean design row (the model is centred there)
+  std::vector<double> coefficients;      ///< per element p + 1: the value at the centre, then the slopes
+  /// per element (p + 1)^2, row-major: (X^T X)^-1 of the centred design of the normals with
+  /// data there (a patient's leverage for Crawford-Howell)
+  std::vector<double> gram_inverse;
 };
 
 /// The reference of `normals` (at least 3). `names` (same length) name the tables in messages.
@@ -66,9 +79,12 @@ Reference build_reference(const std::vector<ElementTable>& normals, const std::v
 /// `elements` (which must have the tables' definition; compare_to_reference then smooths the
 /// patient's the same way), and the spread shrunk across adjacent elements by `shrinkage`
 /// (Reference::shrinkage; InputError outside [0, 1]).
+/// With a non-empty `covariates` design (one row per normal, vpm/covariates.hpp) the mean is a
+/// linear model of the covariates (Reference::covariates); InputError when they do not vary
+/// independently over the normals.
 Reference build_reference(const CanonicalElements& elements, const std::vector<ElementTable>& normals,
                           const std::vector<std::string>& names, const std::string& feature, Normalisation normalisation,
-                          int smoothing, double shrinkage = 0);
+                          int smoothing, double shrinkage = 0, const CovariateDesign& covariates = {});
 
 struct CompareOptions {
   double threshold = 3.0;  ///< |z| beyond which an element is a candidate (ignored with fdr_q > 0)
@@ -101,6 +117,10 @@ struct FocusCluster {
 
 struct Comparison {
   std::vector<double> patient; ///< the patient's normalised feature per element (NaN: no data)
+  /// per element, the reference's value for this patient: its mean, or with covariates the
+  /// model's prediction at the patient's covariates
+  std::vector<double> expected;
+  std::vector<double> covariates;  ///< the patient's design row (empty without covariates)
   std::vector<double> z;       ///< per element (NaN where the reference or the patient has no data)
   std::vector<int> cluster;    ///< per element: FocusCluster::id, 0 when not a focus
   std::vector<FocusCluster> clusters;
@@ -108,9 +128,13 @@ struct Comparison {
 };
 
 /// z per element (CompareOptions::test; the patient's feature normalised and smoothed as the
-/// reference's) and its foci. InputError when the definitions differ.
+/// reference's) and its foci. With a reference of covariates, `covariates` is the patient's
+/// design row (covariate_row) and z = (x - prediction) / std, or Crawford-Howell's t with the
+/// patient's leverage h: (x - prediction) / (std sqrt(1 + h)), n - p - 1 degrees of freedom.
+/// InputError when the definitions differ or the row does not fit the reference.
 Comparison compare_to_reference(const CanonicalElements& elements, const Reference& reference,
-                                const ElementTable& patient, const CompareOptions& options = {});
+                                const ElementTable& patient, const CompareOptions& options = {},
+                                const std::vector<double>& covariates = {});
 
 /// {"threshold", "clusters": [{"id","sign","elements","candidates","volume","peak_element","peak_z"}]}
 Json to_json(const Comparison& comparison);

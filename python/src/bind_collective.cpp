@@ -1,7 +1,10 @@
 // The collective analysis (paper 6.2) from Python: vpm.Elements, sample, compare, the tables,
 // and the pull-back and map-back through a registered mesh.
+#include <optional>
+
 #include "common.hpp"
 #include "report.hpp"
+#include "vpm/covariates.hpp"
 #include "vpm/elements.hpp"
 #include "vpm/error.hpp"
 #include "vpm/label_names.hpp"
@@ -67,7 +70,8 @@ std::vector<ElementTable> tables_of(const py::list& items) {
 // long: the keyword arguments of `vpm compare`, one line each
 py::dict compare_py(const py::list& normals, const py::object& patient, const std::string& feature,
                     const std::string& normalisation, double threshold, double fdr, int min_cluster, double extend,
-                    double peak, const std::string& sign, const std::string& test, int smooth, double shrink) {
+                    double peak, const std::string& sign, const std::string& test, int smooth, double shrink,
+                    const std::vector<std::string>& covariates, const std::string& participants) {
   const std::vector<ElementTable> ns = tables_of(normals);
   py::list one;
   one.append(patient);
@@ -83,16 +87,22 @@ py::dict compare_py(const py::list& normals, const py::object& patient, const st
   const Normalisation n = parse_normalisation(normalisation);
   std::vector<std::string> names;
   for (size_t i = 0; i < ns.size(); ++i) names.push_back(ns[i].subject.empty() ? "normal " + std::to_string(i) : ns[i].subject);
+  if (covariates.empty() != participants.empty())
+    throw InputError("covariates and participants: give both (the columns and the table that holds them) or neither");
   const auto [c, ref] = without_gil(nullptr, [&] {
     const CanonicalElements el(p.definition);
-    Reference r = build_reference(el, ns, names, feature, n, smooth, shrink);
-    return std::make_pair(compare_to_reference(el, r, p, o), r);
+    std::optional<Covariates> cov;
+    if (!covariates.empty()) cov = read_covariates(participants, covariates);
+    Reference r = build_reference(el, ns, names, feature, n, smooth, shrink,
+                                  cov ? covariate_design(*cov, ns, names) : CovariateDesign{});
+    const std::vector<double> row = cov ? covariate_row(*cov, p.subject, "the patient") : std::vector<double>{};
+    return std::make_pair(compare_to_reference(el, r, p, o, row), r);
   });
   py::dict out = json_to_python(to_json(c)).cast<py::dict>();
   out["z"] = vector_array(c.z);
   out["patient"] = vector_array(c.patient);
   out["cluster"] = vector_array(c.cluster);
-  out["reference_mean"] = vector_array(ref.mean);
+  out["reference_mean"] = vector_array(c.expected);  // with covariates: the patient's prediction
   out["reference_std"] = vector_array(ref.std);
   return out;
 }
@@ -152,7 +162,8 @@ void bind_collective(py::module_& m) {
   m.def("_compare", &compare_py, py::arg("normals"), py::arg("patient"), py::arg("feature"), py::kw_only(),
         py::arg("normalisation") = "proportional", py::arg("threshold") = 3.0, py::arg("fdr") = 0.0,
         py::arg("min_cluster") = 3, py::arg("extend") = 0.0, py::arg("peak") = 0.0, py::arg("sign") = "both",
-        py::arg("test") = "z", py::arg("smooth") = 0, py::arg("shrink") = 0.0);
+        py::arg("test") = "z", py::arg("smooth") = 0, py::arg("shrink") = 0.0,
+        py::arg("covariates") = std::vector<std::string>{}, py::arg("participants") = "");
   m.def("to_native", [](const py::object& mesh, const py::object& points) {
     auto msh = mesh_argument(mesh, py::none());
     Points p = to_points(points, "points");

@@ -176,8 +176,14 @@ class Comparison:
 def compare(normals, patient, feature, **options):
     """Compares a patient's table with the normals' (`vpm compare`): proportional scaling, the
     normals' per-element mean and std, z and foci. `normals`: ElementTables or paths; options:
-    normalisation, threshold (3), fdr, min_cluster (3), extend, peak, sign, test, smooth, shrink (0).
-    Returns a Comparison."""
+    normalisation, threshold (3), fdr, min_cluster (3), extend, peak, sign, test, smooth, shrink (0),
+    covariates (column names, e.g. ["age", "sex"]) with participants (the table that holds them,
+    each table looked up by its subject): the reference then models them and reference_mean is
+    the patient's prediction. Returns a Comparison."""
+    if options.get("covariates") is None:
+        options.pop("covariates", None)
+    else:
+        options["covariates"] = list(options["covariates"])
     d = _vpm._compare(list(normals), patient, feature, **options)
     arrays = {k: d.pop(k) for k in ("z", "patient", "cluster", "reference_mean", "reference_std")}
     return Comparison(**arrays, clusters=d.get("clusters", []), threshold_used=d.get("threshold", 0.0),

@@ -168,4 +168,5 @@ def compare(normals: Iterable[Union[ElementTable, str]], patient: Union[ElementT
             normalisation: Literal["proportional", "none"] = ..., threshold: float = ..., fdr: float = ...,
             min_cluster: int = ..., extend: float = ..., peak: float = ...,
             sign: Literal["both", "hyper", "hypo"] = ..., test: Literal["z", "crawford-howell"] = ...,
-            smooth: int = ...) -> Comparison: ...
+            smooth: int = ..., shrink: float = ..., covariates: Optional[Sequence[str]] = ...,
+            participants: str = ...) -> Comparison: ...

@@ -60,7 +60,7 @@ def test_register_landmarks_template_and_moments(vpm, image_array):
         vpm.register(bare, template=t_ball, template_landmarks="moments", dense_iterations=1, dense_force="labels")
 
 
-def test_sample_and_compare(vpm, ball, image_array):
+def test_sample_and_compare(vpm, ball, image_array, tmp_path):
     out, _ = ball
     data, affine = image_array
     el = vpm.elements(level=1, shells=2, samples=8)
@@ -83,6 +83,18 @@ def test_sample_and_compare(vpm, ball, image_array):
     assert np.allclose(s.reference_mean, c.reference_mean, equal_nan=True)
     ok = np.isfinite(c.reference_std) & np.isfinite(s.reference_std)
     assert ok.sum() > 100 and np.ptp(s.reference_std[ok]) < np.ptp(c.reference_std[ok])
+    # covariates from a participants table: the reference a linear model of age, the patient
+    # compared with its own prediction (reference_mean then differs from the normals' mean)
+    table = tmp_path / "participants.tsv"
+    table.write_text("participant_id\tage\nsub-0\t30\nsub-1\t50\nsub-2\t70\nsub-3\t40\n")
+    a = vpm.compare(tables[:3], tables[3], "pet", covariates=["age"], participants=str(table))
+    assert a.z.shape == (160,) and a.summary["clusters"] == a.clusters
+    both = np.isfinite(a.reference_mean) & np.isfinite(c.reference_mean)
+    assert both.sum() > 100 and not np.allclose(a.reference_mean[both], c.reference_mean[both])
+    with pytest.raises(ValueError, match="give both"):
+        vpm.compare(tables[:3], tables[3], "pet", covariates=["age"])
+    with pytest.raises(ValueError, match="no column 'weight'"):
+        vpm.compare(tables[:3], tables[3], "pet", covariates=["weight"], participants=str(table))
     zimg = vpm.to_image(out, el, np.nan_to_num(c.z), vpm.Image(data, affine))
     assert zimg.shape == data.shape and zimg.data.min() < -3
     native = vpm.to_native(out, np.zeros((1, 3)))
