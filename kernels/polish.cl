@@ -1,5 +1,5 @@
 // Polish step of the volume map on the device (host reference: polish_direction_host in
-// host/map/polish.cpp): CGLS on the linearised relative tet volumes, min |A dx - b| with
+// host/map/polish_host.cpp; a tet's row is shared with it, kernels/polish_row.clh): CGLS on the linearised relative tet volumes, min |A dx - b| with
 //   A_(t, v) = vol_t grad phi_v / target_t   (v a corner of tet t),   b_t = 1 - vol_t / target_t,
 // dx restricted per vertex (free / tangent to the sphere / zero). The iterations run without a
 // host synchronisation: scalars live in S, reductions store partials (STORE_PARTIALS,
@@ -22,33 +22,26 @@
 
 #define STRIDE_BEGIN(n) for (int i = get_global_id(0); i < (n); i += get_global_size(0))
 
-// Per tet t: sg[12 t + 3 k + c] = vol_t / target_t * d lambda_k / d x_c, b[t], r[t] = b[t].
+#include "tet_geometry.clh"
+#include "polish_row.clh"
+
+// Per tet t: sg[12 t + 3 k + c] = vol_t / target_t * d lambda_k / d x_c, b[t], r[t] = b[t]
+// (pl_row, as the host's HostPolishSystem).
 __kernel void polish_setup(const int m, __global const int* tets, __global const real* x,
                            __global const real* target, __global real* sg, __global real* b,
                            __global real* r) {
   const int t = get_global_id(0);
   if (t >= m) return;
-  const int i0 = tets[4 * t], i1 = tets[4 * t + 1], i2 = tets[4 * t + 2], i3 = tets[4 * t + 3];
-  const real ax = x[3 * i0], ay = x[3 * i0 + 1], az = x[3 * i0 + 2];
-  // columns of M: e1, e2, e3 (edges from corner 0)
-  const real e1x = x[3 * i1] - ax, e1y = x[3 * i1 + 1] - ay, e1z = x[3 * i1 + 2] - az;
-  const real e2x = x[3 * i2] - ax, e2y = x[3 * i2 + 1] - ay, e2z = x[3 * i2 + 2] - az;
-  const real e3x = x[3 * i3] - ax, e3y = x[3 * i3 + 1] - ay, e3z = x[3 * i3 + 2] - az;
-  // rows of M^-1 = (e2 x e3, e3 x e1, e1 x e2) / det
-  const real c1x = e2y * e3z - e2z * e3y, c1y = e2z * e3x - e2x * e3z, c1z = e2x * e3y - e2y * e3x;
-  const real c2x = e3y * e1z - e3z * e1y, c2y = e3z * e1x - e3x * e1z, c2z = e3x * e1y - e3y * e1x;
-  const real c3x = e1y * e2z - e1z * e2y, c3y = e1z * e2x - e1x * e2z, c3z = e1x * e2y - e1y * e2x;
-  const real det = e1x * c1x + e1y * c1y + e1z * c1z;
-  const real vol = det / 6.0;
-  const real s = vol / target[t] / det;  // vol / target times the 1/det of the inverse
-  __global real* g = sg + 12 * t;
-  g[3] = s * c1x; g[4] = s * c1y; g[5] = s * c1z;
-  g[6] = s * c2x; g[7] = s * c2y; g[8] = s * c2z;
-  g[9] = s * c3x; g[10] = s * c3y; g[11] = s * c3z;
-  g[0] = -(g[3] + g[6] + g[9]);
-  g[1] = -(g[4] + g[7] + g[10]);
-  g[2] = -(g[5] + g[8] + g[11]);
-  const real bt = 1.0 - vol / target[t];
+  __global const int* T = tets + 4 * t;
+  real e1[3], e2[3], e3[3], g[12];
+  for (int c = 0; c < 3; ++c) {
+    const real a = x[3 * T[0] + c];
+    e1[c] = x[3 * T[1] + c] - a;
+    e2[c] = x[3 * T[2] + c] - a;
+    e3[c] = x[3 * T[3] + c] - a;
+  }
+  const real bt = pl_row(e1, e2, e3, target[t], g);
+  for (int j = 0; j < 12; ++j) sg[12 * t + j] = g[j];
   b[t] = bt;
   r[t] = bt;
 }

@@ -7,9 +7,12 @@
 
 #include "core/parallel.hpp"
 #include "map/polish.hpp"
-#include "vpm/geometry.hpp"
+#include "mesh/tet_geometry.hpp"
 
 namespace vpm::detail {
+
+// a tet's row of the least squares, shared with kernels/polish.cl (after tet_geometry's)
+#include "kernels/polish_row.clh"
 
 namespace {
 
@@ -78,18 +81,14 @@ class HostPolishSystem {
   // (sg_[3 t + k - 1]); corner 0's, minus their sum, is recomputed where it is used, in the
   // same order of operations (the loops are memory-bound: a quarter less to read).
   void scaled_gradients(const Eigen::VectorXd& target) {
-    const Eigen::VectorXd vol = tet_volumes(x_, tets_);
     sg_.resize(3 * static_cast<size_t>(m_));
     b_.resize(m_);
     parallel_for(m_, 8192, [&](int t0, int t1) {
       for (int t = t0; t < t1; ++t) {
-        const Eigen::Vector3d a = x_.row(tets_(t, 0)).transpose();
-        Eigen::Matrix3d M;
-        for (int q = 0; q < 3; ++q) M.col(q) = x_.row(tets_(t, q + 1)).transpose() - a;
-        const Eigen::Matrix3d Mi = M.inverse();
-        const double s = vol(t) / target(t);
-        for (int q = 0; q < 3; ++q) sg_[3 * static_cast<size_t>(t) + q] = s * Mi.row(q).transpose();
-        b_(t) = 1.0 - vol(t) / target(t);
+        double e[3][3], g[12];
+        tet_edges(x_, tets_, t, e);
+        b_(t) = pl_row(e[0], e[1], e[2], target(t), g);
+        for (int q = 0; q < 3; ++q) sg_[3 * static_cast<size_t>(t) + q] = Eigen::Vector3d(g[3 + 3 * q], g[4 + 3 * q], g[5 + 3 * q]);
       }
     });
   }
