@@ -8,25 +8,54 @@ Each subject is Colin27 pulled through its own random, smooth, invertible deform
 --max-scaling, and a divergence-free displacement (the curl of Gaussian vector potentials, so
 volumes are kept to first order) of a few mm. Its PET-like image is the uptake of Colin27's
 tissue classes (grey matter 1, white matter 0.3, CSF 0.05, from the T1 intensity) smoothed to
-PET resolution (FWHM --fwhm mm); each patient's foci (balls of 8-20 mm diameter centred in grey
-matter at least 0.8 radius deep, uptake at PET resolution lowered by 15-30 % inside, a soft 2 mm
-edge) are planted in Colin27's space. The result is pulled into the subject's space on a 2 mm
+PET resolution (FWHM --fwhm mm); each patient's --foci-per-patient foci (balls of 8-20 mm
+diameter centred in grey matter at least 0.8 radius deep, uptake at PET resolution lowered inside
+by a fraction drawn uniformly from --reduction, 15-30 % by default, a soft 2 mm edge) are planted
+in Colin27's space. The last --foci-free patients get no focus at all: patients by group, with an
+empty truth mask, so that anything found in them is a false positive (bench/cohort/evaluate.py).
+A patient without foci draws nothing for them; with the default options a cohort is the same,
+bit for bit, as before these two options existed. The result is pulled into the subject's space on a 2 mm
 grid, given a smooth multiplicative bias (about 1.5 % per 80 mm), spatially correlated Gaussian
 noise (FWHM 4 mm, std --noise of grey-matter uptake) and a per-subject global scale (0.7-1.3).
 The truth mask of a focus is its ball where the uptake is at least 0.4 (grey matter, mostly).
 
+Every subject has an age (uniform 20-80 years, one decimal) and a sex (F or M, a fair coin) in
+participants.tsv, drawn from a stream of their own (seed [S, 7], one age and one sex per subject in
+subject order), so that they change nothing else: without --age-effect and --sex-effect they are
+labels only and the images are the same, bit for bit, as before these columns existed. With them
+the tissue uptake, before the PET smoothing (the foci's stage: the uptake at PET resolution is that
+of the scaled tissue), is scaled per subject in the AAL regions (grey matter; names from the
+atlas' aal.nii.txt): by 1 - F (age - 50) / 10 in the frontal lobes (Frontal_*, Supp_Motor_Area_*,
+Olfactory_*, Rectus_*; not Precentral, Rolandic_Oper or Paracentral_Lobule) and by
+1 - F/4 (age - 50) / 10 in every other region, and a male's by a further 1 + S in the temporal
+lobes (Temporal_*): a regional decline with age, 4x steeper in front, and a sex difference, that
+proportional scaling does not remove and a reference modelled on age and sex can (vpm compare
+--covariates age,sex). The truth masks are unchanged by either (they follow the unscaled uptake).
+
 Layout written (BIDS; truth under derivatives/):
-  participants.tsv                 participant_id, group (normal|patient), seed
+  participants.tsv                 participant_id, group (normal|patient), seed, foci (the
+                                   number planted: 0 for normals and --foci-free patients),
+                                   age (years, one decimal), sex (F|M)
   sub-X/anat/sub-X_T1w.nii.gz      1 mm, the deformed Colin27 brain (skull-stripped), on
                                    Colin27's field of view grown by 12 mm a side
   sub-X/anat/sub-X_dseg.nii.gz     1 mm, the deformed AAL labels
   sub-X/pet/sub-X_pet.nii.gz       2 mm, float32 PET-like uptake
-  derivatives/truth/sub-X_foci.nii.gz  patients: planted foci mask on the PET grid (focus id)
+  derivatives/truth/sub-X_foci.nii.gz  patients: planted foci mask on the PET grid (focus id;
+                                   all 0 for a --foci-free patient)
   derivatives/truth/foci.tsv       every planted focus: subject, id, template centre, radius, reduction
   derivatives/truth/sub-X_deformation.json  the deformation's parameters
 
 Usage: synth_cohort.py --out DIR [--normals N] [--patients M] [--seed S] [--data DIR]
-                       [--foci-per-patient K] [--fwhm MM] [--noise F] [--jobs J]
+                       [--foci-per-patient K] [--foci-free F] [--reduction LO,HI]
+                       [--age-effect F] [--sex-effect S] [--fwhm MM] [--noise F] [--jobs J]
+  --foci-free F      the last F of the M patients get no focus (0 <= F <= M; default 0)
+  --reduction LO,HI  a focus lowers the uptake by a fraction drawn uniformly from [LO, HI]
+                     (0 < LO <= HI < 1; default 0.15,0.30)
+  --age-effect F     frontal uptake scaled by 1 - F (age - 50) / 10, other regions' by
+                     1 - F/4 (age - 50) / 10 (0 <= F < 0.15; default 0: no effect)
+  --sex-effect S     males' temporal uptake scaled by 1 + S (|S| < 0.3; default 0: no effect)
+Exit 2 (one line on stderr) on a bad --foci-free, --reduction, --age-effect or --sex-effect or
+missing template data.
 """
 import argparse
 import concurrent.futures
@@ -117,6 +146,17 @@ def grey_matter_points(t1, aal, affine):
     return (affine[:3, :3] @ idx.T + affine[:3, 3:4]).T
 
 
+def region_names(path):
+    """AAL label -> region name from the atlas' name list (lines "LABEL NAME CODE")."""
+    names = {}
+    with open(path, encoding="utf-8", errors="replace") as f:
+        for line in f:
+            parts = line.split()
+            if len(parts) >= 2 and parts[0].isdigit():
+                names[int(parts[0])] = parts[1]
+    return names
+
+
 def write(path, data, affine, dtype):
     os.makedirs(os.path.dirname(path), exist_ok=True)
     img = nib.Nifti1Image(np.asarray(data, dtype=dtype), affine)
@@ -134,7 +174,7 @@ NOISE_SIGMA_VOX = 4.0 / 2.3548 / 2  # FWHM 4 mm on the 2 mm grid
 
 def make_subject(subject, seed):
     """Writes one subject's images (and truth); returns its planted foci rows."""
-    sid, group = subject
+    sid, group, nfoci, age, sex = subject
     g = SHARED
     a, t1, aal, aff, centre = g["args"], g["t1"], g["aal"], g["aff"], g["centre"]
     world_1mm, world_2mm, pet_aff = g["world_1mm"], g["world_2mm"], g["pet_aff"]
@@ -143,15 +183,25 @@ def make_subject(subject, seed):
     truth_template = np.zeros(t1.shape, dtype=np.float64)
     foci_rows = []
     pet_template = g["smoothed_base"]
+    if a.age_effect or a.sex_effect:
+        # the tissue uptake scaled by region, then smoothed to PET resolution (a no-op scale,
+        # age 50 and female, gives smoothed_base itself)
+        scale = np.ones(t1.shape, dtype=np.float64)
+        scale[g["grey"]] = 1 - a.age_effect / 4 * (age - 50) / 10
+        scale[g["frontal"]] = 1 - a.age_effect * (age - 50) / 10
+        if sex == "M":
+            scale[g["temporal"]] *= 1 + a.sex_effect
+        pet_template = ndimage.gaussian_filter(g["base_uptake"] * scale, g["sigma_vox"])
+        del scale
     if group == "patient":
         # a focus lowers the PET-resolution uptake by `reduction` over a ball (soft 2 mm edge),
         # so the reduction stated in foci.tsv is the one in the image, noise aside
         keep = np.ones(t1.shape, dtype=np.float64)
-        for k in range(a.foci_per_patient):
+        for k in range(nfoci):  # 0 for a --foci-free patient: it draws nothing here
             radius = r.uniform(4.0, 10.0)
             inside = g["gm_points"][g["depth"] >= 0.8 * radius]  # at most a fifth of the ball outside the brain
             c = inside[r.integers(len(inside))]
-            reduction = r.uniform(0.15, 0.30)
+            reduction = r.uniform(a.reduction_lo, a.reduction_hi)
             dist = np.sqrt(((world_1mm - c[:, None, None, None]) ** 2).sum(0))
             ball = np.clip((radius + 1.0 - dist) / 2.0, 0, 1)
             keep = np.minimum(keep, 1 - reduction * ball)
@@ -199,6 +249,12 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--data", default="/usr/share/mricron/templates")
     ap.add_argument("--foci-per-patient", type=int, default=2)
+    ap.add_argument("--foci-free", type=int, default=0, help="the last K patients get no focus")
+    ap.add_argument("--reduction", default="0.15,0.30",
+                    help="LO,HI: the range a focus' uptake reduction is drawn from (default %(default)s)")
+    ap.add_argument("--age-effect", type=float, default=0.0,
+                    help="F: frontal uptake scaled by 1 - F (age - 50) / 10, elsewhere by a quarter of that")
+    ap.add_argument("--sex-effect", type=float, default=0.0, help="S: males' temporal uptake scaled by 1 + S")
     ap.add_argument("--fwhm", type=float, default=8.0, help="PET resolution, mm")
     ap.add_argument("--noise", type=float, default=0.05, help="noise std relative to grey-matter uptake")
     ap.add_argument("--max-rotation", type=float, default=5.0, help="degrees")
@@ -207,7 +263,27 @@ def main():
     a = ap.parse_args()
     if a.normals < 0 or a.patients < 0 or a.normals + a.patients == 0:
         sys.exit("synth_cohort.py: --normals and --patients must be >= 0 and not both 0")
-    for f in ("ch2bet.nii.gz", "aal.nii.gz"):
+    if not 0 <= a.foci_free <= a.patients:
+        print(f"synth_cohort.py: --foci-free {a.foci_free}: must be between 0 and --patients ({a.patients})",
+              file=sys.stderr)
+        sys.exit(2)
+    try:
+        a.reduction_lo, a.reduction_hi = (float(x) for x in a.reduction.split(","))
+        ok = 0 < a.reduction_lo <= a.reduction_hi < 1
+    except ValueError:
+        ok = False
+    if not ok:
+        print(f"synth_cohort.py: --reduction '{a.reduction}': must be LO,HI with 0 < LO <= HI < 1",
+              file=sys.stderr)
+        sys.exit(2)
+    if not 0 <= a.age_effect < 0.15:
+        print(f"synth_cohort.py: --age-effect {a.age_effect:g}: must be >= 0 and < 0.15", file=sys.stderr)
+        sys.exit(2)
+    if not abs(a.sex_effect) < 0.3:
+        print(f"synth_cohort.py: --sex-effect {a.sex_effect:g}: must be above -0.3 and below 0.3", file=sys.stderr)
+        sys.exit(2)
+    effects = bool(a.age_effect or a.sex_effect)
+    for f in ("ch2bet.nii.gz", "aal.nii.gz") + (("aal.nii.txt",) if effects else ()):
         if not os.path.exists(os.path.join(a.data, f)):
             print(f"synth_cohort.py: {os.path.join(a.data, f)}: not found (Debian's mricron-data ships it)",
                   file=sys.stderr)
@@ -236,35 +312,64 @@ def main():
     pet_aff[:3, :3] = native_aff[:3, :3] * 2
     pet_aff[:3, 3] = native_aff[:3, 3] + native_aff[:3, :3] @ np.full(3, 0.5)  # 2 mm voxels cover the 1 mm grid
     world_2mm = voxel_world(pet_aff, pet_shape)
+    regions = {}
+    if effects:  # the AAL regions the age and sex effects scale, by name
+        names = region_names(os.path.join(a.data, "aal.nii.txt"))
+        frontal = [k for k, n in names.items()
+                   if n.startswith(("Frontal", "Supp_Motor_Area", "Olfactory", "Rectus"))]
+        temporal = [k for k, n in names.items() if n.startswith("Temporal")]
+        if not frontal or not temporal:
+            print(f"synth_cohort.py: {os.path.join(a.data, 'aal.nii.txt')}: no frontal or no temporal region names",
+                  file=sys.stderr)
+            sys.exit(2)
+        regions = dict(grey=aal > 0, frontal=np.isin(aal, frontal), temporal=np.isin(aal, temporal))
 
     rng = np.random.default_rng(a.seed)
     os.makedirs(os.path.join(a.out, "derivatives", "truth"), exist_ok=True)
-    subjects = [(f"N{i + 1:02d}", "normal") for i in range(a.normals)] + \
-               [(f"P{i + 1:02d}", "patient") for i in range(a.patients)]
+    subjects = [(f"N{i + 1:02d}", "normal", 0) for i in range(a.normals)] + \
+               [(f"P{i + 1:02d}", "patient", a.foci_per_patient if i < a.patients - a.foci_free else 0)
+                for i in range(a.patients)]
     seeds = [int(rng.integers(1 << 31)) for _ in subjects]
+    # age and sex from a stream of their own: the images' seeds above are those of a cohort without them
+    demo = np.random.default_rng([a.seed, 7])
+    demographics = []
+    for _ in subjects:
+        age = round(float(demo.uniform(20, 80)), 1)
+        demographics.append((age, "M" if demo.random() < 0.5 else "F"))
+    subjects = [s + d for s, d in zip(subjects, demographics)]
     global SHARED
     SHARED = dict(args=a, t1=t1, aal=aal, aff=aff, centre=centre, base_uptake=base_uptake,
                   smoothed_base=ndimage.gaussian_filter(base_uptake, sigma_vox), sigma_vox=sigma_vox,
                   gm_points=gm_points, depth=depth, world_1mm=world_1mm, native_shape=native_shape, native_aff=native_aff,
-                  world_2mm=world_2mm, pet_aff=pet_aff)
+                  world_2mm=world_2mm, pet_aff=pet_aff, **regions)
     jobs = max(1, min(a.jobs, len(subjects)))
     with concurrent.futures.ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("fork")) as pool:
         results = list(pool.map(make_subject, subjects, seeds))
-    rows = [(f"sub-{sid}", group, seed) for (sid, group), seed in zip(subjects, seeds)]
+    rows = [(f"sub-{sid}", group, seed, nfoci, f"{age:.1f}", sex)
+            for (sid, group, nfoci, age, sex), seed in zip(subjects, seeds)]
     foci_rows = [row for r in results for row in r]
     with open(os.path.join(a.out, "participants.tsv"), "w") as f:
-        f.write("participant_id\tgroup\tseed\n")
+        f.write("participant_id\tgroup\tseed\tfoci\tage\tsex\n")
         for row in rows:
             f.write("\t".join(map(str, row)) + "\n")
     with open(os.path.join(a.out, "derivatives", "truth", "foci.tsv"), "w") as f:
         f.write("participant_id\tfocus\tcentre_x\tcentre_y\tcentre_z\tradius_mm\treduction\n")
         for row in foci_rows:
             f.write("\t".join(map(str, row)) + "\n")
+    description = f"seed {a.seed}, {a.normals} normals, {a.patients} patients"
+    if a.foci_free:
+        description += f" ({a.foci_free} without foci)"
+    if (a.reduction_lo, a.reduction_hi) != (0.15, 0.30):
+        description += f", uptake reduction {a.reduction_lo:g}-{a.reduction_hi:g}"
+    if a.age_effect:
+        description += f", age_effect {a.age_effect:g} (frontal uptake x (1 - F (age - 50) / 10), elsewhere F/4)"
+    if a.sex_effect:
+        description += f", sex_effect {a.sex_effect:g} (males' temporal uptake x (1 + S))"
     with open(os.path.join(a.out, "dataset_description.json"), "w") as f:
         json.dump({"Name": "vpm synthetic cohort (Colin27 + AAL deformed, planted foci)",
                    "BIDSVersion": "1.8.0", "DatasetType": "raw",
                    "GeneratedBy": [{"Name": "vpm scripts/synth_cohort.py",
-                                    "Description": f"seed {a.seed}, {a.normals} normals, {a.patients} patients"}]},
+                                    "Description": description}]},
                   f, indent=1)
     return 0
 

@@ -4,8 +4,9 @@
 
 Each normal's element table is compared, with `vpm compare`, against the reference of all the
 other normals, with exactly the options (threshold, clusters, hysteresis, test, smoothing,
-normalisation, sign) of a patient's comparison the workflow wrote (RESULTS/compare/*_FEATURE.json),
-so the count is that of the workflow's own settings. Every cluster found is a false focus.
+normalisation, sign, covariates and their participants table) of a patient's comparison the
+workflow wrote (RESULTS/compare/*_FEATURE.json), so the count is that of the workflow's own
+settings. Every cluster found is a false focus.
 Reported: the clusters per normal, their total and the rate per 10 normals.
 
 --calibrate RATE: also `vpm calibrate` on the same tables with the same options (one pass at
@@ -55,6 +56,9 @@ def workflow_options(results, feature):
         for key, flag in (("extend", "--extend"), ("peak", "--peak")):
             if float(o.get(key, 0)) > 0:
                 args += [flag, repr(float(o[key]))]
+        cov = ref.get("covariates")  # compare.covariates: the same model, from the same table
+        if cov:
+            args += ["--covariates", ",".join(str(c) for c in cov["names"]), "--participants", str(cov["table"])]
         return args, sidecars[0]
     except (OSError, ValueError, KeyError, TypeError) as e:
         fail(sidecars[0], f"not a comparison sidecar ({e})")

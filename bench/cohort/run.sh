@@ -6,8 +6,13 @@
 # Usage: bench/cohort/run.sh OUT_DIR [NORMALS=50] [PATIENTS=10] [SEED=1]; env MORE_FEATURES (default
 # "{t1w: anat/T1w}"), REGISTER (the workflow's register settings, e.g. "{extra: '--dense-iterations 12',
 # force: labels}"; default the config's), MESH (the meshes, e.g. "{target_vertices: 15000}"), CORES (2),
-# BUILD_DIR (build), PEER_SETTINGS (the peer's --settings, default its own "8,3,340,0"). Writes
-# OUT_DIR/summary.json and OUT_DIR/summary.md (and prints the latter).
+# BUILD_DIR (build), PEER_SETTINGS (the peer's --settings, default its own "8,3,340,0"), FOCI_FREE
+# (synth_cohort.py --foci-free: the last K patients planted with no focus; default 0) and REDUCTION
+# (synth_cohort.py --reduction LO,HI, e.g. "0.10,0.20"; default 0.15,0.30), AGE_EFFECT and SEX_EFFECT
+# (synth_cohort.py --age-effect F, --sex-effect S: frontal uptake declining with age, males' temporal
+# uptake raised; default 0, none), all read only when the cohort is synthesised (no
+# OUT_DIR/bids/participants.tsv yet). Writes OUT_DIR/summary.json and OUT_DIR/summary.md (and prints
+# the latter).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 out=$1
@@ -23,7 +28,8 @@ export POCL_CACHE_DIR="${POCL_CACHE_DIR:-$build/pocl-cache}"
 SECONDS=0
 if [[ ! -f $out/bids/participants.tsv ]]; then
   /usr/bin/python3 scripts/synth_cohort.py --out "$out/bids" --normals "$normals" --patients "$patients" \
-    --seed "$seed" --jobs "$cores"
+    --seed "$seed" --jobs "$cores" ${FOCI_FREE:+--foci-free "$FOCI_FREE"} ${REDUCTION:+--reduction "$REDUCTION"} \
+    ${AGE_EFFECT:+--age-effect "$AGE_EFFECT"} ${SEX_EFFECT:+--sex-effect "$SEX_EFFECT"}
 fi
 synth_s=$SECONDS
 snakemake -s workflow/Snakefile --cores "$cores" --directory "$out" \

@@ -191,8 +191,11 @@ void covariate_z(const Reference& ref, const std::vector<double>& row, SingleCas
     const detail::ModelPrediction p = detail::predict(ref, static_cast<int>(e), row);
     c.expected[e] = p.expected;
     if (std::isnan(x[e]) || !(ref.std[e] > 0)) continue;
+    // the z test takes the normals' mean at their centre as exact (as without covariates) but
+    // not the slopes: their uncertainty grows with the patient's distance from the centre,
+    // h - 1/n; Crawford-Howell counts both (h) with n - p - 1 degrees of freedom
     c.z[e] = test == SingleCaseTest::z
-                 ? (x[e] - p.expected) / ref.std[e]
+                 ? (x[e] - p.expected) / (ref.std[e] * std::sqrt(1.0 + std::max(0.0, p.leverage - 1.0 / ref.count[e])))
                  : t_as_z((x[e] - p.expected) / (ref.std[e] * std::sqrt(1.0 + p.leverage)), ref.count[e] - q);
   }
 }

@@ -16,7 +16,7 @@
 //    is invariant; RegistrationBoundary::Samples adds the paper's normal-cancelling constraints at
 //    points on the sphere (tangent there only); RegistrationBoundary::None has no boundary condition.
 // 4. Advection: every vertex is moved through the field with K RK4 steps (device kernel
-//    register.rk4_advect, host reference otherwise); boundary vertices are put back on the
+//    register.rk4_advect_soa, host reference otherwise); boundary vertices are put back on the
 //    sphere (radial projection of the O(dt^4) drift); tets the flow inverted (discretisation
 //    error of strongly sheared tets) are repaired by local untangling (vpm/untangle.hpp) when
 //    possible; a result still folded is refused with NumericalError.

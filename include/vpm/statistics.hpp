@@ -129,8 +129,10 @@ struct Comparison {
 
 /// z per element (CompareOptions::test; the patient's feature normalised and smoothed as the
 /// reference's) and its foci. With a reference of covariates, `covariates` is the patient's
-/// design row (covariate_row) and z = (x - prediction) / std, or Crawford-Howell's t with the
-/// patient's leverage h: (x - prediction) / (std sqrt(1 + h)), n - p - 1 degrees of freedom.
+/// design row (covariate_row) and, with h the patient's leverage x^T (X^T X)^-1 x,
+/// z = (x - prediction) / (std sqrt(1 + h - 1/n)) (the mean at the normals' centre taken as exact,
+/// as without covariates, the slopes' uncertainty not), or Crawford-Howell's t
+/// (x - prediction) / (std sqrt(1 + h)) with n - p - 1 degrees of freedom.
 /// InputError when the definitions differ or the row does not fit the reference.
 Comparison compare_to_reference(const CanonicalElements& elements, const Reference& reference,
                                 const ElementTable& patient, const CompareOptions& options = {},

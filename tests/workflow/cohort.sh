@@ -18,6 +18,18 @@ smk() { (cd "$work" && snakemake -s "$src/workflow/Snakefile" --cores 2 \
           --config bids="$work/bids" out="$work/results" vpm="$build/vpm" "$@"); }
 
 /usr/bin/python3 "$src/scripts/synth_cohort.py" --out "$work/bids" --normals 3 --patients 1 --seed 11 --jobs 2
+[[ $(head -1 "$work/bids/participants.tsv") == $'participant_id\tgroup\tseed\tfoci\tage\tsex' ]] ||
+  fail "participants.tsv: not the foci, age and sex columns"
+awk -F'\t' 'NR > 1 && !($5 >= 20 && $5 <= 80 && ($6 == "F" || $6 == "M")) { bad = 1 } END { exit bad }' \
+  "$work/bids/participants.tsv" || fail "participants.tsv: an age outside 20-80 or a sex not F/M"
+# the harder cohorts' options (issue 35) refuse what makes no sense, with exit 2 and one line, before any work
+for bad in "--foci-free 2" "--foci-free -1" "--reduction 0.3,0.2" "--reduction 0,0.2" "--reduction 0.2" \
+           "--age-effect 0.15" "--age-effect -0.01" "--sex-effect 0.3" "--sex-effect -0.3"; do
+  rc=0
+  /usr/bin/python3 "$src/scripts/synth_cohort.py" --out "$work/refused" --normals 3 --patients 1 $bad 2> "$work/refused.log" || rc=$?
+  [[ $rc -eq 2 && $(wc -l < "$work/refused.log") -eq 1 && ! -e $work/refused ]] ||
+    { cat "$work/refused.log"; fail "synth_cohort.py $bad: exit $rc, not a one-line refusal"; }
+done
 smk > "$work/run1.log" 2>&1 || { tail -40 "$work/run1.log"; fail "the workflow failed"; }
 r=$work/results
 for f in tables/sub-N01_pet.tsv tables/sub-N01_pet.json tables/sub-P01_pet.tsv compare/sub-P01_pet.tsv \
@@ -45,6 +57,8 @@ p = e["patients"][0]
 assert p["participant_id"] == "sub-P01"
 for m in ("vpm", "baseline"):
     assert 0 <= p[m]["sensitivity"] <= 1 and p[m]["foci_planted"] == 2, p[m]
+    s = e["summary"][m]
+    assert s["foci_free_patients"] == 0 and s["false_clusters_in_foci_free"] == 0, s
 PY
 # leave-one-normal-out (bench/cohort/lono.py) with the patient counted among the "normals":
 # its entry is a comparison against the three normals with the workflow's options, so it finds
@@ -76,6 +90,15 @@ PY
 if smk 'compare={min_cluster: auto}' -n > "$work/auto.log" 2>&1; then fail "min_cluster auto ran with 3 normals"; fi
 grep -q "compare.min_cluster: auto needs at least 4 normals (each left out in turn), got 3" "$work/auto.log" ||
   { cat "$work/auto.log"; fail "min_cluster auto with 3 normals: no clear refusal"; }
+# compare.covariates: a column the participants table lacks stops the workflow before any job,
+# naming the table and the line; with columns it has, the comparisons are planned again with
+# them (quoted, one word each)
+if smk 'compare={covariates: [weight]}' -n > "$work/cov.log" 2>&1; then fail "covariates: an unknown column ran"; fi
+grep -q "participants.tsv:1: no column 'weight' (compare.covariates)" "$work/cov.log" ||
+  { cat "$work/cov.log"; fail "covariates: no clear refusal of an unknown column"; }
+smk 'compare={covariates: [age, sex]}' -n -p > "$work/cov.log" 2>&1 || { cat "$work/cov.log"; fail "covariates: dry run"; }
+grep -q -- "--covariates age,sex --participants $work/bids/participants.tsv" "$work/cov.log" ||
+  { cat "$work/cov.log"; fail "covariates: not passed to vpm compare"; }
 # a rerun does nothing
 smk -n > "$work/run2.log" 2>&1
 grep -q "Nothing to be done" "$work/run2.log" || { cat "$work/run2.log"; fail "a rerun would redo work"; }

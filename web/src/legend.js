@@ -38,7 +38,10 @@ export function buildLegend(el, manifest) {
     `z: patients against all ${n} normals, each normal against the other ${n - 1} (leave-one-out); foci searched ${dirs}.</summary>` +
     '<dl>' + fs.map((f) => {
       const d = direction(f.sign);
+      const cov = (f.covariates || []).map(esc).join(', ');
       return `<dt>${esc(f.name)}</dt><dd><b>value</b>: ${units(f)}. <b>z</b>: ${test(f)}. ` +
+        (cov ? `The reference models ${cov}: each patient is compared with the value its own ${cov} predict ` +
+          `(a normal's leave-one-out z below uses the normals' mean ${cov}). ` : '') +
         `A patient's z is against the reference of all ${f.reference_subjects} normals; a normal's z is ` +
         `leave-one-out, against the other ${f.reference_subjects - 1} normals, so that it is comparable with a patient's ` +
         `(a normal against a reference that holds it would look closer to the normals than it is). ` +
