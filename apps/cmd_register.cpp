@@ -56,6 +56,8 @@ RegistrationOptions parse_options(const cli::Args& args) {
   if (opt.restore_iterations < 1) throw InputError("--restore-iterations: must be positive");
   if (!opt.restore_volumes && args.has("--restore-iterations"))
     throw InputError("--restore-iterations: the restoration is off (--no-restore)");
+  opt.restore_rounds = args.get_int("--restore-rounds", opt.restore_rounds);
+  if (opt.restore_rounds < 1 || opt.restore_rounds > 1000) throw InputError("--restore-rounds: expected 1 to 1000");
   return opt;
 }
 
@@ -316,6 +318,7 @@ vpm::cli::Registrar reg(cli::with_dense_options(
       {"--no-untangle", "", "skip local untangling (folded results exit 3)"},
       {"--no-restore", "", "skip the volume restoration after the flow"},
       {"--restore-iterations", "N", "CGLS iterations per restoration step (default 10; more: lower volume distortion, the regions drift more)"},
+      {"--restore-rounds", "N", "restoration steps at most (default 12)", false, 0, true},
       {"--max-seconds", "S", "time budget: the dense iterations stop when it is spent (the landmarks and volumes are still restored; exit 4)"},
       {"--allow-partial", "", "exit 0 even when a landmark misses its target by over 1e-3 or the time budget stopped the iterations (the warning stays)"}},
      run}, "--exclude-labels", 0));

@@ -65,6 +65,13 @@ DenseRegistrationOptions dense_options(const Args& args, DenseRegistrationOption
   o.image_smoothing = args.get_double("--dense-image-smoothing", o.image_smoothing);
   if (!(o.image_smoothing >= 0 && o.image_smoothing <= 2))
     throw InputError("--dense-image-smoothing: expected 0 to 2 (x the level's width)");
+  o.ridge = args.get_double("--dense-ridge", o.ridge);
+  if (!(o.ridge > 0 && o.ridge <= 100)) throw InputError("--dense-ridge: expected (0, 100] (x the mean Gram diagonal)");
+  o.smoothing = args.get_double("--dense-smoothing", o.smoothing);
+  if (!(o.smoothing > 0 && o.smoothing <= 4)) throw InputError("--dense-smoothing: expected (0, 4] (x the level's width)");
+  o.centre_spacing = args.get_double("--dense-centre-spacing", o.centre_spacing);
+  if (!(o.centre_spacing >= 0.25 && o.centre_spacing <= 4))
+    throw InputError("--dense-centre-spacing: expected 0.25 to 4 (x the level's width)");
   return o;
 }
 
@@ -107,7 +114,13 @@ Command with_dense_options(Command command, const std::string& after, int defaul
           {"--dense-image-grid", "N", "cells across the ball of the image force's grid (default " +
                                           std::to_string(d.image_grid) + ")", false, 0, true},
           {"--dense-image-smoothing", "F", "Gaussian smoothing of the images before the image force, x the level's width (default " +
-                                               format_sig(d.image_smoothing, 6) + ")", false, 0, true}};
+                                               format_sig(d.image_smoothing, 6) + ")", false, 0, true},
+          {"--dense-ridge", "R", "smoothing ridge of the field's fit, x the mean Gram diagonal (default " +
+                                     format_sig(d.ridge, 6) + ")", false, 0, true},
+          {"--dense-smoothing", "F", "width of the Gaussian gathering the force at a centre, x the level's width (default " +
+                                         format_sig(d.smoothing, 6) + ")", false, 0, true},
+          {"--dense-centre-spacing", "F", "grid spacing of the field's centres, x the level's width (default " +
+                                              format_sig(d.centre_spacing, 6) + ")", false, 0, true}};
   auto at = command.options.begin();
   while (at != command.options.end() && at->flag != after) ++at;
   if (at != command.options.end()) ++at;

@@ -10,12 +10,7 @@ __kernel void tet_volumes(const int m, __global const real* x, __global const in
   if (t >= m) return;
   __global const int* T = tets + 4 * t;
   real e1[3], e2[3], e3[3];
-  for (int c = 0; c < 3; ++c) {
-    const real a = x[3 * T[0] + c];
-    e1[c] = x[3 * T[1] + c] - a;
-    e2[c] = x[3 * T[2] + c] - a;
-    e3[c] = x[3 * T[3] + c] - a;
-  }
+  tg_edges(x, T, e1, e2, e3);
   vol[t] = tg_volume(e1, e2, e3);
 }
 

@@ -17,16 +17,6 @@
 #include "tet_geometry.clh"
 #include "moser_field.clh"
 
-// The edges b - a, c - a, d - a of the tet with corners T[0..3] at positions x.
-inline void tet_edges(__global const real* x, __global const int* T, real* e1, real* e2, real* e3) {
-  for (int c = 0; c < 3; ++c) {
-    const real a = x[3 * T[0] + c];
-    e1[c] = x[3 * T[1] + c] - a;
-    e2[c] = x[3 * T[2] + c] - a;
-    e3[c] = x[3 * T[3] + c] - a;
-  }
-}
-
 // Locates p from tet t (kernels/tet_locate.clh, shared with the host's reference).
 inline int locate(real3 p, int t, __global const real* inv, __global const int* nbr,
                   const real lox, const real loy, const real loz, const real inv_h,
@@ -124,7 +114,7 @@ __kernel void moser_vertex_gradients(const int n, __global const int* offset,
     real gt[3];
     mf_tet_gradient(inv + 12 * t, psi[T[1]] - p0, psi[T[2]] - p0, psi[T[3]] - p0, gt);
     real e1[3], e2[3], e3[3];
-    tet_edges(x, T, e1, e2, e3);
+    tg_edges(x, T, e1, e2, e3);
     const real vol = tg_volume(e1, e2, e3);
     w += vol;
     for (int d = 0; d < 3; ++d) g[d] += vol * gt[d];
@@ -145,7 +135,7 @@ __kernel void moser_tet_inverses(const int m, __global const real* x, __global c
   if (t >= m) return;
   __global const int* T = tets + 4 * t;
   real e1[3], e2[3], e3[3], rows[9];
-  tet_edges(x, T, e1, e2, e3);
+  tg_edges(x, T, e1, e2, e3);
   tg_inverse_rows(e1, e2, e3, rows);
   __global real* q = inv + 12 * (size_t)t;
   for (int c = 0; c < 3; ++c) q[c] = x[3 * T[0] + c];

@@ -34,12 +34,7 @@ __kernel void polish_setup(const int m, __global const int* tets, __global const
   if (t >= m) return;
   __global const int* T = tets + 4 * t;
   real e1[3], e2[3], e3[3], g[12];
-  for (int c = 0; c < 3; ++c) {
-    const real a = x[3 * T[0] + c];
-    e1[c] = x[3 * T[1] + c] - a;
-    e2[c] = x[3 * T[2] + c] - a;
-    e3[c] = x[3 * T[3] + c] - a;
-  }
+  tg_edges(x, T, e1, e2, e3);
   const real bt = pl_row(e1, e2, e3, target[t], g);
   for (int j = 0; j < 12; ++j) sg[12 * t + j] = g[j];
   b[t] = bt;

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <string>
 
+#include "support/elements.hpp"
 #include "support/fixtures.hpp"
 #include "support/process.hpp"
 #include "vpm/covariates.hpp"
@@ -22,13 +23,8 @@ using namespace vpm;
 
 namespace {
 
-ElementDefinition def() {
-  ElementDefinition d;
-  d.level = 2;
-  d.shells = 3;
-  d.samples = 8;
-  return d;
-}
+ElementDefinition def() { return test::small_elements(); }
+using test::planted_focus;
 
 const double kSlope = 0.3;  // per year
 const double kMale = 2.0;
@@ -78,13 +74,6 @@ Cohort cohort(const std::string& dir) {
   return c;
 }
 
-std::set<int> planted(const CanonicalElements& el, int e0) {
-  std::set<int> s{e0};
-  for (int n : el.neighbours(e0))
-    if (el.shell_of(n) == el.shell_of(e0)) s.insert(n);
-  return s;
-}
-
 }  // namespace
 
 TEST_CASE("covariates: the participants table read into design rows, bad tables refused with file and line") {
@@ -104,7 +93,13 @@ TEST_CASE("covariates: the participants table read into design rows, bad tables 
   std::ofstream(dir + "bad.tsv") << "participant_id\tage\nsub-1\t30\nsub-2\n";
   CHECK_THROWS_WITH(read_covariates(dir + "bad.tsv", {"age"}), Catch::Contains("bad.tsv:3: 1 cells where the header has 2"));
   std::ofstream(dir + "twice.tsv") << "participant_id\tage\nsub-1\t30\nsub-1\t31\n";
-  CHECK_THROWS_WITH(read_covariates(dir + "twice.tsv", {"age"}), Catch::Contains("'sub-1' repeated"));
+  CHECK_THROWS_WITH(read_covariates(dir + "twice.tsv", {"age"}), Catch::Contains("twice.tsv:3: participant_id 'sub-1' repeated"));
+  // line numbers count the file's lines, blank ones included
+  std::ofstream(dir + "blank.tsv") << "participant_id\tage\n\nsub-1\t30\n\nsub-1\t31\n";
+  CHECK_THROWS_WITH(read_covariates(dir + "blank.tsv", {"age"}), Catch::Contains("blank.tsv:5: participant_id 'sub-1' repeated"));
+  // a text covariate with one value in the whole table adjusts for nothing: refused, not dropped
+  std::ofstream(dir + "one.tsv") << "participant_id\tsite\nsub-1\tA\nsub-2\tn/a\nsub-3\tA\n";
+  CHECK_THROWS_WITH(read_covariates(dir + "one.tsv", {"site"}), Catch::Contains("one.tsv: covariate 'site' has the one value 'A'"));
   CHECK_THROWS_AS(read_covariates(dir + "missing.tsv", {"age"}), InputError);
 }
 
@@ -164,7 +159,7 @@ TEST_CASE("covariates: a focus the age spread hides is found with the model, an 
   CompareOptions o;
   o.min_cluster = 2;
   o.sign = -1;
-  const std::set<int> focus = planted(el, 40);
+  const std::set<int> focus = planted_focus(el, 40);
   // P1, 35, female: her values sit 4.5 + 1 below the cohort mean already; a loss of 5 (5 noise sds)
   const ElementTable p1 = subject("sub-P1", 11, 35, 'F', focus, 5.0);
   const Comparison without = compare_to_reference(el, plain, p1, o);
@@ -213,7 +208,7 @@ TEST_CASE("vpm compare and calibrate --covariates --participants: recorded, chec
     list += (i ? "," : "") + dir + c.names[i] + ".tsv";
   }
   const CanonicalElements el(def());
-  write_subject_table(dir + "p1.tsv", subject("sub-P1", 11, 35, 'F', planted(el, 40), 5.0));
+  write_subject_table(dir + "p1.tsv", subject("sub-P1", 11, 35, 'F', planted_focus(el, 40), 5.0));
   write_subject_table(dir + "x.tsv", subject("sub-X", 13, 35, 'F'));
   const std::string vpm = VPM_BINARY, base = " --feature pet --normalisation none --normals " + list + " --quiet";
   const std::string cov = " --covariates age,sex --participants " + c.table;

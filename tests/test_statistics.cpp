@@ -9,6 +9,7 @@
 #include <string>
 
 #include "collective/distributions.hpp"
+#include "support/elements.hpp"
 #include "support/fixtures.hpp"
 #include "support/process.hpp"
 #include "vpm/calibration.hpp"
@@ -22,13 +23,8 @@ using namespace vpm;
 
 namespace {
 
-ElementDefinition def() {
-  ElementDefinition d;
-  d.level = 2;
-  d.shells = 3;
-  d.samples = 8;
-  return d;
-}
+ElementDefinition def() { return test::small_elements(); }
+using test::planted_focus;
 
 // A subject: feature "pet" ~ N(100, 5) * global factor, plus `bump` on the elements of `focus`.
 ElementTable subject(unsigned seed, double factor, const std::set<int>& focus = {}, double bump = 0) {
@@ -49,14 +45,6 @@ ElementTable subject(unsigned seed, double factor, const std::set<int>& focus = 
   return t;
 }
 
-// The element e0 and its neighbours in its shell: a planted focus of 4 adjacent elements.
-std::set<int> planted(const CanonicalElements& el, int e0) {
-  std::set<int> s{e0};
-  for (int n : el.neighbours(e0))
-    if (el.shell_of(n) == el.shell_of(e0)) s.insert(n);
-  return s;
-}
-
 }  // namespace
 
 TEST_CASE("statistics: planted foci are found as one cluster, proportional scaling removes global factors") {
@@ -69,7 +57,7 @@ TEST_CASE("statistics: planted foci are found as one cluster, proportional scali
   }
   const Reference ref = build_reference(normals, names, "pet", Normalisation::proportional);
   CHECK(ref.subjects == 30);
-  const std::set<int> focus = planted(el, el.id(1, 17));
+  const std::set<int> focus = planted_focus(el, el.id(1, 17));
   REQUIRE(focus.size() == 4);
   const ElementTable patient = subject(999, 1.3, focus, 60);  // +60 % in the focus, another global factor
   const Comparison c = compare_to_reference(el, ref, patient);
@@ -212,7 +200,7 @@ TEST_CASE("vpm compare writes z, foci and the patient's native maps, refuses mix
     write_subject_table(dir + "n" + std::to_string(i) + ".tsv", subject(10 + i, 1.0));
     normals += (i ? "," : "") + dir + "n" + std::to_string(i) + ".tsv";
   }
-  const std::set<int> focus = planted(el, el.id(2, 40));
+  const std::set<int> focus = planted_focus(el, el.id(2, 40));
   write_subject_table(dir + "p.tsv", subject(77, 1.0, focus, 80));
   TetMesh reg = test::ball_mesh(6);
   reg.set_point_field("original_position", FieldValues(reg.vertices * 50.0));
@@ -268,7 +256,7 @@ TEST_CASE("statistics: hysteresis grows foci from their core, peaks keep small f
   const Reference ref = build_reference(normals, names, "pet", Normalisation::none);
   // a patient with exact z: a core of 4 elements at -4, its other neighbours at -2.7, and an
   // unrelated group of 4 at -2.7 (below the cut everywhere)
-  const std::set<int> core = planted(el, el.id(1, 17)), lonely = planted(el, el.id(1, 150));
+  const std::set<int> core = planted_focus(el, el.id(1, 17)), lonely = planted_focus(el, el.id(1, 150));
   std::set<int> ring;
   for (int e : core)
     for (int n : el.neighbours(e))

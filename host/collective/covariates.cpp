@@ -27,25 +27,33 @@ bool parse_number(const std::string& cell, double& v) {
   return ec == std::errc() && p == cell.data() + cell.size() && std::isfinite(v);
 }
 
-// The table's rows as cells, the header first; checks size, shape and the id column.
-std::vector<std::vector<std::string>> read_rows(const std::string& path) {
+// The table's rows as cells, the header first, with the line number of each in the file (blank
+// lines skipped); checks size and shape.
+struct Rows {
+  std::vector<std::vector<std::string>> cells;
+  std::vector<int> lines;
+};
+
+Rows read_rows(const std::string& path) {
   std::error_code ec;
   const auto bytes = std::filesystem::file_size(path, ec);
   if (ec) throw InputError(path + ": cannot read the participants table");
   if (bytes > kMaxTableBytes) throw InputError(path + ": larger than 64 MB; not a participants table");
   std::ifstream in(path);
   if (!in) throw InputError(path + ": cannot read the participants table");
-  std::vector<std::vector<std::string>> rows;
+  Rows table;
+  auto& rows = table.cells;
   std::string line;
   for (int number = 1; std::getline(in, line); ++number) {
     if (line.empty() || line == "\r") continue;  // blank lines
     rows.push_back(detail::split_tabs(line));
+    table.lines.push_back(number);
     if (rows.size() > 1 && rows.back().size() != rows[0].size())
       throw InputError(path + ":" + std::to_string(number) + ": " + std::to_string(rows.back().size()) +
                        " cells where the header has " + std::to_string(rows[0].size()));
   }
   if (rows.empty()) throw InputError(path + ": empty participants table");
-  return rows;
+  return table;
 }
 
 size_t column_of(const std::vector<std::string>& header, const std::string& name, const std::string& path) {
@@ -75,6 +83,9 @@ Coding coding_of(const std::vector<std::vector<std::string>>& rows, size_t col, 
   if (levels.size() > kMaxLevels)
     throw InputError(path + ": covariate '" + name + "' has " + std::to_string(levels.size()) + " levels (at most " +
                      std::to_string(kMaxLevels) + "); is it a number column with a stray text value?");
+  if (levels.size() < 2)
+    throw InputError(path + ": covariate '" + name + "' has the one value '" + *levels.begin() +
+                     "' in the whole table: nothing to adjust for");
   c.levels.assign(levels.begin(), levels.end());
   return c;
 }
@@ -86,7 +97,8 @@ Covariates read_covariates(const std::string& path, const std::vector<std::strin
   for (size_t i = 0; i < names.size(); ++i)
     if (std::find(names.begin(), names.begin() + static_cast<long>(i), names[i]) != names.begin() + static_cast<long>(i))
       throw InputError("covariate '" + names[i] + "' asked for twice");
-  const auto rows = read_rows(path);
+  const Rows table = read_rows(path);
+  const auto& rows = table.cells;
   Covariates c;
   c.source = path;
   c.names = names;
@@ -116,7 +128,7 @@ Covariates read_covariates(const std::string& path, const std::vector<std::strin
       for (size_t l = 1; l < cd.levels.size(); ++l) row.push_back(missing(cell) ? kMissing : double(cell == cd.levels[l]));
     }
     if (!c.rows.emplace(subject, std::move(row)).second)
-      throw InputError(path + ":" + std::to_string(r + 1) + ": participant_id '" + subject + "' repeated");
+      throw InputError(path + ":" + std::to_string(table.lines[r]) + ": participant_id '" + subject + "' repeated");
   }
   return c;
 }

@@ -1,6 +1,6 @@
 #pragma once
 // Private: a tet's volume and inverse edge matrix on the host, from kernels/tet_geometry.clh (the
-// expressions the kernels compile too: tg_dot, tg_cross, tg_length, tg_volume,
+// expressions the kernels compile too: tg_dot, tg_cross, tg_length, tg_edges, tg_volume,
 // tg_inverse_rows), and the edges of a mesh's tet.
 #include <cmath>
 
@@ -12,10 +12,7 @@ namespace vpm::detail {
 
 /// The edges e[0..2] = b - a, c - a, d - a of tet t (corners a, b, c, d) at positions x.
 inline void tet_edges(const Points& x, const Tets& tets, int t, double (&e)[3][3]) {
-  for (int c = 0; c < 3; ++c) {
-    const double a = x(tets(t, 0), c);
-    for (int k = 0; k < 3; ++k) e[k][c] = x(tets(t, k + 1), c) - a;
-  }
+  tg_edges(x.data(), tets.data() + 4 * static_cast<Eigen::Index>(t), e[0], e[1], e[2]);
 }
 
 }  // namespace vpm::detail
