@@ -58,6 +58,8 @@ RegistrationOptions parse_options(const cli::Args& args) {
     throw InputError("--restore-iterations: the restoration is off (--no-restore)");
   opt.restore_rounds = args.get_int("--restore-rounds", opt.restore_rounds);
   if (opt.restore_rounds < 1 || opt.restore_rounds > 1000) throw InputError("--restore-rounds: expected 1 to 1000");
+  if (!opt.restore_volumes && args.has("--restore-rounds"))
+    throw InputError("--restore-rounds: the restoration is off (--no-restore)");
   return opt;
 }
 

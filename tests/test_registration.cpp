@@ -463,11 +463,17 @@ TEST_CASE("vpm register: bad input exits 2 naming the file and line") {
     CHECK(msg.find(c.expect) != std::string::npos);
     CHECK(!std::filesystem::exists(out));
   }
-  // the restoration's step length: positive, and not without the restoration
+  // the restoration's step length and rounds: in range, and not without the restoration; the
+  // dense fit's hidden settings in range
   write_text(tmp("ok.csv"), "0.1,0.2,0.3\n-0.2,0.1,0\n");
   for (const auto& [extra, expect] : std::vector<std::pair<std::string, std::string>>{
            {" --restore-iterations 0", "--restore-iterations: must be positive"},
-           {" --no-restore --restore-iterations 5", "the restoration is off"}}) {
+           {" --no-restore --restore-iterations 5", "the restoration is off"},
+           {" --restore-rounds 0", "--restore-rounds: expected 1 to 1000"},
+           {" --no-restore --restore-rounds 5", "--restore-rounds: the restoration is off"},
+           {" --dense-ridge 0", "--dense-ridge: expected (0, 100]"},
+           {" --dense-smoothing 5", "--dense-smoothing: expected (0, 4]"},
+           {" --dense-centre-spacing 0.1", "--dense-centre-spacing: expected 0.25 to 4"}}) {
     INFO(extra);
     std::filesystem::remove(out);
     CHECK(vpm_register(mesh + " -o " + out + " --landmarks " + tmp("ok.csv") + " --targets " + tmp("ok_dst.csv") + extra,
