@@ -156,6 +156,9 @@ Settings parse_settings(const vpm::cli::Command& self, const std::vector<std::st
   s.registration.restore_rounds = args.get_int("--restore-rounds", s.registration.restore_rounds);
   if (s.registration.restore_rounds < 1 || s.registration.restore_rounds > 1000)
     throw vpm::InputError("--restore-rounds: expected 1 to 1000");
+  s.registration.restore_min_gain = args.get_double("--restore-min-gain", s.registration.restore_min_gain);
+  if (!(s.registration.restore_min_gain >= 0 && s.registration.restore_min_gain < 1))
+    throw vpm::InputError("--restore-min-gain: expected a fraction in [0, 1)");
   s.registration.restore_volumes = !args.has("--no-restore");
   s.ceiling = args.has("--ceiling");
   s.incompressible = args.has("--incompressible");
@@ -389,6 +392,8 @@ vpm::cli::Registrar reg(vpm::cli::with_dense_options(
        "CGLS iterations per step of the registration's volume restoration (default 10; more: lower volume "
        "distortion, the regions drift more)", false, 0, true},
       {"--restore-rounds", "N", "steps of the registration's volume restoration at most (default 12)", false, 0, true},
+      {"--restore-min-gain", "G", "the restoration's steps end once one gains less than this fraction (default 0.01)",
+       false, 0, true},
       {"--no-restore", "", "skip the registration's volume restoration (to see what it costs in overlap)", false, 0, true},
       {"--seed", "S", "the subject's deformation: 0 (default) the fixed one, S > 0 drawn from seed S"},
       {"--max-rotation", "DEG", "rotate the subject by up to DEG degrees about the brain centre (default 0)"},

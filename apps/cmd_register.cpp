@@ -60,6 +60,11 @@ RegistrationOptions parse_options(const cli::Args& args) {
   if (opt.restore_rounds < 1 || opt.restore_rounds > 1000) throw InputError("--restore-rounds: expected 1 to 1000");
   if (!opt.restore_volumes && args.has("--restore-rounds"))
     throw InputError("--restore-rounds: the restoration is off (--no-restore)");
+  opt.restore_min_gain = args.get_double("--restore-min-gain", opt.restore_min_gain);
+  if (!(opt.restore_min_gain >= 0 && opt.restore_min_gain < 1))
+    throw InputError("--restore-min-gain: expected a fraction in [0, 1)");
+  if (!opt.restore_volumes && args.has("--restore-min-gain"))
+    throw InputError("--restore-min-gain: the restoration is off (--no-restore)");
   return opt;
 }
 
@@ -321,6 +326,8 @@ vpm::cli::Registrar reg(cli::with_dense_options(
       {"--no-restore", "", "skip the volume restoration after the flow"},
       {"--restore-iterations", "N", "CGLS iterations per restoration step (default 10; more: lower volume distortion, the regions drift more)"},
       {"--restore-rounds", "N", "restoration steps at most (default 12)", false, 0, true},
+      {"--restore-min-gain", "G", "restoration steps end once one gains less than this fraction (default 0.01)", false,
+       0, true},
       {"--max-seconds", "S", "time budget: the dense iterations stop when it is spent (the landmarks and volumes are still restored; exit 4)"},
       {"--allow-partial", "", "exit 0 even when a landmark misses its target by over 1e-3 or the time budget stopped the iterations (the warning stays)"}},
      run}, "--exclude-labels", 0));

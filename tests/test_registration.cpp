@@ -471,6 +471,7 @@ TEST_CASE("vpm register: bad input exits 2 naming the file and line") {
            {" --no-restore --restore-iterations 5", "the restoration is off"},
            {" --restore-rounds 0", "--restore-rounds: expected 1 to 1000"},
            {" --no-restore --restore-rounds 5", "--restore-rounds: the restoration is off"},
+           {" --restore-min-gain 1", "--restore-min-gain: expected a fraction in [0, 1)"},
            {" --dense-ridge 0", "--dense-ridge: expected (0, 100]"},
            {" --dense-smoothing 5", "--dense-smoothing: expected (0, 4]"},
            {" --dense-centre-spacing 0.1", "--dense-centre-spacing: expected 0.25 to 4"}}) {

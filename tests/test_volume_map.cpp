@@ -202,7 +202,30 @@ TEST_CASE("polish_volumes runs only polish rounds and never moves pinned vertice
   bad = o;
   bad.iterations = 0;
   CHECK_THROWS_AS(polish_volumes(*host, im.mesh.vertices, im.mesh.tets, y, bad), InputError);
+  bad = o;
+  bad.min_gain = 1;
+  CHECK_THROWS_WITH(polish_volumes(*host, im.mesh.vertices, im.mesh.tets, y, bad), Catch::Contains("min_gain"));
   CHECK(y == im.ball);
+  // the steps end at the first that gains less than min_gain: short steps (3 CGLS iterations)
+  // go on for longer and end lower when smaller gains are accepted
+  auto polish_with = [&](double min_gain, Points& out) {
+    PolishOptions g = o;
+    g.iterations = 3;
+    g.rounds = 40;
+    g.min_gain = min_gain;
+    out = im.ball;
+    return polish_volumes(*host, im.mesh.vertices, im.mesh.tets, out, g);
+  };
+  Points a, b, c;
+  const VolumeMapResult strict = polish_with(0.05, a), usual = polish_with(0.01, b), loose = polish_with(0, c);
+  INFO("rounds " << strict.rounds.size() << " / " << usual.rounds.size() << " / " << loose.rounds.size());
+  CHECK(strict.rounds.size() < usual.rounds.size());
+  CHECK(usual.rounds.size() <= loose.rounds.size());
+  CHECK(loose.final_tet_mean_abs_dev <= usual.final_tet_mean_abs_dev);
+  CHECK(usual.final_tet_mean_abs_dev < strict.final_tet_mean_abs_dev);
+  for (size_t k = 0; k + 1 < strict.rounds.size(); ++k)  // every round but the last gained 5 %
+    CHECK(strict.rounds[k].tet_mean_abs_dev <=
+          0.95 * (k ? strict.rounds[k - 1].tet_mean_abs_dev : strict.initial_tet_mean_abs_dev));
   // a topology built once by the caller gives the same polish, byte for byte; one of other tets
   // is refused
   const TetTopology topology = tet_topology(n, im.mesh.tets);

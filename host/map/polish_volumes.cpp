@@ -62,10 +62,12 @@ VolumeMapResult polish_volumes(Device& device, const Points& reference, const Te
   const TetTopology& topology =
       options.topology ? *options.topology : (built = tet_topology(static_cast<int>(reference.rows()), tets));
   check_constraints(reference, topology, options);
+  if (!(options.min_gain >= 0 && options.min_gain < 1)) throw InputError("polish: min_gain must be in [0, 1)");
   VolumeMapOptions vo;
   vo.method = VolumeMapMethod::moser;
   vo.boundary = options.boundary == MapBoundary::automatic ? MapBoundary::slide : options.boundary;
   vo.polish_rounds = options.rounds;
+  vo.polish_min_gain = options.min_gain;
   vo.polish_iterations = polish_iterations_for(options.iterations, tets.rows());
   vo.polish = options.place;
   vo.local_untangle = options.local_untangle;

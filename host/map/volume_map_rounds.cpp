@@ -182,9 +182,9 @@ int fold_free_polish(MapContext& c, Points& x, const Points& saved, const Points
 
 }  // namespace
 
-// A polish round must bring the tet mean |r-1| below this fraction of its value for another to
-// follow: 1 % less; 3 % less once the map meets its tolerance (VolumeMapOptions::polish_rounds).
-constexpr double kPolishKeep = 0.99, kPolishKeepConverged = 0.97;
+// Once the map meets its tolerance, a polish round must bring the tet mean |r-1| 3 % lower for
+// another to follow (before: VolumeMapOptions::polish_min_gain, 1 % by default).
+constexpr double kPolishKeepConverged = 0.97;
 
 void run_polish(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& d) {
   const VolumeMapOptions& opt = c.opt;
@@ -212,7 +212,7 @@ void run_polish(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& 
     r.time_advect += seconds_since(t2) - r.time_untangle;
     const DistortionPair dp = volume_distortion(c.ref, x, c.tets);
     const bool converged = !c.pc.only && dp.vertex <= opt.tolerance;
-    const bool no_gain = dp.tet > (converged ? kPolishKeepConverged : kPolishKeep) * d.tet;
+    const bool no_gain = dp.tet > (converged ? kPolishKeepConverged : 1.0 - opt.polish_min_gain) * d.tet;
     if (folds > 0 || dp.tet >= d.tet) {  // no progress or folded: undo and stop polishing
       x = saved;
       r.discarded = true;

@@ -22,6 +22,7 @@ RegistrationRestore restore_volumes(Device& dev, const RestoreMesh& mesh, Points
   vo.holds = holds;
   vo.iterations = opt.restore_iterations;  // scaled by polish_iterations_for: the same reach on finer meshes
   vo.rounds = opt.restore_rounds;
+  vo.min_gain = opt.restore_min_gain;
   // Each landmark inside a tet is held where it is: as an anchor (its barycentric combination of
   // the tet's vertices fixed) when the tet's vertices are interior and not landmark vertices;
   // otherwise by pinning the tet's four vertices. Pinned vertices cannot be anchor vertices, so

@@ -47,6 +47,8 @@ struct PolishOptions {
   /// Boundary vertices slide on the unit sphere (slide) or stay (fixed); automatic = slide.
   MapBoundary boundary = MapBoundary::slide;
   int rounds = 8;       ///< at most this many steps
+  /// Steps end once one lowers the tet mean |r-1| by less than this fraction of it.
+  double min_gain = 0.01;
   /// CGLS iterations per step at up to 30,000 tets, scaled by polish_iterations_for above, so
   /// that a step reaches as far in the ball on finer meshes.
   int iterations = 60;

@@ -106,6 +106,8 @@ struct RegistrationOptions {
   /// 1.07 / 1.00 / 0.97 %.
   int restore_iterations = 10;
   int restore_rounds = 12;
+  /// The restoration's steps end once one lowers the tet mean |r-1| by less than this fraction.
+  double restore_min_gain = 0.01;
   /// Where the restoration's polish directions are computed (VolumeMapOptions::polish):
   /// automatic = the OpenCL kernels on GPUs (image holds included), the host threads otherwise.
   ExecutionPlace restore_polish = ExecutionPlace::automatic;

@@ -99,15 +99,17 @@ struct VolumeMapOptions {
   /// `polish_iterations` CGLS iterations from dx = 0 (minimum-norm, early-stopped), boundary
   /// vertices moving tangentially (slide) or not at all (fixed); x += dx, halved while it folds.
   /// They target the per-tet distortion that vertex-based Moser rounds cannot see.
-  /// At most this many (they stop when the tet mean |r-1| improves by less than 1 %, or by less
-  /// than 3 % once the vertex mean |r-1| is within `tolerance`; polish_volumes (vpm/polish.hpp)
-  /// goes on while they gain at all: the last rounds of large meshes gain 0-1.5 % each for
-  /// seconds, docs/volume_map.md). With
+  /// At most this many (they stop when the tet mean |r-1| improves by less than
+  /// `polish_min_gain`, or by less than 3 % once the vertex mean |r-1| is within `tolerance`
+  /// (not in polish_volumes, vpm/polish.hpp): the last rounds of large meshes gain 0-1.5 % each
+  /// for seconds, docs/volume_map.md). With
   /// rounds == -1 the Moser rounds hand over to the polish once a round gains less than half on
   /// the vertex mean |r-1| with it within 5 x tolerance, or gains less than a fifth. A polish
   /// step that folds is untangled locally like a round, then halved.
   int polish_rounds = 8;
   int polish_iterations = 60;
+  /// The fraction by which a polish round must lower the tet mean |r-1| for another to follow.
+  double polish_min_gain = 0.01;
   /// The polish's CGLS iterations when the polish starts with the vertex mean |r-1| above 5 x
   /// `tolerance` (the Moser rounds stalled far from it, as on a hand's fingers; docs/shapes.md),
   /// at up to 30,000 tets, times cbrt(tets / 30,000) above (the same correction spans more
