@@ -153,13 +153,8 @@ Settings parse_settings(const vpm::cli::Command& self, const std::vector<std::st
   s.registration.restore_iterations = args.get_int("--restore-iterations", s.registration.restore_iterations);
   if (s.registration.restore_iterations < 1 || s.registration.restore_iterations > 10000)
     throw vpm::InputError("--restore-iterations: expected 1 to 10000");
-  s.registration.restore_rounds = args.get_int("--restore-rounds", s.registration.restore_rounds);
-  if (s.registration.restore_rounds < 1 || s.registration.restore_rounds > 1000)
-    throw vpm::InputError("--restore-rounds: expected 1 to 1000");
-  s.registration.restore_min_gain = args.get_double("--restore-min-gain", s.registration.restore_min_gain);
-  if (!(s.registration.restore_min_gain >= 0 && s.registration.restore_min_gain < 1))
-    throw vpm::InputError("--restore-min-gain: expected a fraction in [0, 1)");
   s.registration.restore_volumes = !args.has("--no-restore");
+  vpm::cli::restore_step_options(args, s.registration);
   s.ceiling = args.has("--ceiling");
   s.incompressible = args.has("--incompressible");
   const int seed = args.get_int("--seed", 0);

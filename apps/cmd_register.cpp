@@ -56,15 +56,7 @@ RegistrationOptions parse_options(const cli::Args& args) {
   if (opt.restore_iterations < 1) throw InputError("--restore-iterations: must be positive");
   if (!opt.restore_volumes && args.has("--restore-iterations"))
     throw InputError("--restore-iterations: the restoration is off (--no-restore)");
-  opt.restore_rounds = args.get_int("--restore-rounds", opt.restore_rounds);
-  if (opt.restore_rounds < 1 || opt.restore_rounds > 1000) throw InputError("--restore-rounds: expected 1 to 1000");
-  if (!opt.restore_volumes && args.has("--restore-rounds"))
-    throw InputError("--restore-rounds: the restoration is off (--no-restore)");
-  opt.restore_min_gain = args.get_double("--restore-min-gain", opt.restore_min_gain);
-  if (!(opt.restore_min_gain >= 0 && opt.restore_min_gain < 1))
-    throw InputError("--restore-min-gain: expected a fraction in [0, 1)");
-  if (!opt.restore_volumes && args.has("--restore-min-gain"))
-    throw InputError("--restore-min-gain: the restoration is off (--no-restore)");
+  cli::restore_step_options(args, opt);
   return opt;
 }
 

@@ -75,6 +75,16 @@ DenseRegistrationOptions dense_options(const Args& args, DenseRegistrationOption
   return o;
 }
 
+void restore_step_options(const Args& args, RegistrationOptions& o) {
+  o.restore_rounds = args.get_int("--restore-rounds", o.restore_rounds);
+  if (o.restore_rounds < 1 || o.restore_rounds > 1000) throw InputError("--restore-rounds: expected 1 to 1000");
+  o.restore_min_gain = args.get_double("--restore-min-gain", o.restore_min_gain);
+  if (!(o.restore_min_gain >= 0 && o.restore_min_gain < 1))
+    throw InputError("--restore-min-gain: expected a fraction in [0, 1)");
+  for (const char* flag : {"--restore-rounds", "--restore-min-gain"})
+    if (!o.restore_volumes && args.has(flag)) throw InputError(std::string(flag) + ": the restoration is off (--no-restore)");
+}
+
 Command with_dense_options(Command command, const std::string& after, int default_iterations,
                            DenseForce default_force) {
   const DenseRegistrationOptions d;

@@ -11,6 +11,10 @@ namespace vpm::cli {
 /// --dense-image-grid N into `options` (InputError naming the flag for bad values).
 DenseRegistrationOptions dense_options(const Args& args, DenseRegistrationOptions options = {});
 
+/// --restore-rounds N and --restore-min-gain G into `options` (after its restore_volumes is
+/// set: both are refused with --no-restore), InputError naming the flag for bad values.
+void restore_step_options(const Args& args, RegistrationOptions& options);
+
 /// `command` with the option table rows of those flags inserted after the row of `after`
 /// (`default_iterations`, `default_force`: the command's defaults of --dense-iterations and
 /// --dense-force).
