@@ -62,7 +62,6 @@ VolumeMapResult polish_volumes(Device& device, const Points& reference, const Te
   const TetTopology& topology =
       options.topology ? *options.topology : (built = tet_topology(static_cast<int>(reference.rows()), tets));
   check_constraints(reference, topology, options);
-  if (!(options.min_gain >= 0 && options.min_gain < 1)) throw InputError("polish: min_gain must be in [0, 1)");
   VolumeMapOptions vo;
   vo.method = VolumeMapMethod::moser;
   vo.boundary = options.boundary == MapBoundary::automatic ? MapBoundary::slide : options.boundary;

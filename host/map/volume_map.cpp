@@ -111,6 +111,8 @@ void check_inputs(const Points& reference, const Tets& tets, const Points& ball,
   if (tets.minCoeff() < 0 || tets.maxCoeff() >= reference.rows())
     throw InputError("volume map: tet vertex index out of range");
   if (opt.rk_steps < 1) throw InputError("volume map: rk_steps must be >= 1");
+  if (!(opt.polish_min_gain >= 0 && opt.polish_min_gain < 1))
+    throw InputError("volume map: polish_min_gain must be in [0, 1)");
 }
 
 // Boundary, frozen vertices, neighbours, normalised input volumes, solver and advector.
