@@ -16,6 +16,9 @@ CompareOptions compare_options(const Args& args) {
   o.min_cluster = args.get_int("--min-cluster", o.min_cluster);
   o.extend = args.get_double("--extend", 0);
   if (o.extend < 0) throw InputError("option --extend: must be positive (or 0: off)");
+  o.relative_extent = args.get_double("--relative-extent", 0);
+  if (!(o.relative_extent >= 0 && o.relative_extent <= 1))
+    throw InputError("option --relative-extent: must be in (0, 1] (or 0: off)");
   o.test = parse_option("--test", [&] { return parse_single_case_test(args.get("--test", "z")); });
   o.peak = args.get_double("--peak", 0);
   if (o.peak < 0) throw InputError("option --peak: must be positive (or 0: off)");
@@ -84,6 +87,7 @@ std::vector<OptionSpec> comparison_option_rows() {
       {"--smooth", "R", "average every subject's feature over R rings of adjacent elements first (default 0)"},
       {"--shrink", "L", "pull each element's variance over the normals towards its neighbours' by L in 0..1 (default 0)"},
       {"--extend", "Z2", "grow each focus into adjacent elements with |z| >= Z2 (hysteresis; default off)"},
+      {"--relative-extent", "F", "trim each focus to where its locally averaged |z| reaches F x its peak (e.g. 0.3; default off)"},
       {"--test", "z|crawford-howell", "plain z, or Crawford-Howell's t for one case against n normals as the equivalent z (default z)"},
       {"--peak", "ZP", "a cluster smaller than --min-cluster is a focus too when its peak |z| >= ZP (default off)"},
       {"--sign", "both|hyper|hypo", "increases, decreases or both (default both)"},

@@ -16,7 +16,10 @@ empty truth mask, so that anything found in them is a false positive (bench/coho
 A patient without foci draws nothing for them; with the default options a cohort is the same,
 bit for bit, as before these two options existed. The result is pulled into the subject's space on a 2 mm
 grid, given a smooth multiplicative bias (about 1.5 % per 80 mm), spatially correlated Gaussian
-noise (FWHM 4 mm, std --noise of grey-matter uptake) and a per-subject global scale (0.7-1.3).
+noise (FWHM --noise-fwhm mm, 4 by default; 0: white noise; std --noise of grey-matter uptake) and
+a per-subject global scale (0.7-1.3). With --cortical the foci are centred only in the cerebral
+cortex (AAL regions other than the caudate, putamen, pallidum, thalamus, hippocampus, amygdala,
+cerebellum and vermis): the issue-35 cohort's "cortical foci".
 The truth mask of a focus is its ball where the uptake is at least 0.4 (grey matter, mostly).
 
 Every subject has an age (uniform 20-80 years, one decimal) and a sex (F or M, a fair coin) in
@@ -47,15 +50,18 @@ Layout written (BIDS; truth under derivatives/):
 
 Usage: synth_cohort.py --out DIR [--normals N] [--patients M] [--seed S] [--data DIR]
                        [--foci-per-patient K] [--foci-free F] [--reduction LO,HI]
-                       [--age-effect F] [--sex-effect S] [--fwhm MM] [--noise F] [--jobs J]
+                       [--age-effect F] [--sex-effect S] [--fwhm MM] [--noise F]
+                       [--noise-fwhm MM] [--cortical] [--jobs J]
   --foci-free F      the last F of the M patients get no focus (0 <= F <= M; default 0)
   --reduction LO,HI  a focus lowers the uptake by a fraction drawn uniformly from [LO, HI]
                      (0 < LO <= HI < 1; default 0.15,0.30)
   --age-effect F     frontal uptake scaled by 1 - F (age - 50) / 10, other regions' by
                      1 - F/4 (age - 50) / 10 (0 <= F < 0.15; default 0: no effect)
   --sex-effect S     males' temporal uptake scaled by 1 + S (|S| < 0.3; default 0: no effect)
-Exit 2 (one line on stderr) on a bad --foci-free, --reduction, --age-effect or --sex-effect or
-missing template data.
+  --noise-fwhm MM    the noise's correlation length (0 <= MM <= 20; default 4; 0: white)
+  --cortical         foci centred in the cerebral cortex only (default: any grey matter)
+Exit 2 (one line on stderr) on a bad --foci-free, --reduction, --age-effect, --sex-effect or
+--noise-fwhm or missing template data.
 """
 import argparse
 import concurrent.futures
@@ -169,7 +175,9 @@ def write(path, data, affine, dtype):
 
 SHARED = {}
 PAD_MM = 12
-NOISE_SIGMA_VOX = 4.0 / 2.3548 / 2  # FWHM 4 mm on the 2 mm grid
+PET_VOXEL_MM = 2.0
+# the AAL regions that are not cerebral cortex (--cortical keeps foci out of them), by name prefix
+NOT_CORTEX = ("Caudate", "Putamen", "Pallidum", "Thalamus", "Hippocampus", "Amygdala", "Cerebelum", "Vermis")
 
 
 def make_subject(subject, seed):
@@ -222,8 +230,11 @@ def make_subject(subject, seed):
     coeff = r.normal(scale=0.015, size=3)  # a smooth bias of about 1.5 % per 80 mm
     rel = (world_2mm - centre[:, None, None, None]) / 80.0
     bias = 1 + np.tensordot(coeff, rel, axes=1)
-    # noise correlated over about 2 voxels (FWHM 4 mm), std a.noise of grey-matter uptake
-    noise = ndimage.gaussian_filter(r.normal(size=pet.shape), NOISE_SIGMA_VOX)
+    # noise correlated over a.noise_fwhm mm (4 by default: about 2 voxels; 0: white), std a.noise
+    # of grey-matter uptake
+    noise = r.normal(size=pet.shape)
+    if a.noise_fwhm > 0:
+        noise = ndimage.gaussian_filter(noise, a.noise_fwhm / 2.3548 / PET_VOXEL_MM)
     noise *= a.noise / noise.std()
     pet = (pet * bias + noise) * gscale
     base = os.path.join(a.out, f"sub-{sid}")
@@ -257,6 +268,10 @@ def main():
     ap.add_argument("--sex-effect", type=float, default=0.0, help="S: males' temporal uptake scaled by 1 + S")
     ap.add_argument("--fwhm", type=float, default=8.0, help="PET resolution, mm")
     ap.add_argument("--noise", type=float, default=0.05, help="noise std relative to grey-matter uptake")
+    ap.add_argument("--noise-fwhm", type=float, default=4.0,
+                    help="the noise's correlation length, FWHM mm (0: white, independent per PET voxel)")
+    ap.add_argument("--cortical", action="store_true",
+                    help="foci centred in the cerebral cortex only (no deep grey matter, no cerebellum)")
     ap.add_argument("--max-rotation", type=float, default=5.0, help="degrees")
     ap.add_argument("--max-scaling", type=float, default=0.05)
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="subjects generated at once")
@@ -282,8 +297,12 @@ def main():
     if not abs(a.sex_effect) < 0.3:
         print(f"synth_cohort.py: --sex-effect {a.sex_effect:g}: must be above -0.3 and below 0.3", file=sys.stderr)
         sys.exit(2)
+    if not 0 <= a.noise_fwhm <= 20:
+        print(f"synth_cohort.py: --noise-fwhm {a.noise_fwhm:g}: must be between 0 and 20 mm", file=sys.stderr)
+        sys.exit(2)
     effects = bool(a.age_effect or a.sex_effect)
-    for f in ("ch2bet.nii.gz", "aal.nii.gz") + (("aal.nii.txt",) if effects else ()):
+    need_names = effects or a.cortical
+    for f in ("ch2bet.nii.gz", "aal.nii.gz") + (("aal.nii.txt",) if need_names else ()):
         if not os.path.exists(os.path.join(a.data, f)):
             print(f"synth_cohort.py: {os.path.join(a.data, f)}: not found (Debian's mricron-data ships it)",
                   file=sys.stderr)
@@ -300,6 +319,11 @@ def main():
     inv = np.linalg.inv(aff)
     gm_vox = np.rint((inv[:3, :3] @ gm_points.T + inv[:3, 3:4]).T).astype(int)
     depth = depth_map[gm_vox[:, 0], gm_vox[:, 1], gm_vox[:, 2]]
+    if a.cortical:  # focus centres only where the atlas says cerebral cortex
+        names = region_names(os.path.join(a.data, "aal.nii.txt"))
+        deep = [k for k, n in names.items() if n.startswith(NOT_CORTEX)]
+        cortex = ~np.isin(aal[gm_vox[:, 0], gm_vox[:, 1], gm_vox[:, 2]], deep)
+        gm_points, depth = gm_points[cortex], depth[cortex]
     sigma_vox = a.fwhm / 2.3548 / np.abs(np.diag(aff)[:3])
     world_1mm = voxel_world(aff, t1.shape)
     # native grids: Colin27's field of view grown by PAD_MM on every side (a deformed brain must
@@ -361,6 +385,12 @@ def main():
         description += f" ({a.foci_free} without foci)"
     if (a.reduction_lo, a.reduction_hi) != (0.15, 0.30):
         description += f", uptake reduction {a.reduction_lo:g}-{a.reduction_hi:g}"
+    if a.fwhm != 8.0:
+        description += f", PET FWHM {a.fwhm:g} mm"
+    if a.noise_fwhm != 4.0:
+        description += ", white noise" if a.noise_fwhm == 0 else f", noise FWHM {a.noise_fwhm:g} mm"
+    if a.cortical:
+        description += ", foci in the cerebral cortex only"
     if a.age_effect:
         description += f", age_effect {a.age_effect:g} (frontal uptake x (1 - F (age - 50) / 10), elsewhere F/4)"
     if a.sex_effect:

@@ -53,7 +53,7 @@ def workflow_options(results, feature):
             args += ["--fdr", repr(float(o["fdr_q"]))]
         else:
             args += ["--threshold", repr(float(o["threshold"]))]
-        for key, flag in (("extend", "--extend"), ("peak", "--peak")):
+        for key, flag in (("extend", "--extend"), ("peak", "--peak"), ("relative_extent", "--relative-extent")):
             if float(o.get(key, 0)) > 0:
                 args += [flag, repr(float(o[key]))]
         cov = ref.get("covariates")  # compare.covariates: the same model, from the same table

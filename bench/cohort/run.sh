@@ -10,7 +10,9 @@
 # (synth_cohort.py --foci-free: the last K patients planted with no focus; default 0) and REDUCTION
 # (synth_cohort.py --reduction LO,HI, e.g. "0.10,0.20"; default 0.15,0.30), AGE_EFFECT and SEX_EFFECT
 # (synth_cohort.py --age-effect F, --sex-effect S: frontal uptake declining with age, males' temporal
-# uptake raised; default 0, none), all read only when the cohort is synthesised (no
+# uptake raised; default 0, none), FWHM (--fwhm, the PET's resolution in mm; default 8), NOISE_FWHM
+# (--noise-fwhm: 0 for white noise; default 4), CORTICAL (1: --cortical, foci in the cerebral cortex
+# only) and FOCI_PER_PATIENT (--foci-per-patient; default 2), all read only when the cohort is synthesised (no
 # OUT_DIR/bids/participants.tsv yet). Writes OUT_DIR/summary.json and OUT_DIR/summary.md (and prints
 # the latter).
 set -euo pipefail
@@ -29,7 +31,9 @@ SECONDS=0
 if [[ ! -f $out/bids/participants.tsv ]]; then
   /usr/bin/python3 scripts/synth_cohort.py --out "$out/bids" --normals "$normals" --patients "$patients" \
     --seed "$seed" --jobs "$cores" ${FOCI_FREE:+--foci-free "$FOCI_FREE"} ${REDUCTION:+--reduction "$REDUCTION"} \
-    ${AGE_EFFECT:+--age-effect "$AGE_EFFECT"} ${SEX_EFFECT:+--sex-effect "$SEX_EFFECT"}
+    ${AGE_EFFECT:+--age-effect "$AGE_EFFECT"} ${SEX_EFFECT:+--sex-effect "$SEX_EFFECT"} \
+    ${FWHM:+--fwhm "$FWHM"} ${NOISE_FWHM:+--noise-fwhm "$NOISE_FWHM"} ${CORTICAL:+--cortical} \
+    ${FOCI_PER_PATIENT:+--foci-per-patient "$FOCI_PER_PATIENT"}
 fi
 synth_s=$SECONDS
 snakemake -s workflow/Snakefile --cores "$cores" --directory "$out" \

@@ -47,6 +47,7 @@ void write_comparison(const std::string& tsv_path, const CanonicalElements& el, 
   o["fdr_q"] = opt.fdr_q;
   o["min_cluster"] = opt.min_cluster;
   o["extend"] = opt.extend;
+  o["relative_extent"] = opt.relative_extent;
   o["peak"] = opt.peak;
   o["test"] = to_string(opt.test);
   o["sign"] = opt.sign;

@@ -264,6 +264,46 @@ std::vector<FocusCluster> clusters_of(const CanonicalElements& el, const std::ve
   return out;
 }
 
+// CompareOptions::relative_extent: focus c (its elements reach the hysteresis level already)
+// redrawn over its elements whose local mean of sign * z (over the element and its adjacent
+// elements: z's unit noise per element would otherwise jitter the edge outwards) reaches
+// fraction x the largest such mean in the focus, connected through such elements to its peak.
+void delineate(const CanonicalElements& el, const std::vector<double>& z, double fraction, FocusCluster& c) {
+  std::vector<double> local(c.elements.size());
+  double top = 0;
+  for (size_t i = 0; i < c.elements.size(); ++i) {
+    const int e = c.elements[i];
+    double sum = z[e] * c.sign;
+    int n = 1;
+    for (int nb : el.neighbours(e))
+      if (!std::isnan(z[nb])) sum += z[nb] * c.sign, ++n;
+    local[i] = sum / n;
+    top = std::max(top, local[i]);
+  }
+  const double level = fraction * top;
+  std::vector<int> stack, kept;
+  std::vector<char> seen(c.elements.size(), 0);
+  const auto visit = [&](int e) {
+    const auto at = std::lower_bound(c.elements.begin(), c.elements.end(), e);
+    if (at == c.elements.end() || *at != e) return;
+    const size_t i = static_cast<size_t>(at - c.elements.begin());
+    if (seen[i] || (local[i] < level && e != c.peak_element)) return;
+    seen[i] = 1;
+    stack.push_back(e);
+  };
+  visit(c.peak_element);
+  while (!stack.empty()) {
+    const int e = stack.back();
+    stack.pop_back();
+    kept.push_back(e);
+    for (int nb : el.neighbours(e)) visit(nb);
+  }
+  std::sort(kept.begin(), kept.end());
+  c.elements = std::move(kept);
+  c.volume = 0;
+  for (int e : c.elements) c.volume += el.volume(e);
+}
+
 }  // namespace
 
 Comparison compare_to_reference(const CanonicalElements& el, const Reference& ref, const ElementTable& patient,
@@ -293,7 +333,10 @@ Comparison compare_to_reference(const CanonicalElements& el, const Reference& re
   for (int sign : {1, -1}) {
     if (opt.sign != 0 && opt.sign != sign) continue;
     const double low = opt.extend > 0 ? std::min(opt.extend, c.threshold_used) : c.threshold_used;
-    for (FocusCluster& f : clusters_of(el, c.z, c.threshold_used, low, sign, opt.min_cluster, opt.peak)) c.clusters.push_back(std::move(f));
+    for (FocusCluster& f : clusters_of(el, c.z, c.threshold_used, low, sign, opt.min_cluster, opt.peak)) {
+      if (opt.relative_extent > 0) delineate(el, c.z, opt.relative_extent, f);
+      c.clusters.push_back(std::move(f));
+    }
   }
   std::stable_sort(c.clusters.begin(), c.clusters.end(),
                    [](const FocusCluster& a, const FocusCluster& b) { return a.elements.size() > b.elements.size(); });
