@@ -38,7 +38,7 @@ for f in tables/sub-N01_pet.tsv tables/sub-N01_pet.json tables/sub-P01_pet.tsv c
   [[ -s $r/$f ]] || fail "missing $r/$f"
 done
 # the tables hold the default element set (graded, level 4: 32,180 elements) and the comparison
-# read 3 normals with the default hysteresis
+# read 3 normals with the default hysteresis and relative extent
 [[ $(tail -n +2 "$r/tables/sub-N01_pet.tsv" | wc -l) -eq 32180 ]] || fail "sub-N01_pet.tsv: not 32180 rows"
 /usr/bin/python3 - "$r" <<'PY' || fail "reports"
 import json, sys
@@ -47,6 +47,7 @@ c = json.load(open(f"{r}/compare/sub-P01_pet.json"))
 assert c["reference"]["subjects"] == 3, c["reference"]
 assert c["definition"]["layout"] == "graded" and c["definition"]["shells"] == 19, c["definition"]
 assert c["options"]["extend"] == 2.5 and c["options"]["min_cluster"] == 10, c["options"]
+assert c["options"]["relative_extent"] == 0.3, c["options"]
 reg = json.load(open(f"{r}/subjects/sub-P01/sub-P01_register.json"))
 assert reg["input"]["landmarks"] >= 100 and reg["landmark_rms_error"] < 1e-6, reg["input"]
 # the default dense registration pulls by region boundaries and the T1w against the template's
@@ -82,7 +83,7 @@ assert (at10[0] if at10 else 0) == l["false_clusters"] and curve[-1]["false_clus
 rows = {row["normal"]: row for row in l["per_normal"]}
 assert l["normals"] == 4 and len(rows) == 4, l
 assert rows["sub-P01_pet.tsv"]["clusters"] == len(c["result"]["clusters"]), (rows["sub-P01_pet.tsv"], c["result"])
-assert "--extend" in l["options"] and l["options"][l["options"].index("--min-cluster") + 1] == "10", l["options"]
+assert "--extend" in l["options"] and "--relative-extent" in l["options"] and l["options"][l["options"].index("--min-cluster") + 1] == "10", l["options"]
 assert abs(l["per_10_normals"] - 10 * l["false_clusters"] / 4) < 1e-12, l
 PY
 # compare.min_cluster: auto (vpm calibrate in the workflow) needs 4 normals: with 3 the workflow
