@@ -70,7 +70,7 @@ std::vector<ElementTable> tables_of(const py::list& items) {
 // long: the keyword arguments of `vpm compare`, one line each
 py::dict compare_py(const py::list& normals, const py::object& patient, const std::string& feature,
                     const std::string& normalisation, double threshold, double fdr, int min_cluster, double extend,
-                    double peak, const std::string& sign, const std::string& test, int smooth, double shrink,
+                    double relative_extent, double peak, const std::string& sign, const std::string& test, int smooth, double shrink,
                     const std::vector<std::string>& covariates, const std::string& participants) {
   const std::vector<ElementTable> ns = tables_of(normals);
   py::list one;
@@ -79,6 +79,8 @@ py::dict compare_py(const py::list& normals, const py::object& patient, const st
   if (ns.empty()) throw InputError("normals: no tables");
   CompareOptions o;
   o.threshold = threshold, o.fdr_q = fdr, o.min_cluster = min_cluster, o.extend = extend, o.peak = peak;
+  o.relative_extent = relative_extent;
+  if (!(relative_extent >= 0 && relative_extent <= 1)) throw InputError("relative_extent: must be in (0, 1] (or 0: off)");
   o.test = parse_single_case_test(test);
   if (sign == "both") o.sign = 0;
   else if (sign == "hyper") o.sign = 1;
@@ -161,7 +163,7 @@ void bind_collective(py::module_& m) {
         py::arg("elements") = py::none(), py::arg("subject") = "");
   m.def("_compare", &compare_py, py::arg("normals"), py::arg("patient"), py::arg("feature"), py::kw_only(),
         py::arg("normalisation") = "proportional", py::arg("threshold") = 3.0, py::arg("fdr") = 0.0,
-        py::arg("min_cluster") = 3, py::arg("extend") = 0.0, py::arg("peak") = 0.0, py::arg("sign") = "both",
+        py::arg("min_cluster") = 3, py::arg("extend") = 0.0, py::arg("relative_extent") = 0.0, py::arg("peak") = 0.0, py::arg("sign") = "both",
         py::arg("test") = "z", py::arg("smooth") = 0, py::arg("shrink") = 0.0,
         py::arg("covariates") = std::vector<std::string>{}, py::arg("participants") = "");
   m.def("to_native", [](const py::object& mesh, const py::object& points) {

@@ -176,7 +176,8 @@ class Comparison:
 def compare(normals, patient, feature, **options):
     """Compares a patient's table with the normals' (`vpm compare`): proportional scaling, the
     normals' per-element mean and std, z and foci. `normals`: ElementTables or paths; options:
-    normalisation, threshold (3), fdr, min_cluster (3), extend, peak, sign, test, smooth, shrink (0),
+    normalisation, threshold (3), fdr, min_cluster (3), extend, relative_extent (0; the workflow
+    uses 0.3), peak, sign, test, smooth, shrink (0),
     covariates (column names, e.g. ["age", "sex"]) with participants (the table that holds them,
     each table looked up by its subject): the reference then models them and reference_mean is
     the patient's prediction. Returns a Comparison."""

@@ -83,6 +83,14 @@ def test_sample_and_compare(vpm, ball, image_array, tmp_path):
     assert np.allclose(s.reference_mean, c.reference_mean, equal_nan=True)
     ok = np.isfinite(c.reference_std) & np.isfinite(s.reference_std)
     assert ok.sum() > 100 and np.ptp(s.reference_std[ok]) < np.ptp(c.reference_std[ok])
+    # the relative extent only trims the foci the hysteresis found: the same foci, no element added
+    h = vpm.compare(tables[:3], tables[3], "pet", threshold=3, min_cluster=2, extend=2, sign="hypo")
+    r = vpm.compare(tables[:3], tables[3], "pet", threshold=3, min_cluster=2, extend=2, sign="hypo",
+                    relative_extent=0.9)
+    assert len(r.clusters) == len(h.clusters) and ((r.cluster > 0) <= (h.cluster > 0)).all()
+    assert (r.cluster > 0).sum() < (h.cluster > 0).sum()
+    with pytest.raises(ValueError, match="relative_extent"):
+        vpm.compare(tables[:3], tables[3], "pet", relative_extent=1.5)
     # covariates from a participants table: the reference a linear model of age, the patient
     # compared with its own prediction (reference_mean then differs from the normals' mean)
     table = tmp_path / "participants.tsv"
