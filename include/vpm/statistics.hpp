@@ -118,7 +118,8 @@ struct FocusCluster {
   std::vector<int> elements;  ///< ascending
   /// its elements at or beyond the cut (the rest joined by CompareOptions::extend): the count
   /// min_cluster is held against, so one comparison at min_cluster 1 tells which clusters any
-  /// larger min_cluster keeps (bench/cohort/lono.py calibrates it that way)
+  /// larger min_cluster keeps (bench/cohort/lono.py calibrates it that way); with
+  /// CompareOptions::relative_extent counted before the trim, so some may lie outside `elements`
   int candidates = 0;
   double volume = 0;          ///< ball volume (sum of element volumes; the ball is 4 pi / 3)
   int peak_element = -1;
