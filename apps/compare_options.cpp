@@ -10,24 +10,24 @@ namespace vpm::cli {
 CompareOptions compare_options(const Args& args) {
   CompareOptions o;
   o.threshold = args.get_double("--threshold", o.threshold);
-  if (!(o.threshold > 0)) throw InputError("option --threshold: must be positive");
   o.fdr_q = args.get_double("--fdr", 0);
-  if (o.fdr_q < 0 || o.fdr_q >= 1) throw InputError("option --fdr: must be in (0, 1)");
   o.min_cluster = args.get_int("--min-cluster", o.min_cluster);
   o.extend = args.get_double("--extend", 0);
-  if (o.extend < 0) throw InputError("option --extend: must be positive (or 0: off)");
   o.relative_extent = args.get_double("--relative-extent", 0);
-  if (!(o.relative_extent >= 0 && o.relative_extent <= 1))
-    throw InputError("option --relative-extent: must be in (0, 1] (or 0: off)");
   o.test = parse_option("--test", [&] { return parse_single_case_test(args.get("--test", "z")); });
   o.peak = args.get_double("--peak", 0);
-  if (o.peak < 0) throw InputError("option --peak: must be positive (or 0: off)");
-  if (o.min_cluster < 1) throw InputError("option --min-cluster: must be >= 1");
   const std::string sign = args.get("--sign", "both");
   if (sign == "both") o.sign = 0;
   else if (sign == "hyper") o.sign = 1;
   else if (sign == "hypo") o.sign = -1;
   else throw InputError("option --sign: '" + sign + "' is not one of both, hyper, hypo");
+  if (const auto bad = compare_option_error(o)) {
+    // the library names CompareOptions' fields; the flags are those with dashes, but for --fdr
+    std::string flag = bad->field == "fdr_q" ? "fdr" : bad->field;
+    for (char& ch : flag)
+      if (ch == '_') ch = '-';
+    throw InputError("option --" + flag + ": " + bad->problem);
+  }
   return o;
 }
 

@@ -192,6 +192,41 @@ TEST_CASE("statistics: native foci table: voxel volume, centroid, peak and main 
   CHECK(native_foci(foci, c)[0].label == 0);  // no label image
 }
 
+TEST_CASE("statistics: options out of range are refused by the library by name, the command line names the flag") {
+  const CanonicalElements el(def());
+  const std::vector<ElementTable> normals = {subject(1, 1), subject(2, 1), subject(3, 1)};
+  const Reference ref = build_reference(normals, {"a", "b", "c"}, "pet", Normalisation::proportional);
+  const ElementTable patient = subject(4, 1);
+  const auto refused = [&](auto change) {
+    CompareOptions o;
+    change(o);
+    const auto bad = compare_option_error(o);
+    REQUIRE(bad);
+    CHECK_THROWS_WITH(compare_to_reference(el, ref, patient, o), Catch::Contains("compare options: " + bad->field));
+    return bad->field;
+  };
+  CHECK(refused([](CompareOptions& o) { o.threshold = 0; }) == "threshold");
+  CHECK(refused([](CompareOptions& o) { o.fdr_q = 1; }) == "fdr_q");
+  CHECK(refused([](CompareOptions& o) { o.min_cluster = 0; }) == "min_cluster");
+  CHECK(refused([](CompareOptions& o) { o.extend = -1; }) == "extend");
+  CHECK(refused([](CompareOptions& o) { o.relative_extent = std::nan(""); }) == "relative_extent");
+  CHECK(refused([](CompareOptions& o) { o.relative_extent = 1.5; }) == "relative_extent");
+  CHECK(refused([](CompareOptions& o) { o.peak = -2; }) == "peak");
+  CHECK(refused([](CompareOptions& o) { o.sign = 2; }) == "sign");
+  CompareOptions edge;
+  edge.relative_extent = 1;
+  CHECK(!compare_option_error(edge));
+  CHECK_NOTHROW(compare_to_reference(el, ref, patient, edge));
+  // the command line words the same check with its flags, exit 2 before reading any table
+  const std::string vpm = VPM_BINARY, err = std::string(VPM_TEST_TMP) + "/cmp_range_err.txt";
+  for (const auto& [flag, value] : std::vector<std::pair<std::string, std::string>>{
+           {"--relative-extent", "1.5"}, {"--fdr", "1"}, {"--min-cluster", "0"}}) {
+    CHECK(test::run_status(vpm + " compare --normals a.tsv,b.tsv,c.tsv --patient p.tsv --feature pet -o x.tsv " + flag +
+                           " " + value + " 2> " + err) == 2);
+    CHECK_THAT(test::slurp(err), Catch::Contains("option " + flag + ":"));
+  }
+}
+
 TEST_CASE("vpm compare writes z, foci and the patient's native maps, refuses mixed definitions") {
   const std::string dir = std::string(VPM_TEST_TMP) + "/cmp_";
   const CanonicalElements el(def());

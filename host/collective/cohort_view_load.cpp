@@ -101,12 +101,10 @@ std::vector<ComparisonFile> read_comparisons(const fs::path& results, const std:
     c.options.sign = integer(*opt, "sign", side);
     if (const Json* extend = opt->find("extend")) c.options.extend = extend->number();  // absent before 2026-11-26
     if (const Json* peak = opt->find("peak")) c.options.peak = peak->number();        // absent before 2026-11-25
-    if (const Json* rel = opt->find("relative_extent")) {                             // absent before 2026-11-28
-      c.options.relative_extent = rel->number();
-      if (!(c.options.relative_extent >= 0 && c.options.relative_extent <= 1))
-        throw InputError(side + ": 'relative_extent' must be in [0, 1]");
-    }
+    if (const Json* rel = opt->find("relative_extent")) c.options.relative_extent = rel->number();  // absent before 2026-11-28
     if (const Json* test = opt->find("test")) c.options.test = parse_single_case_test(test->string());
+    if (const auto bad = compare_option_error(c.options))
+      throw InputError(side + ": options." + bad->field + ": " + bad->problem);
     c.clusters = res->find("clusters") ? res->find("clusters")->size() : 0;
     out.push_back(std::move(c));
   }

@@ -313,6 +313,7 @@ Comparison compare_to_reference(const CanonicalElements& el, const Reference& re
   if (covariates.size() != ref.covariates.size())
     throw InputError(patient.subject + ": " + std::to_string(covariates.size()) + " covariate values for a reference of " +
                      std::to_string(ref.covariates.size()) + " covariates");
+  if (const auto bad = compare_option_error(opt)) throw InputError("compare options: " + bad->field + ": " + bad->problem);
   Comparison c;
   c.patient = smooth_over_elements(el, normalised_feature(patient, ref.feature, ref.normalisation), ref.smoothing);
   const std::vector<double>& x = c.patient;

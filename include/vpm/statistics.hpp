@@ -2,6 +2,7 @@
 // Cohort statistics over the canonical elements (paper 6.2; docs/collective.md): a reference
 // from the normals' subject tables (vpm/sampling.hpp), a patient's per-element z-scores, and
 // foci: elements beyond a threshold in clusters of adjacent elements.
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -111,6 +112,18 @@ struct CompareOptions {
   SingleCaseTest test = SingleCaseTest::z;
 };
 
+/// An option of CompareOptions out of its range: `field` names the member (as the sidecar's
+/// "options" object spells it), `problem` says what it must be.
+struct CompareOptionError {
+  std::string field;
+  std::string problem;
+};
+
+/// The first option of `options` out of its range, or nothing. compare_to_reference refuses such
+/// options; callers that name the options otherwise (command-line flags, keyword arguments) call
+/// this first to word the message their way.
+std::optional<CompareOptionError> compare_option_error(const CompareOptions& options);
+
 /// A cluster of adjacent focus elements of one sign.
 struct FocusCluster {
   int id = 0;                 ///< 1-based, largest first
@@ -144,7 +157,8 @@ struct Comparison {
 /// z = (x - prediction) / (std sqrt(1 + h - 1/n)) (the mean at the normals' centre taken as exact,
 /// as without covariates, the slopes' uncertainty not), or Crawford-Howell's t
 /// (x - prediction) / (std sqrt(1 + h)) with n - p - 1 degrees of freedom.
-/// InputError when the definitions differ or the row does not fit the reference.
+/// InputError when the definitions differ, the row does not fit the reference or an option is
+/// out of range (compare_option_error).
 Comparison compare_to_reference(const CanonicalElements& elements, const Reference& reference,
                                 const ElementTable& patient, const CompareOptions& options = {},
                                 const std::vector<double>& covariates = {});

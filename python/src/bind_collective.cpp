@@ -80,12 +80,13 @@ py::dict compare_py(const py::list& normals, const py::object& patient, const st
   CompareOptions o;
   o.threshold = threshold, o.fdr_q = fdr, o.min_cluster = min_cluster, o.extend = extend, o.peak = peak;
   o.relative_extent = relative_extent;
-  if (!(relative_extent >= 0 && relative_extent <= 1)) throw InputError("relative_extent: must be in (0, 1] (or 0: off)");
   o.test = parse_single_case_test(test);
   if (sign == "both") o.sign = 0;
   else if (sign == "hyper") o.sign = 1;
   else if (sign == "hypo") o.sign = -1;
   else throw InputError("sign: '" + sign + "' is not one of both, hyper, hypo");
+  if (const auto bad = compare_option_error(o))  // the keyword arguments are the fields' names, but fdr
+    throw InputError((bad->field == "fdr_q" ? std::string("fdr") : bad->field) + ": " + bad->problem);
   const Normalisation n = parse_normalisation(normalisation);
   std::vector<std::string> names;
   for (size_t i = 0; i < ns.size(); ++i) names.push_back(ns[i].subject.empty() ? "normal " + std::to_string(i) : ns[i].subject);

@@ -91,6 +91,11 @@ def test_sample_and_compare(vpm, ball, image_array, tmp_path):
     assert (r.cluster > 0).sum() < (h.cluster > 0).sum()
     with pytest.raises(ValueError, match="relative_extent"):
         vpm.compare(tables[:3], tables[3], "pet", relative_extent=1.5)
+    # every option's range is the library's (compare_option_error), worded with the keywords
+    with pytest.raises(ValueError, match="^fdr: "):
+        vpm.compare(tables[:3], tables[3], "pet", fdr=1.0)
+    with pytest.raises(ValueError, match="^threshold: "):
+        vpm.compare(tables[:3], tables[3], "pet", threshold=-1)
     # covariates from a participants table: the reference a linear model of age, the patient
     # compared with its own prediction (reference_mean then differs from the normals' mean)
     table = tmp_path / "participants.tsv"
