@@ -1,29 +1,19 @@
-// Polish step of the volume map on the device (host reference: polish_direction_host in
-// host/map/polish_host.cpp; a tet's row is shared with it, kernels/polish_row.clh): CGLS on the linearised relative tet volumes, min |A dx - b| with
+// Polish step of the volume map on the device: the OpenCL backend's kernels of the polish's CGLS,
+// whose loop is written once in host/map/polish_cgls.hpp (host backend: host/map/polish_host.cpp;
+// a tet's row, kernels/polish_row.clh, and the iteration's scalars and tangent rule,
+// kernels/polish_cgls.clh, are shared with it). min |A dx - b| with
 //   A_(t, v) = vol_t grad phi_v / target_t   (v a corner of tet t),   b_t = 1 - vol_t / target_t,
-// dx restricted per vertex (free / tangent to the sphere / zero). The iterations run without a
-// host synchronisation: scalars live in S, reductions store partials (STORE_PARTIALS,
+// dx restricted per vertex (free / tangent to the sphere / zero / anchored). The iterations run
+// without a host synchronisation: scalars live in S, reductions store partials (STORE_PARTIALS,
 // kernels/common.clh) that polish_scalars combines.
 //
 // Reductions use a fixed grid of G work items (global size G) with a grid stride.
-
-#define P_GAMMA 0  // |A^T r|^2 of the current iterate
-#define P_ALPHA 1
-#define P_BETA 2
-#define P_STOP 3   // 1 once gamma or |A p|^2 vanished: later iterations change nothing
-#define P_ITER 4   // iterations done
-#define P_BB 5     // |b|^2
-#define P_RR 6     // |r|^2 (filled by P_OP_RR)
-
-#define P_OP_INIT 0   // gamma = sum; bb from the second half; stop if gamma <= 0
-#define P_OP_ALPHA 1  // alpha = gamma / sum (0 when stopped or sum <= 0, then stop)
-#define P_OP_BETA 2   // beta = sum / gamma, gamma = sum; iter++ unless stopped
-#define P_OP_RR 3     // rr = sum
 
 #define STRIDE_BEGIN(n) for (int i = get_global_id(0); i < (n); i += get_global_size(0))
 
 #include "tet_geometry.clh"
 #include "polish_row.clh"
+#include "polish_cgls.clh"  // pl_scalars, pl_tangent, the slots P_* of S
 
 // Per tet t: sg[12 t + 3 k + c] = vol_t / target_t * d lambda_k / d x_c, b[t], r[t] = b[t]
 // (pl_row, as the host's HostPolishSystem).
@@ -96,13 +86,11 @@ __kernel void polish_apply_t(const int n, const int m, __global const int* inc_p
     real sx = 0.0, sy = 0.0, sz = 0.0;
     if (flags[i] == 0 || flags[i] == 1) polish_gather(i, inc_ptr, inc_slot, sg, y, &sx, &sy, &sz);
     if (flags[i] == 1) {
-      const real px = x[3 * i], py = x[3 * i + 1], pz = x[3 * i + 2];
-      const real inv = 1.0 / sqrt(px * px + py * py + pz * pz);
-      const real nx = px * inv, ny = py * inv, nz = pz * inv;
-      const real dn = sx * nx + sy * ny + sz * nz;
-      sx -= dn * nx;
-      sy -= dn * ny;
-      sz -= dn * nz;
+      real u[3] = {sx, sy, sz};
+      pl_tangent(x[3 * i], x[3 * i + 1], x[3 * i + 2], u);
+      sx = u[0];
+      sy = u[1];
+      sz = u[2];
     } else if (flags[i] == 3) {
       const int g = anchor[i], row = anchor_row[i];
       const int b = group_ptr[g], k = group_ptr[g + 1] - b;
@@ -130,33 +118,7 @@ __kernel void polish_scalars(const int G, const int op, __global const real* par
   REDUCE_SCRATCH;
   real p0, p1;
   COMBINE_PARTIALS(G, partial, op == P_OP_INIT || op == P_OP_RR, p0, p1);
-  if (get_global_id(0) != 0) return;
-  if (op == P_OP_INIT) {
-    S[P_GAMMA] = p0;
-    S[P_BB] = p1;
-    S[P_STOP] = p0 > 0.0 ? 0.0 : 1.0;
-    S[P_ITER] = 0.0;
-    S[P_ALPHA] = 0.0;
-    S[P_BETA] = 0.0;
-  } else if (op == P_OP_ALPHA) {
-    if (S[P_STOP] != 0.0 || !(p0 > 0.0)) {
-      S[P_STOP] = 1.0;
-      S[P_ALPHA] = 0.0;
-    } else {
-      S[P_ALPHA] = S[P_GAMMA] / p0;
-    }
-  } else if (op == P_OP_BETA) {
-    if (S[P_STOP] == 0.0) {
-      S[P_BETA] = p0 / S[P_GAMMA];
-      S[P_GAMMA] = p0;
-      S[P_ITER] += 1.0;
-      if (!(p0 > 0.0)) S[P_STOP] = 1.0;
-    } else {
-      S[P_BETA] = 0.0;
-    }
-  } else if (op == P_OP_RR) {
-    S[P_RR] = p1;
-  }
+  if (get_global_id(0) == 0) pl_scalars(op, p0, p1, S);
 }
 
 // dx += alpha p (3n entries); r -= alpha q (m entries)

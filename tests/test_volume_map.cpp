@@ -383,6 +383,39 @@ Eigen::VectorXd polish_target(const InitialMapResult& im) {
   return v0 / v0.sum() * tet_volumes(im.ball, im.mesh.tets).sum();
 }
 
+TEST_CASE("polish direction: the CGLS written once stops alike on host and device (no iterations, nothing can move)") {
+  const InitialMapResult& im = ellipsoid_start();
+  const Points& x = im.ball;
+  const Tets& T = im.mesh.tets;
+  const int n = static_cast<int>(x.rows());
+  const std::vector<char> freedom = detail::polish_freedom(boundary_vertex_mask(n, boundary_faces(T)), true, {});
+  const std::vector<char> fixed(static_cast<size_t>(n), detail::kPolishFixed);  // P A^T b = 0: gamma = 0
+  const Eigen::VectorXd target = polish_target(im);
+  auto cl = test::opencl_device();
+  if (!cl) WARN("no OpenCL device: the device's stops not compared");
+  const auto check = [&](const std::vector<char>& f, int iterations, int done) {
+    std::vector<detail::PolishDirection> got = {detail::polish_direction_host(x, T, target, f, {}, iterations)};
+    if (cl) got.push_back(detail::DevicePolisher(*cl, T, n, f, {}).direction(x, target, iterations));
+    for (const detail::PolishDirection& d : got) {
+      CHECK(d.iterations == done);
+      CHECK(d.residual == Approx(1.0).epsilon(1e-12));  // r = b
+      CHECK(d.dx.cwiseAbs().maxCoeff() == 0.0);
+    }
+  };
+  check(freedom, 0, 0);  // asked for none
+  check(fixed, 40, 0);   // nothing can move: stops before the first iteration
+  // one iteration: the host's and the device's first steps agree, and both count it
+  const detail::PolishDirection h1 = detail::polish_direction_host(x, T, target, freedom, {}, 1);
+  CHECK(h1.iterations == 1);
+  CHECK(h1.residual < 1.0);
+  if (cl) {
+    const detail::PolishDirection d1 = detail::DevicePolisher(*cl, T, n, freedom, {}).direction(x, target, 1);
+    CHECK(d1.iterations == 1);
+    CHECK(d1.residual == Approx(h1.residual).epsilon(1e-12));
+    CHECK((d1.dx - h1.dx).cwiseAbs().maxCoeff() < 1e-12 * h1.dx.cwiseAbs().maxCoeff());
+  }
+}
+
 TEST_CASE("polish direction: host and device agree, fixed vertices stay, sphere vertices move tangentially, anchors hold") {
   const InitialMapResult& im = ellipsoid_start();
   const Points& x = im.ball;

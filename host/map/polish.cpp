@@ -9,6 +9,7 @@
 #include <map>
 
 #include "core/device_cl.hpp"
+#include "map/polish_cgls.hpp"
 #include "vpm/device.hpp"
 
 namespace vpm::detail {
@@ -72,11 +73,8 @@ AnchorGroups anchor_groups(const std::vector<VolumeAnchor>& anchors) {
 
 // ---- OpenCL ----------------------------------------------------------------------------------
 
-namespace {
-enum { P_OP_INIT = 0, P_OP_ALPHA = 1, P_OP_BETA = 2, P_OP_RR = 3 };
-enum { P_ITER = 4, P_BB = 5, P_RR = 6, kPolishSlots = 8 };
-}  // namespace
-
+// polish_cgls's OpenCL backend: the vectors in device buffers, the scalars in S on the device,
+// every call a kernel launch (the sums stay there as partials that polish_scalars combines).
 struct DevicePolisher::Impl {
   Device& dev;
   int n, m;
@@ -98,6 +96,12 @@ struct DevicePolisher::Impl {
     k_scalars.set_arg(1, op);
     dev.cl().launch(k_scalars, dev.combine_items());
   }
+  void apply_t() { dev.cl().launch(k_apply_t, G); }   // s = P A^T r; |s|^2, |r|^2
+  void apply() { dev.cl().launch(k_apply, G); }       // q = A p; |q|^2
+  void update() { dev.cl().launch(k_update, G); }     // dx += alpha p; r -= alpha q
+  void update_p() { dev.cl().launch(k_update_p, G); } // p = s + beta p
+  bool stopped() const { return false; }              // never waits for the device
+  PolishDirection result();
 };
 
 namespace {
@@ -179,7 +183,7 @@ DevicePolisher::DevicePolisher(Device& dev, const Tets& tets, int n, const std::
   I.p = bc::vector<double>(n3, dev.cl().context);
   I.s = bc::vector<double>(n3, dev.cl().context);
   I.partial = bc::vector<double>(2 * I.G, dev.cl().context);
-  I.S = bc::vector<double>(kPolishSlots, dev.cl().context);
+  I.S = bc::vector<double>(P_SLOTS, dev.cl().context);
   for (auto* v : {&I.x, &I.target, &I.sg, &I.b, &I.r, &I.q, &I.dx, &I.p, &I.s, &I.partial, &I.S})
     bc::fill(v->begin(), v->end(), 0.0, queue);
   if (!hold_sg.empty()) bc::copy(hold_sg.begin(), hold_sg.end(), I.sg.begin() + 12 * static_cast<size_t>(m), queue);
@@ -202,36 +206,33 @@ DevicePolisher::DevicePolisher(Device& dev, const Tets& tets, int n, const std::
 
 DevicePolisher::~DevicePolisher() = default;
 
+PolishDirection DevicePolisher::Impl::result() {
+  auto& queue = dev.cl().queue;
+  scalars(P_OP_RR);  // |r|^2 from the partials of the last apply_t
+  PolishDirection res;
+  res.dx = Points::Zero(n, 3);
+  bc::copy(dx.begin(), dx.begin() + 3 * static_cast<size_t>(n), res.dx.data(), queue);
+  double sc[P_SLOTS];
+  bc::copy(S.begin(), S.end(), sc, queue);
+  res.iterations = static_cast<int>(sc[P_ITER]);
+  res.residual = sc[P_BB] > 0 ? std::sqrt(sc[P_RR] / sc[P_BB]) : 0;
+  return res;
+}
+
 PolishDirection DevicePolisher::direction(const Points& x, const Eigen::VectorXd& target, int iterations) {
   Impl& I = *impl_;
   auto& queue = I.dev.cl().queue;
-  PolishDirection res;
-  res.dx = Points::Zero(I.n, 3);
-  if (I.n == 0 || I.m == 0) return res;
+  if (I.n == 0 || I.m == 0) {
+    PolishDirection none;
+    none.dx = Points::Zero(I.n, 3);
+    return none;
+  }
   bc::copy(x.data(), x.data() + 3 * static_cast<size_t>(I.n), I.x.begin(), queue);
   bc::copy(target.data(), target.data() + I.m, I.target.begin(), queue);
   bc::fill(I.dx.begin(), I.dx.end(), 0.0, queue);
   if (I.rows > I.m) bc::fill(I.r.begin() + I.m, I.r.begin() + I.rows, 0.0, queue);  // the holds' residuals
   I.dev.cl().launch(I.k_setup, static_cast<size_t>(I.m));  // sg, b, r = b of the tets' rows
-  I.dev.cl().launch(I.k_apply_t, I.G);                     // s = P A^T r; |s|^2, |b|^2
-  I.scalars(P_OP_INIT);
-  I.dev.cl().launch(I.k_update_p, I.G);  // p = s
-  for (int it = 0; it < iterations; ++it) {
-    I.dev.cl().launch(I.k_apply, I.G);  // q = A p; |q|^2
-    I.scalars(P_OP_ALPHA);
-    I.dev.cl().launch(I.k_update, I.G);   // dx += alpha p; r -= alpha q
-    I.dev.cl().launch(I.k_apply_t, I.G);  // s = P A^T r; |s|^2, |r|^2
-    I.scalars(P_OP_BETA);
-    I.dev.cl().launch(I.k_update_p, I.G);  // p = s + beta p
-  }
-  if (iterations == 0) I.dev.cl().launch(I.k_apply_t, I.G);  // |r|^2 = |b|^2
-  I.scalars(P_OP_RR);
-  bc::copy(I.dx.begin(), I.dx.begin() + 3 * static_cast<size_t>(I.n), res.dx.data(), queue);
-  double sc[kPolishSlots];
-  bc::copy(I.S.begin(), I.S.end(), sc, queue);
-  res.iterations = static_cast<int>(sc[P_ITER]);
-  res.residual = sc[P_BB] > 0 ? std::sqrt(sc[P_RR] / sc[P_BB]) : 0;
-  return res;
+  return polish_cgls(I, iterations);
 }
 
 }  // namespace vpm::detail

@@ -4,8 +4,9 @@
 //   min |A dx - b|,  A_(t, v) = vol_t grad phi_v / target_t,  b_t = 1 - vol_t / target_t,
 // early-stopped after `iterations` (the minimum-norm start is the regularisation), with each
 // vertex free, tangent to the unit sphere, or fixed, and each anchor's weighted sum of its four
-// vertices' dx zero (VolumeAnchor; the orthogonal projection onto those planes). Host reference
-// and OpenCL (kernels/polish.cl), same arithmetic.
+// vertices' dx zero (VolumeAnchor; the orthogonal projection onto those planes). The iteration is
+// written once (map/polish_cgls.hpp); the host threads and the OpenCL kernels (kernels/polish.cl)
+// are its two backends.
 #include <Eigen/Core>
 #include <memory>
 #include <vector>

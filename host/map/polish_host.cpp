@@ -1,23 +1,25 @@
-// The polish direction on the host threads (map/polish.hpp, polish_direction_host): CGLS on the
-// linearised per-tet volume equations and the soft holds, from dx = 0, in the projected space of
-// allowed moves (fixed, tangent, anchored). The least-squares system is HostPolishSystem, the
-// iteration cgls() over it.
+// The polish direction on the host threads (map/polish.hpp, polish_direction_host): the host
+// backend of polish_cgls (map/polish_cgls.hpp), over the linearised per-tet volume equations and
+// the soft holds, in the projected space of allowed moves (fixed, tangent, anchored).
 #include <Eigen/Dense>
 #include <algorithm>
 
 #include "core/parallel.hpp"
 #include "map/polish.hpp"
+#include "map/polish_cgls.hpp"
 #include "mesh/tet_geometry.hpp"
 
 namespace vpm::detail {
 
-// a tet's row of the least squares, shared with kernels/polish.cl (after tet_geometry's)
+// a tet's row of the least squares, shared with kernels/polish.cl (after tet_geometry's; the
+// CGLS's scalars and tangent rule, kernels/polish_cgls.clh, come with map/polish_cgls.hpp)
 #include "kernels/polish_row.clh"
 
 namespace {
 
 // min |A d - b|^2 + |H d|^2 over projected moves d = P d: A's rows are the tets' linearised
-// relative volume changes (b = 1 - vol / target), H's the holds' h . sum_k w_k d_(v_k).
+// relative volume changes (b = 1 - vol / target), H's the holds' h . sum_k w_k d_(v_k). The
+// products with A, H and their transposes.
 class HostPolishSystem {
  public:
   HostPolishSystem(const Points& x, const Tets& tets, const Eigen::VectorXd& target, const std::vector<char>& freedom,
@@ -106,8 +108,9 @@ class HostPolishSystem {
       if (freedom_[v] == kPolishFixed) {
         d.row(v).setZero();
       } else if (freedom_[v] == kPolishTangent) {
-        const Eigen::Vector3d nv = x_.row(v).transpose().normalized(), u = d.row(v).transpose();
-        d.row(v) = (u - u.dot(nv) * nv).transpose();
+        double u[3] = {d(v, 0), d(v, 1), d(v, 2)};
+        pl_tangent(x_(v, 0), x_(v, 1), x_(v, 2), u);
+        d.row(v) = Eigen::RowVector3d(u[0], u[1], u[2]);
       }
     }
     for (int gi = 0; gi < groups_.groups(); ++gi) {
@@ -134,36 +137,51 @@ class HostPolishSystem {
   Eigen::VectorXd b_;
 };
 
-// CGLS from dx = 0 for `iterations` steps (early-stopped: the minimum-norm smooth part of the
-// correction) on a system with apply / apply_t / rhs as HostPolishSystem's.
-template <class System>
-PolishDirection cgls(System& sys, int iterations) {
-  const Eigen::VectorXd& b = sys.rhs();
-  Points dx = Points::Zero(sys.vertices(), 3), s(sys.vertices(), 3), p(sys.vertices(), 3);
-  Eigen::VectorXd rr = b, q(sys.volume_rows()), rr_h = Eigen::VectorXd::Zero(sys.hold_rows()), q_h(sys.hold_rows());
-  sys.apply_t(rr, rr_h, s);
-  p = s;
-  double gamma = s.squaredNorm();
-  int it = 0;
-  for (; it < iterations && gamma > 0; ++it) {
-    sys.apply(p, q, q_h);
-    const double qq = q.squaredNorm() + q_h.squaredNorm();
-    if (qq <= 0) break;
-    const double alpha = gamma / qq;
-    dx += alpha * p;
-    rr -= alpha * q;
-    rr_h -= alpha * q_h;
-    sys.apply_t(rr, rr_h, s);
-    const double g2 = s.squaredNorm();
-    p = s + (g2 / gamma) * p;
-    gamma = g2;
+// polish_cgls's host backend: the iteration's vectors and scalars on the host, the products
+// HostPolishSystem's; the sums are Eigen's squared norms.
+class HostPolishBackend {
+ public:
+  explicit HostPolishBackend(HostPolishSystem& sys)
+      : sys_(sys), dx_(Points::Zero(sys.vertices(), 3)), s_(sys.vertices(), 3), p_(sys.vertices(), 3),
+        r_(sys.rhs()), q_(sys.volume_rows()), r_h_(Eigen::VectorXd::Zero(sys.hold_rows())), q_h_(sys.hold_rows()) {}
+
+  void apply_t() {
+    sys_.apply_t(r_, r_h_, s_);
+    sum_ = s_.squaredNorm();
   }
-  PolishDirection res;
-  res.dx = std::move(dx);
-  res.iterations = it;
-  res.residual = b.norm() > 0 ? rr.norm() / b.norm() : 0;
-  return res;
-}
+  void apply() {
+    sys_.apply(p_, q_, q_h_);
+    sum_ = q_.squaredNorm() + q_h_.squaredNorm();
+  }
+  void scalars(int op) { pl_scalars(op, sum_, op == P_OP_INIT ? sys_.rhs().squaredNorm() : 0.0, S_); }
+  void update() {
+    const double alpha = S_[P_ALPHA];
+    dx_ += alpha * p_;
+    r_ -= alpha * q_;
+    r_h_ -= alpha * q_h_;
+  }
+  void update_p() {
+    const double beta = S_[P_BETA];
+    if (beta == 0) p_ = s_;
+    else p_ = s_ + beta * p_;
+  }
+  bool stopped() const { return S_[P_STOP] != 0; }
+  PolishDirection result() {
+    PolishDirection res;
+    res.dx = std::move(dx_);
+    res.iterations = static_cast<int>(S_[P_ITER]);
+    const double bn = sys_.rhs().norm();
+    res.residual = bn > 0 ? r_.norm() / bn : 0;
+    return res;
+  }
+
+ private:
+  HostPolishSystem& sys_;
+  Points dx_, s_, p_;
+  Eigen::VectorXd r_, q_, r_h_, q_h_;
+  double sum_ = 0;
+  double S_[P_SLOTS] = {};
+};
 
 }  // namespace
 
@@ -171,7 +189,8 @@ PolishDirection polish_direction_host(const Points& x, const Tets& tets, const E
                                       const std::vector<char>& freedom, const std::vector<VolumeAnchor>& anchors,
                                       int iterations, const std::vector<VolumeHold>& holds) {
   HostPolishSystem sys(x, tets, target, freedom, anchors, holds);
-  return cgls(sys, iterations);
+  HostPolishBackend bk(sys);
+  return polish_cgls(bk, iterations);
 }
 
 }  // namespace vpm::detail
