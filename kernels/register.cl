@@ -3,40 +3,7 @@
 // Points, centres and coefficients are n x 3 row-major doubles. One work item per point,
 // looping over the centres (the dominant cost: centres x points x 4 stages x steps).
 
-// Free kernel: Phi(r) c = [(4l - 4l^2 |r|^2) c + 4l^2 r (r.c)] exp(-l |r|^2)
-inline real3 apply_free(const real3 r, const real3 c, const real l) {
-  const real r2 = dot(r, r);
-  const real psi = exp(-l * r2);
-  return psi * ((4.0 * l - 4.0 * l * l * r2) * c + (4.0 * l * l * dot(r, c)) * r);
-}
-
-// Tangent kernel: K(x, y) c = psi (tr(H) c - H^T c), phi(x) = 1 - |x|^2 (see rbf.hpp).
-inline real3 apply_tangent(const real3 x, const real3 y, const real3 c, const real l) {
-  const real3 r = x - y;
-  const real r2 = dot(r, r);
-  const real psi = exp(-l * r2);
-  const real px = 1.0 - dot(x, x), py = 1.0 - dot(y, y);
-  const real xc = dot(x, c), rc = dot(r, c);
-  const real tr = 4.0 * dot(x, y) - 4.0 * l * py * dot(x, r) + 4.0 * l * px * dot(r, y) -
-                  px * py * (4.0 * l * l * r2 - 6.0 * l);
-  const real3 htc = (4.0 * xc) * y - (4.0 * l * py * xc) * r + (4.0 * l * px * rc) * y -
-                    (px * py) * ((4.0 * l * l * rc) * r - (2.0 * l) * c);
-  return psi * (tr * c - htc);
-}
-
-// u(x) = sum over centres [begin, end) of K(x, centre_j) coef_j.
-inline real3 field_at(const real3 x, const int begin, const int end, __global const real* centres,
-                      __global const real* coefs, const real l, const int tangent) {
-  real3 u = (real3)(0.0, 0.0, 0.0);
-  if (tangent) {
-    for (int j = begin; j < end; ++j)
-      u += apply_tangent(x, load3(centres, j), load3(coefs, j), l);
-  } else {
-    for (int j = begin; j < end; ++j)
-      u += apply_free(x - load3(centres, j), load3(coefs, j), l);
-  }
-  return u;
-}
+#include "rbf_kernel.clh"  // rk_free, rk_tangent: the kernels applied to a coefficient, as the host
 
 // out[i] = u(x[i]) for the nc centres of one field.
 __kernel void eval_field(const int n, __global const real* x, const int nc,
@@ -44,10 +11,21 @@ __kernel void eval_field(const int n, __global const real* x, const int nc,
                          const int tangent, __global real* out) {
   const int i = get_global_id(0);
   if (i >= n) return;
-  const real3 u = field_at(load3(x, i), 0, nc, centres, coefs, l, tangent);
-  out[3 * i] = u.x;
-  out[3 * i + 1] = u.y;
-  out[3 * i + 2] = u.z;
+  const real p[3] = {x[3 * i], x[3 * i + 1], x[3 * i + 2]};
+  real u[3] = {0.0, 0.0, 0.0};
+  for (int j = 0; j < nc; ++j) {
+    const real y[3] = {centres[3 * j], centres[3 * j + 1], centres[3 * j + 2]};
+    const real c[3] = {coefs[3 * j], coefs[3 * j + 1], coefs[3 * j + 2]};
+    real t[3];
+    if (tangent) {
+      rk_tangent(p, y, c, l, t);
+    } else {
+      const real r[3] = {p[0] - y[0], p[1] - y[1], p[2] - y[2]};
+      rk_free(r, c, l, t);
+    }
+    for (int k = 0; k < 3; ++k) u[k] += t[k];
+  }
+  for (int k = 0; k < 3; ++k) out[3 * i + k] = u[k];
 }
 
 // ---- SIMD variant: each work item advects LANES points held in vector registers -------------

@@ -15,6 +15,11 @@
 
 namespace vpm {
 
+namespace detail {
+// the kernels applied to a coefficient, shared with kernels/register.cl
+#include "kernels/rbf_kernel.clh"
+}  // namespace detail
+
 namespace bc = boost::compute;
 
 Eigen::Matrix3d divfree_kernel(const Eigen::Vector3d& r, double lambda) {
@@ -41,28 +46,6 @@ Eigen::Matrix3d tangent_kernel(const Eigen::Vector3d& x, const Eigen::Vector3d& 
 
 namespace {
 
-// K(x, y) c without forming the matrix (the same formulas the OpenCL kernel uses).
-inline Eigen::Vector3d apply_free(const Eigen::Vector3d& r, const Eigen::Vector3d& c,
-                                  double lambda) {
-  const double r2 = r.squaredNorm();
-  const double psi = std::exp(-lambda * r2);
-  return psi * ((4 * lambda - 4 * lambda * lambda * r2) * c + (4 * lambda * lambda * r.dot(c)) * r);
-}
-
-inline Eigen::Vector3d apply_tangent(const Eigen::Vector3d& x, const Eigen::Vector3d& y,
-                                     const Eigen::Vector3d& c, double lambda) {
-  const Eigen::Vector3d r = x - y;
-  const double r2 = r.squaredNorm();
-  const double psi = std::exp(-lambda * r2);
-  const double px = 1 - x.squaredNorm(), py = 1 - y.squaredNorm();
-  const double xc = x.dot(c), rc = r.dot(c);
-  const double tr = 4 * x.dot(y) - 4 * lambda * py * x.dot(r) + 4 * lambda * px * r.dot(y) -
-                    px * py * (4 * lambda * lambda * r2 - 6 * lambda);
-  const Eigen::Vector3d htc = 4 * xc * y - 4 * lambda * py * xc * r + 4 * lambda * px * rc * y -
-                              px * py * (4 * lambda * lambda * rc * r - 2 * lambda * c);
-  return psi * (tr * c - htc);
-}
-
 // Gram matrix of point samples only (3N x 3N).
 Eigen::MatrixXd gram(const Points& p, RbfKernel kind, double lambda) {
   const Eigen::Index n = p.rows();
@@ -79,12 +62,21 @@ Eigen::MatrixXd gram(const Points& p, RbfKernel kind, double lambda) {
 }  // namespace
 
 Eigen::Vector3d DivFreeField::operator()(const Eigen::Vector3d& x) const {
-  Eigen::Vector3d u = Eigen::Vector3d::Zero();
+  double u[3] = {0, 0, 0};
+  const double p[3] = {x(0), x(1), x(2)};
   for (Eigen::Index j = 0; j < centres.rows(); ++j) {
-    const Eigen::Vector3d c = centres.row(j).transpose(), a = coefficients.row(j).transpose();
-    u += kernel == RbfKernel::Free ? apply_free(x - c, a, lambda) : apply_tangent(x, c, a, lambda);
+    const double c[3] = {centres(j, 0), centres(j, 1), centres(j, 2)};
+    const double a[3] = {coefficients(j, 0), coefficients(j, 1), coefficients(j, 2)};
+    double t[3];
+    if (kernel == RbfKernel::Free) {
+      const double r[3] = {p[0] - c[0], p[1] - c[1], p[2] - c[2]};
+      detail::rk_free(r, a, lambda, t);
+    } else {
+      detail::rk_tangent(p, c, a, lambda, t);
+    }
+    for (int k = 0; k < 3; ++k) u[k] += t[k];
   }
-  return u;
+  return Eigen::Vector3d(u[0], u[1], u[2]);
 }
 
 Points evaluate(const DivFreeField& field, const Points& points) {
