@@ -1,5 +1,8 @@
 // Untangling energy of Garanzha et al. 2021 (see include/vpm/untangle.hpp), one work item per
-// active tet, and the per-vertex gather of the gradient (no atomics: CSR of contributions).
+// active tet, and the per-vertex gather of the gradient (no atomics: CSR of contributions). The
+// energy's formula is shared with the host (kernels/untangle_energy.clh).
+
+#include "untangle_energy.clh"
 
 // For active tet a (vertices tv[4a..4a+3], R^-1 row-major in rinv[9a..], weight w[a]):
 //   e[a] = w f(J), d[a] = det J, and if want_grad: gt[12a + 3k + c] = dE/dx of corner k.
@@ -19,19 +22,12 @@ __kernel void untangle_tet(const int m, const real eps, const real theta, const 
   const real3 J2 = c0 * R[2] + c1 * R[5] + c2 * R[8];
   const real3 C0 = cross(J1, J2), C1 = cross(J2, J0), C2 = cross(J0, J1);
   const real det = dot(J0, C0);
-  const real s = sqrt(eps * eps + det * det);
-  const real c = det >= 0 ? 0.5 * (det + s) : 0.5 * eps * eps / (s - det);
-  const real dc = c / s;
-  const real tr = dot(J0, J0) + dot(J1, J1) + dot(J2, J2);
-  const real c23 = cbrt(c * c);
-  const real f = (1 - theta) * tr / c23 + theta * (det * det + 1) / c;
+  real k1, k2;
+  const real f = ue_energy(det, dot(J0, J0) + dot(J1, J1) + dot(J2, J2), eps, theta, &k1, &k2);
   const real wa = w[a];
   e[a] = wa * f;
   d[a] = det;
   if (!want_grad) return;
-  const real k1 = (1 - theta) * 2.0 / c23;
-  const real k2 = -(1 - theta) * (2.0 / 3.0) * tr / (c23 * c) * dc +
-                  theta * (2 * det / c - (det * det + 1) * dc / (c * c));
   const real3 D0 = wa * (k1 * J0 + k2 * C0);
   const real3 D1 = wa * (k1 * J1 + k2 * C1);
   const real3 D2 = wa * (k1 * J2 + k2 * C2);

@@ -1,12 +1,18 @@
 // Host evaluation of the untangling energy and gradient (see map/untangle_problem.hpp).
 #include <Eigen/Dense>
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <thread>
 
 #include "map/untangle_problem.hpp"
 
 namespace vpm {
+
+namespace detail {
+// a tet's energy and the factors of its gradient, shared with kernels/untangle.cl
+#include "kernels/untangle_energy.clh"
+}  // namespace detail
 
 namespace {
 
@@ -33,18 +39,11 @@ UntangleEval evaluate_range(const UntangleProblem& p, const Points& x, double ep
     const double d = J.col(0).dot(C.col(0));
     out.min_det = std::min(out.min_det, d);
     if (d <= 0) ++out.nonpositive;
-    const double s = std::sqrt(eps * eps + d * d);
-    const double c = d >= 0 ? 0.5 * (d + s) : 0.5 * eps * eps / (s - d);
-    const double dc = c / s;  // chi'(D)
-    const double tr = J.squaredNorm();
-    const double c23 = std::cbrt(c * c);  // chi^(2/3)
-    const double f = (1 - th) * tr / c23 + th * (d * d + 1) / c;
+    double k1, k2;
+    const double f = detail::ue_energy(d, J.squaredNorm(), eps, th, &k1, &k2);
     const double w = p.weight[a];
     out.energy += w * f;
     if (!g) continue;
-    // df/dJ = (1-th) [2 J / c^(2/3) - 2/3 tr c^(-5/3) chi' C] + th [2D/c - (D^2+1) chi'/c^2] C
-    const double k1 = (1 - th) * 2.0 / c23;
-    const double k2 = -(1 - th) * (2.0 / 3.0) * tr / (c23 * c) * dc + th * (2 * d / c - (d * d + 1) * dc / (c * c));
     const Eigen::Matrix3d G = (w * (k1 * J + k2 * C)) * p.rinv[a].transpose();  // dE/dX
     const int vs[4] = {v0, v1, v2, v3};
     const Eigen::Vector3d g0 = -(G.col(0) + G.col(1) + G.col(2));
