@@ -1,4 +1,5 @@
-// ---- advection: K RK4 steps through the fields, on the host or the device ----
+// ---- advection: K RK4 steps through the fields, on the host or the device, written once
+// (kernels/rbf_advect.clh) ----
 #include <algorithm>
 #include <cmath>
 
@@ -6,35 +7,25 @@
 
 #include "register/registration_steps.hpp"
 #include "core/device_cl.hpp"
+#include "core/parallel.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/mesh_order.hpp"
 
 namespace vpm {
 
+namespace detail {
+// the grid of centres, the cut and RK4 of LANES points (here 1), shared with kernels/register.cl
+#include "kernels/rbf_advect.clh"
+}  // namespace detail
+
 namespace bc = boost::compute;
 
 namespace {
 
-void advect_host(Points& x, const std::vector<DivFreeField>& f, int steps) {
-  const double dt = 1.0 / steps;
-  auto field = [&](int s) -> const DivFreeField& { return f.size() == 1 ? f[0] : f[static_cast<size_t>(s)]; };
-  for (Eigen::Index i = 0; i < x.rows(); ++i) {
-    Eigen::Vector3d p = x.row(i).transpose();
-    for (int k = 0; k < steps; ++k) {
-      const Eigen::Vector3d k1 = field(2 * k)(p);
-      const Eigen::Vector3d k2 = field(2 * k + 1)(p + 0.5 * dt * k1);
-      const Eigen::Vector3d k3 = field(2 * k + 1)(p + 0.5 * dt * k2);
-      const Eigen::Vector3d k4 = field(2 * k + 2)(p + dt * k3);
-      p += dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
-    }
-    x.row(i) = p.transpose();
-  }
-}
-
-/// The kernel leaves out a centre whose Gaussian exp(-lambda r^2) is below exp(-kFieldCut) at
-/// every point of a work item: its terms are at most about 32 exp(-32) = 4e-13 of a near
-/// centre's, far below what the integration resolves.
+/// Advection leaves out a centre whose Gaussian exp(-lambda r^2) is below exp(-kFieldCut) at
+/// every point of a call (one on the host, a work item's lanes on the device): its terms are at
+/// most about 32 exp(-32) = 4e-13 of a near centre's, far below what the integration resolves.
 constexpr double kFieldCut = 32;
 
 /// The distinct fields packed for the kernel: each field's centres and coefficients sorted by
@@ -109,6 +100,23 @@ PackedFields pack_fields(const std::vector<DivFreeField>& f, int steps) {
     pk.coefs.assign(3, 0.0);
   }
   return pk;
+}
+
+// The host: rbf_advect.clh's rk4_points one point at a time (LANES 1) on the host threads.
+void advect_host(Points& x, const std::vector<DivFreeField>& f, int steps) {
+  const PackedFields pk = pack_fields(f, steps);
+  const detail::CentreGrid grid = {pk.origin(0), pk.origin(1), pk.origin(2), pk.side, pk.g};
+  const int tangent = f[0].kernel == RbfKernel::Tangent ? 1 : 0;
+  detail::parallel_for(static_cast<int>(x.rows()), 64, [&](int i0, int i1) {
+    for (int i = i0; i < i1; ++i) {
+      double p0 = x(i, 0), p1 = x(i, 1), p2 = x(i, 2);
+      detail::rk4_points(&p0, &p1, &p2, steps, 1.0 / steps, pk.slot.data(), pk.cells.data(), grid, pk.reach,
+                         pk.centres.data(), pk.coefs.data(), f[0].lambda, kFieldCut, tangent);
+      x(i, 0) = p0;
+      x(i, 1) = p1;
+      x(i, 2) = p2;
+    }
+  });
 }
 
 void advect_device(Device& dev, Points& x, const std::vector<DivFreeField>& f, int steps) {

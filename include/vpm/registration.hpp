@@ -16,7 +16,7 @@
 //    is invariant; RegistrationBoundary::Samples adds the paper's normal-cancelling constraints at
 //    points on the sphere (tangent there only); RegistrationBoundary::None has no boundary condition.
 // 4. Advection: every vertex is moved through the field with K RK4 steps (device kernel
-//    register.rk4_advect_soa, host reference otherwise); boundary vertices are put back on the
+//    register.rk4_advect_soa, the same code on the host threads otherwise); boundary vertices are put back on the
 //    sphere (radial projection of the O(dt^4) drift); tets the flow inverted (discretisation
 //    error of strongly sheared tets) are repaired by local untangling (vpm/untangle.hpp) when
 //    possible; a result still folded is refused with NumericalError.
@@ -229,7 +229,8 @@ std::vector<DivFreeField> registration_fields(const Points& landmarks, const Poi
                                               RegistrationFitReport* fit_report = nullptr);
 
 /// Moves `points` (n x 3, in/out) with K RK4 steps through `fields` (2K + 1 of them, as
-/// registration_fields returns) on `device` (host: the reference loop).
+/// registration_fields returns) on `device`: kernels/rbf_advect.clh, one point per call on the
+/// host threads, several per work item on OpenCL devices (far centres cut the same way).
 void advect(Device& device, Points& points, const std::vector<DivFreeField>& fields, int steps);
 
 /// Registers the mapped mesh: moves `ball` (n x 3 vertices of a mesh mapped to the unit ball,
