@@ -7,13 +7,7 @@
 // on CPUs, per work group on GPUs). With -DCHUNKED (CPU devices) each work item sums a
 // contiguous chunk, else a grid stride (coalesced on GPUs).
 
-// Scalar slots (keep in sync with host/linalg/solver_backend.hpp)
-#define S_RZ 0
-#define S_RR 1
-#define S_ALPHA 2
-#define S_BETA 3
-#define S_RHO 4
-#define S_OMEGA 5
+#include "krylov_scalars.clh"  // the slots S_* of S, the operations OP_*, ks_finalize (shared with the host)
 
 #ifdef CHUNKED
 #define RANGE_BEGIN(n)                                                   \
@@ -145,34 +139,12 @@ __kernel void dot2_partial(const int n, __global const real* a, __global const r
 }
 
 // Combines the partial sums (one work group, or one item on CPUs) and updates the scalars.
-#define OP_CG_INIT 0   // S[RZ] = p0, S[RR] = p1
-#define OP_CG_ALPHA 1  // S[ALPHA] = S[RZ] / p0
-#define OP_CG_BETA 2   // S[BETA] = p0 / S[RZ], S[RZ] = p0, S[RR] = p1
-#define OP_BI_INIT 3   // S[RHO] = p0, S[RR] = p1
-#define OP_BI_ALPHA 4  // S[ALPHA] = S[RHO] / p0
-#define OP_BI_OMEGA 5  // S[OMEGA] = p0 / p1
-#define OP_BI_BETA 6   // S[BETA] = (p0 / S[RHO]) (S[ALPHA] / S[OMEGA]), S[RHO] = p0, S[RR] = p1
-#define OP_NORM 7      // S[RR] = p0
 __kernel void finalize(const int G, const int op, __global const real* partial,
                        __global real* S) {
   REDUCE_SCRATCH;
   real p0, p1;
-  COMBINE_PARTIALS(G, partial, op == OP_CG_INIT || op == OP_CG_BETA || op == OP_BI_INIT || op == OP_BI_OMEGA || op == OP_BI_BETA, p0, p1);
-  if (get_global_id(0) != 0) return;
-  switch (op) {
-    case OP_CG_INIT: S[S_RZ] = p0; S[S_RR] = p1; break;
-    case OP_CG_ALPHA: S[S_ALPHA] = S[S_RZ] / p0; break;
-    case OP_CG_BETA: S[S_BETA] = p0 / S[S_RZ]; S[S_RZ] = p0; S[S_RR] = p1; break;
-    case OP_BI_INIT: S[S_RHO] = p0; S[S_RR] = p1; break;
-    case OP_BI_ALPHA: S[S_ALPHA] = S[S_RHO] / p0; break;
-    case OP_BI_OMEGA: S[S_OMEGA] = p0 / p1; break;
-    case OP_BI_BETA:
-      S[S_BETA] = (p0 / S[S_RHO]) * (S[S_ALPHA] / S[S_OMEGA]);
-      S[S_RHO] = p0;
-      S[S_RR] = p1;
-      break;
-    case OP_NORM: S[S_RR] = p0; break;
-  }
+  COMBINE_PARTIALS(G, partial, ks_uses_p1(op), p0, p1);
+  if (get_global_id(0) == 0) ks_finalize(op, p0, p1, S);
 }
 
 // CG start: p = d r; partials r . p and r . r

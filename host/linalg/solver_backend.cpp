@@ -79,23 +79,7 @@ void HostBackend::spmv_scaled(Vec y, Vec x) {
   }
 }
 
-void HostBackend::finalize(Op op, double p0, double p1) {
-  auto& S = s_;
-  switch (op) {
-    case OP_CG_INIT: S[S_RZ] = p0; S[S_RR] = p1; break;
-    case OP_CG_ALPHA: S[S_ALPHA] = S[S_RZ] / p0; break;
-    case OP_CG_BETA: S[S_BETA] = p0 / S[S_RZ]; S[S_RZ] = p0; S[S_RR] = p1; break;
-    case OP_BI_INIT: S[S_RHO] = p0; S[S_RR] = p1; break;
-    case OP_BI_ALPHA: S[S_ALPHA] = S[S_RHO] / p0; break;
-    case OP_BI_OMEGA: S[S_OMEGA] = p0 / p1; break;
-    case OP_BI_BETA:
-      S[S_BETA] = (p0 / S[S_RHO]) * (S[S_ALPHA] / S[S_OMEGA]);
-      S[S_RHO] = p0;
-      S[S_RR] = p1;
-      break;
-    case OP_NORM: S[S_RR] = p0; break;
-  }
-}
+void HostBackend::finalize(Op op, double p0, double p1) { ks_finalize(op, p0, p1, s_.data()); }
 
 void HostBackend::dot(Vec a, Vec b, Op op) {
   double s = 0;

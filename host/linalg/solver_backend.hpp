@@ -18,10 +18,11 @@ class ClAmg;
 
 enum Vec { VX, VB, VR, VP, VQ, VR0, VS, VT, VTMP, VZ, kNumVecs };  // VZ: z = M^-1 r (AMG-PCG)
 constexpr int kMaxBlock = 3;  // columns of spmv_block (kernels/solver.cl)
-// scalar slots and finalize ops: keep in sync with kernels/solver.cl
-enum Slot { S_RZ = 0, S_RR = 1, S_ALPHA = 2, S_BETA = 3, S_RHO = 4, S_OMEGA = 5, kNumSlots = 8 };
-enum Op { OP_CG_INIT, OP_CG_ALPHA, OP_CG_BETA, OP_BI_INIT, OP_BI_ALPHA, OP_BI_OMEGA, OP_BI_BETA,
-          OP_NORM };
+// the scalar slots S_* and the operations OP_* that advance them (ks_finalize), shared with
+// kernels/solver.cl
+#include "kernels/krylov_scalars.clh"
+using Op = int;  // an OP_* of krylov_scalars.clh
+constexpr int kNumSlots = KS_SLOTS;
 
 /// Plain loops on the host; matrices are CsrMatrix.
 class HostBackend {
