@@ -1,7 +1,8 @@
 #pragma once
 // Private: the fixed field of one Moser round on its background mesh (point location:
 // mesh/tet_grid.hpp), and the RK4 advection of all vertices along their pathlines, on the host
-// (reference) and on an OpenCL device (kernels/moser.cl, same algorithm line for line).
+// and on an OpenCL device (kernels/moser.cl); the per-point arithmetic (velocity, RK4 step,
+// gradients) is written once in kernels/moser_field.clh, compiled by both.
 #include <Eigen/Core>
 #include <memory>
 #include <vector>
