@@ -71,7 +71,8 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   const std::optional<vpm::Covariates> cov = vpm::cli::read_participants(args, settings);
   const vpm::Reference ref =
       vpm::build_reference(el, normals, normal_paths, settings.feature, settings.normalisation, settings.smoothing,
-                           settings.shrinkage, cov ? vpm::covariate_design(*cov, normals, normal_paths) : vpm::CovariateDesign{});
+                           settings.shrinkage, cov ? vpm::covariate_design(*cov, normals, normal_paths) : vpm::CovariateDesign{},
+                           settings.image_covariate);
   vpm::ElementTable patient = vpm::read_subject_table(*patient_path);
   const std::vector<double> row = cov ? vpm::covariate_row(*cov, patient.subject, *patient_path) : std::vector<double>{};
   patient.subject = *patient_path;

@@ -50,6 +50,9 @@ CalibrationSettings comparison_settings(const Args& args) {
       if (!item.empty()) s.covariates.push_back(item);
     if (s.covariates.empty()) throw InputError("option --covariates: names no covariate");
   }
+  s.image_covariate = args.get("--image-covariate", "");
+  if (args.has("--image-covariate") && (s.image_covariate.empty() || s.image_covariate == s.feature))
+    throw InputError("option --image-covariate: '" + s.image_covariate + "' must name another feature of the tables than --feature");
   return s;
 }
 
@@ -93,6 +96,7 @@ std::vector<OptionSpec> comparison_option_rows() {
       {"--sign", "both|hyper|hypo", "increases, decreases or both (default both)"},
       {"--covariates", "NAME,...", "model the normals' values on these participant covariates (e.g. age,sex); each subject compared with its own prediction"},
       {"--participants", "TABLE.tsv", "with --covariates: the table with participant_id and those columns (BIDS participants.tsv)"},
+      {"--image-covariate", "NAME", "model each element's normal value on the subjects' own feature NAME there too (e.g. t1w: what the structure explains is not a focus)"},
   };
 }
 

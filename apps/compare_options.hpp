@@ -17,7 +17,7 @@ namespace vpm::cli {
 CompareOptions compare_options(const Args& args);
 
 /// The feature (--feature), normalisation (--normalisation), smoothing (--smooth 0..8),
-/// shrinkage (--shrink 0..1) and
+/// shrinkage (--shrink 0..1), image covariate (--image-covariate) and
 /// compare options of a comparison, as a calibration records them (rate left at its default).
 CalibrationSettings comparison_settings(const Args& args);
 
@@ -29,7 +29,7 @@ std::optional<Covariates> read_participants(const Args& args, const CalibrationS
 std::vector<ElementTable> read_normals(const Args& args, size_t at_least, std::vector<std::string>& paths);
 
 /// The option-table rows of --normalisation, --threshold, --fdr, --smooth, --shrink, --extend,
-/// --test, --peak, --sign, --covariates and --participants (not --min-cluster, --normals,
+/// --test, --peak, --sign, --covariates, --participants and --image-covariate (not --min-cluster, --normals,
 /// --feature), for both commands' Registrar.
 std::vector<OptionSpec> comparison_option_rows();
 

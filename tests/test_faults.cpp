@@ -173,7 +173,7 @@ std::vector<Output> outputs() {
       v.mid_radii = shell_mid_radii(el);
       v.display = icosphere(4);
       v.display_triangle_element = display_triangle_elements(el, v.display);
-      v.features.push_back({"pet", Normalisation::proportional, 0, 0, {}, {}, 3, std::vector<float>(el.size(), 1.0f),
+      v.features.push_back({"pet", Normalisation::proportional, 0, 0, {}, "", {}, 3, std::vector<float>(el.size(), 1.0f),
                             std::vector<float>(el.size(), 0.1f)});
       ViewSubject sub;
       sub.id = "sub-P01";

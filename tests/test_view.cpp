@@ -129,7 +129,7 @@ CohortView two_subjects(const CanonicalElements& el) {
   v.mid_radii = shell_mid_radii(el);
   v.display = icosphere(2);
   v.display_triangle_element = display_triangle_elements(el, v.display);
-  v.features.push_back({"pet", Normalisation::proportional, 0, 0, {}, {}, 3, std::vector<float>(el.size(), 1.0f),
+  v.features.push_back({"pet", Normalisation::proportional, 0, 0, {}, "", {}, 3, std::vector<float>(el.size(), 1.0f),
                         std::vector<float>(el.size(), 0.1f), std::vector<int>(el.size(), 3)});
   for (int s = 0; s < 2; ++s) {
     const TetMesh reg = affine_registered(Eigen::Matrix3d::Identity() * (70 + 5 * s), Eigen::Vector3d(3 * s, 0, 0));

@@ -4,7 +4,7 @@
 
 Each normal's element table is compared, with `vpm compare`, against the reference of all the
 other normals, with exactly the options (threshold, clusters, hysteresis, test, smoothing,
-normalisation, sign, covariates and their participants table) of a patient's comparison the
+normalisation, sign, covariates and their participants table, image covariate) of a patient's comparison the
 workflow wrote (RESULTS/compare/*_FEATURE.json), so the count is that of the workflow's own
 settings. Every cluster found is a false focus.
 Reported: the clusters per normal, their total and the rate per 10 normals.
@@ -59,6 +59,8 @@ def workflow_options(results, feature):
         cov = ref.get("covariates")  # compare.covariates: the same model, from the same table
         if cov:
             args += ["--covariates", ",".join(str(c) for c in cov["names"]), "--participants", str(cov["table"])]
+        if ref.get("image_covariate"):  # compare.image_covariate
+            args += ["--image-covariate", str(ref["image_covariate"])]
         return args, sidecars[0]
     except (OSError, ValueError, KeyError, TypeError) as e:
         fail(sidecars[0], f"not a comparison sidecar ({e})")

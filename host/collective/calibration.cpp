@@ -32,7 +32,8 @@ LeftOutNormal leave_out(const CanonicalElements& el, const std::vector<ElementTa
       if (!design.empty()) other_rows.rows.push_back(design.rows[i]);
     }
   const Reference ref =
-      build_reference(el, others, other_names, s.feature, s.normalisation, s.smoothing, s.shrinkage, other_rows);
+      build_reference(el, others, other_names, s.feature, s.normalisation, s.smoothing, s.shrinkage, other_rows,
+                      s.image_covariate);
   CompareOptions o = s.compare;
   o.min_cluster = 1;
   ElementTable patient = normals[out];
@@ -117,6 +118,7 @@ Json to_json(const ClusterCalibration& c) {
   Json cov = Json::array();
   for (const std::string& n : c.settings.covariates) cov.push_back(n);
   j["covariates"] = cov;
+  j["image_covariate"] = c.settings.image_covariate;
   j["options"] = options_json(c.settings);
   j["rate"] = c.settings.rate;
   j["normals"] = c.normals;
@@ -190,6 +192,12 @@ int calibrated_min_cluster(const Json& cal, const CalibrationSettings& s, const 
   if ((cov ? cov->dump(-1) : "[]") != want.find("covariates")->dump(-1))
     throw InputError(source + ": calibrated with covariates " + (cov ? cov->dump(-1) : "[]") + ", this comparison uses " +
                      want.find("covariates")->dump(-1) + "; calibrate with the comparison's own --covariates");
+  const Json* image = cal.find("image_covariate");  // absent before 2026-11-29: none
+  const std::string image_name = image && image->type() == Json::Type::String ? image->string() : "";
+  if (image && image->type() != Json::Type::String) throw InputError(source + ": \"image_covariate\" is not a string");
+  if (image_name != s.image_covariate)
+    throw InputError(source + ": calibrated with image covariate '" + image_name + "', this comparison uses '" +
+                     s.image_covariate + "'; calibrate with the comparison's own --image-covariate");
   const Json& opts = member(cal, "options", source);
   for (const char* key : {"threshold", "fdr_q", "extend", "peak", "test", "sign"})
     same(member(opts, key, source), *want.find("options")->find(key), std::string("options.") + key, source);

@@ -27,6 +27,7 @@ struct ComparisonFile {
   double shrinkage = 0;
   std::string covariate_table;               ///< the participants table (empty: no covariates)
   std::vector<std::string> covariate_names;
+  std::string image_covariate;               ///< Reference::image_covariate (empty: none)
   CompareOptions options;
   size_t clusters = 0;
 };
@@ -95,6 +96,10 @@ std::vector<ComparisonFile> read_comparisons(const fs::path& results, const std:
     c.smoothing = integer(*ref, "smoothing", side, 0);
     if (const Json* sh = ref->find("shrinkage")) c.shrinkage = sh->number();  // absent before 2026-11-28
     read_covariate_names(*ref, results, side, c);
+    if (const Json* image = ref->find("image_covariate")) {  // absent before 2026-11-29: none
+      if (image->type() != Json::Type::String) throw InputError(side + ": 'image_covariate' is not a string");
+      c.image_covariate = image->string();
+    }
     c.options.threshold = need(*opt, "threshold", side).number();
     c.options.fdr_q = need(*opt, "fdr_q", side).number();
     c.options.min_cluster = integer(*opt, "min_cluster", side);
@@ -192,9 +197,10 @@ void add_feature(CohortView& v, const CanonicalElements& el, const std::vector<c
   if (!first.covariate_names.empty()) cov = read_covariates(first.covariate_table, first.covariate_names);
   const Reference ref = build_reference(el, normals, first.normal_tables, first.feature, first.normalisation, first.smoothing,
                                         first.shrinkage,
-                                        cov ? covariate_design(*cov, normals, first.normal_tables) : CovariateDesign{});
+                                        cov ? covariate_design(*cov, normals, first.normal_tables) : CovariateDesign{},
+                                        first.image_covariate);
   v.features.push_back({first.feature, first.normalisation, first.smoothing, first.shrinkage, first.covariate_names,
-                        first.options, ref.subjects, to_float(ref.mean),
+                        first.image_covariate, first.options, ref.subjects, to_float(ref.mean),
                         to_float(ref.std), ref.count});
   for (size_t i = 0; i < normals.size(); ++i) {
     ViewSubject& s = subject_for(v, index, subject_id(normals[i], first.normal_tables[i]), false);
@@ -205,7 +211,8 @@ void add_feature(CohortView& v, const CanonicalElements& el, const std::vector<c
   for (const ComparisonFile* c : comps) {
     if (c->normal_tables != first.normal_tables || c->normalisation != first.normalisation ||
         c->smoothing != first.smoothing || c->shrinkage != first.shrinkage ||
-        c->covariate_names != first.covariate_names || c->covariate_table != first.covariate_table)
+        c->covariate_names != first.covariate_names || c->covariate_table != first.covariate_table ||
+        c->image_covariate != first.image_covariate)
       throw InputError(c->tsv + ": compared against other normals than " + first.tsv + "; one reference per feature");
     const ElementTable& t = tables.get(c->patient_table);
     const Comparison cmp =

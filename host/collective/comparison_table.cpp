@@ -40,6 +40,7 @@ void write_comparison(const std::string& tsv_path, const CanonicalElements& el, 
     cov["patient"] = patient;
     r["covariates"] = cov;
   }
+  if (!ref.image_covariate.empty()) r["image_covariate"] = ref.image_covariate;
   j["reference"] = r;
   j["patient"] = patient_table;
   Json o = Json::object();

@@ -41,35 +41,51 @@ void check_rank(const Eigen::MatrixXd& X, const CovariateDesign& d) {
 
 }  // namespace
 
-void fit_covariate_model(const std::vector<std::vector<double>>& values, const CovariateDesign& design, Reference& ref) {
-  if (design.rows.size() != values.size())
-    throw InputError("reference: " + std::to_string(design.rows.size()) + " covariate rows for " +
-                     std::to_string(values.size()) + " normals");
-  const Eigen::MatrixXd X = centred_design(design, ref.covariate_centre);
-  check_rank(X, design);
-  const int q = static_cast<int>(X.cols());  // p + 1
+void fit_covariate_model(const std::vector<std::vector<double>>& values, const CovariateDesign& design,
+                         const std::vector<std::vector<double>>& image, Reference& ref) {
   const size_t n = values[0].size(), normals = values.size();
+  if (!design.empty() && design.rows.size() != normals)
+    throw InputError("reference: " + std::to_string(design.rows.size()) + " covariate rows for " +
+                     std::to_string(normals) + " normals");
+  if (!image.empty() && image.size() != normals)
+    throw InputError("reference: image covariate values of " + std::to_string(image.size()) + " tables for " +
+                     std::to_string(normals) + " normals");
+  Eigen::MatrixXd X = Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(normals), 1);
+  ref.covariate_centre.clear();
+  if (!design.empty()) {
+    X = centred_design(design, ref.covariate_centre);
+    check_rank(X, design);
+  }
+  const int shared = static_cast<int>(X.cols()), q = shared + (image.empty() ? 0 : 1);
   ref.covariates = design.columns;
   ref.covariate_table = design.source;
   ref.covariate_names = design.names;
   ref.mean.assign(n, kNaN);
   ref.std.assign(n, kNaN);
   ref.count.assign(n, 0);
+  ref.image_covariate_centre.assign(image.empty() ? 0 : n, kNaN);
   ref.coefficients.assign(n * q, kNaN);
   ref.gram_inverse.assign(n * q * q, kNaN);
   std::vector<Eigen::Index> with;
   for (size_t e = 0; e < n; ++e) {
     with.clear();
+    double centre = 0;
     for (size_t i = 0; i < normals; ++i)
-      if (!std::isnan(values[i][e])) with.push_back(static_cast<Eigen::Index>(i));
+      if (!std::isnan(values[i][e]) && (image.empty() || !std::isnan(image[i][e]))) {
+        with.push_back(static_cast<Eigen::Index>(i));
+        if (!image.empty()) centre += image[i][e];
+      }
     const int c = static_cast<int>(with.size());
     ref.count[e] = c;
     if (c <= q) continue;
     Eigen::MatrixXd Xe(c, q);
     Eigen::VectorXd y(c);
+    if (!image.empty()) ref.image_covariate_centre[e] = centre /= c;
     for (int k = 0; k < c; ++k) {
-      Xe.row(k) = X.row(with[static_cast<size_t>(k)]);
-      y(k) = values[static_cast<size_t>(with[static_cast<size_t>(k)])][e];
+      const size_t i = static_cast<size_t>(with[static_cast<size_t>(k)]);
+      Xe.row(k).head(shared) = X.row(static_cast<Eigen::Index>(i));
+      if (!image.empty()) Xe(k, shared) = image[i][e] - centre;
+      y(k) = values[i][e];
     }
     const Eigen::MatrixXd G = Xe.transpose() * Xe;
     Eigen::LDLT<Eigen::MatrixXd> ldlt(G);
@@ -86,18 +102,19 @@ void fit_covariate_model(const std::vector<std::vector<double>>& values, const C
   }
 }
 
-ModelPrediction predict(const Reference& ref, int e, const std::vector<double>& row) {
-  const size_t q = ref.covariates.size() + 1;
+ModelPrediction predict(const Reference& ref, int e, const std::vector<double>& row, double image_value) {
+  const size_t q = static_cast<size_t>(ref.model_columns()), p = ref.covariates.size();
   const double* beta = ref.coefficients.data() + static_cast<size_t>(e) * q;
   const double* Gi = ref.gram_inverse.data() + static_cast<size_t>(e) * q * q;
   std::vector<double> x(q, 1.0);
-  for (size_t j = 1; j < q; ++j) x[j] = row[j - 1] - ref.covariate_centre[j - 1];
-  ModelPrediction p{0.0, 0.0};
+  for (size_t j = 0; j < p; ++j) x[1 + j] = row[j] - ref.covariate_centre[j];
+  if (q > p + 1) x[p + 1] = image_value - ref.image_covariate_centre[static_cast<size_t>(e)];
+  ModelPrediction pr{0.0, 0.0};
   for (size_t a = 0; a < q; ++a) {
-    p.expected += beta[a] * x[a];
-    for (size_t b = 0; b < q; ++b) p.leverage += x[a] * Gi[a * q + b] * x[b];
+    pr.expected += beta[a] * x[a];
+    for (size_t b = 0; b < q; ++b) pr.leverage += x[a] * Gi[a * q + b] * x[b];
   }
-  return p;
+  return pr;
 }
 
 }  // namespace vpm::detail

@@ -99,7 +99,8 @@ void shrink_spread(const CanonicalElements& el, double shrinkage, std::vector<do
 
 Reference reference_of(const CanonicalElements* el, const std::vector<ElementTable>& normals,
                        const std::vector<std::string>& names, const std::string& feature, Normalisation normalisation,
-                       int smoothing, double shrinkage, const CovariateDesign& design) {
+                       int smoothing, double shrinkage, const CovariateDesign& design,
+                       const std::string& image_covariate) {
   if (normals.size() < 3) throw InputError("reference: needs at least 3 normals, got " + std::to_string(normals.size()));
   Reference r;
   r.definition = normals[0].definition;
@@ -107,10 +108,13 @@ Reference reference_of(const CanonicalElements* el, const std::vector<ElementTab
   r.normalisation = normalisation;
   r.smoothing = smoothing;
   r.shrinkage = shrinkage;
+  r.image_covariate = image_covariate;
+  if (image_covariate == feature)
+    throw InputError("reference: the image covariate '" + feature + "' is the feature compared itself");
   if ((smoothing > 0 || shrinkage > 0) && el->definition() != r.definition)
     throw InputError("reference: the elements to smooth over differ from the tables' definition");
   r.subjects = static_cast<int>(normals.size());
-  std::vector<std::vector<double>> values;
+  std::vector<std::vector<double>> values, image;
   for (size_t i = 0; i < normals.size(); ++i) {
     if (normals[i].definition != r.definition)
       throw InputError(names[i] + ": element definition differs from " + names[0] + "'s (level/shells/samples " +
@@ -121,9 +125,14 @@ Reference reference_of(const CanonicalElements* el, const std::vector<ElementTab
     named.subject = names[i];
     values.push_back(normalised_feature(named, feature, normalisation));
     if (smoothing > 0) values.back() = smooth_over_elements(*el, values.back(), smoothing);
+    if (!image_covariate.empty()) {
+      image.push_back(normalised_feature(named, image_covariate, normalisation));
+      if (smoothing > 0) image.back() = smooth_over_elements(*el, image.back(), smoothing);
+    }
   }
-  if (!design.empty()) {
-    detail::fit_covariate_model(values, design, r);
+  r.covariates = design.columns;
+  if (r.has_model()) {
+    detail::fit_covariate_model(values, design, image, r);
     if (shrinkage > 0) shrink_spread(*el, shrinkage, r.std);
     return r;
   }
@@ -155,16 +164,18 @@ Reference reference_of(const CanonicalElements* el, const std::vector<ElementTab
 
 Reference build_reference(const std::vector<ElementTable>& normals, const std::vector<std::string>& names,
                           const std::string& feature, Normalisation normalisation) {
-  return reference_of(nullptr, normals, names, feature, normalisation, 0, 0, {});
+  return reference_of(nullptr, normals, names, feature, normalisation, 0, 0, {}, {});
 }
 
 Reference build_reference(const CanonicalElements& elements, const std::vector<ElementTable>& normals,
                           const std::vector<std::string>& names, const std::string& feature, Normalisation normalisation,
-                          int smoothing, double shrinkage, const CovariateDesign& covariates) {
+                          int smoothing, double shrinkage, const CovariateDesign& covariates,
+                          const std::string& image_covariate) {
   if (smoothing < 0) throw InputError("reference: smoothing " + std::to_string(smoothing) + " is negative");
   if (!(shrinkage >= 0 && shrinkage <= 1))
     throw InputError("reference: shrinkage " + std::to_string(shrinkage) + " is not in [0, 1]");
-  return reference_of(&elements, normals, names, feature, normalisation, smoothing, shrinkage, covariates);
+  return reference_of(&elements, normals, names, feature, normalisation, smoothing, shrinkage, covariates,
+                      image_covariate);
 }
 
 namespace {
@@ -182,13 +193,17 @@ double crawford_howell_z(double x, double mean, double std, int n) {
   return t_as_z((x - mean) / (std * std::sqrt((n + 1.0) / n)), n - 1.0);
 }
 
-// z of the patient's values x against a reference with covariates (its design row `row`).
-void covariate_z(const Reference& ref, const std::vector<double>& row, SingleCaseTest test, Comparison& c) {
+// z of the patient's values x against a reference with a model (its design row `row`, its
+// values of the image covariate `image`; empty without one).
+void covariate_z(const Reference& ref, const std::vector<double>& row, const std::vector<double>& image,
+                 SingleCaseTest test, Comparison& c) {
   const std::vector<double>& x = c.patient;
-  const double q = static_cast<double>(ref.covariates.size()) + 1;
+  const double q = ref.model_columns();
   for (size_t e = 0; e < x.size(); ++e) {
     if (std::isnan(ref.mean[e])) continue;
-    const detail::ModelPrediction p = detail::predict(ref, static_cast<int>(e), row);
+    const double own = image.empty() ? 0.0 : image[e];
+    if (std::isnan(own)) continue;
+    const detail::ModelPrediction p = detail::predict(ref, static_cast<int>(e), row, own);
     c.expected[e] = p.expected;
     if (std::isnan(x[e]) || !(ref.std[e] > 0)) continue;
     // the z test takes the normals' mean at their centre as exact (as without covariates) but
@@ -318,10 +333,14 @@ Comparison compare_to_reference(const CanonicalElements& el, const Reference& re
   c.patient = smooth_over_elements(el, normalised_feature(patient, ref.feature, ref.normalisation), ref.smoothing);
   const std::vector<double>& x = c.patient;
   c.z.assign(x.size(), kNaN);
-  if (!ref.covariates.empty()) {
+  if (ref.has_model()) {
     c.covariates = covariates;
     c.expected.assign(x.size(), kNaN);
-    covariate_z(ref, covariates, opt.test, c);
+    const std::vector<double> image =
+        ref.image_covariate.empty()
+            ? std::vector<double>{}
+            : smooth_over_elements(el, normalised_feature(patient, ref.image_covariate, ref.normalisation), ref.smoothing);
+    covariate_z(ref, covariates, image, opt.test, c);
   } else {
     c.expected = ref.mean;
     for (size_t e = 0; e < x.size(); ++e)

@@ -48,6 +48,7 @@ Json feature_entry(const CohortView& v, const ViewFeature& f, FeatureCodes& code
   Json cov = Json::array();
   for (const std::string& n : f.covariates) cov.push_back(n);
   j["covariates"] = cov;
+  j["image_covariate"] = f.image_covariate;
   j["sign"] = f.compare.sign;
   j["reference_subjects"] = f.reference_subjects;
   std::vector<const std::vector<float>*> normals;

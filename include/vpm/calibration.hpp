@@ -23,6 +23,7 @@ struct CalibrationSettings {
   double shrinkage = 0;       ///< Reference::shrinkage
   CompareOptions compare;     ///< the patients' options; its min_cluster is what is calibrated (ignored)
   std::vector<std::string> covariates;  ///< Covariates::names of the reference's model (empty: none)
+  std::string image_covariate;          ///< Reference::image_covariate (empty: none)
   double rate = 1.0;          ///< false clusters per 10 normals allowed (>= 0)
 };
 
@@ -58,14 +59,15 @@ ClusterCalibration calibrate_min_cluster(const CanonicalElements& elements, cons
                                          const std::vector<std::string>& names, const CalibrationSettings& settings,
                                          const CovariateDesign& design = {});
 
-/// {"feature", "normalisation", "smoothing", "shrinkage", "covariates" (names), "options": {threshold, fdr_q, extend, peak, sign,
+/// {"feature", "normalisation", "smoothing", "shrinkage", "covariates" (names), "image_covariate"
+/// ("" for none), "options": {threshold, fdr_q, extend, peak, sign,
 ///  test}, "rate", "normals", "min_cluster", "curve": [{"min_cluster", "false_clusters",
 ///  "per_10_normals"}], "per_normal": [{"normal", "candidates", "peak_z"}]}
 Json to_json(const ClusterCalibration& calibration);
 
 /// The min_cluster of a calibration JSON written by to_json (a file from elsewhere: checked),
 /// after checking that it was made with `settings` (feature, normalisation, smoothing, shrinkage,
-/// covariates (absent in a file: none) and every
+/// covariates and image covariate (absent in a file: none) and every
 /// compare option but min_cluster) and on the normals named `normals` (the same set, any
 /// order): InputError naming `source` and the first difference.
 int calibrated_min_cluster(const Json& calibration, const CalibrationSettings& settings,

@@ -67,6 +67,9 @@ struct ViewFeature {
   /// predictions; `mean` is the model at the normals' mean covariates, so the page's
   /// leave-one-out z of a normal is exact only for a normal at those covariates.
   std::vector<std::string> covariates;
+  /// Reference::image_covariate (empty: none); patients' z are against the value their own
+  /// structure predicts, and the page's leave-one-out z of a normal ignores it, as covariates
+  std::string image_covariate;
   CompareOptions compare;     ///< the options `vpm compare` used
   int reference_subjects = 0;
   std::vector<float> mean, std;  ///< the reference per element

@@ -66,10 +66,22 @@ struct Reference {
   std::string covariate_table;                ///< CovariateDesign::source
   std::vector<std::string> covariate_names;   ///< CovariateDesign::names
   std::vector<double> covariate_centre;  ///< the normals' mean design row (the model is centred there)
-  std::vector<double> coefficients;      ///< per element p + 1: the value at the centre, then the slopes
-  /// per element (p + 1)^2, row-major: (X^T X)^-1 of the centred design of the normals with
-  /// data there (a patient's leverage for Crawford-Howell)
+  /// A second feature of the tables (e.g. "t1w") as a covariate that varies by element (empty:
+  /// none): each element's model gains the normals' own value of that feature there (normalised
+  /// and smoothed as `feature`), so that what the structure explains (a residual misalignment
+  /// of grey matter, partial volumes) is not read as a loss of function; the patient is compared
+  /// with the value its own structure predicts (docs/cohort.md, "Image covariate").
+  std::string image_covariate;
+  std::vector<double> image_covariate_centre;  ///< per element: the normals' mean of image_covariate
+  /// per element q = p + 1 (+ 1 with an image covariate): the value at the centre, then the
+  /// slopes (the image covariate's last)
+  std::vector<double> coefficients;
+  /// per element q^2, row-major: (X^T X)^-1 of the centred design of the normals with data
+  /// there (a patient's leverage)
   std::vector<double> gram_inverse;
+  /// the model's columns per element: 1 + covariates.size() + (image_covariate empty ? 0 : 1)
+  int model_columns() const { return 1 + static_cast<int>(covariates.size()) + (image_covariate.empty() ? 0 : 1); }
+  bool has_model() const { return model_columns() > 1; }
 };
 
 /// The reference of `normals` (at least 3). `names` (same length) name the tables in messages.
@@ -82,10 +94,13 @@ Reference build_reference(const std::vector<ElementTable>& normals, const std::v
 /// (Reference::shrinkage; InputError outside [0, 1]).
 /// With a non-empty `covariates` design (one row per normal, vpm/covariates.hpp) the mean is a
 /// linear model of the covariates (Reference::covariates); InputError when they do not vary
-/// independently over the normals.
+/// independently over the normals. A non-empty `image_covariate` (a feature of the tables other
+/// than `feature`) adds that feature per element to the model (Reference::image_covariate);
+/// InputError when it is `feature` itself or a table lacks it.
 Reference build_reference(const CanonicalElements& elements, const std::vector<ElementTable>& normals,
                           const std::vector<std::string>& names, const std::string& feature, Normalisation normalisation,
-                          int smoothing, double shrinkage = 0, const CovariateDesign& covariates = {});
+                          int smoothing, double shrinkage = 0, const CovariateDesign& covariates = {},
+                          const std::string& image_covariate = {});
 
 struct CompareOptions {
   double threshold = 3.0;  ///< |z| beyond which an element is a candidate (ignored with fdr_q > 0)
@@ -156,7 +171,9 @@ struct Comparison {
 /// design row (covariate_row) and, with h the patient's leverage x^T (X^T X)^-1 x,
 /// z = (x - prediction) / (std sqrt(1 + h - 1/n)) (the mean at the normals' centre taken as exact,
 /// as without covariates, the slopes' uncertainty not), or Crawford-Howell's t
-/// (x - prediction) / (std sqrt(1 + h)) with n - p - 1 degrees of freedom.
+/// (x - prediction) / (std sqrt(1 + h)) with n - p - 1 degrees of freedom. With an image
+/// covariate the patient's own value of that feature (in `patient`) enters its row, and the
+/// model's extra column costs one more degree of freedom.
 /// InputError when the definitions differ, the row does not fit the reference or an option is
 /// out of range (compare_option_error).
 Comparison compare_to_reference(const CanonicalElements& elements, const Reference& reference,

@@ -71,7 +71,8 @@ std::vector<ElementTable> tables_of(const py::list& items) {
 py::dict compare_py(const py::list& normals, const py::object& patient, const std::string& feature,
                     const std::string& normalisation, double threshold, double fdr, int min_cluster, double extend,
                     double relative_extent, double peak, const std::string& sign, const std::string& test, int smooth, double shrink,
-                    const std::vector<std::string>& covariates, const std::string& participants) {
+                    const std::vector<std::string>& covariates, const std::string& participants,
+                    const std::string& image_covariate) {
   const std::vector<ElementTable> ns = tables_of(normals);
   py::list one;
   one.append(patient);
@@ -97,7 +98,7 @@ py::dict compare_py(const py::list& normals, const py::object& patient, const st
     std::optional<Covariates> cov;
     if (!covariates.empty()) cov = read_covariates(participants, covariates);
     Reference r = build_reference(el, ns, names, feature, n, smooth, shrink,
-                                  cov ? covariate_design(*cov, ns, names) : CovariateDesign{});
+                                  cov ? covariate_design(*cov, ns, names) : CovariateDesign{}, image_covariate);
     const std::vector<double> row = cov ? covariate_row(*cov, p.subject, "the patient") : std::vector<double>{};
     return std::make_pair(compare_to_reference(el, r, p, o, row), r);
   });
@@ -166,7 +167,8 @@ void bind_collective(py::module_& m) {
         py::arg("normalisation") = "proportional", py::arg("threshold") = 3.0, py::arg("fdr") = 0.0,
         py::arg("min_cluster") = 3, py::arg("extend") = 0.0, py::arg("relative_extent") = 0.0, py::arg("peak") = 0.0, py::arg("sign") = "both",
         py::arg("test") = "z", py::arg("smooth") = 0, py::arg("shrink") = 0.0,
-        py::arg("covariates") = std::vector<std::string>{}, py::arg("participants") = "");
+        py::arg("covariates") = std::vector<std::string>{}, py::arg("participants") = "",
+        py::arg("image_covariate") = "");
   m.def("to_native", [](const py::object& mesh, const py::object& points) {
     auto msh = mesh_argument(mesh, py::none());
     Points p = to_points(points, "points");

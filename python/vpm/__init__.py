@@ -180,7 +180,8 @@ def compare(normals, patient, feature, **options):
     uses 0.3), peak, sign, test, smooth, shrink (0),
     covariates (column names, e.g. ["age", "sex"]) with participants (the table that holds them,
     each table looked up by its subject): the reference then models them and reference_mean is
-    the patient's prediction. Returns a Comparison."""
+    the patient's prediction; image_covariate (another feature of the tables, e.g. "t1w"): each
+    element's model gains the subjects' own value of it there. Returns a Comparison."""
     if options.get("covariates") is None:
         options.pop("covariates", None)
     else:

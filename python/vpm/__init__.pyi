@@ -166,7 +166,7 @@ def sample(mesh: Mesh, images: Optional[Mapping[str, ImageLike]] = ..., labels: 
            elements: Optional[Elements] = ..., subject: str = ...) -> ElementTable: ...
 def compare(normals: Iterable[Union[ElementTable, str]], patient: Union[ElementTable, str], feature: str, *,
             normalisation: Literal["proportional", "none"] = ..., threshold: float = ..., fdr: float = ...,
-            min_cluster: int = ..., extend: float = ..., peak: float = ...,
+            min_cluster: int = ..., extend: float = ..., relative_extent: float = ..., peak: float = ...,
             sign: Literal["both", "hyper", "hypo"] = ..., test: Literal["z", "crawford-howell"] = ...,
             smooth: int = ..., shrink: float = ..., covariates: Optional[Sequence[str]] = ...,
-            participants: str = ...) -> Comparison: ...
+            participants: str = ..., image_covariate: str = ...) -> Comparison: ...

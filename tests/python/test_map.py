@@ -65,13 +65,15 @@ def test_sample_and_compare(vpm, ball, image_array, tmp_path):
     data, affine = image_array
     el = vpm.elements(level=1, shells=2, samples=8)
     assert len(el) == 160 and el.samples.shape == (160 * 8, 3)
-    rng = np.random.default_rng(3)
+    rng, rng_t1 = np.random.default_rng(3), np.random.default_rng(4)
     tables = []
     for s in range(4):
         pet = data * (1 + 0.02 * rng.standard_normal(data.shape)).astype(np.float32)
+        t1w = data * (1 + 0.02 * rng_t1.standard_normal(data.shape)).astype(np.float32)
         if s == 3:
             pet[data.shape[0] // 2:] *= 0.5  # the patient: half the brain hypometabolic
-        tables.append(vpm.sample(out, {"pet": (vpm.Image(pet, affine))}, elements=el, subject=f"sub-{s}"))
+        tables.append(vpm.sample(out, {"pet": vpm.Image(pet, affine), "t1w": vpm.Image(t1w, affine)}, elements=el,
+                                 subject=f"sub-{s}"))
     f = tables[0].features["pet"]
     assert f["mean"].shape == (160,) and (f["count"] > 0).sum() > 100
     c = vpm.compare(tables[:3], tables[3], "pet", threshold=3, min_cluster=2, sign="hypo")
@@ -108,6 +110,15 @@ def test_sample_and_compare(vpm, ball, image_array, tmp_path):
         vpm.compare(tables[:3], tables[3], "pet", covariates=["age"])
     with pytest.raises(ValueError, match="no column 'weight'"):
         vpm.compare(tables[:3], tables[3], "pet", covariates=["weight"], participants=str(table))
+    # an image covariate: each element's reference models the subjects' own t1w there, the
+    # patient's expected value is its own prediction
+    i = vpm.compare(tables[:3], tables[3], "pet", image_covariate="t1w")
+    both = np.isfinite(i.reference_mean) & np.isfinite(c.reference_mean)
+    assert both.sum() > 100 and not np.allclose(i.reference_mean[both], c.reference_mean[both])
+    with pytest.raises(ValueError, match="is the feature compared itself"):
+        vpm.compare(tables[:3], tables[3], "pet", image_covariate="pet")
+    with pytest.raises(ValueError, match="no feature 'fa'"):
+        vpm.compare(tables[:3], tables[3], "pet", image_covariate="fa")
     zimg = vpm.to_image(out, el, np.nan_to_num(c.z), vpm.Image(data, affine))
     assert zimg.shape == data.shape and zimg.data.min() < -3
     native = vpm.to_native(out, np.zeros((1, 3)))

@@ -42,6 +42,9 @@ export function buildLegend(el, manifest) {
       return `<dt>${esc(f.name)}</dt><dd><b>value</b>: ${units(f)}. <b>z</b>: ${test(f)}. ` +
         (cov ? `The reference models ${cov}: each patient is compared with the value its own ${cov} predict ` +
           `(a normal's leave-one-out z below uses the normals' mean ${cov}). ` : '') +
+        (f.image_covariate ? `Each element's reference also models the subjects' own ${esc(f.image_covariate)} there: a ` +
+          `patient is compared with the value its own ${esc(f.image_covariate)} predicts, so that what the structure ` +
+          `explains (grey matter a little off its place) is not read as a focus (a normal's leave-one-out z ignores it). ` : '') +
         `A patient's z is against the reference of all ${f.reference_subjects} normals; a normal's z is ` +
         `leave-one-out, against the other ${f.reference_subjects - 1} normals, so that it is comparable with a patient's ` +
         `(a normal against a reference that holds it would look closer to the normals than it is). ` +
