@@ -6,7 +6,8 @@ comparison changes, so a setting costs seconds per patient instead of a workflow
 
 Every variant starts from the options of the run's own comparisons (a patient's sidecar, read as
 bench/cohort/lono.py reads it) and overrides the flags it names; `--tables NAME DIR` gives a
-variant other element tables (e.g. `vpm sample --level 5` of the same registered meshes).
+variant other element tables (e.g. `vpm sample --level 5` of the same registered meshes), and a flag
+given the value "-" is dropped (e.g. `--image-covariate -`).
 Writes OUT/NAME/compare/ (the comparisons) and OUT/variants.json, and prints a markdown table
 (pooled over the patients: volume overlap, precision, Dice, foci found, false clusters, and the
 false clusters in the foci-free patients).
@@ -29,7 +30,7 @@ import lono  # noqa: E402
 
 
 def merged(base, extra):
-    """`base` (flag value pairs) with the flags of `extra` replaced or added."""
+    """`base` (flag value pairs) with the flags of `extra` replaced or added (a value "-" drops the flag)."""
     opts, order = {}, []
     for args in (base, extra):
         if len(args) % 2:
@@ -38,7 +39,7 @@ def merged(base, extra):
             if flag not in opts:
                 order.append(flag)
             opts[flag] = value
-    return [x for f in order for x in (f, opts[f])]
+    return [x for f in order if opts[f] != "-" for x in (f, opts[f])]
 
 
 def compare_one(a, name, options, tables, sid):

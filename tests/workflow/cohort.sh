@@ -37,16 +37,20 @@ for f in tables/sub-N01_pet.tsv tables/sub-N01_pet.json tables/sub-P01_pet.tsv c
          compare/sub-P01_pet_native.vtu evaluation.json evaluation.md subjects/sub-P01/sub-P01_registered.vtu; do
   [[ -s $r/$f ]] || fail "missing $r/$f"
 done
-# the tables hold the default element set (graded, level 4: 32,180 elements) and the comparison
-# read 3 normals with the default hysteresis and relative extent
-[[ $(tail -n +2 "$r/tables/sub-N01_pet.tsv" | wc -l) -eq 32180 ]] || fail "sub-N01_pet.tsv: not 32180 rows"
+# the tables hold the default element set (graded, level 5: 283,060 elements) with the T1w beside
+# the PET (the default image covariate), and the comparison read 3 normals with the default
+# hysteresis, relative extent and image covariate
+[[ $(tail -n +2 "$r/tables/sub-N01_pet.tsv" | wc -l) -eq 283060 ]] || fail "sub-N01_pet.tsv: not 283060 rows"
+head -1 "$r/tables/sub-N01_pet.tsv" | grep -q "	t1w_mean	" || fail "sub-N01_pet.tsv: no t1w columns"
 /usr/bin/python3 - "$r" <<'PY' || fail "reports"
 import json, sys
 r = sys.argv[1]
 c = json.load(open(f"{r}/compare/sub-P01_pet.json"))
 assert c["reference"]["subjects"] == 3, c["reference"]
-assert c["definition"]["layout"] == "graded" and c["definition"]["shells"] == 19, c["definition"]
-assert c["options"]["extend"] == 2.5 and c["options"]["min_cluster"] == 10, c["options"]
+assert c["definition"]["layout"] == "graded" and c["definition"]["shells"] == 41, c["definition"]
+assert c["definition"]["level"] == 5 and c["definition"]["samples"] == 8, c["definition"]
+assert c["options"]["extend"] == 2.25 and c["options"]["min_cluster"] == 60, c["options"]
+assert c["reference"]["image_covariate"] == "t1w", c["reference"]
 assert c["options"]["relative_extent"] == 0.3, c["options"]
 reg = json.load(open(f"{r}/subjects/sub-P01/sub-P01_register.json"))
 assert reg["input"]["landmarks"] >= 100 and reg["landmark_rms_error"] < 1e-6, reg["input"]
@@ -78,12 +82,13 @@ k = json.load(open(sys.argv[3]))
 assert [r["clusters"] for r in k["per_normal"]] == [r["clusters"] for r in l["per_normal"]], (k["per_normal"], l["per_normal"])
 curve = k["calibration"]["curve"]
 assert [p["false_clusters"] for p in curve] == sorted((p["false_clusters"] for p in curve), reverse=True), curve
-at10 = [p["false_clusters"] for p in curve if p["min_cluster"] == 10]  # past the largest cluster: 0
-assert (at10[0] if at10 else 0) == l["false_clusters"] and curve[-1]["false_clusters"] == 0, curve
+at60 = [p["false_clusters"] for p in curve if p["min_cluster"] == 60]  # past the largest cluster: 0
+assert (at60[0] if at60 else 0) == l["false_clusters"] and curve[-1]["false_clusters"] == 0, curve
 rows = {row["normal"]: row for row in l["per_normal"]}
 assert l["normals"] == 4 and len(rows) == 4, l
 assert rows["sub-P01_pet.tsv"]["clusters"] == len(c["result"]["clusters"]), (rows["sub-P01_pet.tsv"], c["result"])
-assert "--extend" in l["options"] and "--relative-extent" in l["options"] and l["options"][l["options"].index("--min-cluster") + 1] == "10", l["options"]
+assert "--extend" in l["options"] and "--relative-extent" in l["options"] and l["options"][l["options"].index("--min-cluster") + 1] == "60", l["options"]
+assert l["options"][l["options"].index("--image-covariate") + 1] == "t1w", l["options"]
 assert abs(l["per_10_normals"] - 10 * l["false_clusters"] / 4) < 1e-12, l
 PY
 # compare.min_cluster: auto (vpm calibrate in the workflow) needs 4 normals: with 3 the workflow
@@ -172,4 +177,13 @@ grep -q "register .*sub-N01_ball.vtu" "$work/masked.log" || fail "no register jo
 grep "register .*sub-N01_ball.vtu" "$work/masked.log" | grep -q -- "--dense-force" && fail "a mask subject got the image force"
 grep "register .*sub-N02_ball.vtu" "$work/masked.log" | grep -q -- "--dense-force both --image" ||
   { grep "register" "$work/masked.log"; fail "a T1w subject lost the image force"; }
+# ... and with one subject without a T1w, compare.image_covariate: auto models none
+grep -q "compare .*--feature" "$work/masked.log" || fail "no compare job planned for the masked cohort"
+grep "compare .*--feature" "$work/masked.log" | grep -q -- "--image-covariate" && fail "image covariate with a mask subject"
+# compare.image_covariate: t1w asked for outright is refused there, naming the subject
+if (cd "$work" && snakemake -s "$src/workflow/Snakefile" --cores 1 -n --config bids="$work/masked" \
+      out="$work/masked_results" vpm="$build/vpm" 'compare={image_covariate: t1w}') > "$work/masked2.log" 2>&1; then
+  fail "image_covariate t1w accepted with a mask subject"
+fi
+grep -q "compare.image_covariate: t1w: sub-N01 has no such image" "$work/masked2.log" || { cat "$work/masked2.log"; fail "no clear error"; }
 echo "cohort workflow: ok"
