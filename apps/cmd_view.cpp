@@ -46,7 +46,7 @@ vpm::cli::Registrar reg(
       {"--label-names", "NAMES.txt", "region names: AAL's table (lines 'id name', e.g. mricron's aal.nii.txt) or a FreeSurfer colour table (FreeSurferColorLUT.txt)"},
       {"--title", "TEXT", "the page's title"},
       {"--max-slice-voxels", "N", "patients' images are subsampled to at most N voxels for slices (default 400000)"},
-      {"--data", "auto|file|folder", "the data inside the page, or in PAGE_data/ beside it, read a row at a time (default auto: a folder above 120 subjects)"}},
+      {"--data", "auto|file|folder", "the data inside the page, or in PAGE_data/ beside it, read a row at a time (default auto: a folder above 120 subjects or about 100 MB of data)"}},
      run});
 
 }  // namespace

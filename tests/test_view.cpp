@@ -228,6 +228,38 @@ TEST_CASE("the page carries the manifest and the chunks of data the browser read
   CHECK(c2[3] == 65535);
 }
 
+TEST_CASE("view data auto: a folder above the subject count or the estimated data") {
+  if (!view_page_available()) return;
+  namespace fs = std::filesystem;
+  const CanonicalElements el(ElementDefinition{1, 2, 4});
+  const CohortView v = two_subjects(el);
+  const std::string dir = VPM_TEST_TMP "/view_auto";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const long long est = estimated_view_bytes(v);
+  ViewPageOptions o;
+  o.folder_above_bytes = est;
+  const ViewPageStats file = write_view_page(dir + "/a.html", v, o);
+  CHECK(file.data_dir.empty());
+  CHECK(est <= file.data_bytes);  // the subjects' arrays, as encoded: never more than all the data
+  // ... and most of it once the subjects outweigh the display sphere and the reference
+  CohortView many = v;
+  for (int i = 2; i < 40; ++i) {
+    many.subjects.push_back(v.subjects[1]);
+    many.subjects.back().id = "sub-N" + std::to_string(i + 10);
+  }
+  ViewPageOptions m;
+  m.data = ViewData::embedded;
+  const ViewPageStats big = write_view_page(dir + "/many.html", many, m);
+  CHECK(estimated_view_bytes(many) <= big.data_bytes);
+  CHECK(estimated_view_bytes(many) > 0.7 * big.data_bytes);
+  o.folder_above_bytes = est - 1;
+  CHECK(write_view_page(dir + "/b.html", v, o).data_dir == dir + "/b_data");
+  o.folder_above_bytes = 100LL << 20;
+  o.folder_above = 1;
+  CHECK(write_view_page(dir + "/c.html", v, o).data_dir == dir + "/c_data");
+}
+
 TEST_CASE("a large cohort's page reads its data from a folder beside it") {
   if (!view_page_available()) return;
   namespace fs = std::filesystem;

@@ -150,12 +150,25 @@ const char* to_string(ViewData d) {
 
 bool view_page_available() { return std::strlen(detail::embedded_view_script()) > 0; }
 
+long long estimated_view_bytes(const CohortView& v) {
+  long long n = 0;
+  for (const ViewSubject& s : v.subjects) {
+    n += static_cast<long long>(s.native.size()) + 2LL * static_cast<long long>(s.centres.size());
+    for (const auto& [f, x] : s.values) n += 2LL * static_cast<long long>(x.size());
+    for (const auto& [f, x] : s.z) n += 2LL * static_cast<long long>(x.size());
+    for (const auto& [f, x] : s.cluster) n += 2LL * static_cast<long long>(x.size());
+    for (const auto& [f, x] : s.slices) n += static_cast<long long>(x.image.size() + x.z.size());
+  }
+  return n;
+}
+
 ViewPageStats write_view_page(const std::string& html_path, const CohortView& v, const ViewPageOptions& o) {
   if (!view_page_available())
     throw InputError("this vpm was built without the browser view (web/ needs Node.js and its npm packages at "
                      "build time: run scripts/setup.sh, then rebuild)");
   const bool folder = o.data == ViewData::folder ||
-                      (o.data == ViewData::automatic && static_cast<int>(v.subjects.size()) > o.folder_above);
+                      (o.data == ViewData::automatic && (static_cast<int>(v.subjects.size()) > o.folder_above ||
+                                                         estimated_view_bytes(v) > o.folder_above_bytes));
   const fs::path page = fs::absolute(html_path).lexically_normal();
   const std::string dir_name = page.stem().string() + "_data";
   const fs::path data = page.parent_path() / dir_name, tmp = page.parent_path() / (dir_name + ".tmp");

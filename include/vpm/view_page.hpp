@@ -17,7 +17,9 @@ bool view_page_available();
 
 /// Where the page's data goes.
 enum class ViewData {
-  automatic,  ///< embedded up to ViewPageOptions::folder_above subjects, else a folder
+  /// embedded up to ViewPageOptions::folder_above subjects and folder_above_bytes of data
+  /// (estimated_view_bytes), else a folder
+  automatic,
   embedded,   ///< one self-contained file
   folder,     ///< the page and PAGE_data/ beside it
 };
@@ -27,9 +29,19 @@ const char* to_string(ViewData d);
 struct ViewPageOptions {
   ViewData data = ViewData::automatic;
   int folder_above = 120;     ///< automatic: a folder for more subjects than this
+  /// automatic: a folder for more data than this (estimated_view_bytes, before base64): a
+  /// browser reads a one-file page whole before it draws, a folder a row at a time (level-5
+  /// elements: about 2.4 MB a normal, 7 MB a patient)
+  long long folder_above_bytes = 100LL << 20;
   int rows_per_chunk = 8;     ///< subjects per chunk of rows (what the page reads at a time)
   int column_elements = 1024; ///< folder: elements per chunk of the normals' values by element
 };
+
+/// The subjects' binary data in a page of `view`, estimated from their arrays as the page encodes
+/// them (shells: a byte a coordinate; values, z, clusters and centres: two bytes; slices: a byte
+/// a voxel): what grows with the cohort and the element level, most of ViewPageStats::data_bytes
+/// in a large cohort's page (the rest: the display sphere, the reference, the atlas).
+long long estimated_view_bytes(const CohortView& view);
 
 /// Size of the page's parts, for reports.
 struct ViewPageStats {
