@@ -193,8 +193,8 @@ int calibrated_min_cluster(const Json& cal, const CalibrationSettings& s, const 
     throw InputError(source + ": calibrated with covariates " + (cov ? cov->dump(-1) : "[]") + ", this comparison uses " +
                      want.find("covariates")->dump(-1) + "; calibrate with the comparison's own --covariates");
   const Json* image = cal.find("image_covariate");  // absent before 2026-11-29: none
-  const std::string image_name = image && image->type() == Json::Type::String ? image->string() : "";
   if (image && image->type() != Json::Type::String) throw InputError(source + ": \"image_covariate\" is not a string");
+  const std::string image_name = image ? image->string() : "";
   if (image_name != s.image_covariate)
     throw InputError(source + ": calibrated with image covariate '" + image_name + "', this comparison uses '" +
                      s.image_covariate + "'; calibrate with the comparison's own --image-covariate");
