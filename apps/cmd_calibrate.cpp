@@ -17,7 +17,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
     throw vpm::InputError("needs -o, --normals and --feature; usage: " + vpm::cli::synopsis(self));
   if (args.has("--min-cluster"))
     throw vpm::InputError("option --min-cluster: not taken (it is what vpm calibrate finds)");
-  vpm::CalibrationSettings s = vpm::cli::comparison_settings(args);
+  vpm::CalibrationSettings s = vpm::cli::comparison_settings(args, true);
   s.rate = args.get_double("--rate", 1.0);
   if (!(s.rate >= 0)) throw vpm::InputError("option --rate: must be >= 0 false clusters per 10 normals");
   std::vector<std::string> paths;
@@ -31,7 +31,8 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
     throw vpm::NumericalError(*out + ": no min_cluster keeps the normals at or under " + vpm::format_sig(s.rate) +
                               " false clusters per 10 normals (reached " + vpm::format_sig(c.rate_at(1 << 30)) +
                               " with clusters of any size: the --peak rule keeps small ones); lower --peak or raise --rate");
-  vpm::cli::info("wrote " + *out + ": min_cluster " + std::to_string(c.min_cluster) + " (" +
+  const std::string peak = s.calibrate_peak ? ", peak |z| " + vpm::format_sig(c.peak) : "";
+  vpm::cli::info("wrote " + *out + ": min_cluster " + std::to_string(c.min_cluster) + peak + " (" +
                  vpm::format_sig(c.rate_at(c.min_cluster)) + " false clusters per 10 normals, at most " +
                  vpm::format_sig(s.rate) + "; min_cluster 1: " + vpm::format_sig(c.rate_at(1)) + ") over " +
                  std::to_string(c.normals) + " normals left out in turn");
@@ -39,7 +40,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
 }
 
 std::vector<vpm::cli::OptionSpec> rows() {
-  std::vector<vpm::cli::OptionSpec> r = vpm::cli::comparison_option_rows();
+  std::vector<vpm::cli::OptionSpec> r = vpm::cli::comparison_option_rows(true);
   r.push_back({"--rate", "R", "false clusters allowed per 10 normals (default 1)"});
   r.push_back({"--normals", "A.tsv,B.tsv,...", "the normals' subject tables (vpm sample), at least 4", true, 0, true});
   r.push_back({"--feature", "NAME", "the feature compared (a NAME of vpm sample --images)", true, 0, true});
@@ -47,7 +48,7 @@ std::vector<vpm::cli::OptionSpec> rows() {
 }
 
 vpm::cli::Registrar reg({"calibrate", "--normals A.tsv,B.tsv,... --feature NAME -o CAL.json",
-                         "the cluster size at which the normals, each compared with the others, show at most R false foci per 10",
+                         "the cluster size (and with --peak auto the peak level) at which the normals, each compared with the others, show at most R false foci per 10",
                          rows(), run});
 
 }  // namespace

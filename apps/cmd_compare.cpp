@@ -21,15 +21,17 @@ std::string beside(const std::string& tsv, const std::string& suffix) {
   return side.substr(0, side.size() - 5) + suffix;
 }
 
-// --min-cluster-from CAL.json: the min_cluster a calibration of these normals found (vpm
-// calibrate), refused when it was made with other options.
+// --min-cluster-from CAL.json: the min_cluster (and peak level, when calibrated) a calibration of
+// these normals found (vpm calibrate), refused when it was made with other options.
 vpm::CompareOptions options_with_calibration(const vpm::cli::Args& args, const vpm::CalibrationSettings& s,
                                              const std::vector<std::string>& normals) {
   vpm::CompareOptions o = s.compare;
   const auto from = args.get("--min-cluster-from");
   if (!from) return o;
   if (args.has("--min-cluster")) throw vpm::InputError("options --min-cluster and --min-cluster-from exclude each other");
-  o.min_cluster = vpm::calibrated_min_cluster(vpm::read_json_file(*from), s, normals, *from);
+  const vpm::CalibratedRule rule = vpm::calibrated_rule(vpm::read_json_file(*from), s, normals, *from);
+  o.min_cluster = rule.min_cluster;
+  o.peak = rule.peak;
   return o;
 }
 
@@ -90,7 +92,7 @@ std::vector<vpm::cli::OptionSpec> with_shared_rows(std::vector<vpm::cli::OptionS
   std::vector<vpm::cli::OptionSpec> rows = vpm::cli::comparison_option_rows();
   rows.insert(rows.begin() + 3,
               {{"--min-cluster", "C", "foci are clusters of at least C adjacent elements (default 3)", false, 1},
-               {"--min-cluster-from", "CAL.json", "the min_cluster a calibration of these normals found (vpm calibrate)", false, 1}});
+               {"--min-cluster-from", "CAL.json", "the min_cluster (and peak level) a calibration of these normals found (vpm calibrate)", false, 1}});
   rows.insert(rows.end(), rest.begin(), rest.end());
   return rows;
 }

@@ -7,7 +7,7 @@
 
 namespace vpm::cli {
 
-CompareOptions compare_options(const Args& args) {
+CompareOptions compare_options(const Args& args, bool peak_auto) {
   CompareOptions o;
   o.threshold = args.get_double("--threshold", o.threshold);
   o.fdr_q = args.get_double("--fdr", 0);
@@ -15,7 +15,7 @@ CompareOptions compare_options(const Args& args) {
   o.extend = args.get_double("--extend", 0);
   o.relative_extent = args.get_double("--relative-extent", 0);
   o.test = parse_option("--test", [&] { return parse_single_case_test(args.get("--test", "z")); });
-  o.peak = args.get_double("--peak", 0);
+  o.peak = peak_auto && args.get("--peak", "") == "auto" ? 0.0 : args.get_double("--peak", 0);
   const std::string sign = args.get("--sign", "both");
   if (sign == "both") o.sign = 0;
   else if (sign == "hyper") o.sign = 1;
@@ -31,7 +31,7 @@ CompareOptions compare_options(const Args& args) {
   return o;
 }
 
-CalibrationSettings comparison_settings(const Args& args) {
+CalibrationSettings comparison_settings(const Args& args, bool peak_auto) {
   CalibrationSettings s;
   const auto feature = args.get("--feature");
   if (!feature) throw InputError("needs --feature");
@@ -42,7 +42,8 @@ CalibrationSettings comparison_settings(const Args& args) {
   if (s.smoothing < 0 || s.smoothing > 8) throw InputError("option --smooth: must be in 0..8");
   s.shrinkage = args.get_double("--shrink", 0);
   if (!(s.shrinkage >= 0 && s.shrinkage <= 1)) throw InputError("option --shrink: must be in 0..1");
-  s.compare = compare_options(args);
+  s.compare = compare_options(args, peak_auto);
+  s.calibrate_peak = peak_auto && args.get("--peak", "") == "auto";
   if (const auto names = args.get("--covariates")) {
     std::stringstream ss(*names);
     std::string item;
@@ -82,7 +83,13 @@ std::vector<ElementTable> read_normals(const Args& args, size_t at_least, std::v
   return normals;
 }
 
-std::vector<OptionSpec> comparison_option_rows() {
+std::vector<OptionSpec> comparison_option_rows(bool peak_auto) {
+  const OptionSpec peak =
+      peak_auto ? OptionSpec{"--peak", "ZP|auto",
+                             "a cluster under the cluster size is a focus too when its peak |z| >= ZP; auto: the level "
+                             "the normals' false clusters peak beyond at half the rate (default off)"}
+                : OptionSpec{"--peak", "ZP",
+                             "a cluster smaller than --min-cluster is a focus too when its peak |z| >= ZP (default off)"};
   return {
       {"--normalisation", "proportional|none", "per-subject scaling to the global mean (default proportional)"},
       {"--threshold", "Z", "|z| of a focus element (default 3)"},
@@ -92,7 +99,7 @@ std::vector<OptionSpec> comparison_option_rows() {
       {"--extend", "Z2", "grow each focus into adjacent elements with |z| >= Z2 (hysteresis; default off)"},
       {"--relative-extent", "F", "trim each focus to where its locally averaged |z| reaches F x its peak (e.g. 0.3; default off)"},
       {"--test", "z|crawford-howell", "plain z, or Crawford-Howell's t for one case against n normals as the equivalent z (default z)"},
-      {"--peak", "ZP", "a cluster smaller than --min-cluster is a focus too when its peak |z| >= ZP (default off)"},
+      peak,
       {"--sign", "both|hyper|hypo", "increases, decreases or both (default both)"},
       {"--covariates", "NAME,...", "model the normals' values on these participant covariates (e.g. age,sex); each subject compared with its own prediction"},
       {"--participants", "TABLE.tsv", "with --covariates: the table with participant_id and those columns (BIDS participants.tsv)"},

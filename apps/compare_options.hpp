@@ -13,13 +13,15 @@
 namespace vpm::cli {
 
 /// --threshold, --fdr, --min-cluster, --extend, --test, --peak, --sign over CompareOptions'
-/// defaults; InputError naming the option on a bad value.
-CompareOptions compare_options(const Args& args);
+/// defaults; InputError naming the option on a bad value. `peak_auto`: --peak may be "auto"
+/// (vpm calibrate: the level is calibrated; peak left 0).
+CompareOptions compare_options(const Args& args, bool peak_auto = false);
 
 /// The feature (--feature), normalisation (--normalisation), smoothing (--smooth 0..8),
 /// shrinkage (--shrink 0..1), image covariate (--image-covariate) and
-/// compare options of a comparison, as a calibration records them (rate left at its default).
-CalibrationSettings comparison_settings(const Args& args);
+/// compare options of a comparison, as a calibration records them (rate left at its default);
+/// with `peak_auto`, --peak auto sets calibrate_peak.
+CalibrationSettings comparison_settings(const Args& args, bool peak_auto = false);
 
 /// --participants TABLE.tsv read for settings.covariates (--covariates NAME,...); nullopt
 /// without covariates. InputError when one option comes without the other.
@@ -30,7 +32,7 @@ std::vector<ElementTable> read_normals(const Args& args, size_t at_least, std::v
 
 /// The option-table rows of --normalisation, --threshold, --fdr, --smooth, --shrink, --extend,
 /// --test, --peak, --sign, --covariates, --participants and --image-covariate (not --min-cluster, --normals,
-/// --feature), for both commands' Registrar.
-std::vector<OptionSpec> comparison_option_rows();
+/// --feature), for both commands' Registrar; `peak_auto`: --peak's row offers auto (vpm calibrate).
+std::vector<OptionSpec> comparison_option_rows(bool peak_auto = false);
 
 }  // namespace vpm::cli

@@ -465,16 +465,16 @@ TEST_CASE("calibration: one pass at min_cluster 1 counts the false clusters ever
   if (cal.min_cluster > 1) CHECK(cal.rate_at(cal.min_cluster - 1) > s.rate);
   // the JSON gives it back, for the same settings and normals only
   const Json j = to_json(cal);
-  CHECK(calibrated_min_cluster(j, s, names, "cal.json") == cal.min_cluster);
+  CHECK(calibrated_rule(j, s, names, "cal.json").min_cluster == cal.min_cluster);
   std::vector<std::string> shuffled(names.rbegin(), names.rend());
-  CHECK(calibrated_min_cluster(j, s, shuffled, "cal.json") == cal.min_cluster);
+  CHECK(calibrated_rule(j, s, shuffled, "cal.json").min_cluster == cal.min_cluster);
   CalibrationSettings other = s;
   other.compare.threshold = 2;
-  CHECK_THROWS_WITH(calibrated_min_cluster(j, other, names, "cal.json"),
+  CHECK_THROWS_WITH(calibrated_rule(j, other, names, "cal.json"),
                     Catch::StartsWith("cal.json: calibrated with options.threshold 1.8"));
-  CHECK_THROWS_WITH(calibrated_min_cluster(j, s, {names.begin(), names.end() - 1}, "cal.json"),
+  CHECK_THROWS_WITH(calibrated_rule(j, s, {names.begin(), names.end() - 1}, "cal.json"),
                     Catch::Contains("calibrated on other normals"));
-  CHECK_THROWS_WITH(calibrated_min_cluster(Json::parse("{\"feature\": \"pet\"}"), s, names, "cal.json"),
+  CHECK_THROWS_WITH(calibrated_rule(Json::parse("{\"feature\": \"pet\"}"), s, names, "cal.json"),
                     Catch::Contains("not a calibration"));
   // a peak rule that keeps clusters of every size: no min_cluster reaches the rate
   CalibrationSettings peaky = s;
@@ -482,7 +482,7 @@ TEST_CASE("calibration: one pass at min_cluster 1 counts the false clusters ever
   peaky.rate = 0;
   const ClusterCalibration none = calibrate_min_cluster(el, normals, names, peaky);
   CHECK(none.min_cluster == 0);
-  CHECK_THROWS_WITH(calibrated_min_cluster(to_json(none), peaky, names, "cal.json"), Catch::Contains("no min_cluster"));
+  CHECK_THROWS_WITH(calibrated_rule(to_json(none), peaky, names, "cal.json"), Catch::Contains("no min_cluster"));
   // three normals are too few to leave one out
   CHECK_THROWS_AS(calibrate_min_cluster(el, {normals.begin(), normals.begin() + 3}, {names.begin(), names.begin() + 3}, s),
                   InputError);

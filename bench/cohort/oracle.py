@@ -188,10 +188,15 @@ def main():
     def table(sub):
         return os.path.join(a.out, "tables", f"{sub}_pet.tsv")
 
+    q = shlex.quote
+
     def sample(sub):
+        # with an image covariate in the comparison (--image-covariate t1w), the T1w beside the PET
         mesh = os.path.join(a.out, "subjects", sub, f"{sub}_registered.vtu")
-        run(f"{vpm} sample {mesh} --images pet={feature_image(a.bids, sub, 'pet', 'pet')} --subject {sub} "
-            f"{a.elements} -o {table(sub)} --quiet")
+        images = f"pet={feature_image(a.bids, sub, 'pet', 'pet')}"
+        if "--image-covariate t1w" in a.compare:
+            images += f",t1w={feature_image(a.bids, sub, 'anat', 'T1w')}"
+        run(f"{vpm} sample {q(mesh)} --images {q(images)} --subject {q(sub)} {a.elements} -o {q(table(sub))} --quiet")
 
     with concurrent.futures.ThreadPoolExecutor(a.jobs) as ex:
         list(ex.map(sample, subs))
@@ -200,14 +205,14 @@ def main():
     def compare(sub):
         mesh = os.path.join(a.out, "subjects", sub, f"{sub}_registered.vtu")
         labels = feature_image(a.bids, sub, "anat", "dseg")
-        run(f"{vpm} compare --normals {normal_tables} --patient {table(sub)} --feature pet {a.compare} --mesh {mesh} "
-            f"--image {feature_image(a.bids, sub, 'pet', 'pet')} --labels {labels} "
-            f"-o {os.path.join(a.out, 'compare', sub + '_pet.tsv')} --quiet")
+        run(f"{vpm} compare --normals {q(normal_tables)} --patient {q(table(sub))} --feature pet {a.compare} "
+            f"--mesh {q(mesh)} --image {q(feature_image(a.bids, sub, 'pet', 'pet'))} --labels {q(labels)} "
+            f"-o {q(os.path.join(a.out, 'compare', sub + '_pet.tsv'))} --quiet")
 
     with concurrent.futures.ThreadPoolExecutor(a.jobs) as ex:
         list(ex.map(compare, patients))
-    run(f"/usr/bin/python3 {os.path.join(HERE, 'evaluate.py')} --bids {a.bids} --results {a.out} "
-        f"--out-json {os.path.join(a.out, 'evaluation.json')} --out-md {os.path.join(a.out, 'evaluation.md')}")
+    run(f"/usr/bin/python3 {q(os.path.join(HERE, 'evaluate.py'))} --bids {q(a.bids)} --results {q(a.out)} "
+        f"--out-json {q(os.path.join(a.out, 'evaluation.json'))} --out-md {q(os.path.join(a.out, 'evaluation.md'))}")
     with open(os.path.join(a.out, "oracle.json"), "w") as f:
         json.dump({"points_outside_template_mesh": outside, "elements": a.elements, "compare": a.compare}, f, indent=1)
     with open(os.path.join(a.out, "evaluation.md")) as f:

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
+#include <functional>
 
 #include "core/parallel.hpp"
 #include "vpm/error.hpp"
@@ -48,13 +49,29 @@ LeftOutNormal leave_out(const CanonicalElements& el, const std::vector<ElementTa
   return r;
 }
 
+// CalibrationSettings::calibrate_peak's level: at most half the rate's clusters (over all
+// normals left out) peak at or beyond it.
+double calibrated_peak(const std::vector<LeftOutNormal>& per_normal, const CalibrationSettings& s) {
+  std::vector<double> peaks;
+  for (const LeftOutNormal& n : per_normal)
+    for (size_t i = 0; i < n.candidates.size(); ++i)
+      if (n.candidates[i] > 0) peaks.push_back(std::abs(n.peak_z[i]));
+  std::sort(peaks.begin(), peaks.end(), std::greater<>());
+  const double allowed = 0.5 * s.rate * static_cast<double>(per_normal.size()) / 10.0;
+  const size_t k = static_cast<size_t>(std::floor(allowed + 1e-12));  // clusters the rule may keep
+  if (k >= peaks.size()) return s.compare.threshold;                  // every cluster may pass
+  if (!std::isfinite(peaks[k])) return 0;  // no level is beyond it (a reference without spread): off
+  const double level = (std::floor(peaks[k] * 100.0 + 1e-9) + 1.0) / 100.0;  // the next 0.01 step
+  return std::max(level, std::nextafter(peaks[k], HUGE_VAL));        // strictly beyond the (k+1)-th
+}
+
 }  // namespace
 
 int ClusterCalibration::clusters_at(int m) const {
   int count = 0;
   for (const LeftOutNormal& n : per_normal)
     for (size_t i = 0; i < n.candidates.size(); ++i)
-      count += kept(n.candidates[i], n.peak_z[i], std::max(m, 1), settings.compare.peak);
+      count += kept(n.candidates[i], n.peak_z[i], std::max(m, 1), peak);
   return count;
 }
 
@@ -70,6 +87,8 @@ ClusterCalibration calibrate_min_cluster(const CanonicalElements& el, const std:
     throw InputError("calibration: needs at least 4 normals (3 in each reference), got " +
                      std::to_string(normals.size()));
   if (!(s.rate >= 0)) throw InputError("calibration: the rate must be >= 0 false clusters per 10 normals");
+  if (s.calibrate_peak && s.compare.peak != 0)
+    throw InputError("calibration: a fixed peak level and a calibrated one exclude each other");
   ClusterCalibration cal;
   cal.settings = s;
   cal.normals = static_cast<int>(normals.size());
@@ -84,6 +103,7 @@ ClusterCalibration calibrate_min_cluster(const CanonicalElements& el, const std:
   });
   for (const std::exception_ptr& x : errors)
     if (x) std::rethrow_exception(x);
+  cal.peak = s.calibrate_peak ? calibrated_peak(cal.per_normal, s) : s.compare.peak;
   int largest = 0;
   for (const LeftOutNormal& n : cal.per_normal)
     for (int c : n.candidates) largest = std::max(largest, c);
@@ -123,6 +143,8 @@ Json to_json(const ClusterCalibration& c) {
   j["rate"] = c.settings.rate;
   j["normals"] = c.normals;
   j["min_cluster"] = c.min_cluster;
+  j["calibrate_peak"] = c.settings.calibrate_peak;
+  j["peak"] = c.peak;
   Json curve = Json::array();
   for (size_t m = 1; m <= c.false_clusters.size(); ++m) {
     Json p = Json::object();
@@ -181,8 +203,8 @@ std::vector<std::string> calibrated_normals(const Json& cal, const std::string& 
 
 }  // namespace
 
-int calibrated_min_cluster(const Json& cal, const CalibrationSettings& s, const std::vector<std::string>& normals,
-                           const std::string& source) {
+CalibratedRule calibrated_rule(const Json& cal, const CalibrationSettings& s, const std::vector<std::string>& normals,
+                               const std::string& source) {
   if (cal.type() != Json::Type::Object) throw InputError(source + ": not a calibration (not a JSON object)");
   CalibrationSettings probe = s;
   const Json want = to_json(ClusterCalibration{probe});
@@ -213,7 +235,16 @@ int calibrated_min_cluster(const Json& cal, const CalibrationSettings& s, const 
   if (v == 0)
     throw InputError(source + ": the calibration found no min_cluster at or under its rate (a --peak rule keeps "
                               "small clusters in the normals); lower --peak or raise the rate");
-  return static_cast<int>(v);
+  CalibratedRule rule{static_cast<int>(v), s.compare.peak};
+  const Json* calibrated = cal.find("calibrate_peak");  // absent before 2026-11-29 (ninth session): no
+  if (calibrated && calibrated->type() != Json::Type::Bool) throw InputError(source + ": \"calibrate_peak\" is not true or false");
+  if (calibrated && calibrated->boolean()) {
+    const Json& p = member(cal, "peak", source);
+    const double level = p.type() == Json::Type::Number ? p.number() : -1;
+    if (!(level > 0 && std::isfinite(level))) throw InputError(source + ": \"peak\" is not a positive |z| level");
+    rule.peak = level;
+  }
+  return rule;
 }
 
 }  // namespace vpm

@@ -6,6 +6,9 @@
 // that every larger min_cluster would keep; the calibration is the smallest min_cluster whose
 // false clusters stay at or under a stated rate per 10 normals. `vpm calibrate` runs it and
 // `vpm compare --min-cluster-from` applies it (docs/cohort.md, "Calibrated cluster size").
+// Optionally the same pass sets the peak rule's level too (CompareOptions::peak: a cluster under
+// min_cluster is a focus when its peak is stronger than the normals' false ones; docs/cohort.md
+// "Calibrated peak").
 #include <string>
 #include <vector>
 
@@ -25,6 +28,12 @@ struct CalibrationSettings {
   std::vector<std::string> covariates;  ///< Covariates::names of the reference's model (empty: none)
   std::string image_covariate;          ///< Reference::image_covariate (empty: none)
   double rate = 1.0;          ///< false clusters per 10 normals allowed (>= 0)
+  /// true: the calibration sets the peak rule's level too (compare.peak must then be 0): the
+  /// lowest level at which the left-out normals' clusters whose peak |z| reaches it stay at or
+  /// under half the rate, strictly beyond the next such peak (at 0.01 resolution; the threshold
+  /// when every cluster may pass; 0, off, when that peak is infinite: a reference without
+  /// spread somewhere); min_cluster then holds the whole rate with that rule applied
+  bool calibrate_peak = false;
 };
 
 /// One normal left out: its clusters' candidate counts and peaks at min_cluster 1.
@@ -44,6 +53,9 @@ struct ClusterCalibration {
   /// The smallest min_cluster with false_clusters * 10 / normals <= rate; 0 when none is (a
   /// peak rule keeps clusters at every size: lower CompareOptions::peak or raise the rate).
   int min_cluster = 0;
+  /// the peak rule's level the curve and min_cluster hold with: the calibrated one
+  /// (CalibrationSettings::calibrate_peak), else settings.compare.peak (0: off)
+  double peak = 0;
   std::vector<LeftOutNormal> per_normal;
   /// The false clusters min_cluster m keeps over all left-out normals (0 past the curve's end
   /// unless a peak rule keeps small ones), and that per 10 normals.
@@ -60,17 +72,25 @@ ClusterCalibration calibrate_min_cluster(const CanonicalElements& elements, cons
                                          const CovariateDesign& design = {});
 
 /// {"feature", "normalisation", "smoothing", "shrinkage", "covariates" (names), "image_covariate"
-/// ("" for none), "options": {threshold, fdr_q, extend, peak, sign,
-///  test}, "rate", "normals", "min_cluster", "curve": [{"min_cluster", "false_clusters",
-///  "per_10_normals"}], "per_normal": [{"normal", "candidates", "peak_z"}]}
+/// ("" for none), "options": {threshold, fdr_q, extend, peak (the fixed one; 0 when
+///  calibrated), sign, test}, "rate", "normals", "min_cluster", "calibrate_peak", "peak" (the
+///  level applied), "curve": [{"min_cluster", "false_clusters", "per_10_normals"}],
+///  "per_normal": [{"normal", "candidates", "peak_z"}]}
 Json to_json(const ClusterCalibration& calibration);
 
-/// The min_cluster of a calibration JSON written by to_json (a file from elsewhere: checked),
-/// after checking that it was made with `settings` (feature, normalisation, smoothing, shrinkage,
-/// covariates and image covariate (absent in a file: none) and every
-/// compare option but min_cluster) and on the normals named `normals` (the same set, any
-/// order): InputError naming `source` and the first difference.
-int calibrated_min_cluster(const Json& calibration, const CalibrationSettings& settings,
-                           const std::vector<std::string>& normals, const std::string& source);
+/// What a calibration sets in a comparison: CompareOptions::min_cluster and ::peak.
+struct CalibratedRule {
+  int min_cluster = 0;
+  double peak = 0;  ///< the calibrated level, or the comparison's own fixed one
+};
+
+/// The rule of a calibration JSON written by to_json (a file from elsewhere: checked), after
+/// checking that it was made with `settings` (feature, normalisation, smoothing, shrinkage,
+/// covariates and image covariate (absent in a file: none) and every compare option but
+/// min_cluster, the peak being 0 in both when the calibration set it) and on the normals named
+/// `normals` (the same set, any order): InputError naming `source` and the first difference.
+/// A file without "calibrate_peak" (before 2026-11-29, ninth session) sets no peak.
+CalibratedRule calibrated_rule(const Json& calibration, const CalibrationSettings& settings,
+                               const std::vector<std::string>& normals, const std::string& source);
 
 }  // namespace vpm

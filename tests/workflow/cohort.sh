@@ -118,8 +118,15 @@ cal = json.load(open(f"{r}/compare/calibration_pet.json"))
 c = json.load(open(f"{r}/compare/sub-P01_pet.json"))
 assert cal["normals"] == 4 and cal["image_covariate"] == "t1w" and cal["rate"] == 1, {k: cal[k] for k in ("normals", "image_covariate", "rate")}
 assert cal["min_cluster"] >= 1 and c["options"]["min_cluster"] == cal["min_cluster"], (cal["min_cluster"], c["options"])
+# compare.peak: auto (the default): the peak level calibrated beside the size and applied
+assert cal["calibrate_peak"] is True and cal["options"]["peak"] == 0 and cal["peak"] >= 3, {k: cal[k] for k in ("calibrate_peak", "peak")}
+assert c["options"]["peak"] == cal["peak"], (c["options"], cal["peak"])
 assert c["reference"]["subjects"] == 4 and c["reference"]["image_covariate"] == "t1w", c["reference"]
 PY
+# compare.peak: neither auto nor a level stops the workflow before any job
+if smk 'compare={peak: high}' -n > "$work/peak.log" 2>&1; then fail "compare.peak: a word ran"; fi
+grep -q "compare.peak: 'high' is neither auto nor a |z| level >= 0" "$work/peak.log" ||
+  { cat "$work/peak.log"; fail "compare.peak: no clear refusal"; }
 # compare.covariates: a column the participants table lacks stops the workflow before any job,
 # naming the table and the line; with columns it has, the comparisons are planned again with
 # them (quoted, one word each)

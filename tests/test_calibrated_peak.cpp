@@ -1,0 +1,187 @@
+// The peak rule's level calibrated on the normals (CalibrationSettings::calibrate_peak, vpm
+// calibrate --peak auto): at most half the rate's false clusters peak beyond it, the cluster size
+// then holds the whole rate with it, a small strong focus under that size is found by it, and the
+// level travels through the calibration file to vpm compare --min-cluster-from.
+#include <catch2/catch.hpp>
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <random>
+#include <set>
+#include <string>
+
+#include "support/elements.hpp"
+#include "support/fixtures.hpp"
+#include "support/process.hpp"
+#include "vpm/calibration.hpp"
+#include "vpm/error.hpp"
+#include "vpm/io.hpp"
+#include "vpm/json.hpp"
+#include "vpm/statistics.hpp"
+
+using namespace vpm;
+
+namespace {
+
+// "pet" ~ N(100, 5) per element, minus `loss` on `focus`.
+ElementTable subject(const std::string& id, unsigned seed, const std::set<int>& focus = {}, double loss = 0) {
+  const CanonicalElements el(test::small_elements());
+  ElementTable t;
+  t.definition = el.definition();
+  t.subject = id;
+  ElementFeature f;
+  f.name = "pet";
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(100, 5);
+  for (int e = 0; e < el.size(); ++e) {
+    f.mean.push_back(g(rng) - (focus.count(e) ? loss : 0));
+    f.std.push_back(1);
+    f.count.push_back(8);
+  }
+  t.features.push_back(f);
+  return t;
+}
+
+std::vector<ElementTable> normals(std::vector<std::string>& names) {
+  std::vector<ElementTable> out;
+  for (int i = 0; i < 10; ++i) {
+    names.push_back("sub-N" + std::to_string(i));
+    out.push_back(subject(names.back(), 300 + static_cast<unsigned>(i)));
+  }
+  return out;
+}
+
+CalibrationSettings settings() {
+  CalibrationSettings s;
+  s.feature = "pet";
+  s.normalisation = Normalisation::none;
+  s.compare.threshold = 2.2;  // low: false clusters of several sizes in the normals
+  s.compare.extend = 1.5;
+  s.compare.sign = -1;
+  s.rate = 2;  // 2 per 10 normals: 2 clusters, 1 of them for the peak rule
+  s.calibrate_peak = true;
+  return s;
+}
+
+// The left-out normals' cluster peaks, strongest first.
+std::vector<double> peaks(const ClusterCalibration& c) {
+  std::vector<double> p;
+  for (const LeftOutNormal& n : c.per_normal)
+    for (double z : n.peak_z) p.push_back(std::abs(z));
+  std::sort(p.begin(), p.end(), std::greater<>());
+  return p;
+}
+
+}  // namespace
+
+TEST_CASE("calibrated peak: half the rate beyond the level, the size holds the rest, a small strong focus found") {
+  const CanonicalElements el(test::small_elements());
+  std::vector<std::string> names;
+  const std::vector<ElementTable> n = normals(names);
+  const CalibrationSettings s = settings();
+  const ClusterCalibration cal = calibrate_min_cluster(el, n, names, s);
+  const std::vector<double> p = peaks(cal);
+  REQUIRE(p.size() >= 3);
+  // one cluster (half of 2 per 10 over 10 normals) may peak beyond the level: strictly past the second
+  CHECK(cal.peak > p[1]);
+  CHECK(cal.peak <= p[1] + 0.01 + 1e-12);
+  CHECK(std::count_if(p.begin(), p.end(), [&](double z) { return z >= cal.peak; }) <= 1);
+  // the size holds the whole rate with the peak rule applied, and is the smallest that does
+  REQUIRE(cal.min_cluster >= 1);
+  CHECK(cal.rate_at(cal.min_cluster) <= s.rate);
+  if (cal.min_cluster > 1) CHECK(cal.rate_at(cal.min_cluster - 1) > s.rate);
+  // the count is what the comparisons with that rule give
+  int direct = 0;
+  CompareOptions rule = s.compare;
+  rule.min_cluster = cal.min_cluster;
+  rule.peak = cal.peak;
+  for (size_t i = 0; i < n.size(); ++i) {
+    std::vector<ElementTable> others;
+    std::vector<std::string> other_names;
+    for (size_t j = 0; j < n.size(); ++j)
+      if (j != i) {
+        others.push_back(n[j]);
+        other_names.push_back(names[j]);
+      }
+    const Reference ref = build_reference(el, others, other_names, "pet", s.normalisation, 0);
+    direct += static_cast<int>(compare_to_reference(el, ref, n[i], rule).clusters.size());
+  }
+  CHECK(direct == cal.clusters_at(cal.min_cluster));
+  // a single element 12 spreads low: a focus by its peak, not by its size
+  const Reference ref = build_reference(el, n, names, "pet", s.normalisation, 0);
+  const int e0 = el.size() / 2;
+  const ElementTable patient = subject("sub-P", 999, {e0}, 60);
+  CompareOptions size_only = rule;
+  size_only.peak = 0;
+  size_only.min_cluster = std::max(cal.min_cluster, 2);
+  rule.min_cluster = size_only.min_cluster;
+  const auto has = [&](const Comparison& c) { return c.cluster[static_cast<size_t>(e0)] > 0; };
+  CHECK_FALSE(has(compare_to_reference(el, ref, patient, size_only)));
+  CHECK(has(compare_to_reference(el, ref, patient, rule)));
+}
+
+TEST_CASE("calibrated peak: through the file to the comparison, refused with a fixed level") {
+  const CanonicalElements el(test::small_elements());
+  std::vector<std::string> names;
+  const std::vector<ElementTable> n = normals(names);
+  const CalibrationSettings s = settings();
+  const ClusterCalibration cal = calibrate_min_cluster(el, n, names, s);
+  const Json j = to_json(cal);
+  CHECK(j.find("calibrate_peak")->boolean());
+  CHECK(j.find("options")->find("peak")->number() == 0);
+  // the comparison's settings: the fixed peak 0, no calibration of its own
+  CalibrationSettings compare = s;
+  compare.calibrate_peak = false;
+  const CalibratedRule rule = calibrated_rule(j, compare, names, "cal.json");
+  CHECK(rule.min_cluster == cal.min_cluster);
+  CHECK(rule.peak == cal.peak);
+  // a comparison with a fixed level of its own is refused; a fixed level cannot be calibrated
+  CalibrationSettings fixed = compare;
+  fixed.compare.peak = 5;
+  CHECK_THROWS_WITH(calibrated_rule(j, fixed, names, "cal.json"), Catch::Contains("options.peak"));
+  CalibrationSettings both = s;
+  both.compare.peak = 5;
+  CHECK_THROWS_AS(calibrate_min_cluster(el, n, names, both), InputError);
+  // without a calibrated peak (and in files from before it): the comparison's own level
+  CalibrationSettings plain = compare;
+  const ClusterCalibration size_only = calibrate_min_cluster(el, n, names, plain);
+  CHECK(size_only.peak == 0);
+  const Json old = to_json(size_only);
+  CHECK(calibrated_rule(old, plain, names, "cal.json").peak == 0);
+  Json bad = j;
+  bad["peak"] = -1.0;
+  CHECK_THROWS_WITH(calibrated_rule(bad, compare, names, "cal.json"), Catch::Contains("\"peak\""));
+}
+
+TEST_CASE("vpm calibrate --peak auto and vpm compare --min-cluster-from: the level recorded and applied") {
+  const std::string dir = std::string(VPM_TEST_TMP) + "/cpeak_";
+  std::vector<std::string> names;
+  const std::vector<ElementTable> n = normals(names);
+  std::string list;
+  for (size_t i = 0; i < n.size(); ++i) {
+    write_subject_table(dir + names[i] + ".tsv", n[i]);
+    list += (i ? "," : "") + dir + names[i] + ".tsv";
+  }
+  const CanonicalElements el(test::small_elements());
+  write_subject_table(dir + "p.tsv", subject("sub-P", 999, {el.size() / 2}, 60));
+  const std::string vpm = VPM_BINARY,
+                    opts = " --feature pet --normalisation none --threshold 2.2 --extend 1.5 --sign hypo --quiet";
+  REQUIRE(test::run_status(vpm + " calibrate --normals " + list + opts + " --peak auto --rate 2 -o " + dir + "cal.json") == 0);
+  const Json cal = Json::parse(test::slurp(dir + "cal.json"));
+  CHECK(cal.find("calibrate_peak")->boolean());
+  const double level = cal.find("peak")->number();
+  CHECK(level > 2.2);
+  REQUIRE(test::run_status(vpm + " compare --normals " + list + " --patient " + dir + "p.tsv" + opts +
+                           " --min-cluster-from " + dir + "cal.json -o " + dir + "out.tsv") == 0);
+  const Json side = Json::parse(test::slurp(dir + "out.json"));
+  CHECK(side.find("options")->find("peak")->number() == level);
+  // a fixed --peak beside a calibrated one, or auto outside vpm calibrate: exit 2 naming it
+  const std::string err = dir + "err.txt";
+  CHECK(test::run_status(vpm + " compare --normals " + list + " --patient " + dir + "p.tsv" + opts +
+                         " --peak 4 --min-cluster-from " + dir + "cal.json -o " + dir + "bad.tsv 2> " + err) == 2);
+  CHECK_THAT(test::slurp(err), Catch::Contains("options.peak"));
+  CHECK(test::run_status(vpm + " compare --normals " + list + " --patient " + dir + "p.tsv" + opts +
+                         " --peak auto --min-cluster 3 -o " + dir + "bad.tsv 2> " + err) == 2);
+  CHECK_THAT(test::slurp(err), Catch::Contains("--peak"));
+  CHECK(test::run_status("test -e " + dir + "bad.tsv") == 1);
+}
