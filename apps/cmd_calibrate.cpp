@@ -31,7 +31,9 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
     throw vpm::NumericalError(*out + ": no min_cluster keeps the normals at or under " + vpm::format_sig(s.rate) +
                               " false clusters per 10 normals (reached " + vpm::format_sig(c.rate_at(1 << 30)) +
                               " with clusters of any size: the --peak rule keeps small ones); lower --peak or raise --rate");
-  const std::string peak = s.calibrate_peak ? ", peak |z| " + vpm::format_sig(c.peak) : "";
+  const std::string peak = !s.calibrate_peak ? ""
+                           : c.peak > 0 ? ", peak |z| " + vpm::format_sig(c.peak)
+                                        : ", no peak level (a normal's peak |z| is infinite: the peak rule is off)";
   vpm::cli::info("wrote " + *out + ": min_cluster " + std::to_string(c.min_cluster) + peak + " (" +
                  vpm::format_sig(c.rate_at(c.min_cluster)) + " false clusters per 10 normals, at most " +
                  vpm::format_sig(s.rate) + "; min_cluster 1: " + vpm::format_sig(c.rate_at(1)) + ") over " +
