@@ -6,6 +6,7 @@
 #include <exception>
 #include <functional>
 
+#include "collective/reference_values.hpp"
 #include "core/parallel.hpp"
 #include "vpm/error.hpp"
 
@@ -19,22 +20,23 @@ bool kept(int candidates, double peak_z, int m, double peak) {
   return candidates >= m || (peak > 0 && candidates > 0 && std::abs(peak_z) >= peak);
 }
 
+detail::ReferenceRecipe recipe_of(const CalibrationSettings& s) {
+  return {s.feature, s.normalisation, s.smoothing, s.shrinkage, s.image_covariate};
+}
+
+// Normal `out` compared with the reference of the others (their `values`, shared by every pass).
 LeftOutNormal leave_out(const CanonicalElements& el, const std::vector<ElementTable>& normals,
-                        const std::vector<std::string>& names, const CalibrationSettings& s, const CovariateDesign& design,
-                        size_t out) {
-  std::vector<ElementTable> others;
-  std::vector<std::string> other_names;
+                        const std::vector<detail::NormalValues>& values, const std::vector<std::string>& names,
+                        const CalibrationSettings& s, const CovariateDesign& design, size_t out) {
+  std::vector<const detail::NormalValues*> others;
   CovariateDesign other_rows = design;
   other_rows.rows.clear();
   for (size_t i = 0; i < normals.size(); ++i)
     if (i != out) {
-      others.push_back(normals[i]);
-      other_names.push_back(names[i]);
+      others.push_back(&values[i]);
       if (!design.empty()) other_rows.rows.push_back(design.rows[i]);
     }
-  const Reference ref =
-      build_reference(el, others, other_names, s.feature, s.normalisation, s.smoothing, s.shrinkage, other_rows,
-                      s.image_covariate);
+  const Reference ref = detail::reference_from_values(&el, normals[0].definition, others, recipe_of(s), other_rows);
   CompareOptions o = s.compare;
   o.min_cluster = 1;
   ElementTable patient = normals[out];
@@ -93,10 +95,11 @@ ClusterCalibration calibrate_min_cluster(const CanonicalElements& el, const std:
   cal.settings = s;
   cal.normals = static_cast<int>(normals.size());
   cal.per_normal.resize(normals.size());
+  const std::vector<detail::NormalValues> values = detail::normal_values(&el, normals, names, recipe_of(s));
   std::vector<std::exception_ptr> errors(normals.size());  // the first normal's is rethrown as it was
   detail::parallel_for(cal.normals, 2, [&](int b, int e) {
     for (int i = b; i < e; ++i) try {
-        cal.per_normal[static_cast<size_t>(i)] = leave_out(el, normals, names, s, design, static_cast<size_t>(i));
+        cal.per_normal[static_cast<size_t>(i)] = leave_out(el, normals, values, names, s, design, static_cast<size_t>(i));
       } catch (...) {
         errors[static_cast<size_t>(i)] = std::current_exception();
       }

@@ -41,29 +41,26 @@ void check_rank(const Eigen::MatrixXd& X, const CovariateDesign& d) {
 
 }  // namespace
 
-void fit_covariate_model(const std::vector<std::vector<double>>& values, const CovariateDesign& design,
-                         const std::vector<std::vector<double>>& image, Reference& ref) {
-  const size_t n = values[0].size(), normals = values.size();
+void fit_covariate_model(const std::vector<const NormalValues*>& use, const CovariateDesign& design, Reference& ref) {
+  const size_t n = use[0]->feature.size(), normals = use.size();
   if (!design.empty() && design.rows.size() != normals)
     throw InputError("reference: " + std::to_string(design.rows.size()) + " covariate rows for " +
                      std::to_string(normals) + " normals");
-  if (!image.empty() && image.size() != normals)
-    throw InputError("reference: image covariate values of " + std::to_string(image.size()) + " tables for " +
-                     std::to_string(normals) + " normals");
+  const bool with_image = !ref.image_covariate.empty();
   Eigen::MatrixXd X = Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(normals), 1);
   ref.covariate_centre.clear();
   if (!design.empty()) {
     X = centred_design(design, ref.covariate_centre);
     check_rank(X, design);
   }
-  const int shared = static_cast<int>(X.cols()), q = shared + (image.empty() ? 0 : 1);
+  const int shared = static_cast<int>(X.cols()), q = shared + (with_image ? 1 : 0);
   ref.covariates = design.columns;
   ref.covariate_table = design.source;
   ref.covariate_names = design.names;
   ref.mean.assign(n, kNaN);
   ref.std.assign(n, kNaN);
   ref.count.assign(n, 0);
-  ref.image_covariate_centre.assign(image.empty() ? 0 : n, kNaN);
+  ref.image_covariate_centre.assign(with_image ? n : 0, kNaN);
   ref.coefficients.assign(n * q, kNaN);
   ref.gram_inverse.assign(n * q * q, kNaN);
   std::vector<Eigen::Index> with;
@@ -71,21 +68,21 @@ void fit_covariate_model(const std::vector<std::vector<double>>& values, const C
     with.clear();
     double centre = 0;
     for (size_t i = 0; i < normals; ++i)
-      if (!std::isnan(values[i][e]) && (image.empty() || !std::isnan(image[i][e]))) {
+      if (!std::isnan(use[i]->feature[e]) && (!with_image || !std::isnan(use[i]->image[e]))) {
         with.push_back(static_cast<Eigen::Index>(i));
-        if (!image.empty()) centre += image[i][e];
+        if (with_image) centre += use[i]->image[e];
       }
     const int c = static_cast<int>(with.size());
     ref.count[e] = c;
     if (c <= q) continue;
     Eigen::MatrixXd Xe(c, q);
     Eigen::VectorXd y(c);
-    if (!image.empty()) ref.image_covariate_centre[e] = centre /= c;
+    if (with_image) ref.image_covariate_centre[e] = centre /= c;
     for (int k = 0; k < c; ++k) {
       const size_t i = static_cast<size_t>(with[static_cast<size_t>(k)]);
       Xe.row(k).head(shared) = X.row(static_cast<Eigen::Index>(i));
-      if (!image.empty()) Xe(k, shared) = image[i][e] - centre;
-      y(k) = values[i][e];
+      if (with_image) Xe(k, shared) = use[i]->image[e] - centre;
+      y(k) = use[i]->feature[e];
     }
     const Eigen::MatrixXd G = Xe.transpose() * Xe;
     Eigen::LDLT<Eigen::MatrixXd> ldlt(G);

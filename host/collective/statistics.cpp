@@ -7,6 +7,7 @@
 #include <numeric>
 
 #include "collective/covariate_model.hpp"
+#include "collective/reference_values.hpp"
 #include "collective/distributions.hpp"
 #include "vpm/error.hpp"
 
@@ -78,104 +79,20 @@ std::vector<double> smooth_over_elements(const CanonicalElements& el, const std:
   return out;
 }
 
-namespace {
-
-// Reference::shrinkage: each variance pulled towards the mean over the element and its neighbours.
-void shrink_spread(const CanonicalElements& el, double shrinkage, std::vector<double>& std) {
-  std::vector<double> var(std.size());
-  for (size_t e = 0; e < std.size(); ++e) var[e] = std[e] * std[e];
-  for (size_t e = 0; e < std.size(); ++e) {
-    if (std::isnan(var[e])) continue;
-    double sum = var[e];
-    int k = 1;
-    for (int nb : el.neighbours(static_cast<int>(e)))
-      if (!std::isnan(var[static_cast<size_t>(nb)])) {
-        sum += var[static_cast<size_t>(nb)];
-        ++k;
-      }
-    std[e] = std::sqrt((1 - shrinkage) * var[e] + shrinkage * sum / k);
-  }
-}
-
-Reference reference_of(const CanonicalElements* el, const std::vector<ElementTable>& normals,
-                       const std::vector<std::string>& names, const std::string& feature, Normalisation normalisation,
-                       int smoothing, double shrinkage, const CovariateDesign& design,
-                       const std::string& image_covariate) {
-  if (normals.size() < 3) throw InputError("reference: needs at least 3 normals, got " + std::to_string(normals.size()));
-  Reference r;
-  r.definition = normals[0].definition;
-  r.feature = feature;
-  r.normalisation = normalisation;
-  r.smoothing = smoothing;
-  r.shrinkage = shrinkage;
-  r.image_covariate = image_covariate;
-  if (image_covariate == feature)
-    throw InputError("reference: the image covariate '" + feature + "' is the feature compared itself");
-  if ((smoothing > 0 || shrinkage > 0) && el->definition() != r.definition)
-    throw InputError("reference: the elements to smooth over differ from the tables' definition");
-  r.subjects = static_cast<int>(normals.size());
-  std::vector<std::vector<double>> values, image;
-  for (size_t i = 0; i < normals.size(); ++i) {
-    if (normals[i].definition != r.definition)
-      throw InputError(names[i] + ": element definition differs from " + names[0] + "'s (level/shells/samples " +
-                       std::to_string(normals[i].definition.level) + "/" + std::to_string(normals[i].definition.shells) +
-                       "/" + std::to_string(normals[i].definition.samples) + " vs " + std::to_string(r.definition.level) +
-                       "/" + std::to_string(r.definition.shells) + "/" + std::to_string(r.definition.samples) + ")");
-    ElementTable named = normals[i];
-    named.subject = names[i];
-    values.push_back(normalised_feature(named, feature, normalisation));
-    if (smoothing > 0) values.back() = smooth_over_elements(*el, values.back(), smoothing);
-    if (!image_covariate.empty()) {
-      image.push_back(normalised_feature(named, image_covariate, normalisation));
-      if (smoothing > 0) image.back() = smooth_over_elements(*el, image.back(), smoothing);
-    }
-  }
-  r.covariates = design.columns;
-  if (r.has_model()) {
-    detail::fit_covariate_model(values, design, image, r);
-    if (shrinkage > 0) shrink_spread(*el, shrinkage, r.std);
-    return r;
-  }
-  const size_t n = values[0].size();
-  r.mean.assign(n, kNaN);
-  r.std.assign(n, kNaN);
-  r.count.assign(n, 0);
-  for (size_t e = 0; e < n; ++e) {
-    double s = 0, s2 = 0;
-    int c = 0;
-    for (const auto& v : values)
-      if (!std::isnan(v[e])) {
-        s += v[e];
-        ++c;
-      }
-    r.count[e] = c;
-    if (c < 2) continue;
-    const double mean = s / c;
-    for (const auto& v : values)
-      if (!std::isnan(v[e])) s2 += (v[e] - mean) * (v[e] - mean);
-    r.mean[e] = mean;
-    r.std[e] = std::sqrt(s2 / (c - 1));
-  }
-  if (shrinkage > 0) shrink_spread(*el, shrinkage, r.std);
-  return r;
-}
-
-}  // namespace
-
 Reference build_reference(const std::vector<ElementTable>& normals, const std::vector<std::string>& names,
                           const std::string& feature, Normalisation normalisation) {
-  return reference_of(nullptr, normals, names, feature, normalisation, 0, 0, {}, {});
+  const detail::ReferenceRecipe recipe{feature, normalisation, 0, 0, {}};
+  const std::vector<detail::NormalValues> values = detail::normal_values(nullptr, normals, names, recipe);
+  return detail::reference_from_values(nullptr, normals[0].definition, detail::every_normal(values), recipe, {});
 }
 
 Reference build_reference(const CanonicalElements& elements, const std::vector<ElementTable>& normals,
                           const std::vector<std::string>& names, const std::string& feature, Normalisation normalisation,
                           int smoothing, double shrinkage, const CovariateDesign& covariates,
                           const std::string& image_covariate) {
-  if (smoothing < 0) throw InputError("reference: smoothing " + std::to_string(smoothing) + " is negative");
-  if (!(shrinkage >= 0 && shrinkage <= 1))
-    throw InputError("reference: shrinkage " + std::to_string(shrinkage) + " is not in [0, 1]");
-  return reference_of(&elements, normals, names, feature, normalisation, smoothing, shrinkage, covariates,
-                      image_covariate);
+  const detail::ReferenceRecipe recipe{feature, normalisation, smoothing, shrinkage, image_covariate};
+  const std::vector<detail::NormalValues> values = detail::normal_values(&elements, normals, names, recipe);
+  return detail::reference_from_values(&elements, normals[0].definition, detail::every_normal(values), recipe, covariates);
 }
 
 namespace {
