@@ -217,4 +217,23 @@ if (cd "$work" && snakemake -s "$src/workflow/Snakefile" --cores 1 -n --config b
   fail "image_covariate t1w accepted with a mask subject"
 fi
 grep -q "compare.image_covariate: t1w: sub-N01 has no such image" "$work/masked2.log" || { cat "$work/masked2.log"; fail "no clear error"; }
+# the sharp preset merges over the defaults: level-6 elements, foci drawn to 0.22 of their peak
+# deficit, and rules that ask for the memory level-6 tables take
+(cd "$work" && snakemake -s "$src/workflow/Snakefile" --cores 1 -n -p --configfile "$src/workflow/sharp.yaml" \
+   --config bids="$work/bids" out="$work/sharp_results" vpm="$build/vpm") > "$work/sharp.log" 2>&1 ||
+  { tail -30 "$work/sharp.log"; fail "the sharp preset's plan"; }
+grep -q -- "sample .*--layout graded --level 6 --samples 8 " "$work/sharp.log" || fail "the sharp preset samples no level-6 table"
+grep "compare .*--feature" "$work/sharp.log" | grep -q -- "--relative-extent 0.22" || fail "the sharp preset keeps the default extent"
+/usr/bin/python3 - "$work/sharp.log" <<'PY' || fail "the sharp preset's memory"
+import re, sys
+mem, rule = {}, None
+for line in open(sys.argv[1]):
+    m = re.match(r"(?:local)?rule (\w+):", line.strip())
+    rule = m.group(1) if m else rule
+    m = re.search(r"resources: .*mem_mb=(\d+)", line)
+    if m and rule:
+        mem.setdefault(rule, int(m.group(1)))
+# level 5 asks 1,000 MB to sample and about 1,100 to compare or draw this small cohort
+assert mem.get("sample", 0) >= 2000 and mem.get("compare", 0) >= 1500 and mem.get("view", 0) >= 1500, mem
+PY
 echo "cohort workflow: ok"
