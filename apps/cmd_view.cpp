@@ -23,6 +23,9 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   opt.title = args.get("--title", "");
   opt.max_slice_voxels = args.get_int("--max-slice-voxels", static_cast<int>(opt.max_slice_voxels));
   if (opt.max_slice_voxels < 1000) throw vpm::InputError("option --max-slice-voxels: must be >= 1000");
+  opt.max_display_level = args.get_int("--display-level", opt.max_display_level);
+  if (opt.max_display_level < 0 || opt.max_display_level > 7)
+    throw vpm::InputError("option --display-level: must be 0..7");
   vpm::ViewPageOptions page;
   page.data = vpm::cli::parse_option("--data", [&] { return vpm::parse_view_data(args.get("--data", "auto")); });
   const auto t0 = vpm::Clock::now();
@@ -45,6 +48,7 @@ vpm::cli::Registrar reg(
       {"--template", "TEMPLATE.vtu", "the template's ball mesh naming atlas regions (default RESULTS/template/template_ball.vtu)"},
       {"--label-names", "NAMES.txt", "region names: AAL's table (lines 'id name', e.g. mricron's aal.nii.txt) or a FreeSurfer colour table (FreeSurferColorLUT.txt)"},
       {"--title", "TEXT", "the page's title"},
+      {"--display-level", "L", "tables of a finer level are drawn at level L, each element the mean of the finer ones inside it (default 5)"},
       {"--max-slice-voxels", "N", "patients' images are subsampled to at most N voxels for slices (default 400000)"},
       {"--data", "auto|file|folder", "the data inside the page, or in PAGE_data/ beside it, read a row at a time (default auto: a folder above 120 subjects or about 100 MB of data)"}},
      run});

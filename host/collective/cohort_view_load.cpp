@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "collective/cohort_view_detail.hpp"
+#include "collective/view_coarsen.hpp"
 #include "vpm/error.hpp"
 #include "vpm/icosphere.hpp"
 #include "vpm/io.hpp"
@@ -255,19 +256,38 @@ void add_geometry(CohortView& v, const CanonicalElements& el, Tables& tables, co
 
 }  // namespace
 
+namespace {
+
+/// Carries every per-element array of `v` (built over the tables' elements) to its display elements.
+void coarsen(CohortView& v, const detail::ElementCoarsening& to) {
+  if (to.identity()) return;
+  for (ViewFeature& f : v.features) f.mean = to.mean(f.mean), f.std = to.rms(f.std), f.count = to.least(f.count);
+  for (ViewSubject& s : v.subjects) {
+    for (auto& [feature, x] : s.values) x = to.mean(x);
+    for (auto& [feature, z] : s.z) z = to.mean(z);
+    for (auto& [feature, ids] : s.cluster) ids = to.most_frequent(ids);
+    for (auto& [feature, foci] : s.foci)
+      for (ViewFocus& f : foci) f.peak_element = f.peak_element >= 0 ? to.of(f.peak_element) : -1;
+  }
+}
+
+}  // namespace
+
 CohortView load_cohort_view(const std::string& results_dir, const CohortViewOptions& opt) {
+  if (opt.max_display_level < 0) throw InputError("view: the display level " + std::to_string(opt.max_display_level) + " is negative");
   const fs::path results = fs::absolute(results_dir).lexically_normal();
   const std::vector<ComparisonFile> comps = read_comparisons(results, opt.feature);
   Tables tables;
   CohortView v;
   v.title = opt.title.empty() ? "vpm cohort: " + results.parent_path().filename().string() : opt.title;
-  v.definition = tables.get(comps.front().patient_table).definition;
-  const CanonicalElements el(v.definition);
-  v.mid_radii = shell_mid_radii(el);
+  v.compared = tables.get(comps.front().patient_table).definition;
+  v.definition = detail::display_definition(v.compared, opt.max_display_level);
+  const CanonicalElements el(v.compared), shown(v.definition);
+  v.mid_radii = shell_mid_radii(shown);
   // one level finer than the elements' for smooth shading, up to level 4 (2,562 vertices per shell
   // and subject: at level 5 the page of a 60-subject cohort with 19 graded shells held 70 MB of them)
   v.display = icosphere(v.definition.level < 4 ? v.definition.level + 1 : v.definition.level);
-  v.display_triangle_element = display_triangle_elements(el, v.display);
+  v.display_triangle_element = display_triangle_elements(shown, v.display);
   std::map<std::string, size_t> index;
   std::vector<std::string> order;
   for (const ComparisonFile& c : comps)
@@ -279,15 +299,16 @@ CohortView load_cohort_view(const std::string& results_dir, const CohortViewOpti
     add_feature(v, el, of, tables, index);
   }
   for (const auto& [path, t] : tables.by_path)
-    if (t.definition != v.definition)
+    if (t.definition != v.compared)
       throw InputError(path + ": element definition differs from " + comps.front().patient_table + "'s");
   tables.release_values();
-  add_geometry(v, el, tables, comps, results, opt);
+  coarsen(v, detail::ElementCoarsening(el, shown));
+  add_geometry(v, shown, tables, comps, results, opt);
   std::stable_sort(v.subjects.begin(), v.subjects.end(), [](const ViewSubject& a, const ViewSubject& b) {
     return a.patient != b.patient ? a.patient : a.id < b.id;
   });
   const std::string templ = !opt.template_mesh.empty() ? opt.template_mesh : (results / "template" / "template_ball.vtu").string();
-  if (!opt.template_mesh.empty() || fs::exists(templ)) v.element_label = detail::element_labels(el, templ);
+  if (!opt.template_mesh.empty() || fs::exists(templ)) v.element_label = detail::element_labels(shown, templ);
   if (!opt.label_names.empty()) v.label_names = read_label_names(opt.label_names);
   return v;
 }

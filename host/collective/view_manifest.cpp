@@ -122,6 +122,11 @@ Json head(const CohortView& v, const Shapes& shapes) {
   m["format"] = "vpm-view-2";
   m["title"] = v.title;
   m["definition"] = to_json(v.definition);
+  if (v.compared.level > v.definition.level) {  // tables finer than the page draws
+    Json c = to_json(v.compared);
+    c["elements"] = v.compared.elements();
+    m["compared"] = c;
+  }
   m["shells"] = v.definition.shells;
   m["triangles"] = v.definition.triangles();
   m["elements"] = v.definition.elements();

@@ -217,6 +217,16 @@ if (cd "$work" && snakemake -s "$src/workflow/Snakefile" --cores 1 -n --config b
   fail "image_covariate t1w accepted with a mask subject"
 fi
 grep -q "compare.image_covariate: t1w: sub-N01 has no such image" "$work/masked2.log" || { cat "$work/masked2.log"; fail "no clear error"; }
+# a page drawn a level coarser than the tables names both levels and keeps the foci's elements' worth
+"$build/vpm" view "$r" --display-level 4 --data file -o "$work/page4.html" > "$work/page4.log" 2>&1 ||
+  { cat "$work/page4.log"; fail "vpm view --display-level 4"; }
+/usr/bin/python3 - "$work/page4.html" <<'PY' || fail "the level-4 page's manifest"
+import json, sys
+page = open(sys.argv[1], encoding="utf-8").read()
+m = json.loads(page.split('<script id="vpm-manifest" type="application/json">')[1].split("</script>")[0])
+assert m["definition"]["level"] == 4 and m["compared"]["level"] == 5, (m["definition"], m.get("compared"))
+assert m["compared"]["elements"] == 283060 and m["elements"] < 283060 / 4, m["elements"]
+PY
 # the sharp preset merges over the defaults: level-6 elements, foci drawn to 0.22 of their peak
 # deficit, and rules that ask for the memory level-6 tables take
 (cd "$work" && snakemake -s "$src/workflow/Snakefile" --cores 1 -n -p --configfile "$src/workflow/sharp.yaml" \

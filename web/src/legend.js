@@ -53,7 +53,9 @@ export function buildLegend(el, manifest) {
     }).join('') +
     `<dt>elements</dt><dd>${thousands(manifest.elements)} canonical volume elements of the unit ball (level ${manifest.definition.level}, ` +
     `${manifest.shells} shells of equal volume); every subject is mapped to the ball, so an element is the same ` +
-    'anatomical place in every brain. The shell slider shows one shell (the outer one is the brain\u2019s surface).</dd>' +
+    'anatomical place in every brain. The shell slider shows one shell (the outer one is the brain\u2019s surface).' +
+    (manifest.compared ? ` The comparisons used ${thousands(manifest.compared.elements)} finer elements (level ` +
+      `${manifest.compared.level}); each element here shows the mean of the finer ones inside it.` : '') + '</dd>' +
     '<dt>reference row</dt><dd>the normals\u2019 mean (value columns) and spread, their standard deviation (z columns), on their mean shape.</dd>' +
     '<dt>keys</dt><dd>Tab moves between cells and the foci table; arrow keys turn every brain; + and \u2212 (or Ctrl + wheel) zoom; ' +
     'Enter opens the detail of a cell; Escape closes it.</dd></dl>';

@@ -38,7 +38,8 @@ const state = { mode: 'native', shell: K - 1, threshold: features[0]?.threshold 
 document.title = manifest.title;
 $('#title').textContent = manifest.title;
 $('#summary').textContent = `${cohort.patients.length} patients, ${cohort.normals.length} normals; ` +
-  `${thousands(manifest.elements)} elements (level ${manifest.definition.level}, ${K} shells)`;
+  `${thousands(manifest.elements)} elements (level ${manifest.definition.level}, ${K} shells)` +
+  (manifest.compared ? `; compared at level ${manifest.compared.level} (${thousands(manifest.compared.elements)} elements)` : '');
 const shellInput = $('#shell');
 shellInput.max = String(K);
 shellInput.value = String(K);
