@@ -14,7 +14,10 @@ rm -rf "$work"
 mkdir -p "$work"
 export POCL_CACHE_DIR=${POCL_CACHE_DIR:-$build/pocl-cache}
 fail() { echo "FAIL: $*" >&2; exit 1; }
-smk() { (cd "$work" && snakemake -s "$src/workflow/Snakefile" --cores 2 \
+# the mechanics are checked with workflow/fast.yaml (level-5 elements, 7.7x lighter than the
+# default level 6, which the last check below runs)
+fast=(--configfile "$src/workflow/fast.yaml")
+smk() { (cd "$work" && snakemake -s "$src/workflow/Snakefile" --cores 2 "${fast[@]}" \
           --config bids="$work/bids" out="$work/results" vpm="$build/vpm" "$@"); }
 
 /usr/bin/python3 "$src/scripts/synth_cohort.py" --out "$work/bids" --normals 3 --patients 1 --seed 11 --jobs 2
@@ -37,7 +40,7 @@ for f in tables/sub-N01_pet.tsv tables/sub-N01_pet.json tables/sub-P01_pet.tsv c
          compare/sub-P01_pet_native.vtu evaluation.json evaluation.md subjects/sub-P01/sub-P01_registered.vtu; do
   [[ -s $r/$f ]] || fail "missing $r/$f"
 done
-# the tables hold the default element set (graded, level 5: 283,060 elements) with the T1w beside
+# the tables hold fast.yaml's element set (graded, level 5: 283,060 elements) with the T1w beside
 # the PET (the default image covariate), and the comparison read 3 normals with the default
 # hysteresis, relative extent and image covariate
 [[ $(tail -n +2 "$r/tables/sub-N01_pet.tsv" | wc -l) -eq 283060 ]] || fail "sub-N01_pet.tsv: not 283060 rows"
@@ -107,7 +110,7 @@ done
 mkdir -p "$work/four_results/subjects/sub-N04"
 for f in "$work"/results/subjects/sub-N01/*; do cp -a "$f" "$work/four_results/subjects/sub-N04/$(basename "${f//sub-N01/sub-N04}")"; done
 awk -F'\t' -v OFS='\t' '{ print } $1 == "sub-N01" { $1 = "sub-N04"; print }' "$work/bids/participants.tsv" > "$work/four_bids/participants.tsv"
-(cd "$work" && snakemake -s "$src/workflow/Snakefile" --cores 2 --config bids="$work/four_bids" out="$work/four_results" \
+(cd "$work" && snakemake -s "$src/workflow/Snakefile" --cores 2 "${fast[@]}" --config bids="$work/four_bids" out="$work/four_results" \
    vpm="$build/vpm") > "$work/four.log" 2>&1 || { tail -40 "$work/four.log"; fail "the 4-normal group level failed"; }
 jobs=$(awk '/^Job stats:/{s=1;next} s&&/^total/{exit} s&&NF==4&&$2~/^[0-9]+$/{print $1}' "$work/four.log" | sort | tr '\n' ' ')
 [[ $jobs == "calibrate compare evaluate group sample view " ]] || { cat "$work/four.log"; fail "4-normal run jobs: $jobs"; }
@@ -158,7 +161,7 @@ sed 's/YOUR_ACCOUNT/vpmlab/; s/YOUR_PARTITION/short/; s/^cores: 8$/cores: 1/; s/
   "$src/workflow/profiles/slurm/config.yaml" > "$work/profile/config.yaml"
 grep -q "^cores: 1$" "$work/profile/config.yaml" || fail "the Slurm profile has no 'cores: 8' cap to lower"
 (cd "$work" && FAKE_SLURM_DIR=$fs PATH=$src/tests/workflow/fake_slurm:$PATH USER=${USER:-$(id -un)} \
-   snakemake -s "$src/workflow/Snakefile" --profile "$work/profile" --max-status-checks-per-second 1 \
+   snakemake -s "$src/workflow/Snakefile" --profile "$work/profile" --max-status-checks-per-second 1 "${fast[@]}" \
    --config bids="$work/bids" out="$work/results" vpm="$build/vpm") > "$work/slurm.log" 2>&1 ||
   { tail -40 "$work/slurm.log"; fail "the workflow on the stand-in Slurm failed"; }
 [[ -s $r/subjects/sub-N03/sub-N03_registered.vtu ]] || fail "the Slurm run did not remake sub-N03"
@@ -225,17 +228,21 @@ import json, sys
 page = open(sys.argv[1], encoding="utf-8").read()
 m = json.loads(page.split('<script id="vpm-manifest" type="application/json">')[1].split("</script>")[0])
 assert m["definition"]["level"] == 4 and m["compared"]["level"] == 5, (m["definition"], m.get("compared"))
-assert m["compared"]["elements"] == 283060 and m["elements"] < 283060 / 4, m["elements"]
+assert m["compared"]["elements"] == 283060 and m["elements"] < 283060 / 4, m["elements"]  # fast.yaml: level 5
 PY
-# the sharp preset merges over the defaults: level-6 elements, foci drawn to 0.22 of their peak
-# deficit, and rules that ask for the memory level-6 tables take
-(cd "$work" && snakemake -s "$src/workflow/Snakefile" --cores 1 -n -p --configfile "$src/workflow/sharp.yaml" \
-   --config bids="$work/bids" out="$work/sharp_results" vpm="$build/vpm") > "$work/sharp.log" 2>&1 ||
-  { tail -30 "$work/sharp.log"; fail "the sharp preset's plan"; }
-grep -q -- "sample .*--layout graded --level 6 --samples 8 " "$work/sharp.log" || fail "the sharp preset samples no level-6 table"
-grep "compare .*--feature" "$work/sharp.log" | grep -q -- "--relative-extent 0.22" || fail "the sharp preset keeps the default extent"
-/usr/bin/python3 - "$work/sharp.log" <<'PY' || fail "the sharp preset's memory"
-import re, sys
+# the defaults: level-6 elements (2,167,220), foci drawn to 0.22 of their peak deficit, the page
+# drawn at level 5, and rules that ask for the memory level-6 tables take; run on the same
+# registered meshes (the group level and the sampling only)
+d=$work/default_results
+mkdir -p "$d"
+cp -a "$r/subjects" "$r/template" "$d/"
+(cd "$work" && snakemake -s "$src/workflow/Snakefile" --cores 2 -p --config bids="$work/bids" out="$d" \
+   vpm="$build/vpm") > "$work/default.log" 2>&1 || { tail -40 "$work/default.log"; fail "the workflow at its defaults"; }
+[[ $(tail -n +2 "$d/tables/sub-N01_pet.tsv" | wc -l) -eq 2167220 ]] || fail "sub-N01_pet.tsv: not the 2,167,220 level-6 elements"
+grep "compare .*--feature" "$work/default.log" | grep -q -- "--relative-extent 0.22 .*--min-cluster 460" ||
+  { grep "compare .*--feature" "$work/default.log"; fail "the defaults' comparison options"; }
+/usr/bin/python3 - "$work/default.log" "$d" <<'PY' || fail "the defaults' memory, page or foci"
+import json, re, sys
 mem, rule = {}, None
 for line in open(sys.argv[1]):
     m = re.match(r"(?:local)?rule (\w+):", line.strip())
@@ -245,5 +252,11 @@ for line in open(sys.argv[1]):
         mem.setdefault(rule, int(m.group(1)))
 # level 5 asks 1,000 MB to sample and about 1,100 to compare or draw this small cohort
 assert mem.get("sample", 0) >= 2000 and mem.get("compare", 0) >= 1500 and mem.get("view", 0) >= 1500, mem
+page = open(f"{sys.argv[2]}/view/cohort.html", encoding="utf-8").read()
+m = json.loads(page.split('<script id="vpm-manifest" type="application/json">')[1].split("</script>")[0])
+assert m["definition"]["level"] == 5 and m["compared"]["level"] == 6 and m["elements"] == 283060, m["definition"]
+s = json.load(open(f"{sys.argv[2]}/evaluation.json"))["summary"]["vpm"]
+assert 0 <= s["pooled"]["dice"] <= 1 and s["foci_planted"] == 2, s
+print(f"defaults: {s['foci_found']}/{s['foci_planted']} foci, Dice {s['pooled']['dice']:.3f}, {s['false_positive_clusters']} false")
 PY
 echo "cohort workflow: ok"

@@ -34,10 +34,12 @@ mkdir -p "$ds/sourcedata"
 mv "$ds/sub-P01/anat/sub-P01_T1w.nii.gz" "$ds/sourcedata/P01 T1w.nii.gz"
 ln -s "../../sourcedata/P01 T1w.nii.gz" "$ds/sub-P01/anat/sub-P01_T1w.nii.gz"
 
-# a small, quick configuration: 1,500-vertex meshes, 2 dense iterations, no page
+# a small, quick configuration: 1,500-vertex meshes, 2 dense iterations, level-5 elements, no page
 cat > "$work/config.yaml" <<'YAML'
 mesh: {target_vertices: 1500}
 register: {extra: "--dense-iterations 2", force: both}
+elements: {level: 5}
+compare: {fixed_min_cluster: 60}
 view: {enabled: false}
 YAML
 out='$(touch pwned-out) results'

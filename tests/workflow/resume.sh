@@ -19,6 +19,8 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 cat > "$work/config.yaml" <<'YAML'
 mesh: {target_vertices: 1500}
 register: {extra: "--dense-iterations 2", force: both}
+elements: {level: 5}
+compare: {fixed_min_cluster: 60}
 view: {enabled: false}
 YAML
 smk() {  # smk OUT [snakemake options...]
