@@ -1,6 +1,7 @@
-// Multigrid V-cycle of the AMG preconditioner (host/linalg/amg_device.cpp; the host reference
-// is AmgHierarchy::apply in host/linalg/amg.cpp). CSR one row per work item, no masks: fixed
-// rows have d = 0 and empty rows in P, so they stay 0.
+// The primitives of the AMG preconditioner's V-cycle on the device (the cycle itself is written
+// once in host/linalg/amg_vcycle.hpp; ClAmg in host/linalg/amg_device.cpp enqueues these, the
+// host's backend in host/linalg/amg.cpp runs the same loops). CSR one row per work item, no
+// masks: fixed rows have d = 0 and empty rows in P, so they stay 0.
 
 // Pre-smoothing from zero with the residual fused in: x = d f; r = f - A (d f).
 __kernel void amg_first(const int n, __global const int* row_ptr, __global const int* col,

@@ -1,4 +1,5 @@
-// Smoothed-aggregation multigrid hierarchy and its host V-cycle (vpm/amg.hpp). The coarse
+// Smoothed-aggregation multigrid hierarchy and the host backend of its V-cycle (vpm/amg.hpp,
+// linalg/amg_vcycle.hpp). The coarse
 // (pseudo-)inverse is in amg_coarse.cpp.
 #include "vpm/amg.hpp"
 
@@ -7,6 +8,7 @@
 #include <string>
 
 #include "linalg/amg_coarse.hpp"
+#include "linalg/amg_vcycle.hpp"
 #include "linalg/csr_ops.hpp"
 #include "vpm/error.hpp"
 
@@ -229,58 +231,80 @@ double AmgHierarchy::operator_complexity() const {
   return s / std::max(1, levels_[0].A.nnz());
 }
 
-void AmgHierarchy::apply(const double* r, double* z) const { vcycle(0, r, z); }
+namespace {
 
-void AmgHierarchy::vcycle(int l, const double* f, double* out) const {
-  const AmgLevel& lv = levels_[l];
-  const int n = lv.A.rows;
-  if (l + 1 == num_levels()) {
-    Eigen::Map<const Eigen::VectorXd> ff(f, n);
-    Eigen::Map<Eigen::VectorXd>(out, n).noalias() = coarse_inv_ * ff;
-    return;
+// amg_vcycle's backend on the host: loops over the levels' CSR matrices, vectors as pointers
+// into the hierarchy's work vectors (per level: f, out, x, r, t).
+struct HostAmgBackend {
+  using Vec = double*;
+  const std::vector<AmgLevel>& lv;
+  std::vector<std::vector<double>>& vectors;  // per level: f, out, x, r, t
+  const Eigen::MatrixXd& coarse_inv;
+  int nsweeps;
+
+  int levels() const { return static_cast<int>(lv.size()); }
+  int sweeps() const { return nsweeps; }
+  int rows(int l) const { return lv[l].A.rows; }
+  void work_vectors(int l, Vec& f, Vec& out, Vec& x, Vec& r, Vec& t) const {
+    const size_t n = static_cast<size_t>(rows(l));
+    f = vectors[l].data();
+    out = f + n;
+    x = out + n;
+    r = x + n;
+    t = r + n;
   }
-  const CsrMatrix& A = lv.A;
-  double* x = work_[l].data() + 2 * size_t(n);  // layout per level: f, out, x, r, t
-  double* r = x + n;
-  double* t = r + n;
-  auto sweep = [&](const double* in, double* o) {  // o = in + d (f - A in); o != in
-    for (int i = 0; i < n; ++i) {
+  void work(int l, Vec& x, Vec& r, Vec& t) const {
+    Vec f, out;
+    work_vectors(l, f, out, x, r, t);
+  }
+  void coarse_vectors(int l, Vec& f, Vec& out) const {
+    Vec x, r, t;
+    work_vectors(l, f, out, x, r, t);
+  }
+  // y = b - M v (Subtract: a residual) or y = b + M v (a correction; b null: 0) over M's rows
+  template <bool Subtract>
+  static void row_products(const CsrMatrix& m, const double* b, const double* v, double* y) {
+    for (int i = 0; i < m.rows; ++i) {
+      double s = b ? b[i] : 0.0;
+      for (int k = m.row_ptr[i]; k < m.row_ptr[i + 1]; ++k) {
+        if constexpr (Subtract)
+          s -= m.val[k] * v[m.col[k]];
+        else
+          s += m.val[k] * v[m.col[k]];
+      }
+      y[i] = s;
+    }
+  }
+  void scale(int l, const double* f, double* x) const {
+    for (int i = 0; i < rows(l); ++i) x[i] = lv[l].d[i] * f[i];
+  }
+  void residual(int l, const double* f, const double* x, double* r) const { row_products<true>(lv[l].A, f, x, r); }
+  void first(int l, const double* f, double* x, double* r) const {
+    scale(l, f, x);
+    residual(l, f, x, r);
+  }
+  void sweep(int l, const double* f, const double* in, double* o) const {
+    const CsrMatrix& A = lv[l].A;
+    const std::vector<double>& d = lv[l].d;
+    for (int i = 0; i < A.rows; ++i) {
       double s = f[i];
       for (int k = A.row_ptr[i]; k < A.row_ptr[i + 1]; ++k) s -= A.val[k] * in[A.col[k]];
-      o[i] = in[i] + lv.d[i] * s;
+      o[i] = in[i] + d[i] * s;
     }
-  };
-  for (int i = 0; i < n; ++i) x[i] = lv.d[i] * f[i];
-  for (int s = 1; s < options_.sweeps; ++s) {
-    sweep(x, t);
-    std::swap(x, t);
   }
-  for (int i = 0; i < n; ++i) {
-    double s = f[i];
-    for (int k = A.row_ptr[i]; k < A.row_ptr[i + 1]; ++k) s -= A.val[k] * x[A.col[k]];
-    r[i] = s;
+  void restrict_to(int l, const double* r, double* fc) const { row_products<false>(lv[l].R, nullptr, r, fc); }
+  void prolong(int l, const double* xc, const double* x, double* t) const { row_products<false>(lv[l].P, x, xc, t); }
+  void coarse(int l, const double* f, double* out) const {
+    Eigen::Map<const Eigen::VectorXd> ff(f, rows(l));
+    Eigen::Map<Eigen::VectorXd>(out, rows(l)).noalias() = coarse_inv * ff;
   }
-  const AmgLevel& next = levels_[l + 1];
-  double* fc = work_[l + 1].data();
-  double* xc = fc + next.A.rows;
-  const CsrMatrix& R = lv.R;
-  for (int c = 0; c < R.rows; ++c) {
-    double s = 0;
-    for (int k = R.row_ptr[c]; k < R.row_ptr[c + 1]; ++k) s += R.val[k] * r[R.col[k]];
-    fc[c] = s;
-  }
-  vcycle(l + 1, fc, xc);
-  const CsrMatrix& P = lv.P;
-  for (int i = 0; i < n; ++i) {
-    double s = x[i];
-    for (int k = P.row_ptr[i]; k < P.row_ptr[i + 1]; ++k) s += P.val[k] * xc[P.col[k]];
-    t[i] = s;
-  }
-  for (int s = 1; s < options_.sweeps; ++s) {
-    sweep(t, r);
-    std::swap(t, r);
-  }
-  sweep(t, out);
+};
+
+}  // namespace
+
+void AmgHierarchy::apply(const double* r, double* z) const {
+  HostAmgBackend bk{levels_, work_, coarse_inv_, options_.sweeps};
+  detail::amg_vcycle(bk, 0, const_cast<double*>(r), z);  // level 0's f is only read
 }
 
 }  // namespace vpm

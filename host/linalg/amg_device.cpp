@@ -1,5 +1,6 @@
 #include "linalg/amg_device.hpp"
 #include "core/device_cl.hpp"
+#include "linalg/amg_vcycle.hpp"
 
 #include <algorithm>
 
@@ -68,46 +69,60 @@ void ClAmg::upload(const AmgHierarchy& h, bool pattern) {
   put(coarse_inv_, inv, pattern, q);
 }
 
-void ClAmg::apply(bc::vector<double>& f, bc::vector<double>& z) { vcycle(0, f, z); }
+void ClAmg::apply(bc::vector<double>& f, bc::vector<double>& z) { amg_vcycle(*this, 0, &f, &z); }
 
-void ClAmg::vcycle(int l, bc::vector<double>& f, bc::vector<double>& out) {
-  Level& lv = levels_[l];
-  const int n = lv.n;
-  if (l + 1 == num_levels()) {
-    k_dense_.set_args(n, coarse_inv_, f, out);
-    dev_.cl().launch(k_dense_, n);
-    return;
-  }
-  const Csr& A = lv.A;
-  bc::vector<double>*x = &lv.x, *r = &lv.r, *t = &lv.t;
-  auto sweep = [&](bc::vector<double>& in, bc::vector<double>& o) {
-    k_sweep_.set_args(n, A.row_ptr, A.col, A.val, lv.d, f, in, o);
-    dev_.cl().launch(k_sweep_, n);
-  };
-  if (sweeps_ == 1) {
-    k_first_.set_args(n, A.row_ptr, A.col, A.val, lv.d, f, *x, *r);
-    dev_.cl().launch(k_first_, n);
-  } else {
-    k_scale_.set_args(n, lv.d, f, *x);
-    dev_.cl().launch(k_scale_, n);
-    for (int s = 1; s < sweeps_; ++s) {
-      sweep(*x, *t);
-      std::swap(x, t);
-    }
-    k_residual_.set_args(n, A.row_ptr, A.col, A.val, f, *x, *r);
-    dev_.cl().launch(k_residual_, n);
-  }
-  Level& next = levels_[l + 1];
-  k_spmv_.set_args(next.n, lv.R.row_ptr, lv.R.col, lv.R.val, *r, next.f);
-  dev_.cl().launch(k_spmv_, next.n);
-  vcycle(l + 1, next.f, next.out);
-  k_prolong_.set_args(n, lv.P.row_ptr, lv.P.col, lv.P.val, next.out, *x, *t);
-  dev_.cl().launch(k_prolong_, n);
-  for (int s = 1; s < sweeps_; ++s) {
-    sweep(*t, *r);
-    std::swap(t, r);
-  }
-  sweep(*t, out);
+void ClAmg::work(int l, Vec& x, Vec& r, Vec& t) {
+  x = &levels_[l].x;
+  r = &levels_[l].r;
+  t = &levels_[l].t;
+}
+
+void ClAmg::coarse_vectors(int l, Vec& f, Vec& out) {
+  f = &levels_[l].f;
+  out = &levels_[l].out;
+}
+
+void ClAmg::first(int l, Vec f, Vec x, Vec r) {
+  const Level& lv = levels_[l];
+  k_first_.set_args(lv.n, lv.A.row_ptr, lv.A.col, lv.A.val, lv.d, *f, *x, *r);
+  dev_.cl().launch(k_first_, lv.n);
+}
+
+void ClAmg::scale(int l, Vec f, Vec x) {
+  const Level& lv = levels_[l];
+  k_scale_.set_args(lv.n, lv.d, *f, *x);
+  dev_.cl().launch(k_scale_, lv.n);
+}
+
+void ClAmg::sweep(int l, Vec f, Vec in, Vec o) {
+  const Level& lv = levels_[l];
+  k_sweep_.set_args(lv.n, lv.A.row_ptr, lv.A.col, lv.A.val, lv.d, *f, *in, *o);
+  dev_.cl().launch(k_sweep_, lv.n);
+}
+
+void ClAmg::residual(int l, Vec f, Vec x, Vec r) {
+  const Level& lv = levels_[l];
+  k_residual_.set_args(lv.n, lv.A.row_ptr, lv.A.col, lv.A.val, *f, *x, *r);
+  dev_.cl().launch(k_residual_, lv.n);
+}
+
+void ClAmg::restrict_to(int l, Vec r, Vec fc) {
+  const Csr& R = levels_[l].R;
+  const int nc = levels_[l + 1].n;
+  k_spmv_.set_args(nc, R.row_ptr, R.col, R.val, *r, *fc);
+  dev_.cl().launch(k_spmv_, nc);
+}
+
+void ClAmg::prolong(int l, Vec xc, Vec x, Vec t) {
+  const Level& lv = levels_[l];
+  k_prolong_.set_args(lv.n, lv.P.row_ptr, lv.P.col, lv.P.val, *xc, *x, *t);
+  dev_.cl().launch(k_prolong_, lv.n);
+}
+
+void ClAmg::coarse(int l, Vec f, Vec out) {
+  const int n = levels_[l].n;
+  k_dense_.set_args(n, coarse_inv_, *f, *out);
+  dev_.cl().launch(k_dense_, n);
 }
 
 }  // namespace vpm::detail

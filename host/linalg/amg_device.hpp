@@ -1,6 +1,6 @@
 #pragma once
-// Private: the multigrid V-cycle of an AmgHierarchy (vpm/amg.hpp) as OpenCL kernels
-// (kernels/amg.cl): every level's A, P, R and smoother diagonal in device CSR buffers, the
+// Private: the OpenCL backend of an AmgHierarchy's V-cycle (vpm/amg.hpp, linalg/amg_vcycle.hpp:
+// the kernels of kernels/amg.cl): every level's A, P, R and smoother diagonal in device CSR buffers, the
 // coarsest level's dense (pseudo-)inverse as a matrix; apply() only enqueues kernels.
 #include <boost/compute/container/vector.hpp>
 #include <vector>
@@ -22,6 +22,20 @@ class ClAmg {
   void apply(boost::compute::vector<double>& f, boost::compute::vector<double>& z);
   int num_levels() const { return static_cast<int>(levels_.size()); }
 
+  /// amg_vcycle's backend (linalg/amg_vcycle.hpp): each primitive enqueues one kernel.
+  using Vec = boost::compute::vector<double>*;
+  int levels() const { return num_levels(); }
+  int sweeps() const { return sweeps_; }
+  void work(int l, Vec& x, Vec& r, Vec& t);
+  void coarse_vectors(int l, Vec& f, Vec& out);
+  void first(int l, Vec f, Vec x, Vec r);
+  void scale(int l, Vec f, Vec x);
+  void sweep(int l, Vec f, Vec in, Vec o);
+  void residual(int l, Vec f, Vec x, Vec r);
+  void restrict_to(int l, Vec r, Vec fc);
+  void prolong(int l, Vec xc, Vec x, Vec t);
+  void coarse(int l, Vec f, Vec out);
+
  private:
   struct Csr {
     boost::compute::vector<int> row_ptr, col;
@@ -34,7 +48,6 @@ class ClAmg {
     boost::compute::vector<double> d, f, out, x, r, t;
   };
   void upload_csr(const CsrMatrix& m, Csr& c, bool pattern);
-  void vcycle(int l, boost::compute::vector<double>& f, boost::compute::vector<double>& out);
   Device& dev_;
   int sweeps_ = 1;
   std::vector<Level> levels_;

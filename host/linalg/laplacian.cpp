@@ -7,6 +7,7 @@
 
 #include "core/device_alloc.hpp"
 #include "linalg/laplacian_device.hpp"
+#include "mesh/tet_geometry.hpp"
 #include "core/parallel.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
@@ -14,29 +15,21 @@
 
 namespace vpm {
 
+namespace detail {
+#include "kernels/cotan_laplacian.clh"  // after tet_geometry.clh (mesh/tet_geometry.hpp)
+}  // namespace detail
+
 namespace bc = boost::compute;
 
 namespace {
 
-constexpr int kEdge[4][4] = {{-1, 0, 1, 2}, {0, -1, 3, 4}, {1, 3, -1, 5}, {2, 4, 5, -1}};
-constexpr int kEdgeEnds[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+constexpr int kEdgeEnds[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};  // cl_edge's order
 
-// The six off-diagonal entries K_ab of tet t (same formula as kernels/laplacian.cl) and its
-// signed volume.
+// The six off-diagonal entries K_ab of tet t and its signed volume (kernels/cotan_laplacian.clh).
 inline double tet_weights(const Points& x, const Tets& tets, Eigen::Index t, double w[6]) {
-  const Eigen::Vector3d p0 = x.row(tets(t, 0)).transpose();
-  const Eigen::Vector3d e1 = x.row(tets(t, 1)).transpose() - p0;
-  const Eigen::Vector3d e2 = x.row(tets(t, 2)).transpose() - p0;
-  const Eigen::Vector3d e3 = x.row(tets(t, 3)).transpose() - p0;
-  Eigen::Vector3d c[4];
-  c[1] = e2.cross(e3);
-  c[2] = e3.cross(e1);
-  c[3] = e1.cross(e2);
-  c[0] = -(c[1] + c[2] + c[3]);
-  const double det = e1.dot(c[1]);
-  const double s = -1.0 / (6.0 * det);
-  for (int e = 0; e < 6; ++e) w[e] = s * c[kEdgeEnds[e][0]].dot(c[kEdgeEnds[e][1]]);
-  return det / 6.0;
+  double e[3][3];
+  detail::tet_edges(x, tets, static_cast<int>(t), e);
+  return detail::cl_tet_weights(e[0], e[1], e[2], w);
 }
 
 void check_tets(int n, const Tets& tets, const char* where) {
@@ -121,30 +114,17 @@ void CotanLaplacian::assemble(Device& device, const Points& x) {
                      " positions for " + std::to_string(n) + " vertices");
   const Eigen::Index m = tets_.rows();
   if (device.is_host() || n == 0) {
-    // Same gather as the kernel (row by row over incident tets in increasing order).
+    // the kernels' two passes on the host threads: the tets' weights, then each row's gather
     std::vector<double> w(static_cast<size_t>(m) * 6), vol(m);
-    for (Eigen::Index t = 0; t < m; ++t) vol[t] = tet_weights(x, tets_, t, &w[6 * t]);
+    detail::parallel_for(static_cast<int>(m), 8192, [&](int t0, int t1) {
+      for (int t = t0; t < t1; ++t) vol[t] = tet_weights(x, tets_, t, &w[6 * static_cast<size_t>(t)]);
+    });
     const Incidence inc = vertex_tet_incidence(n, tets_);
-    auto& val = pattern_.val;
-    for (int i = 0; i < n; ++i) {
-      for (int k = pattern_.row_ptr[i]; k < pattern_.row_ptr[i + 1]; ++k) val[k] = 0;
-      double d = 0, vs = 0;
-      for (int k = inc.offset[i]; k < inc.offset[i + 1]; ++k) {
-        const int t = inc.tet_of[k];
-        int a = 0;
-        for (int c = 1; c < 4; ++c)
-          if (tets_(t, c) == i) a = c;
-        for (int q = 0; q < 3; ++q) {
-          const int b = q < a ? q : q + 1;
-          const double ww = w[6 * t + kEdge[a][b]];
-          val[slot_[12 * t + 3 * a + q]] += ww;
-          d -= ww;
-        }
-        vs += vol[t];
-      }
-      val[diag_[i]] = d;
-      mass_[i] = 0.25 * vs;
-    }
+    detail::parallel_for(n, 8192, [&](int i0, int i1) {
+      for (int i = i0; i < i1; ++i)
+        detail::cl_assemble_row(i, pattern_.row_ptr.data(), inc.offset.data(), inc.tet_of.data(), tets_.data(),
+                                slot_.data(), diag_.data(), w.data(), vol.data(), pattern_.val.data(), mass_.data());
+    });
     host_stale_ = false;
     device_ = &device;
     return;

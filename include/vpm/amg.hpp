@@ -83,7 +83,6 @@ class AmgHierarchy {
   void level_values(int l, std::vector<int>& pos);  // smoother, P, R, A_{l+1} of level l
   void finish_values();                             // coarse inverse, work vectors
   void compute_values();
-  void vcycle(int l, const double* f, double* x) const;
   AmgOptions options_;
   std::vector<char> fixed_;
   std::vector<AmgLevel> levels_;
