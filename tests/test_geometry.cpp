@@ -3,7 +3,7 @@
 #include <cmath>
 #include <map>
 
-#include "mesh/device_volumes.hpp"
+#include "mesh/mesh_volumes.hpp"
 #include "support/devices.hpp"
 #include "support/fixtures.hpp"
 #include "support/incompressible.hpp"
@@ -46,7 +46,7 @@ TEST_CASE("volumes kept on the device (connectivity uploaded once) follow new po
   for (auto& dev : test::devices()) {
     if (dev->is_host()) continue;
     INFO("device " << dev->name());
-    detail::DeviceVolumes dv(*dev, m.tets);
+    detail::MeshVolumes dv(*dev, m.tets);
     for (int k = 0; k < 3; ++k) {  // the same object at three shapes: nothing stale is reused
       Points x = m.vertices;
       for (int i = 0; i < m.num_vertices(); ++i) x.row(i) *= 1.0 + 0.02 * k * std::sin(5.0 * i + k);

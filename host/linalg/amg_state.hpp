@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "linalg/amg_device.hpp"
+#include "linalg/solver_backend.hpp"
 #include "vpm/amg.hpp"
 
 namespace vpm::detail {
@@ -22,5 +23,10 @@ struct AmgState {
   double prepare(Device* device, const CsrMatrix& a, const std::vector<char>& mask,
                  const AmgOptions& options);
 };
+
+/// Backend b preconditioned with st's hierarchy on b's side (the host's or the device's copy),
+/// or with Jacobi when st is null.
+inline void use_amg(HostBackend& b, const AmgState* st) { b.set_amg(st ? st->host.get() : nullptr); }
+inline void use_amg(ClBackend& b, const AmgState* st) { b.set_amg(st ? st->device.get() : nullptr); }
 
 }  // namespace vpm::detail

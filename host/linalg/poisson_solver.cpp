@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <type_traits>
+#include <variant>
 
 #include "linalg/amg_state.hpp"
 #include "linalg/krylov.hpp"
@@ -21,12 +22,36 @@ using detail::ClBackend;
 using detail::HostBackend;
 using detail::solve_system;
 
+namespace {
+
+// One side's backends: the main one first, then the further columns of block solves
+// (solve_dirichlet with several columns), on the same matrix and mask, made on first use.
+template <class BK>
+struct Backends {
+  std::vector<std::unique_ptr<BK>> list;
+};
+
+}  // namespace
+
 struct PoissonSolver::Impl {
-  std::unique_ptr<HostBackend> host;
-  std::unique_ptr<ClBackend> cl;
-  std::vector<char> mask;  // the mask the backend holds
+  std::variant<Backends<HostBackend>, Backends<ClBackend>> side;  // by the device, at construction
+  std::vector<char> mask;  // the mask the backends hold
   bool assembled = false;
   detail::AmgState amg_neumann, amg_dirichlet;  // one hierarchy per kind of solve
+  CotanLaplacian* matrix = nullptr;             // what set_positions gave the backends
+
+  // f(b) for every backend b of the side the device chose
+  template <class F>
+  void each(F&& f) {
+    std::visit([&](auto& bs) {
+      for (auto& b : bs.list) f(*b);
+    }, side);
+  }
+  // f(the main backend)
+  template <class F>
+  auto with(F&& f) {
+    return std::visit([&](auto& bs) { return f(*bs.list.front()); }, side);
+  }
   /// Selects Jacobi or the (refreshed) AMG hierarchy for `mask` on the backend; returns the
   /// setup seconds.
   double prepare(Device& dev, const CotanLaplacian& lap, const SolverOptions& o, bool dirichlet) {
@@ -34,26 +59,13 @@ struct PoissonSolver::Impl {
     double t = 0;
     detail::AmgState& st = dirichlet ? amg_dirichlet : amg_neumann;
     if (use) t = st.prepare(&dev, lap.matrix(), mask, o.amg);
-    if (host) host->set_amg(use ? st.host.get() : nullptr);
-    else cl->set_amg(use ? st.device.get() : nullptr);
+    with([&](auto& bk) { detail::use_amg(bk, use ? &st : nullptr); });
     return t;
-  }
-  // the further columns of block solves (solve_dirichlet with several columns): backends on the
-  // same matrix and mask, made on first use
-  std::vector<std::unique_ptr<HostBackend>> host_more;
-  std::vector<std::unique_ptr<ClBackend>> cl_more;
-  CotanLaplacian* matrix = nullptr;  // what set_positions gave the backends
-  template <class F>
-  auto with(F&& f) {
-    return host ? f(*host) : f(*cl);
   }
   void set_mask(const std::vector<char>& m) {
     if (m == mask) return;
     mask = m;
-    if (host) host->set_mask(mask);
-    else cl->set_mask(mask);
-    for (auto& b : host_more) b->set_mask(mask);
-    for (auto& b : cl_more) b->set_mask(mask);
+    each([&](auto& b) { b.set_mask(mask); });
   }
   static void give_matrix(HostBackend& b, CotanLaplacian& lap) { b.set_matrix(&lap.matrix(), nullptr); }
   static void give_matrix(ClBackend& b, CotanLaplacian& lap) {
@@ -62,23 +74,19 @@ struct PoissonSolver::Impl {
   }
   void set_matrix(CotanLaplacian& lap) {
     matrix = &lap;
-    if (host) give_matrix(*host, lap);
-    else give_matrix(*cl, lap);
-    for (auto& b : host_more) give_matrix(*b, lap);
-    for (auto& b : cl_more) give_matrix(*b, lap);
+    each([&](auto& b) { give_matrix(b, lap); });
   }
   // The k backends of a block solve (the main one first).
   template <class BK>
-  std::vector<BK*> columns(Device& dev, int n, int k, std::unique_ptr<BK>& first,
-                           std::vector<std::unique_ptr<BK>>& more) {
-    while (static_cast<int>(more.size()) < k - 1) {
-      if constexpr (std::is_same_v<BK, HostBackend>) more.push_back(std::make_unique<BK>(n));
-      else more.push_back(std::make_unique<BK>(dev, n));
-      more.back()->set_mask(mask);
-      give_matrix(*more.back(), *matrix);
+  std::vector<BK*> columns(Device& dev, int n, int k, Backends<BK>& bs) {
+    while (static_cast<int>(bs.list.size()) < k) {
+      if constexpr (std::is_same_v<BK, HostBackend>) bs.list.push_back(std::make_unique<BK>(n));
+      else bs.list.push_back(std::make_unique<BK>(dev, n));
+      bs.list.back()->set_mask(mask);
+      give_matrix(*bs.list.back(), *matrix);
     }
-    std::vector<BK*> out = {first.get()};
-    for (int c = 0; c + 1 < k; ++c) out.push_back(more[static_cast<size_t>(c)].get());
+    std::vector<BK*> out;
+    for (int c = 0; c < k; ++c) out.push_back(bs.list[static_cast<size_t>(c)].get());
     return out;
   }
   // Solves the columns of b into those of x (start in, solution out): one column alone, more
@@ -93,8 +101,15 @@ struct PoissonSolver::Impl {
       bp.push_back(b.col(c).data());
       xp.push_back(x.col(c).data());
     }
-    if (host) return detail::solve_system_block(columns(dev, n, k, host, host_more), o, mask, bp, xp);
-    return detail::solve_system_block(columns(dev, n, k, cl, cl_more), o, mask, bp, xp);
+    return std::visit([&](auto& bs) { return detail::solve_system_block(columns(dev, n, k, bs), o, mask, bp, xp); },
+                      side);
+  }
+  // Back to the main backend with Jacobi (the further columns and the hierarchies go).
+  void release() {
+    std::visit([&](auto& bs) { bs.list.resize(1); }, side);
+    amg_neumann = detail::AmgState{};
+    amg_dirichlet = detail::AmgState{};
+    with([&](auto& bk) { detail::use_amg(bk, nullptr); });
   }
 };
 
@@ -102,23 +117,20 @@ PoissonSolver::PoissonSolver(Device& device, int num_vertices, const Tets& tets,
     : device_(device), laplacian_(num_vertices, tets), options_(options), impl_(std::make_unique<Impl>()) {
   impl_->mask.assign(num_vertices, 0);
   if (device.is_host()) {
-    impl_->host = std::make_unique<HostBackend>(num_vertices);
-    impl_->host->set_mask(impl_->mask);
+    Backends<HostBackend> bs;
+    bs.list.push_back(std::make_unique<HostBackend>(num_vertices));
+    bs.list.front()->set_mask(impl_->mask);
+    impl_->side = std::move(bs);
   } else {
-    impl_->cl = std::make_unique<ClBackend>(device, num_vertices);
+    Backends<ClBackend> bs;
+    bs.list.push_back(std::make_unique<ClBackend>(device, num_vertices));
+    impl_->side = std::move(bs);
   }
 }
 
 PoissonSolver::~PoissonSolver() = default;
 
-void PoissonSolver::release_work_memory() {
-  impl_->host_more.clear();
-  impl_->cl_more.clear();
-  impl_->amg_neumann = detail::AmgState{};
-  impl_->amg_dirichlet = detail::AmgState{};
-  if (impl_->host) impl_->host->set_amg(nullptr);
-  else impl_->cl->set_amg(nullptr);
-}
+void PoissonSolver::release_work_memory() { impl_->release(); }
 
 void PoissonSolver::set_positions(const Points& vertices) {
   laplacian_.assemble(device_, vertices);

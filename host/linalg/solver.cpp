@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <sstream>
+#include <type_traits>
+#include <variant>
 
 #include "linalg/amg_state.hpp"
 #include "linalg/csr_ops.hpp"
@@ -52,18 +54,73 @@ const char* to_string(SolverMethod m) {
 
 // ------------------------------------------------------------------ SparseSolver ----------
 
+namespace {
+
+// The matrix and its transpose in device buffers, for the OpenCL backend (kept alive with it).
+struct ClMatrix {
+  std::unique_ptr<bc::vector<int>> rp, col, trp, tcol;
+  std::unique_ptr<bc::vector<double>> val, tval;
+};
+
+// The OpenCL backend with the buffers it points into.
+struct ClSide {
+  ClMatrix m;
+  std::unique_ptr<ClBackend> bk;
+};
+
+}  // namespace
+
 struct SparseSolver::Impl {
   Device& device;
   CsrMatrix a, at;
   bool symmetric = true;
   std::vector<char> mask;
-  std::unique_ptr<HostBackend> host;
-  std::unique_ptr<ClBackend> cl;
-  std::unique_ptr<bc::vector<int>> d_rp, d_col, d_trp, d_tcol;
-  std::unique_ptr<bc::vector<double>> d_val, d_tval;
+  std::variant<std::unique_ptr<HostBackend>, ClSide> side;  // by the device, at construction
   detail::AmgState amg;
   explicit Impl(Device& d) : device(d) {}
+  // f(backend) on the side the device chose
+  template <class F>
+  auto with(F&& f) {
+    return std::visit([&](auto& sd) {
+      if constexpr (std::is_same_v<std::decay_t<decltype(sd)>, ClSide>) return f(*sd.bk);
+      else return f(*sd);
+    }, side);
+  }
 };
+
+namespace {
+
+std::unique_ptr<HostBackend> host_side(const CsrMatrix& a, const CsrMatrix* at, const std::vector<char>& mask) {
+  auto bk = std::make_unique<HostBackend>(a.rows);
+  bk->set_matrix(&a, at);
+  bk->set_mask(mask);
+  return bk;
+}
+
+ClSide device_side(Device& device, const CsrMatrix& a, const CsrMatrix* at, const std::vector<char>& mask) {
+  auto& q = device.cl().queue;
+  auto up = [&](const auto& v) {
+    using T = typename std::decay_t<decltype(v)>::value_type;
+    auto p = std::make_unique<bc::vector<T>>(std::max<size_t>(v.size(), 1), device.cl().context);
+    if (!v.empty()) bc::copy(v.begin(), v.end(), p->begin(), q);
+    return p;
+  };
+  ClSide sd;
+  sd.m.rp = up(a.row_ptr);
+  sd.m.col = up(a.col);
+  sd.m.val = up(a.val);
+  if (at) {
+    sd.m.trp = up(at->row_ptr);
+    sd.m.tcol = up(at->col);
+    sd.m.tval = up(at->val);
+  }
+  sd.bk = std::make_unique<ClBackend>(device, a.rows);
+  sd.bk->set_matrix(sd.m.rp.get(), sd.m.col.get(), sd.m.val.get(), sd.m.trp.get(), sd.m.tcol.get(), sd.m.tval.get());
+  sd.bk->set_mask(mask);
+  return sd;
+}
+
+}  // namespace
 
 SparseSolver::SparseSolver(Device& device, const CsrMatrix& a, SolverOptions options)
     : impl_(std::make_unique<Impl>(device)), options_(options) {
@@ -75,35 +132,9 @@ SparseSolver::SparseSolver(Device& device, const CsrMatrix& a, SolverOptions opt
   s.at = detail::csr_transpose(a);
   s.symmetric = s.at.row_ptr == a.row_ptr && s.at.col == a.col && s.at.val == a.val;
   s.mask.assign(a.rows, 0);
-  if (device.is_host()) {
-    s.host = std::make_unique<HostBackend>(a.rows);
-    s.host->set_matrix(&s.a, s.symmetric ? nullptr : &s.at);
-    s.host->set_mask(s.mask);
-  } else {
-    auto& q = device.cl().queue;
-    auto up_i = [&](const std::vector<int>& v) {
-      auto p = std::make_unique<bc::vector<int>>(std::max<size_t>(v.size(), 1), device.cl().context);
-      if (!v.empty()) bc::copy(v.begin(), v.end(), p->begin(), q);
-      return p;
-    };
-    auto up_d = [&](const std::vector<double>& v) {
-      auto p = std::make_unique<bc::vector<double>>(std::max<size_t>(v.size(), 1), device.cl().context);
-      if (!v.empty()) bc::copy(v.begin(), v.end(), p->begin(), q);
-      return p;
-    };
-    s.d_rp = up_i(s.a.row_ptr);
-    s.d_col = up_i(s.a.col);
-    s.d_val = up_d(s.a.val);
-    if (!s.symmetric) {
-      s.d_trp = up_i(s.at.row_ptr);
-      s.d_tcol = up_i(s.at.col);
-      s.d_tval = up_d(s.at.val);
-    }
-    s.cl = std::make_unique<ClBackend>(device, a.rows);
-    s.cl->set_matrix(s.d_rp.get(), s.d_col.get(), s.d_val.get(), s.d_trp.get(), s.d_tcol.get(),
-                     s.d_tval.get());
-    s.cl->set_mask(s.mask);
-  }
+  const CsrMatrix* at = s.symmetric ? nullptr : &s.at;
+  if (device.is_host()) s.side = host_side(s.a, at, s.mask);
+  else s.side = device_side(device, s.a, at, s.mask);
 }
 
 SparseSolver::~SparseSolver() = default;
@@ -119,10 +150,10 @@ SolverStats SparseSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   const bool amg = options_.preconditioner == Preconditioner::amg && options_.method == SolverMethod::cg;
   double setup = 0;
   if (amg) setup = s.amg.prepare(&s.device, s.a, s.mask, options_.amg);
-  if (s.host) s.host->set_amg(amg ? s.amg.host.get() : nullptr);
-  else s.cl->set_amg(amg ? s.amg.device.get() : nullptr);
-  SolverStats st = s.host ? solve_system(*s.host, options_, s.mask, b.data(), x.data())
-                          : solve_system(*s.cl, options_, s.mask, b.data(), x.data());
+  SolverStats st = s.with([&](auto& bk) {
+    detail::use_amg(bk, amg ? &s.amg : nullptr);
+    return solve_system(bk, options_, s.mask, b.data(), x.data());
+  });
   st.seconds = seconds_since(t0);
   st.setup_seconds = setup;
   return st;

@@ -6,6 +6,7 @@
 #include <boost/compute/algorithm/copy.hpp>
 #include <boost/compute/container/vector.hpp>
 #include <cmath>
+#include <stdexcept>
 #include <unordered_map>
 
 #include "core/parallel.hpp"
@@ -104,6 +105,11 @@ void advect_host(const MoserField& f, const std::vector<char>& boundary, const A
     stats->grid_fallbacks += st[1];
     stats->clamped += st[2];
   }
+}
+
+void HostAdvector::advect(const AdvectParams& p, Points& x, std::vector<int>& hint, AdvectStats* stats) {
+  if (!field_) throw std::logic_error("HostAdvector::advect: no field (set_field first)");
+  advect_host(*field_, boundary_, p, x, hint, stats);
 }
 
 // ---- OpenCL ------------------------------------------------------------------------------

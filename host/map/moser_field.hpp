@@ -53,20 +53,51 @@ struct AdvectParams {
 void advect_host(const MoserField& f, const std::vector<char>& boundary, const AdvectParams& p,
                  Points& x, std::vector<int>& hint, AdvectStats* stats);
 
+/// A Moser round's advection where the map's Placement put it (the host's threads or an OpenCL
+/// device): made once per map, then called without knowing which.
+class Advector {
+ public:
+  virtual ~Advector() = default;
+  /// The round's field f (background, rho0, grad). f must then live unchanged until
+  /// release_field() or the next set_field: the host's advector reads it in place, the device's
+  /// views its big arrays on CPU devices (elsewhere it copies them).
+  virtual void set_field(const MoserField& f) = 0;
+  /// Drops what the last set_field kept of f (call before that MoserField changes or goes).
+  virtual void release_field() = 0;
+  /// Moves x (n x 3) along the field from t = 0 to p.t_end; `hint` (n) in/out as advect_host's.
+  virtual void advect(const AdvectParams& p, Points& x, std::vector<int>& hint, AdvectStats* stats) = 0;
+  /// Whether it runs on an OpenCL device.
+  virtual bool on_device() const = 0;
+};
+
+/// advect_host behind the Advector interface; `boundary` (n entries) must outlive it.
+class HostAdvector final : public Advector {
+ public:
+  explicit HostAdvector(const std::vector<char>& boundary) : boundary_(boundary) {}
+  void set_field(const MoserField& f) override { field_ = &f; }
+  void release_field() override { field_ = nullptr; }
+  void advect(const AdvectParams& p, Points& x, std::vector<int>& hint, AdvectStats* stats) override;
+  bool on_device() const override { return false; }
+
+ private:
+  const std::vector<char>& boundary_;
+  const MoserField* field_ = nullptr;
+};
+
 /// OpenCL advection: connectivity and boundary uploaded once; per round the background
 /// (set_field), then advect() keeps positions on the device for the whole round and reads them
 /// back once.
-class DeviceAdvector {
+class DeviceAdvector final : public Advector {
  public:
   DeviceAdvector(Device& device, const Tets& tets, const std::vector<int>& nbr,
                  const std::vector<char>& boundary);
-  ~DeviceAdvector();
+  ~DeviceAdvector() override;
   /// The round's background and field from the host: f's inverse matrices, grid, rho0 and grad.
   /// On CPU devices the inverse matrices and the grid's lists are not copied but used where f
   /// holds them: f must then live unchanged until release_field() (or the next set_field).
-  void set_field(const MoserField& f);
+  void set_field(const MoserField& f) override;
   /// Drops the views of the last set_field's host arrays (call before that MoserField goes).
-  void release_field();
+  void release_field() override;
   /// The same background with the inverse matrices and the vertex gradients computed on the
   /// device (f.inv and f.grad are not read: build_grid suffices): the inverses from x
   /// (kernels/moser.cl, equal to build_background's to round-off), the gradients from psi
@@ -80,7 +111,8 @@ class DeviceAdvector {
   std::vector<double> gradients();
   /// The background's inverse matrices now on the device (m x 12, TetGrid::inv), for tests.
   std::vector<double> inverses();
-  void advect(const AdvectParams& p, Points& x, std::vector<int>& hint, AdvectStats* stats);
+  void advect(const AdvectParams& p, Points& x, std::vector<int>& hint, AdvectStats* stats) override;
+  bool on_device() const override { return true; }
 
  private:
   struct Impl;

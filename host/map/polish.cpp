@@ -219,6 +219,14 @@ PolishDirection DevicePolisher::Impl::result() {
   return res;
 }
 
+std::unique_ptr<Polisher> make_polisher(Device& device, bool on_device, const Tets& tets, int num_vertices,
+                                        const std::vector<char>& freedom, const std::vector<VolumeAnchor>& anchors,
+                                        const std::vector<VolumeHold>& holds) {
+  if (on_device && !device.is_host())
+    return std::make_unique<DevicePolisher>(device, tets, num_vertices, freedom, anchors, holds);
+  return std::make_unique<HostPolisher>(tets, freedom, anchors, holds);
+}
+
 PolishDirection DevicePolisher::direction(const Points& x, const Eigen::VectorXd& target, int iterations) {
   Impl& I = *impl_;
   auto& queue = I.dev.cl().queue;

@@ -53,20 +53,54 @@ PolishDirection polish_direction_host(const Points& x, const Tets& tets, const E
                                       const std::vector<char>& freedom, const std::vector<VolumeAnchor>& anchors,
                                       int iterations, const std::vector<VolumeHold>& holds = {});
 
+/// The polish's direction on one backend, chosen once per map (Placement's "polish"): callers
+/// ask `direction` and do not know which. make_polisher builds one.
+class Polisher {
+ public:
+  virtual ~Polisher() = default;
+  /// The direction from positions `x` (n x 3) towards the tets' `target` volumes (m, the same
+  /// total as x's) after at most `iterations` CGLS iterations.
+  virtual PolishDirection direction(const Points& x, const Eigen::VectorXd& target, int iterations) = 0;
+};
+
+/// polish_direction_host on the host threads, with the tets, freedom, anchors and holds given
+/// here (held by reference: they must outlive the polisher).
+class HostPolisher final : public Polisher {
+ public:
+  HostPolisher(const Tets& tets, const std::vector<char>& freedom, const std::vector<VolumeAnchor>& anchors,
+               const std::vector<VolumeHold>& holds)
+      : tets_(tets), freedom_(freedom), anchors_(anchors), holds_(holds) {}
+  PolishDirection direction(const Points& x, const Eigen::VectorXd& target, int iterations) override {
+    return polish_direction_host(x, tets_, target, freedom_, anchors_, iterations, holds_);
+  }
+
+ private:
+  const Tets& tets_;
+  const std::vector<char>& freedom_;
+  const std::vector<VolumeAnchor>& anchors_;
+  const std::vector<VolumeHold>& holds_;
+};
+
 /// OpenCL: connectivity (vertex -> row-corner incidence), freedom and the holds' rows uploaded
 /// once; each call uploads x and target, runs the iterations without a host synchronisation,
 /// reads dx back. The holds' rows sit after the tets' in the kernels' A (same shape: four
 /// vertices with a 3-vector each), so the same kernels apply both.
-class DevicePolisher {
+class DevicePolisher final : public Polisher {
  public:
   DevicePolisher(Device& device, const Tets& tets, int num_vertices, const std::vector<char>& freedom,
                  const std::vector<VolumeAnchor>& anchors, const std::vector<VolumeHold>& holds = {});
-  ~DevicePolisher();
-  PolishDirection direction(const Points& x, const Eigen::VectorXd& target, int iterations);
+  ~DevicePolisher() override;
+  PolishDirection direction(const Points& x, const Eigen::VectorXd& target, int iterations) override;
 
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// The polisher of `device` when `on_device` (DevicePolisher; a host device gets the host's),
+/// else the host threads' (HostPolisher, which holds the arguments by reference).
+std::unique_ptr<Polisher> make_polisher(Device& device, bool on_device, const Tets& tets, int num_vertices,
+                                        const std::vector<char>& freedom, const std::vector<VolumeAnchor>& anchors,
+                                        const std::vector<VolumeHold>& holds);
 
 }  // namespace vpm::detail

@@ -152,13 +152,16 @@ void set_up(detail::MapContext& c) {
                                                    opt.preconditioner, opt.poisson);
   // where the parts run (VolumeMapOptions::advection, ::polish; the rules: vpm/placement.hpp)
   // (a polish on its own never advects: no advector, no advection placed)
-  if (!c.pc.only && opt.method == VolumeMapMethod::moser &&
-      c.placement.decide(c.dev, PlacedWork::advection, opt.advection)) {
-    c.advector = std::make_unique<detail::DeviceAdvector>(c.dev, tets, c.nbr, c.boundary);
-    c.gradients_on_device = c.placement.decide(c.dev, PlacedWork::gradients, opt.advection);
+  if (!c.pc.only && opt.method == VolumeMapMethod::moser) {
+    if (c.placement.decide(c.dev, PlacedWork::advection, opt.advection)) {
+      c.advector = std::make_unique<detail::DeviceAdvector>(c.dev, tets, c.nbr, c.boundary);
+      c.gradients_on_device = c.placement.decide(c.dev, PlacedWork::gradients, opt.advection);
+    } else {
+      c.advector = std::make_unique<detail::HostAdvector>(c.boundary);
+    }
   }
   c.polish_on_device = c.placement.decide(c.dev, PlacedWork::polish, opt.polish);
-  if (!c.dev.is_host()) c.volumes = std::make_unique<detail::DeviceVolumes>(c.dev, tets);
+  c.volumes = std::make_unique<detail::MeshVolumes>(c.dev, tets);
 }
 
 }  // namespace
@@ -181,7 +184,7 @@ VolumeMapResult detail::map_volumes(Device& dev, const Points& reference, const 
   res.solver = opt.solver;
   res.preconditioner = to_string(c.solver->preconditioner());
   res.rk_steps = opt.rk_steps;
-  res.device_advection = c.advector != nullptr;
+  res.device_advection = c.advector && c.advector->on_device();
   res.placement = c.placement;
 
   // The start must be fold-free.

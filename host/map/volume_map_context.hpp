@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "map/moser_field.hpp"
-#include "mesh/device_volumes.hpp"
+#include "mesh/mesh_volumes.hpp"
 #include "map/polish.hpp"
 #include "map/volume_map_solve.hpp"
 #include "vpm/mesh.hpp"
@@ -45,13 +45,13 @@ struct MapContext {
   Eigen::VectorXd ref_dual;       // input dual volumes / input total volume
   Eigen::VectorXd ref_tet;        // input tet volumes / input total volume
   std::unique_ptr<MapSolver> solver;
-  std::unique_ptr<DeviceAdvector> advector;
-  std::unique_ptr<DeviceVolumes> volumes;  // fold checks and dual volumes on the device (null on the host)
+  std::unique_ptr<Advector> advector;      // the Moser rounds' advection where placed (method moser)
+  std::unique_ptr<MeshVolumes> volumes;  // fold checks and dual volumes, on the context's device
   MoserField field;  // a Moser round's field, its arrays reused by the next round (freed after the rounds)
   Eigen::VectorXd psi;
   Triangles bfaces;  // boundary faces (outward), from the same face sort as nbr
   std::vector<char> freedom;                          // polish: free / tangent / fixed per vertex
-  std::unique_ptr<DevicePolisher> polisher;   // polish on the device, built on first use
+  std::unique_ptr<Polisher> polisher;         // the polish where placed, built on first use
   Placement placement;                                // where the parts below run, and why
   bool polish_on_device = false;                      // VolumeMapOptions::polish resolved
   bool gradients_on_device = false;                   // the advector computes the field's gradients
@@ -59,6 +59,9 @@ struct MapContext {
   MapContext(Device& d, const Points& r, const Tets& t, const VolumeMapOptions& o, const PolishConstraints& p)
       : dev(d), ref(r), tets(t), opt(o), pc(p) {}
   bool pinned(int v) const { return !pc.pinned.empty() && pc.pinned[static_cast<size_t>(v)]; }
+  /// The advector as the device's, for the field made from psi there (gradients_on_device is
+  /// placed only with the device's advection; std::logic_error otherwise).
+  DeviceAdvector& device_advector() const;
 };
 
 /// volume_preserving_map with the polish constraints `pc` (polish_volumes: pc.only).

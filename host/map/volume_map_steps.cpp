@@ -2,6 +2,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "map/volume_map_context.hpp"
 #include "vpm/device.hpp"
@@ -12,8 +13,14 @@
 
 namespace vpm::detail {
 
+DeviceAdvector& MapContext::device_advector() const {
+  if (!advector || !advector->on_device())
+    throw std::logic_error("volume map: the field's gradients were placed on a device without its advection");
+  return static_cast<DeviceAdvector&>(*advector);
+}
+
 int count_folds(MapContext& c, const Points& x) {
-  const Eigen::VectorXd v = c.volumes ? c.volumes->tet_volumes(x) : tet_volumes(x, c.tets);
+  const Eigen::VectorXd v = c.volumes->tet_volumes(x);
   return static_cast<int>((v.array() <= 0).count());
 }
 
@@ -56,7 +63,7 @@ namespace {
 void solve_round(MapContext& c, const Points& x, Eigen::VectorXd& V, Eigen::VectorXd& target,
                  VolumeMapRound& r) {
   const auto t0 = Clock::now();
-  V = c.volumes ? c.volumes->dual_volumes(x) : dual_volumes(x, c.tets);
+  V = c.volumes->dual_volumes(x);
   target = c.ref_dual * V.sum();
   const Eigen::VectorXd b = target - V;
   c.psi.setZero(c.n);
@@ -92,9 +99,10 @@ void moser_round(MapContext& c, Points& x, double t_end, VolumeMapRound& r) {
   // the context's field: its big arrays keep their memory from round to round (rebuilt in place,
   // no fresh pages; MapContext::field)
   detail::MoserField& f = c.field;
-  // on CPU devices the advector views f's arrays: the views go after the round, even on an exception
+  // the advector reads f's arrays in place (the host's, CPU devices'): they are released after
+  // the round, even on an exception
   struct ReleaseField {
-    DeviceAdvector* advector;
+    Advector* advector;
     ~ReleaseField() {
       if (advector) advector->release_field();
     }
@@ -103,8 +111,8 @@ void moser_round(MapContext& c, Points& x, double t_end, VolumeMapRound& r) {
   const auto t1 = Clock::now();
   f.rho0.resize(static_cast<size_t>(c.n));
   for (int i = 0; i < c.n; ++i) f.rho0[i] = V(i) > 0 ? target(i) / V(i) : 1.0;
-  if (c.gradients_on_device) c.advector->set_field(f, c.psi, x, c.slide);
-  else if (c.advector) c.advector->set_field(f);  // on CPU devices a view of f's arrays: f stays
+  if (c.gradients_on_device) c.device_advector().set_field(f, c.psi, x, c.slide);
+  else c.advector->set_field(f);  // the host's and CPU devices' read f's arrays in place: f stays
   r.time_field += seconds_since(t1);
 
   const auto t2 = Clock::now();
@@ -114,11 +122,7 @@ void moser_round(MapContext& c, Points& x, double t_end, VolumeMapRound& r) {
   p.slide = c.slide;
   std::vector<int> hint = c.vertex_tet;
   detail::AdvectStats st;
-  if (c.advector) {
-    c.advector->advect(p, x, hint, &st);
-  } else {
-    detail::advect_host(f, c.boundary, p, x, hint, &st);
-  }
+  c.advector->advect(p, x, hint, &st);
   r.time_advect += seconds_since(t2);
   r.walk_steps_per_location = st.locations ? double(st.walk_steps) / double(st.locations) : 0.0;
   r.grid_fallbacks += st.grid_fallbacks;
@@ -148,14 +152,9 @@ void polish_step(MapContext& c, const Points& x, VolumeMapRound& r, Points& dx_o
   const Eigen::VectorXd vol = tet_volumes(x, c.tets);
   const Eigen::VectorXd target = c.ref_tet * vol.sum();
   if (c.freedom.empty()) c.freedom = detail::polish_freedom(c.boundary, c.slide, c.pc.pinned);
-  detail::PolishDirection d;
-  if (c.polish_on_device) {
-    if (!c.polisher)
-      c.polisher = std::make_unique<detail::DevicePolisher>(c.dev, c.tets, c.n, c.freedom, c.pc.anchors, c.pc.holds);
-    d = c.polisher->direction(x, target, iterations);
-  } else {
-    d = detail::polish_direction_host(x, c.tets, target, c.freedom, c.pc.anchors, iterations, c.pc.holds);
-  }
+  if (!c.polisher)
+    c.polisher = detail::make_polisher(c.dev, c.polish_on_device, c.tets, c.n, c.freedom, c.pc.anchors, c.pc.holds);
+  detail::PolishDirection d = c.polisher->direction(x, target, iterations);
   r.solver_iterations += d.iterations;
   r.solver_residual = d.residual;
   r.time_solve += seconds_since(t0);

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "core/parallel.hpp"
-#include "mesh/device_volumes.hpp"
+#include "mesh/mesh_volumes.hpp"
 #include "mesh/tet_geometry.hpp"
 #include "core/device_cl.hpp"
 #include "vpm/device.hpp"
@@ -36,13 +36,13 @@ Eigen::VectorXd dual_volumes(const Points& x, const Tets& t) {
 }
 
 Eigen::VectorXd tet_volumes(Device& dev, const Points& x, const Tets& t) {
-  if (dev.is_host() || t.rows() == 0) return tet_volumes(x, t);
-  return detail::DeviceVolumes(dev, t).tet_volumes(x);
+  if (t.rows() == 0) return tet_volumes(x, t);
+  return detail::MeshVolumes(dev, t).tet_volumes(x);
 }
 
 Eigen::VectorXd dual_volumes(Device& dev, const Points& x, const Tets& t) {
-  if (dev.is_host() || t.rows() == 0) return dual_volumes(x, t);
-  return detail::DeviceVolumes(dev, t).dual_volumes(x);
+  if (t.rows() == 0) return dual_volumes(x, t);
+  return detail::MeshVolumes(dev, t).dual_volumes(x);
 }
 
 namespace {

@@ -89,7 +89,7 @@ struct CalibratedRule {
 /// covariates and image covariate (absent in a file: none) and every compare option but
 /// min_cluster, the peak being 0 in both when the calibration set it) and on the normals named
 /// `normals` (the same set, any order): InputError naming `source` and the first difference.
-/// A file without "calibrate_peak" (before 2026-11-29, ninth session) sets no peak.
+/// A file without "calibrate_peak" (written by an older vpm) sets no peak.
 CalibratedRule calibrated_rule(const Json& calibration, const CalibrationSettings& settings,
                                const std::vector<std::string>& normals, const std::string& source);
 

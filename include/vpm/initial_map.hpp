@@ -101,7 +101,7 @@ struct InitialMapOptions {
   // ---- step 4: untangling
   enum class Untangle { Never, IfFolded, Always };
   /// IfFolded: only when the harmonic map folded a tet. Always: also improve a fold-free map
-  /// (lower distortion, docs/design.md 4.1 table: 0.363 -> 0.318 on Colin27).
+  /// (lower distortion: docs/design.md 4.1).
   Untangle untangle = Untangle::IfFolded;
   UntangleOptions untangle_options{};   ///< theta = 1/128 by default
   /// Caps of the global run (the last resort before NumericalError), above those of

@@ -1,17 +1,18 @@
-#include "mesh/device_volumes.hpp"
+#include "mesh/mesh_volumes.hpp"
 
 #include <boost/compute/algorithm/copy.hpp>
 #include <boost/compute/container/vector.hpp>
 
 #include "core/device_cl.hpp"
 #include "vpm/device.hpp"
+#include "vpm/geometry.hpp"
 #include "vpm/topology.hpp"
 
 namespace vpm::detail {
 
 namespace bc = boost::compute;
 
-struct DeviceVolumes::Impl {
+struct MeshVolumes::Impl {
   Device& dev;
   const Tets& tets;
   bc::vector<int> dtets, offset, tet_of;  // the incidence: at the first dual_volumes
@@ -38,11 +39,13 @@ struct DeviceVolumes::Impl {
   }
 };
 
-DeviceVolumes::DeviceVolumes(Device& device, const Tets& tets) : impl_(std::make_unique<Impl>(device, tets)) {}
+MeshVolumes::MeshVolumes(Device& device, const Tets& tets)
+    : tets_(tets), impl_(device.is_host() ? nullptr : std::make_unique<Impl>(device, tets)) {}
 
-DeviceVolumes::~DeviceVolumes() = default;
+MeshVolumes::~MeshVolumes() = default;
 
-Eigen::VectorXd DeviceVolumes::tet_volumes(const Points& x) {
+Eigen::VectorXd MeshVolumes::tet_volumes(const Points& x) {
+  if (!impl_) return vpm::tet_volumes(x, tets_);
   Impl& s = *impl_;
   Eigen::VectorXd out(s.tets.rows());
   if (s.tets.rows() == 0) return out;
@@ -51,7 +54,8 @@ Eigen::VectorXd DeviceVolumes::tet_volumes(const Points& x) {
   return out;
 }
 
-Eigen::VectorXd DeviceVolumes::dual_volumes(const Points& x) {
+Eigen::VectorXd MeshVolumes::dual_volumes(const Points& x) {
+  if (!impl_) return vpm::dual_volumes(x, tets_);
   Impl& s = *impl_;
   auto& q = s.dev.cl().queue;
   const int n = static_cast<int>(x.rows());
