@@ -3,6 +3,7 @@
 
     python3 bench/ab/compare_builds.py --a OLD_BUILD --b NEW_BUILD --out DIR [--rounds 5]
         [--warmup 1] [--cases volume_map,register,...] [--mesh MESH.vtu] [--threshold 0.03]
+        [--instructions]
 
 Each round runs every case once with each build, the order alternating (A B, then B A), so a
 machine that drifts slower affects both alike. The first --warmup rounds (PoCL's kernel builds,
@@ -14,6 +15,14 @@ the noise a ratio has to be read against. A timing counts as slower only when bo
 1 + threshold; `noisy` when A's spread exceeds the threshold (then only a larger difference means
 anything). Writes DIR/compare.json and prints the table; the builds' outputs are kept in
 DIR/<case>/<a|b>/<round>/.
+
+With --instructions each case runs once per build under valgrind's cachegrind instead, which
+counts the instructions executed (I refs, the PoCL kernels' included): a count does not move
+with the machine's load, where wall times on a shared 2-core VM spread by 10-80 % between runs
+of the same build. The two builds run side by side (valgrind runs a program's threads one at a
+time, so each takes one core), twice, and the second run is counted: the first fills the PoCL
+kernel cache for the CPU valgrind presents, so kernel compilation stays out of the count. The cases are lighter (INSTR_CASES). A count is a
+proxy for time, not a time: memory traffic and parallel efficiency are not in it.
 
 A build folder is what scripts/build.sh makes (vpm, bench/vpm_bench_*); the command runs with
 POCL_CACHE_DIR=DIR/pocl-cache-<a|b>. Exit 1 when a timing is slower, else 0.
@@ -31,7 +40,7 @@ import time
 CASES = {
     # name: (command template, JSON file written under {O} or None, extra environment)
     "volume_map": ("{B}/bench/vpm_bench_volume_map --runs 1 --out {O}", "volume_map.json", {}),
-    "register": ("{B}/bench/vpm_bench_register --quick --runs 1 --out {O}/register.json", "register.json", {}),
+    "register": ("{B}/bench/vpm_bench_register --quick --runs 5 --out {O}/register.json", "register.json", {}),
     "solver": ("{B}/bench/vpm_bench_solver --sizes 25000,100000 --repeats 3 --no-viennacl --no-eigen "
                "--no-hypre --json {O}/solver.json", "solver.json", {}),
     "harmonic": ("{B}/bench/vpm_bench_harmonic --repeats 3 --json {O}/harmonic.json", "harmonic.json", {}),
@@ -44,6 +53,19 @@ CASES = {
     "mesh_image": ("{B}/bench/vpm_bench_mesh_image --runs 1 --out {O}/mesh_image.json", "mesh_image.json", {}),
     "io": ("{B}/bench/vpm_bench_io 40 {O}", "bench_io.json", {}),
 }
+# lighter settings for --instructions (valgrind runs 50-300x slower than the program)
+INSTR_CASES = {
+    "register": ("{B}/bench/vpm_bench_register --quick --runs 1 --out {O}/register.json", "register.json", {}),
+    "solver": ("{B}/bench/vpm_bench_solver --sizes 25000,100000 --repeats 1 --no-viennacl --no-eigen --no-hypre "
+               "--json {O}/solver.json", "solver.json", {}),
+    "harmonic": ("{B}/bench/vpm_bench_harmonic --sizes 100000 --repeats 1 --json {O}/harmonic.json", "harmonic.json", {}),
+    "sphere_map": ("{B}/bench/vpm_bench_sphere_map --sizes 100000 --repeats 1 --json {O}/sphere_map.json",
+                   "sphere_map.json", {}),
+    "initial_map": CASES["initial_map"],
+    "map_host": ("{B}/vpm map {MESH} -o {O}/map.vtu", None, {"VPM_DEVICE": "host"}),
+    "map_pocl": ("{B}/vpm map {MESH} -o {O}/map.vtu", None, {"VPM_DEVICE": "cpu"}),
+}
+INSTR_DEFAULT = ["register", "solver", "harmonic", "sphere_map", "initial_map", "map_host", "map_pocl"]
 DEFAULT = ["volume_map", "register", "solver", "harmonic", "sphere_map", "initial_map", "demo_host", "demo_pocl"]
 IDENTITY = ("name", "mesh", "case", "solver", "method", "shape")
 TIMING_PARENTS = ("timings_s_median", "median_s")
@@ -98,6 +120,58 @@ def run_case(case, build, outdir, env_extra, mesh, pocl_cache):
     return res
 
 
+VALGRIND = ["valgrind", "--tool=cachegrind", "--cache-sim=no", "--branch-sim=no", "--cachegrind-out-file=/dev/null"]
+
+
+def instructions(case, builds, out, mesh):
+    """I refs of one case per build: two valgrind runs of each, the builds side by side, the
+    second run counted (the first fills PoCL's kernel cache for the CPU valgrind presents, which
+    lacks the host's AVX-512: native runs would not)."""
+    cmd_t, _, env_case = INSTR_CASES[case]
+    counts = {}
+    for attempt in ("warm", "count"):
+        procs = {}
+        for k, build in builds.items():
+            outdir = os.path.join(out, "instructions", case, k)
+            os.makedirs(outdir, exist_ok=True)
+            cmd = cmd_t.format(B=build, O=outdir, MESH=mesh or "").split()
+            env = dict(os.environ, POCL_CACHE_DIR=os.path.join(os.path.abspath(out), f"pocl-cache-{k}"), **env_case)
+            log = open(os.path.join(outdir, f"{attempt}.txt"), "w")
+            procs[k] = (subprocess.Popen(VALGRIND + cmd, env=env, stdout=log, stderr=subprocess.STDOUT), log, outdir)
+        for k, (proc, log, outdir) in procs.items():
+            rc = proc.wait()
+            log.close()
+            text = open(os.path.join(outdir, f"{attempt}.txt")).read()
+            m = re.search(r"I\s+refs:\s+([\d,]+)", text)
+            if rc != 0 or not m:
+                sys.exit(f"compare_builds: {case} under valgrind failed with {builds[k]}; see {outdir}/{attempt}.txt")
+            counts[k] = int(m.group(1).replace(",", ""))
+    return counts
+
+
+def main_instructions(args, builds):
+    cases = [c for c in (args.cases or ",".join(INSTR_DEFAULT)).split(",") if c]
+    for c in cases:
+        if c not in INSTR_CASES:
+            sys.exit(f"compare_builds: unknown case {c!r} for --instructions (known: {', '.join(INSTR_CASES)})")
+        if c.startswith("map_") and not args.mesh:
+            sys.exit(f"compare_builds: the case {c} needs --mesh")
+    rows, slower = [], []
+    print(f"{'case':12} {'A instructions':>16} {'B instructions':>16} {'B/A':>7}")
+    for c in cases:
+        n = instructions(c, builds, args.out, args.mesh)
+        ratio = n["b"] / n["a"]
+        rows.append({"case": c, "a": n["a"], "b": n["b"], "ratio": ratio})
+        if ratio > 1 + args.threshold:
+            slower.append(c)
+        print(f"{c:12} {n['a']:16,d} {n['b']:16,d} {ratio:7.4f}", flush=True)
+    with open(os.path.join(args.out, "instructions.json"), "w") as f:
+        json.dump({"a": builds["a"], "b": builds["b"], "threshold": args.threshold, "cases": rows,
+                   "slower": slower}, f, indent=1)
+    print(f"\nmore instructions than A by more than {args.threshold:.0%}: {', '.join(slower) if slower else 'none'}")
+    return 1 if slower else 0
+
+
 def summarise(samples_a, samples_b, threshold):
     rows = []
     for key in sorted(set(samples_a) & set(samples_b)):
@@ -121,23 +195,26 @@ def main():
     p.add_argument("--out", required=True)
     p.add_argument("--rounds", type=int, default=5)
     p.add_argument("--warmup", type=int, default=1)
-    p.add_argument("--cases", default=",".join(DEFAULT))
+    p.add_argument("--cases", help="comma-separated (default: every case of the mode)")
+    p.add_argument("--instructions", action="store_true", help="count instructions under valgrind instead")
     p.add_argument("--mesh", help="a mesh for the case map_mesh (vpm map)")
     p.add_argument("--threshold", type=float, default=0.03)
     p.add_argument("--min-seconds", type=float, default=0.05,
                    help="timings whose A median is below this are listed but not judged")
     args = p.parse_args()
-    cases = [c for c in args.cases.split(",") if c]
-    for c in cases:
-        if c not in CASES:
-            sys.exit(f"compare_builds: unknown case {c!r} (known: {', '.join(CASES)})")
-        if c == "map_mesh" and not args.mesh:
-            sys.exit("compare_builds: the case map_mesh needs --mesh")
     builds = {"a": os.path.abspath(args.a), "b": os.path.abspath(args.b)}
     for k, b in builds.items():
         if not os.path.exists(os.path.join(b, "vpm")):
             sys.exit(f"compare_builds: --{k} {b} holds no vpm")
     os.makedirs(args.out, exist_ok=True)
+    if args.instructions:
+        return main_instructions(args, builds)
+    cases = [c for c in (args.cases or ",".join(DEFAULT)).split(",") if c]
+    for c in cases:
+        if c not in CASES:
+            sys.exit(f"compare_builds: unknown case {c!r} (known: {', '.join(CASES)})")
+        if c == "map_mesh" and not args.mesh:
+            sys.exit("compare_builds: the case map_mesh needs --mesh")
     samples = {c: {"a": {}, "b": {}} for c in cases}
     total = args.warmup + args.rounds
     for r in range(total):
