@@ -3,7 +3,7 @@
 
     python3 bench/ab/compare_builds.py --a OLD_BUILD --b NEW_BUILD --out DIR [--rounds 5]
         [--warmup 1] [--cases volume_map,register,...] [--mesh MESH.vtu] [--threshold 0.03]
-        [--instructions]
+        [--instructions | --profile]
 
 Each round runs every case once with each build, the order alternating (A B, then B A), so a
 machine that drifts slower affects both alike. The first --warmup rounds (PoCL's kernel builds,
@@ -23,6 +23,12 @@ of the same build. The two builds run side by side (valgrind runs a program's th
 time, so each takes one core), twice, and the second run is counted: the first fills the PoCL
 kernel cache for the CPU valgrind presents, so kernel compilation stays out of the count. The cases are lighter (INSTR_CASES). A count is a
 proxy for time, not a time: memory traffic and parallel efficiency are not in it.
+
+With --profile each run is sampled by `perf record -e cpu-clock` (a software clock: the VM
+exposes no hardware counters) and the samples are summed per shared object (the library, libm,
+each PoCL kernel's .so) over the rounds: a machine that runs slower scales every row alike,
+where a code change moves its own row. Printed: samples per row for A and B, B / A, and B / A
+of the row's share of all samples (1 = the same fraction of the run). Writes DIR/profile.json.
 
 A build folder is what scripts/build.sh makes (vpm, bench/vpm_bench_*); the command runs with
 POCL_CACHE_DIR=DIR/pocl-cache-<a|b>. Exit 1 when a timing is slower, else 0.
@@ -172,6 +178,62 @@ def main_instructions(args, builds):
     return 1 if slower else 0
 
 
+def perf_rows(data):
+    """Samples per shared object of one perf.data."""
+    text = subprocess.run(["perf", "report", "-i", data, "--stdio", "--sort", "dso", "-F", "sample,dso"],
+                          capture_output=True, text=True).stdout
+    rows = {}
+    for line in text.splitlines():
+        parts = line.split()
+        if len(parts) >= 2 and not line.startswith("#") and parts[0].isdigit():
+            rows[parts[1]] = rows.get(parts[1], 0) + int(parts[0])
+    return rows
+
+
+def main_profile(args, builds):
+    cases = [c for c in (args.cases or ",".join(DEFAULT)).split(",") if c]
+    totals = {c: {"a": {}, "b": {}} for c in cases}
+    for r in range(args.warmup + args.rounds):
+        for c in cases:
+            for k in (["a", "b"] if r % 2 == 0 else ["b", "a"]):
+                outdir = os.path.join(args.out, "profile", c, k, str(r))
+                os.makedirs(outdir, exist_ok=True)
+                cmd_t, _, env_case = CASES[c]
+                cmd = cmd_t.format(B=builds[k], O=outdir, MESH=args.mesh or "").split()
+                env = dict(os.environ, POCL_CACHE_DIR=os.path.join(os.path.abspath(args.out), f"pocl-cache-{k}"),
+                           **env_case)
+                data = os.path.join(outdir, "perf.data")
+                with open(os.path.join(outdir, "log.txt"), "w") as log:
+                    rc = subprocess.run(["perf", "record", "-q", "-e", "cpu-clock", "-F", "999", "-o", data, "--"] + cmd,
+                                        env=env, stdout=log, stderr=subprocess.STDOUT).returncode
+                if rc != 0:
+                    sys.exit(f"compare_builds: {c} failed under perf with {builds[k]}; see {outdir}/log.txt")
+                if r >= args.warmup:
+                    for dso, n in perf_rows(data).items():
+                        totals[c][k][dso] = totals[c][k].get(dso, 0) + n
+                os.remove(data)
+            print(f"round {r + 1}/{args.warmup + args.rounds} {c} done", flush=True)
+    report = {"a": builds["a"], "b": builds["b"], "rounds": args.rounds, "cases": {}}
+    print(f"\n{'case':12} {'shared object':28} {'A samples':>10} {'B samples':>10} {'B/A':>7} {'share B/A':>9}")
+    for c in cases:
+        a, b = totals[c]["a"], totals[c]["b"]
+        ta, tb = max(1, sum(a.values())), max(1, sum(b.values()))
+        rows = []
+        for dso in sorted(set(a) | set(b), key=lambda d: -(a.get(d, 0) + b.get(d, 0))):
+            na, nb = a.get(dso, 0), b.get(dso, 0)
+            if max(na / ta, nb / tb) < 0.01:
+                continue  # under 1 % of the run on both sides
+            ratio = nb / na if na else float("inf")
+            share = (nb / tb) / (na / ta) if na else float("inf")
+            rows.append({"object": dso, "a": na, "b": nb, "ratio": ratio, "share_ratio": share})
+            print(f"{c:12} {dso[:28]:28} {na:10d} {nb:10d} {ratio:7.3f} {share:9.3f}")
+        print(f"{c:12} {'(all)':28} {ta:10d} {tb:10d} {tb / ta:7.3f}")
+        report["cases"][c] = {"a_total": ta, "b_total": tb, "rows": rows}
+    with open(os.path.join(args.out, "profile.json"), "w") as f:
+        json.dump(report, f, indent=1)
+    return 0
+
+
 def summarise(samples_a, samples_b, threshold):
     rows = []
     for key in sorted(set(samples_a) & set(samples_b)):
@@ -197,6 +259,7 @@ def main():
     p.add_argument("--warmup", type=int, default=1)
     p.add_argument("--cases", help="comma-separated (default: every case of the mode)")
     p.add_argument("--instructions", action="store_true", help="count instructions under valgrind instead")
+    p.add_argument("--profile", action="store_true", help="sample where the time goes with perf instead")
     p.add_argument("--mesh", help="a mesh for the case map_mesh (vpm map)")
     p.add_argument("--threshold", type=float, default=0.03)
     p.add_argument("--min-seconds", type=float, default=0.05,
@@ -209,6 +272,8 @@ def main():
     os.makedirs(args.out, exist_ok=True)
     if args.instructions:
         return main_instructions(args, builds)
+    if args.profile:
+        return main_profile(args, builds)
     cases = [c for c in (args.cases or ",".join(DEFAULT)).split(",") if c]
     for c in cases:
         if c not in CASES:
