@@ -18,6 +18,7 @@ PKGS=(
   python3-matplotlib python3-nbformat  # the worked example (examples/): plots, and its notebook made from the script
   python3-tqdm  # optional: progress bars of vpm.map_to_ball(progress=True)
   chromium
+  linux-perf valgrind  # bench only: bench/ab/compare_builds.py --profile and --instructions
   clang-14 libclang-rt-14-dev llvm-14  # the ASan + UBSan build and libFuzzer (scripts/sanitize.sh, scripts/fuzz.sh); llvm-symbolizer for their stacks
 )
 missing=()
