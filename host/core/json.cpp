@@ -1,6 +1,7 @@
 #include "vpm/json.hpp"
 
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -72,11 +73,22 @@ void Json::dump_to(std::string& out, int indent, int depth) const {
     case Type::Bool: out += bool_ ? "true" : "false"; break;
     case Type::Number: {
       if (!std::isfinite(number_)) { out += "null"; break; }
+      // Integers below 1e15 exactly, anything else to 10 significant digits; a value whose 10
+      // digits are an integer below 1e15 is written as that integer, as its parse would be
+      // written (else 55555555555550.02 -> "5.555555556e+13" -> "55555555560000": found by
+      // fuzz_json, input in fuzz/regressions/json/).
       char buf[32];
-      if (number_ == std::floor(number_) && std::fabs(number_) < 1e15)
-        std::snprintf(buf, sizeof buf, "%.0f", number_);
-      else
-        std::snprintf(buf, sizeof buf, "%.10g", number_);
+      double v = number_;
+      const auto integral = [](double x) { return x == std::floor(x) && std::fabs(x) < 1e15; };
+      if (!integral(v)) {
+        std::snprintf(buf, sizeof buf, "%.10g", v);
+        v = std::strtod(buf, nullptr);
+        if (!integral(v)) {
+          out += buf;
+          break;
+        }
+      }
+      std::snprintf(buf, sizeof buf, "%.0f", v);
       out += buf;
       break;
     }
