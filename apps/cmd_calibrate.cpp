@@ -20,12 +20,14 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   vpm::CalibrationSettings s = vpm::cli::comparison_settings(args, true);
   s.rate = args.get_double("--rate", 1.0);
   if (!(s.rate >= 0)) throw vpm::InputError("option --rate: must be >= 0 false clusters per 10 normals");
-  std::vector<std::string> paths;
-  const std::vector<vpm::ElementTable> normals = vpm::cli::read_normals(args, 4, paths);
-  const vpm::CanonicalElements el(normals[0].definition);
   const std::optional<vpm::Covariates> cov = vpm::cli::read_participants(args, s);
+  const vpm::ReferenceRecipe recipe = vpm::cli::reference_recipe(s, cov);
+  const vpm::cli::LoadedReference loaded = vpm::cli::load_reference(args, recipe, cov, 4);
+  const vpm::CanonicalElements& el = *loaded.elements;
+  // each normal left out is read once more (its values, then taken out of the totals)
+  const std::vector<std::string> left_out = vpm::cli::normal_paths(args, 1);
   const vpm::ClusterCalibration c = vpm::calibrate_min_cluster(
-      el, normals, paths, s, cov ? vpm::covariate_design(*cov, normals, paths) : vpm::CovariateDesign{});
+      el, loaded.sums, vpm::table_files(left_out, loaded.sums.definition(), recipe, &el, cov ? &*cov : nullptr), s);
   vpm::write_json_file(*out, vpm::to_json(c));
   if (c.min_cluster == 0)
     throw vpm::NumericalError(*out + ": no min_cluster keeps the normals at or under " + vpm::format_sig(s.rate) +
@@ -44,12 +46,13 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
 std::vector<vpm::cli::OptionSpec> rows() {
   std::vector<vpm::cli::OptionSpec> r = vpm::cli::comparison_option_rows(true);
   r.push_back({"--rate", "R", "false clusters allowed per 10 normals (default 1)"});
-  r.push_back({"--normals", "A.tsv,B.tsv,...", "the normals' subject tables (vpm sample), at least 4", true, 0, true});
+  r.push_back({"--normals", "A.h5,B.h5,...|@LIST", "the normals' subject tables (vpm sample), each left out in turn; at least 4", true, 0, true});
+  r.push_back({"--reference", "SUMS.h5", "the sums of every normal (vpm reference; default: summed from --normals in a first pass)"});
   r.push_back({"--feature", "NAME", "the feature compared (a NAME of vpm sample --images)", true, 0, true});
   return r;
 }
 
-vpm::cli::Registrar reg({"calibrate", "--normals A.tsv,B.tsv,... --feature NAME -o CAL.json",
+vpm::cli::Registrar reg({"calibrate", "--normals A.h5,B.h5,... --feature NAME -o CAL.json",
                          "the cluster size (and with --peak auto the peak level) at which the normals, each compared with the others, show at most R false foci per 10",
                          rows(), run});
 

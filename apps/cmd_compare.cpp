@@ -60,27 +60,26 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   args.expect_positional(0, "usage: " + vpm::cli::synopsis(self));
   const auto out = args.get("-o");
   const auto patient_path = args.get("--patient");
-  if (!out || !args.has("--normals") || !patient_path || !args.has("--feature"))
-    throw vpm::InputError("needs -o, --normals, --patient and --feature; usage: " + vpm::cli::synopsis(self));
+  if (!out || (!args.has("--normals") && !args.has("--reference")) || !patient_path || !args.has("--feature"))
+    throw vpm::InputError("needs -o, --normals (or --reference), --patient and --feature; usage: " + vpm::cli::synopsis(self));
+  if (args.has("--normals") && args.has("--reference"))
+    throw vpm::InputError("options --normals and --reference exclude each other (the reference's sums name its normals)");
   const vpm::CalibrationSettings settings = vpm::cli::comparison_settings(args);
   if (args.has("--image") && !args.has("--mesh"))
     throw vpm::InputError("option --image needs --mesh (the patient's registered mesh)");
   if (args.has("--labels") && !args.has("--image")) throw vpm::InputError("option --labels needs --image");
-  std::vector<std::string> normal_paths;
-  const std::vector<vpm::ElementTable> normals = vpm::cli::read_normals(args, 3, normal_paths);
-  const vpm::CompareOptions opt = options_with_calibration(args, settings, normal_paths);
-  const vpm::CanonicalElements el(normals[0].definition);
   const std::optional<vpm::Covariates> cov = vpm::cli::read_participants(args, settings);
-  const vpm::Reference ref =
-      vpm::build_reference(el, normals, normal_paths, settings.feature, settings.normalisation, settings.smoothing,
-                           settings.shrinkage, cov ? vpm::covariate_design(*cov, normals, normal_paths) : vpm::CovariateDesign{},
-                           settings.image_covariate);
+  const vpm::cli::LoadedReference loaded =
+      vpm::cli::load_reference(args, vpm::cli::reference_recipe(settings, cov), cov, 3);
+  const vpm::CanonicalElements& el = *loaded.elements;
+  const vpm::CompareOptions opt = options_with_calibration(args, settings, loaded.sums.normals());
+  const vpm::Reference ref = loaded.sums.reference(&el, settings.shrinkage);
   vpm::ElementTable patient = vpm::read_subject_table(*patient_path);
   const std::vector<double> row = cov ? vpm::covariate_row(*cov, patient.subject, *patient_path) : std::vector<double>{};
   patient.subject = *patient_path;
   const vpm::Comparison c = vpm::compare_to_reference(el, ref, patient, opt, row);
   map_back(args, *out, el, c);  // first: OUT.tsv, written last, marks a complete run
-  vpm::write_comparison(*out, el, ref, normal_paths, *patient_path, opt, c);
+  vpm::write_comparison(*out, el, ref, loaded.sums.normals(), *patient_path, opt, c);
   vpm::cli::info("wrote " + *out + ": " + std::to_string(c.clusters.size()) + " foci (|z| >= " +
                  std::to_string(c.threshold_used) + ", clusters of >= " + std::to_string(opt.min_cluster) +
                  " elements) against " + std::to_string(ref.subjects) + " normals");
@@ -98,14 +97,15 @@ std::vector<vpm::cli::OptionSpec> with_shared_rows(std::vector<vpm::cli::OptionS
 }
 
 vpm::cli::Registrar reg(
-    {"compare", "--normals A.tsv,B.tsv,... --patient P.tsv --feature NAME -o OUT.tsv",
+    {"compare", "--patient P.h5 --feature NAME -o OUT.tsv",
      "a patient's element table against the normals: z-scores, foci, and both on the patient's brain",
      with_shared_rows({
       {"--mesh", "REGISTERED.vtu", "the patient's registered mesh: writes OUT_native.vtu with fields z, focus"},
       {"--image", "IMAGE.nii[.gz]", "with --mesh: OUT_z.nii.gz, OUT_foci.nii.gz on this image's grid and the foci table OUT_foci.tsv (mm^3, centroid)"},
       {"--labels", "ATLAS.nii[.gz]", "with --image: the patient's atlas labels; OUT_foci.tsv names each focus's main region"},
-      {"--normals", "A.tsv,B.tsv,...", "the normals' subject tables (vpm sample), at least 3", true, 0, true},
-      {"--patient", "P.tsv", "the patient's subject table", true, 0, true},
+      {"--normals", "A.h5,B.h5,...|@LIST", "the normals' subject tables (vpm sample), at least 3, summed in one pass", true, 2},
+      {"--reference", "SUMS.h5", "the normals' sums written by vpm reference instead", true, 2},
+      {"--patient", "P.h5", "the patient's subject table", true, 0, true},
       {"--feature", "NAME", "the feature compared (a NAME of vpm sample --images)", true, 0, true}}),
      run});
 

@@ -1,17 +1,36 @@
-// vpm convert IN OUT [--ascii]: reads any mesh (or surface) format and writes any other, by extension.
+// vpm convert IN OUT [--ascii]: reads any mesh (or surface) format and writes any other, by extension;
+// element tables between HDF5 (.h5) and TSV (.tsv).
 #include <iostream>
 
 #include "cli.hpp"
 #include "vpm/error.hpp"
 #include "vpm/io.hpp"
+#include "vpm/sampling.hpp"
 #include "vpm/topology.hpp"
 
 namespace {
+
+bool is_table_path(const std::string& path) {
+  try {
+    vpm::table_format(path);
+    return true;
+  } catch (const vpm::InputError&) {
+    return false;
+  }
+}
+
 int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   vpm::cli::Args args(argv, self);
   args.expect_positional(2, vpm::cli::synopsis(self));
   const std::string& in = args.positional()[0];
   const std::string& out = args.positional()[1];
+  if (is_table_path(in) || is_table_path(out)) {  // element tables: HDF5 <-> TSV
+    const vpm::ElementTable t = vpm::read_subject_table(in);
+    vpm::write_subject_table(out, t);
+    vpm::cli::info("wrote " + out + ": " + std::to_string(t.definition.elements()) + " elements, " +
+                   std::to_string(t.features.size()) + " features" + (t.label_images.empty() ? "" : " and label fractions"));
+    return 0;
+  }
   if (vpm::is_surface_path(in) && vpm::is_surface_path(out)) {
     const vpm::TriSurface s = vpm::read_surface(in);
     vpm::write_surface(out, s);
@@ -40,6 +59,6 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
                  std::to_string(m.num_tets()) + " tets");
   return 0;
 }
-vpm::cli::Registrar reg({"convert", "IN OUT", "convert between mesh (or surface) formats, chosen by extension; a tet mesh to .off/.obj/.stl writes its boundary",
+vpm::cli::Registrar reg({"convert", "IN OUT", "convert between mesh (or surface) formats, chosen by extension; a tet mesh to .off/.obj/.stl writes its boundary; element tables between .h5 and .tsv",
                           {{"--ascii", "", "a .vtu output as ASCII text (default: appended raw binary, as ParaView writes it)"}}, run});
 }  // namespace

@@ -1,4 +1,4 @@
-// vpm sample REGISTERED -o TABLE.tsv: per-element features of one subject (vpm/sampling.hpp).
+// vpm sample REGISTERED -o TABLE.h5: per-element features of one subject (vpm/sampling.hpp).
 #include <sstream>
 
 #include "cli.hpp"
@@ -34,7 +34,8 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   args.expect_positional(1, "usage: " + vpm::cli::synopsis(self));
   const std::string mesh_path = args.positional()[0];
   const auto out = args.get("-o");
-  if (!out) throw vpm::InputError("missing -o TABLE.tsv; usage: " + vpm::cli::synopsis(self));
+  if (!out) throw vpm::InputError("missing -o TABLE.h5; usage: " + vpm::cli::synopsis(self));
+  vpm::cli::parse_option("-o", [&] { return vpm::table_format(*out); });  // before the work, not after
   if (!args.has("--images") && !args.has("--labels"))
     throw vpm::InputError("nothing to sample: give --images NAME=IMAGE[,...] and/or --labels LABELS");
   vpm::ElementTable table;
@@ -51,14 +52,14 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   if (const auto labels = args.get("--labels"))
     table.label_images.push_back(vpm::sample_label_fractions(el, positions, vpm::read_image(*labels)));
   vpm::write_subject_table(*out, table);
-  vpm::cli::info("wrote " + *out + " and " + vpm::sidecar_path(*out) + ": " + std::to_string(el.size()) +
+  vpm::cli::info("wrote " + *out + (vpm::table_format(*out) == vpm::TableFormat::tsv ? " and " + vpm::sidecar_path(*out) : "") + ": " + std::to_string(el.size()) +
                  " elements x " + std::to_string(table.definition.samples) + " samples, " +
                  std::to_string(images.size()) + " features" + (args.has("--labels") ? " and label fractions" : ""));
   return 0;
 }
 
 vpm::cli::Registrar reg(
-    {"sample", "REGISTERED -o TABLE.tsv", "per-element features of a subject: element samples read in its images",
+    {"sample", "REGISTERED -o TABLE.h5", "per-element features of a subject: element samples read in its images; TABLE.h5 (HDF5) or TABLE.tsv (text)",
      {{"--images", "NAME=IMAGE[,NAME=IMAGE...]", "images to read (trilinear, world mm): columns NAME_mean/_std/_count"},
       {"--labels", "LABELS.nii[.gz]", "a label image: per-element label fractions (label_<id> columns)"},
       {"--subject", "ID", "subject id recorded in the sidecar"},

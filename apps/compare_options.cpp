@@ -1,5 +1,6 @@
 #include "compare_options.hpp"
 
+#include <fstream>
 #include <sstream>
 
 #include "vpm/error.hpp"
@@ -67,20 +68,70 @@ std::optional<Covariates> read_participants(const Args& args, const CalibrationS
   return read_covariates(*table, settings.covariates);
 }
 
-std::vector<ElementTable> read_normals(const Args& args, size_t at_least, std::vector<std::string>& paths) {
+std::vector<std::string> normal_paths(const Args& args, size_t at_least) {
   const auto list = args.get("--normals");
   if (!list) throw InputError("needs --normals");
-  paths.clear();
-  std::stringstream ss(*list);
-  std::string item;
-  while (std::getline(ss, item, ','))
-    if (!item.empty()) paths.push_back(item);
+  std::vector<std::string> paths;
+  if (!list->empty() && (*list)[0] == '@') {  // @LIST: one path a line
+    const std::string file = list->substr(1);
+    std::ifstream in(file);
+    if (!in) throw InputError("option --normals: cannot read the list " + file);
+    std::string line;
+    for (int n = 1; std::getline(in, line); ++n) {
+      if (!line.empty() && line.back() == '\r') line.pop_back();
+      if (!line.empty()) paths.push_back(line);
+      if (n > 10'000'000) throw InputError(file + ": more than 10 million lines; not a list of tables");
+    }
+  } else {
+    std::stringstream ss(*list);
+    std::string item;
+    while (std::getline(ss, item, ','))
+      if (!item.empty()) paths.push_back(item);
+  }
   if (paths.size() < at_least)
     throw InputError("option --normals: needs at least " + std::to_string(at_least) + " tables, got " +
                      std::to_string(paths.size()));
-  std::vector<ElementTable> normals;
-  for (const std::string& p : paths) normals.push_back(read_subject_table(p));
-  return normals;
+  return paths;
+}
+
+ReferenceRecipe reference_recipe(const CalibrationSettings& s, const std::optional<Covariates>& cov) {
+  ReferenceRecipe r;
+  r.feature = s.feature;
+  r.normalisation = s.normalisation;
+  r.smoothing = s.smoothing;
+  r.image_covariate = s.image_covariate;
+  if (cov) {
+    r.covariates = cov->names;
+    r.covariate_columns = cov->columns;
+    r.covariate_table = cov->source;
+  }
+  return r;
+}
+
+ElementDefinition table_definition(const std::string& path) {
+  TableColumns metadata_only;
+  metadata_only.features = {""};  // no feature has an empty name
+  metadata_only.spread = metadata_only.labels = false;
+  return read_subject_table(path, metadata_only).definition;
+}
+
+LoadedReference load_reference(const Args& args, const ReferenceRecipe& recipe, const std::optional<Covariates>& cov,
+                               size_t at_least) {
+  if (const auto path = args.get("--reference")) {
+    ReferenceSums sums = read_reference_sums(*path);
+    if (const auto diff = recipe_difference(recipe, sums.recipe()))
+      throw InputError("option --reference: " + *path + " was summed with " + *diff);
+    if (sums.normals().size() < at_least)
+      throw InputError("option --reference: " + *path + " sums " + std::to_string(sums.normals().size()) +
+                       " normals, at least " + std::to_string(at_least) + " are needed");
+    auto el = std::make_unique<CanonicalElements>(sums.definition());
+    return {std::move(sums), std::move(el)};
+  }
+  const std::vector<std::string> paths = normal_paths(args, at_least);
+  const ElementDefinition definition = table_definition(paths[0]);
+  auto el = std::make_unique<CanonicalElements>(definition);
+  ReferenceSums sums = sum_normals(definition, recipe, table_files(paths, definition, recipe, el.get(), cov ? &*cov : nullptr));
+  return {std::move(sums), std::move(el)};
 }
 
 std::vector<OptionSpec> comparison_option_rows(bool peak_auto) {

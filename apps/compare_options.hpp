@@ -1,6 +1,7 @@
 #pragma once
 // The comparison options shared by `vpm compare` and `vpm calibrate` (the calibration must use
 // the patients' own options), and reading the normals' tables.
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -8,6 +9,7 @@
 #include "cli.hpp"
 #include "vpm/calibration.hpp"
 #include "vpm/covariates.hpp"
+#include "vpm/reference_sums.hpp"
 #include "vpm/statistics.hpp"
 
 namespace vpm::cli {
@@ -27,8 +29,26 @@ CalibrationSettings comparison_settings(const Args& args, bool peak_auto = false
 /// without covariates. InputError when one option comes without the other.
 std::optional<Covariates> read_participants(const Args& args, const CalibrationSettings& settings);
 
-/// The tables of --normals A.tsv,B.tsv,... (at least `at_least`), read; `paths` receives the names.
-std::vector<ElementTable> read_normals(const Args& args, size_t at_least, std::vector<std::string>& paths);
+/// The table paths of --normals: A.h5,B.h5,... or @LIST (a file naming one table a line, for
+/// cohorts whose list outgrows a command line); at least `at_least`.
+std::vector<std::string> normal_paths(const Args& args, size_t at_least);
+
+/// What a reference sums under `settings` (feature, normalisation, smoothing, image covariate)
+/// with `covariates` (their columns; none without).
+ReferenceRecipe reference_recipe(const CalibrationSettings& settings, const std::optional<Covariates>& covariates);
+
+/// The normals' sums and the elements of their definition: read from --reference SUMS.h5 (vpm
+/// reference; InputError when its recipe differs from `recipe`), or summed in one pass over the
+/// tables of --normals. At least `at_least` normals.
+struct LoadedReference {
+  ReferenceSums sums;
+  std::unique_ptr<CanonicalElements> elements;
+};
+LoadedReference load_reference(const Args& args, const ReferenceRecipe& recipe, const std::optional<Covariates>& covariates,
+                               size_t at_least);
+
+/// The element definition of the table at `path` (its metadata alone is read from an HDF5 table).
+ElementDefinition table_definition(const std::string& path);
 
 /// The option-table rows of --normalisation, --threshold, --fdr, --smooth, --shrink, --extend,
 /// --test, --peak, --sign, --covariates, --participants and --image-covariate (not --min-cluster, --normals,

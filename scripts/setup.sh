@@ -8,6 +8,7 @@ PKGS=(
   libeigen3-dev libboost-dev catch2
   libtet1.5-dev tetgen libnifti2-dev zlib1g-dev mricron-data
   libcgal-dev libgmp-dev libmpfr-dev
+  libhdf5-dev python3-h5py  # element tables and reference sums (HDF5); h5py reads them in Python without vpm
   libsuitesparse-dev libopenblas0-pthread  # CHOLMOD's supernodal Cholesky for the sphere map, on OpenBLAS
   libcgal-demo  # bench only: the public surface models of bench/shapes (--models)
   libviennacl-dev python3-vtk9 python3-numpy

@@ -5,8 +5,9 @@
 #include <cmath>
 #include <exception>
 #include <functional>
+#include <map>
 
-#include "collective/reference_values.hpp"
+#include "collective/comparison.hpp"
 #include "core/parallel.hpp"
 #include "vpm/error.hpp"
 
@@ -20,30 +21,16 @@ bool kept(int candidates, double peak_z, int m, double peak) {
   return candidates >= m || (peak > 0 && candidates > 0 && std::abs(peak_z) >= peak);
 }
 
-detail::ReferenceRecipe recipe_of(const CalibrationSettings& s) {
-  return {s.feature, s.normalisation, s.smoothing, s.shrinkage, s.image_covariate};
-}
-
-// Normal `out` compared with the reference of the others (their `values`, shared by every pass).
-LeftOutNormal leave_out(const CanonicalElements& el, const std::vector<ElementTable>& normals,
-                        const std::vector<detail::NormalValues>& values, const std::vector<std::string>& names,
-                        const CalibrationSettings& s, const CovariateDesign& design, size_t out) {
-  std::vector<const detail::NormalValues*> others;
-  CovariateDesign other_rows = design;
-  other_rows.rows.clear();
-  for (size_t i = 0; i < normals.size(); ++i)
-    if (i != out) {
-      others.push_back(&values[i]);
-      if (!design.empty()) other_rows.rows.push_back(design.rows[i]);
-    }
-  const Reference ref = detail::reference_from_values(&el, normals[0].definition, others, recipe_of(s), other_rows);
+// Normal `values` (normals()[index] of the totals) compared with the reference of the others.
+LeftOutNormal leave_out(const CanonicalElements& el, const ReferenceSums& totals, size_t index, const NormalValues& values,
+                        const CalibrationSettings& s) {
+  const Reference ref = totals.reference_without(&el, s.shrinkage, index, values);
   CompareOptions o = s.compare;
   o.min_cluster = 1;
-  ElementTable patient = normals[out];
-  patient.subject = names[out];
-  const Comparison c = compare_to_reference(el, ref, patient, o, design.empty() ? std::vector<double>{} : design.rows[out]);
+  const std::string& name = totals.normals()[index];
+  const Comparison c = detail::compare_values(el, ref, values, o, totals.design()[index], name);
   LeftOutNormal r;
-  r.name = names[out];
+  r.name = name;
   for (const FocusCluster& f : c.clusters) {
     r.candidates.push_back(f.candidates);
     r.peak_z.push_back(f.peak_z);
@@ -79,27 +66,36 @@ int ClusterCalibration::clusters_at(int m) const {
 
 double ClusterCalibration::rate_at(int m) const { return normals > 0 ? 10.0 * clusters_at(m) / normals : 0; }
 
-ClusterCalibration calibrate_min_cluster(const CanonicalElements& el, const std::vector<ElementTable>& normals,
-                                         const std::vector<std::string>& names, const CalibrationSettings& s,
-                                         const CovariateDesign& design) {
-  if (normals.size() != names.size()) throw InputError("calibration: names and tables differ in number");
-  if (design.names != s.covariates || (!design.empty() && design.rows.size() != normals.size()))
-    throw InputError("calibration: the covariate design does not match the settings' covariates or the normals");
-  if (normals.size() < 4)
+ClusterCalibration calibrate_min_cluster(const CanonicalElements& el, const ReferenceSums& totals,
+                                         const NormalSource& left_out, const CalibrationSettings& s) {
+  if (totals.normals().size() < 4)
     throw InputError("calibration: needs at least 4 normals (3 in each reference), got " +
-                     std::to_string(normals.size()));
+                     std::to_string(totals.normals().size()));
   if (!(s.rate >= 0)) throw InputError("calibration: the rate must be >= 0 false clusters per 10 normals");
   if (s.calibrate_peak && s.compare.peak != 0)
     throw InputError("calibration: a fixed peak level and a calibrated one exclude each other");
+  ReferenceRecipe wanted = totals.recipe();  // the settings' recipe, with the sums' covariate columns
+  wanted.feature = s.feature;
+  wanted.normalisation = s.normalisation;
+  wanted.smoothing = s.smoothing;
+  wanted.image_covariate = s.image_covariate;
+  wanted.covariates = s.covariates;
+  if (const auto diff = recipe_difference(wanted, totals.recipe()))
+    throw InputError("calibration: the reference sums were made with " + *diff);
+  std::map<std::string, size_t> index;
+  for (size_t i = 0; i < totals.normals().size(); ++i) index.emplace(totals.normals()[i], i);
+  for (const std::string& name : left_out.names)
+    if (!index.count(name)) throw InputError(name + ": not one of the reference's normals (it cannot be left out of it)");
   ClusterCalibration cal;
   cal.settings = s;
-  cal.normals = static_cast<int>(normals.size());
-  cal.per_normal.resize(normals.size());
-  const std::vector<detail::NormalValues> values = detail::normal_values(&el, normals, names, recipe_of(s));
-  std::vector<std::exception_ptr> errors(normals.size());  // the first normal's is rethrown as it was
+  cal.normals = static_cast<int>(left_out.names.size());
+  cal.per_normal.resize(left_out.names.size());
+  std::vector<std::exception_ptr> errors(left_out.names.size());  // the first normal's is rethrown as it was
   detail::parallel_for(cal.normals, 2, [&](int b, int e) {
     for (int i = b; i < e; ++i) try {
-        cal.per_normal[static_cast<size_t>(i)] = leave_out(el, normals, values, names, s, design, static_cast<size_t>(i));
+        const size_t k = static_cast<size_t>(i);
+        const NormalValues v = left_out.values(k);
+        cal.per_normal[k] = leave_out(el, totals, index.at(left_out.names[k]), v, s);
       } catch (...) {
         errors[static_cast<size_t>(i)] = std::current_exception();
       }
@@ -115,6 +111,21 @@ ClusterCalibration calibrate_min_cluster(const CanonicalElements& el, const std:
     if (cal.min_cluster == 0 && cal.rate_at(m) <= s.rate) cal.min_cluster = m;
   }
   return cal;
+}
+
+ClusterCalibration calibrate_min_cluster(const CanonicalElements& el, const std::vector<ElementTable>& normals,
+                                         const std::vector<std::string>& names, const CalibrationSettings& s,
+                                         const CovariateDesign& design) {
+  if (normals.size() != names.size()) throw InputError("calibration: names and tables differ in number");
+  if (design.names != s.covariates || (!design.empty() && design.rows.size() != normals.size()))
+    throw InputError("calibration: the covariate design does not match the settings' covariates or the normals");
+  if (normals.size() < 4)
+    throw InputError("calibration: needs at least 4 normals (3 in each reference), got " +
+                     std::to_string(normals.size()));
+  const ReferenceRecipe recipe =
+      detail::recipe_for(s.feature, s.normalisation, s.smoothing, s.image_covariate, design);
+  const NormalSource source = tables_in_memory(normals, names, recipe, &el, design);
+  return calibrate_min_cluster(el, sum_normals(normals[0].definition, recipe, source), source, s);
 }
 
 namespace {

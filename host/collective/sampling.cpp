@@ -2,10 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iomanip>
 #include <map>
 
-#include "core/atomic_file.hpp"
 #include "core/parallel.hpp"
 #include "vpm/error.hpp"
 #include "vpm/locate.hpp"
@@ -69,67 +67,6 @@ ElementLabels sample_label_fractions(const CanonicalElements& el, const Points& 
       if (l != 0) out.fraction[column.at(l)][e] += 1.0 / S;
     }
   return out;
-}
-
-namespace {
-
-Json table_sidecar(const ElementTable& t) {
-  Json j = Json::object();
-  j["definition"] = to_json(t.definition);
-  j["elements"] = t.definition.elements();
-  j["subject"] = t.subject;
-  j["mesh"] = t.mesh;
-  Json feats = Json::array();
-  for (const ElementFeature& f : t.features) {
-    Json o = Json::object();
-    o["name"] = f.name;
-    o["source"] = f.source;
-    o["interpolation"] = "trilinear";
-    feats.push_back(o);
-  }
-  j["features"] = feats;
-  Json labs = Json::array();
-  for (const ElementLabels& l : t.label_images) {
-    Json o = Json::object();
-    o["source"] = l.source;
-    o["labels"] = static_cast<long>(l.labels.size());
-    labs.push_back(o);
-  }
-  j["label_images"] = labs;
-  Json c = Json::object();
-  c["samples"] = "sample points of the element (the same for every subject)";
-  c["<feature>_mean"] = "mean of the image over the element's samples inside the image grid";
-  c["<feature>_std"] = "population standard deviation over those samples";
-  c["<feature>_count"] = "samples inside the image grid";
-  c["label_<id>"] = "fraction of the element's samples on that label (nearest voxel)";
-  j["columns"] = c;
-  return j;
-}
-
-}  // namespace
-
-void write_subject_table(const std::string& tsv_path, const ElementTable& t) {
-  const int n = t.definition.elements(), triangles = t.definition.triangles();
-  for (const ElementFeature& f : t.features)
-    if (f.mean.size() != static_cast<size_t>(n))
-      throw InputError(tsv_path + ": feature " + f.name + " has " + std::to_string(f.mean.size()) +
-                       " elements, the definition " + std::to_string(n));
-  detail::AtomicFile file(tsv_path);
-  std::ostream& out = file.stream();
-  out << "element\tshell\ttriangle\tsamples";
-  for (const ElementFeature& f : t.features) out << '\t' << f.name << "_mean\t" << f.name << "_std\t" << f.name << "_count";
-  for (const ElementLabels& l : t.label_images)
-    for (int id : l.labels) out << "\tlabel_" << id;
-  out << '\n' << std::setprecision(10);
-  for (int e = 0; e < n; ++e) {
-    out << e << '\t' << e / triangles << '\t' << e % triangles << '\t' << t.definition.samples;
-    for (const ElementFeature& f : t.features) out << '\t' << f.mean[e] << '\t' << f.std[e] << '\t' << f.count[e];
-    for (const ElementLabels& l : t.label_images)
-      for (const auto& col : l.fraction) out << '\t' << col[e];
-    out << '\n';
-  }
-  write_json_file(sidecar_path(tsv_path), table_sidecar(t));
-  file.commit();
 }
 
 }  // namespace vpm

@@ -7,7 +7,7 @@
 #include <numeric>
 
 #include "collective/covariate_model.hpp"
-#include "collective/reference_values.hpp"
+#include "collective/comparison.hpp"
 #include "collective/distributions.hpp"
 #include "vpm/error.hpp"
 
@@ -81,18 +81,23 @@ std::vector<double> smooth_over_elements(const CanonicalElements& el, const std:
 
 Reference build_reference(const std::vector<ElementTable>& normals, const std::vector<std::string>& names,
                           const std::string& feature, Normalisation normalisation) {
-  const detail::ReferenceRecipe recipe{feature, normalisation, 0, 0, {}};
-  const std::vector<detail::NormalValues> values = detail::normal_values(nullptr, normals, names, recipe);
-  return detail::reference_from_values(nullptr, normals[0].definition, detail::every_normal(values), recipe, {});
+  if (normals.size() < 3) throw InputError("reference: needs at least 3 normals, got " + std::to_string(normals.size()));
+  ReferenceRecipe recipe;
+  recipe.feature = feature;
+  recipe.normalisation = normalisation;
+  return sum_normals(normals[0].definition, recipe, tables_in_memory(normals, names, recipe, nullptr)).reference(nullptr, 0);
 }
 
 Reference build_reference(const CanonicalElements& elements, const std::vector<ElementTable>& normals,
                           const std::vector<std::string>& names, const std::string& feature, Normalisation normalisation,
                           int smoothing, double shrinkage, const CovariateDesign& covariates,
                           const std::string& image_covariate) {
-  const detail::ReferenceRecipe recipe{feature, normalisation, smoothing, shrinkage, image_covariate};
-  const std::vector<detail::NormalValues> values = detail::normal_values(&elements, normals, names, recipe);
-  return detail::reference_from_values(&elements, normals[0].definition, detail::every_normal(values), recipe, covariates);
+  if (normals.size() < 3) throw InputError("reference: needs at least 3 normals, got " + std::to_string(normals.size()));
+  if (!(shrinkage >= 0 && shrinkage <= 1))
+    throw InputError("reference: shrinkage " + std::to_string(shrinkage) + " is not in [0, 1]");
+  const ReferenceRecipe recipe = detail::recipe_for(feature, normalisation, smoothing, image_covariate, covariates);
+  return sum_normals(normals[0].definition, recipe, tables_in_memory(normals, names, recipe, &elements, covariates))
+      .reference(&elements, shrinkage);
 }
 
 namespace {
@@ -242,22 +247,52 @@ Comparison compare_to_reference(const CanonicalElements& el, const Reference& re
                                 const CompareOptions& opt, const std::vector<double>& covariates) {
   if (patient.definition != ref.definition || el.definition() != ref.definition)
     throw InputError(patient.subject + ": element definition differs from the reference's");
+  return detail::compare_values(el, ref, normal_values(&el, patient, patient.subject, detail::recipe_of(ref)), opt,
+                                covariates, patient.subject);
+}
+
+namespace detail {
+
+ReferenceRecipe recipe_of(const Reference& ref) {
+  ReferenceRecipe r;
+  r.feature = ref.feature;
+  r.normalisation = ref.normalisation;
+  r.smoothing = ref.smoothing;
+  r.image_covariate = ref.image_covariate;
+  r.covariates = ref.covariate_names;
+  r.covariate_columns = ref.covariates;
+  r.covariate_table = ref.covariate_table;
+  return r;
+}
+
+ReferenceRecipe recipe_for(const std::string& feature, Normalisation normalisation, int smoothing,
+                           const std::string& image_covariate, const CovariateDesign& design) {
+  ReferenceRecipe r;
+  r.feature = feature;
+  r.normalisation = normalisation;
+  r.smoothing = smoothing;
+  r.image_covariate = image_covariate;
+  r.covariates = design.names;
+  r.covariate_columns = design.columns;
+  r.covariate_table = design.source;
+  return r;
+}
+
+Comparison compare_values(const CanonicalElements& el, const Reference& ref, const NormalValues& values,
+                          const CompareOptions& opt, const std::vector<double>& covariates, const std::string& who) {
+  if (el.definition() != ref.definition) throw InputError(who + ": element definition differs from the reference's");
   if (covariates.size() != ref.covariates.size())
-    throw InputError(patient.subject + ": " + std::to_string(covariates.size()) + " covariate values for a reference of " +
+    throw InputError(who + ": " + std::to_string(covariates.size()) + " covariate values for a reference of " +
                      std::to_string(ref.covariates.size()) + " covariates");
   if (const auto bad = compare_option_error(opt)) throw InputError("compare options: " + bad->field + ": " + bad->problem);
   Comparison c;
-  c.patient = smooth_over_elements(el, normalised_feature(patient, ref.feature, ref.normalisation), ref.smoothing);
+  c.patient = values.feature;
   const std::vector<double>& x = c.patient;
   c.z.assign(x.size(), kNaN);
   if (ref.has_model()) {
     c.covariates = covariates;
     c.expected.assign(x.size(), kNaN);
-    const std::vector<double> image =
-        ref.image_covariate.empty()
-            ? std::vector<double>{}
-            : smooth_over_elements(el, normalised_feature(patient, ref.image_covariate, ref.normalisation), ref.smoothing);
-    covariate_z(ref, covariates, image, opt.test, c);
+    covariate_z(ref, covariates, values.image, opt.test, c);
   } else {
     c.expected = ref.mean;
     for (size_t e = 0; e < x.size(); ++e)
@@ -284,6 +319,8 @@ Comparison compare_to_reference(const CanonicalElements& el, const Reference& re
   }
   return c;
 }
+
+}  // namespace detail
 
 Json to_json(const Comparison& c) {
   Json j = Json::object();

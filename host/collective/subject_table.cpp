@@ -1,16 +1,165 @@
-// Reading subject tables (vpm/sampling.hpp): the TSV written by write_subject_table and its sidecar.
+// Subject tables (vpm/sampling.hpp): the format chosen by the file name, the metadata both
+// formats carry, and the TSV export with its JSON sidecar (the HDF5 format is in
+// subject_table_hdf5.cpp).
 #include <charconv>
 #include <climits>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 
+#include "collective/subject_table_formats.hpp"
+#include "core/atomic_file.hpp"
 #include "io/text.hpp"
 #include "vpm/error.hpp"
 #include "vpm/sampling.hpp"
 
 namespace vpm {
+
+TableFormat table_format(const std::string& path) {
+  const std::string ext = detail::extension_of(path);
+  if (ext == ".h5" || ext == ".hdf5") return TableFormat::hdf5;
+  if (ext == ".tsv") return TableFormat::tsv;
+  throw InputError(path + ": a subject table is .h5 (HDF5) or .tsv (text), not '" + ext + "'");
+}
+
+void write_subject_table(const std::string& path, const ElementTable& table) {
+  if (table_format(path) == TableFormat::hdf5)
+    detail::write_subject_table_hdf5(path, table);
+  else
+    detail::write_subject_table_tsv(path, table);
+}
+
+ElementTable read_subject_table(const std::string& path) { return read_subject_table(path, TableColumns{}); }
+
+ElementTable read_subject_table(const std::string& path, const TableColumns& columns) {
+  if (table_format(path) == TableFormat::hdf5) return detail::read_subject_table_hdf5(path, columns);
+  ElementTable t = detail::read_subject_table_tsv(path);
+  if (!columns.features.empty())
+    std::erase_if(t.features, [&](const ElementFeature& f) {
+      return std::find(columns.features.begin(), columns.features.end(), f.name) == columns.features.end();
+    });
+  if (!columns.spread)
+    for (ElementFeature& f : t.features) std::vector<double>().swap(f.std);
+  if (!columns.labels) t.label_images.clear();
+  return t;
+}
+
+namespace detail {
+
+Json table_metadata(const ElementTable& t) {
+  Json j = Json::object();
+  j["definition"] = to_json(t.definition);
+  j["elements"] = t.definition.elements();
+  j["subject"] = t.subject;
+  j["mesh"] = t.mesh;
+  Json feats = Json::array();
+  for (const ElementFeature& f : t.features) {
+    Json o = Json::object();
+    o["name"] = f.name;
+    o["source"] = f.source;
+    o["interpolation"] = "trilinear";
+    feats.push_back(o);
+  }
+  j["features"] = feats;
+  Json labs = Json::array();
+  for (const ElementLabels& l : t.label_images) {
+    Json o = Json::object();
+    o["source"] = l.source;
+    o["labels"] = static_cast<long>(l.labels.size());
+    labs.push_back(o);
+  }
+  j["label_images"] = labs;
+  Json c = Json::object();
+  c["samples"] = "sample points of the element (the same for every subject)";
+  c["<feature>_mean"] = "mean of the image over the element's samples inside the image grid";
+  c["<feature>_std"] = "population standard deviation over those samples";
+  c["<feature>_count"] = "samples inside the image grid";
+  c["label_<id>"] = "fraction of the element's samples on that label (nearest voxel)";
+  j["columns"] = c;
+  return j;
+}
+
+namespace {
+
+bool feature_name_ok(const std::string& name) {
+  if (name.empty() || name.size() > 64) return false;
+  for (char c : name)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') return false;
+  return true;
+}
+
+}  // namespace
+
+void read_table_metadata(const Json& j, const std::string& source, ElementTable& t, bool with_features) {
+  if (j.type() != Json::Type::Object) throw InputError(source + ": the metadata is not a JSON object");
+  const Json* d = j.find("definition");
+  if (!d) throw InputError(source + ": no element definition");
+  t.definition = element_definition_from_json(*d, source);
+  auto text = [&](const char* key) -> std::string {
+    const Json* v = j.find(key);
+    if (!v) return "";
+    if (v->type() != Json::Type::String) throw InputError(source + ": '" + key + "' is not a string");
+    return v->string();
+  };
+  t.subject = text("subject");
+  t.mesh = text("mesh");
+  const Json* f = j.find("features");
+  if (with_features && (!f || f->type() != Json::Type::Array)) throw InputError(source + ": no list of features");
+  if (!f || f->type() != Json::Type::Array) return;
+  if (with_features && f->size() > 256) throw InputError(source + ": more than 256 features");
+  for (size_t i = 0; i < f->size(); ++i) {
+    const Json& o = f->at(i);
+    const Json* src = o.type() == Json::Type::Object ? o.find("source") : nullptr;
+    if (with_features) {
+      const Json* name = o.type() == Json::Type::Object ? o.find("name") : nullptr;
+      if (!name || name->type() != Json::Type::String || !feature_name_ok(name->string()))
+        throw InputError(source + ": feature " + std::to_string(i + 1) + " has no name of letters, digits or _");
+      for (const ElementFeature& g : t.features)
+        if (g.name == name->string()) throw InputError(source + ": feature '" + g.name + "' is listed twice");
+      ElementFeature e;
+      e.name = name->string();
+      t.features.push_back(std::move(e));
+    }
+    if (i < t.features.size() && src && src->type() == Json::Type::String) t.features[i].source = src->string();
+  }
+}
+
+int checked_table_size(const std::string& path, const ElementTable& t) {
+  const int n = t.definition.elements();
+  const size_t un = static_cast<size_t>(n);
+  for (const ElementFeature& f : t.features)
+    if (f.mean.size() != un || f.count.size() != un || f.std.size() != un)
+      throw InputError(path + ": feature " + f.name + " has " + std::to_string(f.mean.size()) +
+                       " elements, the definition " + std::to_string(n));
+  for (const ElementLabels& l : t.label_images) {
+    if (l.fraction.size() != l.labels.size()) throw InputError(path + ": label fractions and labels differ in number");
+    for (const auto& col : l.fraction)
+      if (col.size() != un) throw InputError(path + ": a label column has " + std::to_string(col.size()) + " elements, the definition " + std::to_string(n));
+  }
+  return n;
+}
+
+void write_subject_table_tsv(const std::string& tsv_path, const ElementTable& t) {
+  const int n = checked_table_size(tsv_path, t), triangles = t.definition.triangles();
+  AtomicFile file(tsv_path);
+  std::ostream& out = file.stream();
+  out << "element\tshell\ttriangle\tsamples";
+  for (const ElementFeature& f : t.features) out << '\t' << f.name << "_mean\t" << f.name << "_std\t" << f.name << "_count";
+  for (const ElementLabels& l : t.label_images)
+    for (int id : l.labels) out << "\tlabel_" << id;
+  out << '\n' << std::setprecision(10);
+  for (int e = 0; e < n; ++e) {
+    out << e << '\t' << e / triangles << '\t' << e % triangles << '\t' << t.definition.samples;
+    for (const ElementFeature& f : t.features) out << '\t' << f.mean[e] << '\t' << f.std[e] << '\t' << f.count[e];
+    for (const ElementLabels& l : t.label_images)
+      for (const auto& col : l.fraction) out << '\t' << col[e];
+    out << '\n';
+  }
+  write_json_file(sidecar_path(tsv_path), table_metadata(t));
+  file.commit();
+}
 
 namespace {
 
@@ -64,19 +213,12 @@ void read_sidecar(const std::string& path, ElementTable& t) {
   } catch (const std::exception& e) {
     throw InputError(side + ": " + e.what());
   }
-  const Json* d = j.find("definition");
-  if (!d) throw InputError(side + ": no element definition");
-  t.definition = element_definition_from_json(*d, side);
-  if (const Json* s = j.find("subject")) t.subject = s->string();
-  if (const Json* m = j.find("mesh")) t.mesh = m->string();
-  if (const Json* f = j.find("features"))
-    for (size_t i = 0; i < f->size() && i < t.features.size(); ++i)
-      if (const Json* src = f->at(i).find("source")) t.features[i].source = src->string();
+  read_table_metadata(j, side, t, false);
 }
 
 }  // namespace
 
-ElementTable read_subject_table(const std::string& path) {
+ElementTable read_subject_table_tsv(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path + ": cannot read");
   ElementTable t;
@@ -122,5 +264,7 @@ ElementTable read_subject_table(const std::string& path) {
   if (!labels.empty()) t.label_images.push_back(std::move(lab));
   return t;
 }
+
+}  // namespace detail
 
 }  // namespace vpm

@@ -14,6 +14,7 @@
 
 #include "vpm/elements.hpp"
 #include "vpm/json.hpp"
+#include "vpm/reference_sums.hpp"
 #include "vpm/statistics.hpp"
 
 namespace vpm {
@@ -70,6 +71,14 @@ struct ClusterCalibration {
 ClusterCalibration calibrate_min_cluster(const CanonicalElements& elements, const std::vector<ElementTable>& normals,
                                          const std::vector<std::string>& names, const CalibrationSettings& settings,
                                          const CovariateDesign& design = {});
+
+/// The same streaming (vpm/reference_sums.hpp): `totals` are the sums of every normal (at least
+/// 4), made with the settings' recipe; each normal of `left_out` (named as in totals.normals(), a
+/// subset of them or all) is read once, taken out of the totals and compared with the rest, in
+/// parallel, a normal at a time per thread. Memory is a few references, whatever the number of
+/// normals. InputError when the recipes differ or a normal left out is not in the totals.
+ClusterCalibration calibrate_min_cluster(const CanonicalElements& elements, const ReferenceSums& totals,
+                                         const NormalSource& left_out, const CalibrationSettings& settings);
 
 /// {"feature", "normalisation", "smoothing", "shrinkage", "covariates" (names), "image_covariate"
 /// ("" for none), "options": {threshold, fdr_q, extend, peak (the fixed one; 0 when

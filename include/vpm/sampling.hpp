@@ -54,15 +54,44 @@ ElementFeature sample_feature(const CanonicalElements& elements, const Points& p
 /// Reads a label image at the samples (nearest voxel) and counts label fractions per element.
 ElementLabels sample_label_fractions(const CanonicalElements& elements, const Points& positions, const Image& labels);
 
-/// Writes `table` as TSV (one row per element: element, shell, triangle, samples, then
-/// <name>_mean, <name>_std for each feature, then label_<id> fractions) and its JSON sidecar
-/// (sidecar_path: definition, subject, mesh, features with sources, label sources, columns).
-/// Atomic; InputError naming the path when it cannot be written.
-void write_subject_table(const std::string& tsv_path, const ElementTable& table);
+/// The file format of a subject table, chosen by its name.
+enum class TableFormat {
+  /// .h5 (or .hdf5), what `vpm sample` writes by default: HDF5 readable without vpm (h5py,
+  /// MATLAB, nibabel's users), values as float32, chunked and compressed. Root attributes
+  /// "format" ("vpm element table"), "format_version" (1), "metadata" (the JSON object of the TSV
+  /// sidecar below), "subject", "level", "shells", "samples", "layout"; datasets
+  /// /features/<name>/mean and /std (float32, one value per element), /features/<name>/count
+  /// (uint16), and per label image k /labels/<k>/ids (int32, L) and /labels/<k>/fraction
+  /// (float32, L x elements). Level-6 tables of two features take about 20 MB (docs/collective.md).
+  hdf5,
+  /// .tsv: one row per element (element, shell, triangle, samples, then <name>_mean, <name>_std,
+  /// <name>_count per feature, then label_<id> fractions), ten significant digits, with a JSON
+  /// sidecar (sidecar_path) holding the definition, subject, mesh, features with their sources,
+  /// label sources and the columns' descriptions. An export for spreadsheets and scripts.
+  tsv,
+};
+/// The format of the table at `path` by its extension; InputError naming it for any other.
+TableFormat table_format(const std::string& path);
 
-/// Reads a subject table written by write_subject_table (the TSV and its JSON sidecar). Throws
-/// InputError naming the file and line when a column, a row or the sidecar is missing or
-/// malformed, or when the rows do not match the sidecar's element definition.
-ElementTable read_subject_table(const std::string& tsv_path);
+/// Writes `table` in the format its path names (table_format). Atomic: nothing is left under any
+/// name when writing fails; InputError naming the path when it cannot be written or a column's
+/// length differs from the definition's element count.
+void write_subject_table(const std::string& path, const ElementTable& table);
+
+/// Reads a subject table written by write_subject_table, in the format its path names. Throws
+/// InputError naming the file and the place (line, or HDF5 object) when a column, a row, a
+/// dataset or the metadata is missing or malformed, when the values do not match the element
+/// definition, or when the file is truncated or corrupt.
+ElementTable read_subject_table(const std::string& path);
+
+/// The columns a reader needs: a reference reads one or two features' means and counts of many
+/// tables, not every column.
+struct TableColumns {
+  std::vector<std::string> features;  ///< features to read (empty: all); absent ones are skipped
+  bool spread = true;                 ///< the features' std (else left empty)
+  bool labels = true;                 ///< label fractions (else none)
+};
+/// As read_subject_table, only `columns` (an HDF5 table reads nothing else from disk).
+ElementTable read_subject_table(const std::string& path, const TableColumns& columns);
 
 }  // namespace vpm
