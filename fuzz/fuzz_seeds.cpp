@@ -158,6 +158,9 @@ void table_seeds(const fs::path& out, const fs::path& tmp) {
   put(out, "json", "subject_table.json", side);
   fs::remove(tsv);
   fs::remove(sidecar_path(tsv.string()));
+  const fs::path h5 = tmp / "sub-01.h5";  // the same table in HDF5
+  write_subject_table(h5.string(), t);
+  take(out, "table_hdf5", h5);
   const fs::path elements = tmp / "elements.tsv";
   write_element_table(elements.string(), CanonicalElements(ElementDefinition{1, 2, 4, ElementLayout::shells}));
   take(out, "json", sidecar_path(elements.string()));

@@ -123,6 +123,7 @@ TEST_CASE("image covariate: refused when it is the feature itself or a table lac
   ns[3].features.pop_back();
   CHECK_THROWS_WITH(build_reference(el, ns, names, "pet", Normalisation::none, 0, 0, {}, "t1w"),
                     Catch::Contains("sub-N3: no feature 't1w'"));
+  names.clear();
   ns = normals(names);
   const Reference model = build_reference(el, ns, names, "pet", Normalisation::none, 0, 0, {}, "t1w");
   ElementTable p = subject("sub-P", 33);

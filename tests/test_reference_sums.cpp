@@ -228,7 +228,7 @@ TEST_CASE("reference sums: leaving a normal out of the totals equals summing the
     }
 }
 
-TEST_CASE("reference sums: disjoint groups merge to the sums of all; what cannot merge is refused") {
+TEST_CASE("reference sums: disjoint groups merge to the sums of all, and what cannot merge is refused") {
   const Cohort c(10);
   const Covariates cov = covariates(10);
   const ReferenceRecipe rec = recipe(true, true);

@@ -18,34 +18,30 @@ namespace {
 
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr int kMaxColumns = 16;
-using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxColumns, kMaxColumns>;
-using Vec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxColumns, 1>;
-
-// Index of (a, b), a <= b, in the packed upper triangle of a q x q matrix.
-inline int packed(int a, int b, int q) { return a * q - a * (a - 1) / 2 + (b - a); }
 
 std::string definition_text(const ElementDefinition& d) {
   return std::to_string(d.level) + "/" + std::to_string(d.shells) + "/" + std::to_string(d.samples) + " " +
          to_string(d.layout);
 }
 
-// The design row x of a normal at one element: 1, its covariates, its image covariate there.
-inline void design_x(const std::vector<double>& row, bool image, double image_value, Vec& x) {
-  x(0) = 1.0;
-  for (size_t j = 0; j < row.size(); ++j) x(static_cast<Eigen::Index>(1 + j)) = row[j];
-  if (image) x(x.size() - 1) = image_value;
+// The design row x (q values) of a normal at one element: 1, its covariates, its image covariate there.
+inline void design_x(const std::vector<double>& row, bool image, double image_value, int q, double* x) {
+  x[0] = 1.0;
+  for (size_t j = 0; j < row.size(); ++j) x[1 + j] = row[j];
+  if (image) x[q - 1] = image_value;
 }
 
 // Reference::shrinkage: each variance pulled towards the mean over the element and its neighbours.
 void shrink_spread(const CanonicalElements& el, double shrinkage, std::vector<double>& std) {
   std::vector<double> var(std.size());
   for (size_t e = 0; e < std.size(); ++e) var[e] = std[e] * std[e];
-  detail::parallel_for(static_cast<int>(std.size()), 4096, [&](int begin, int end) {
+  const CanonicalElements::Adjacency& adjacency = el.adjacency();
+  detail::parallel_for(static_cast<int>(std.size()), 65536, [&](int begin, int end) {
     for (int e = begin; e < end; ++e) {
       if (std::isnan(var[static_cast<size_t>(e)])) continue;
       double sum = var[static_cast<size_t>(e)];
       int k = 1;
-      for (int nb : el.neighbours(e))
+      for (int nb : adjacency.of(e))
         if (!std::isnan(var[static_cast<size_t>(nb)])) {
           sum += var[static_cast<size_t>(nb)];
           ++k;
@@ -73,47 +69,109 @@ struct FitShape {
   std::vector<double> centre;  // p values
 };
 
+// The packed terms of one normal at one element, times `sign` (+1 adds, -1 takes out): x x^T's
+// upper triangle, x y, y^2 (Q: the model's columns when fixed at compile time, else q).
+template <int Q>
+inline void accumulate(double* s, int q, const double* x, double y, double sign) {
+  const int n = Q > 0 ? Q : q;
+  int k = 0;
+  for (int a = 0; a < n; ++a)
+    for (int b = a; b < n; ++b) s[k++] += sign * (x[a] * x[b]);
+  for (int a = 0; a < n; ++a) s[k++] += sign * (x[a] * y);
+  s[k] += sign * (y * y);
+}
+
+void accumulate_any(double* s, int q, const double* x, double y, double sign) {
+  switch (q) {
+    case 1: return accumulate<1>(s, q, x, y, sign);
+    case 2: return accumulate<2>(s, q, x, y, sign);
+    case 3: return accumulate<3>(s, q, x, y, sign);
+    case 4: return accumulate<4>(s, q, x, y, sign);
+    default: return accumulate<0>(s, q, x, y, sign);
+  }
+}
+
+// One element's model fit (q > 1 columns) from its sums `s` into r at e; Q as accumulate's.
+template <int Q>
+void fit_model(const double* s, const FitShape& f, size_t e, Reference& r) {
+  constexpr int M = Q > 0 ? Q : kMaxColumns, R = Q > 0 ? Q : int(Eigen::Dynamic);
+  using MatQ = Eigen::Matrix<double, R, R, 0, M, M>;
+  using VecQ = Eigen::Matrix<double, R, 1, 0, M, 1>;
+  const int q = Q > 0 ? Q : f.q, P = q * (q + 1) / 2;
+  const double n = s[0];
+  MatQ G(q, q);
+  for (int a = 0, k = 0; a < q; ++a)
+    for (int b = a; b < q; ++b, ++k) G(a, b) = G(b, a) = s[k];
+  VecQ bv(q), x0 = VecQ::Zero(q);
+  for (int a = 0; a < q; ++a) bv(a) = s[P + a];
+  const double yy = s[P + q];
+  for (int j = 0; j < f.p; ++j) x0(1 + j) = f.centre[static_cast<size_t>(j)];
+  if (f.image) x0(q - 1) = G(0, q - 1) / n;
+  // centred: x_c = x - x0 (the intercept column stays 1), y taken about its mean
+  const VecQ g = G.col(0);
+  const MatQ Gc = G - x0 * g.transpose() - g * x0.transpose() + n * x0 * x0.transpose();
+  const double ybar = bv(0) / n;
+  const VecQ bc = bv - x0 * bv(0) - ybar * Gc.col(0);
+  const double yyc = yy - bv(0) * ybar;
+  Eigen::LDLT<MatQ> ldlt(Gc);
+  if (ldlt.info() != Eigen::Success || ldlt.vectorD().minCoeff() <= 1e-12 * ldlt.vectorD().maxCoeff()) return;
+  VecQ beta = ldlt.solve(bc);
+  const double rss = std::max(0.0, yyc - beta.dot(bc));
+  beta(0) += ybar;
+  const MatQ Gi = ldlt.solve(MatQ::Identity(q, q));
+  r.mean[e] = beta(0);
+  r.std[e] = std::sqrt(rss / (n - q));
+  if (f.image) r.image_covariate_centre[e] = x0(q - 1);
+  const size_t uq = static_cast<size_t>(q);
+  for (int a = 0; a < q; ++a) {
+    r.coefficients[e * uq + static_cast<size_t>(a)] = beta(a);
+    for (int b = 0; b < q; ++b) r.gram_inverse[(e * uq + static_cast<size_t>(a)) * uq + static_cast<size_t>(b)] = Gi(a, b);
+  }
+}
+
+// fit_model<2> written out: one covariate (the image covariate, the workflow's default, or one
+// subject covariate), the same arithmetic without the general solver (7x faster).
+void fit_line(const double* s, const FitShape& f, size_t e, Reference& r) {
+  const double n = s[0], g1 = s[1], g11 = s[2], b0 = s[3], b1 = s[4], yy = s[5];
+  const double c = f.image ? g1 / n : f.centre[0];
+  // centred design (1, x - c): G_c = [[n, g1 - n c], [., g11 - 2 c g1 + n c^2]]
+  const double a01 = g1 - n * c, a11 = g11 - 2 * c * g1 + n * c * c;
+  const double ybar = b0 / n;
+  const double c0 = b0 - ybar * n, c1 = (b1 - c * b0) - ybar * a01;  // centred x^T (y - ybar)
+  const double yyc = yy - b0 * ybar;
+  // singular as fit_model's LDLT judges it: the pivots (the larger diagonal, then det / it)
+  const double det = n * a11 - a01 * a01, pivot = std::max(n, a11), second = det / pivot;
+  if (!(std::min(pivot, second) > 1e-12 * std::max(pivot, second))) return;
+  const double i00 = a11 / det, i01 = -a01 / det, i11 = n / det;
+  const double beta0 = i00 * c0 + i01 * c1, beta1 = i01 * c0 + i11 * c1;
+  const double rss = std::max(0.0, yyc - (beta0 * c0 + beta1 * c1));
+  r.mean[e] = beta0 + ybar;
+  r.std[e] = std::sqrt(rss / (n - 2));
+  if (f.image) r.image_covariate_centre[e] = c;
+  r.coefficients[2 * e] = beta0 + ybar;
+  r.coefficients[2 * e + 1] = beta1;
+  double* gi = r.gram_inverse.data() + 4 * e;
+  gi[0] = i00, gi[1] = i01, gi[2] = i01, gi[3] = i11;
+}
+
 // One element's fit from its sums `s` (packed sum x x^T, sum x y, sum y^2) into r at e.
 void fit_element(const double* s, const FitShape& f, int e, Reference& r) {
-  const int q = f.q;
   const size_t ue = static_cast<size_t>(e);
   const double n = s[0];
   r.count[ue] = static_cast<int>(std::lround(n));
-  const int P = q * (q + 1) / 2;
-  if (q == 1) {  // no model: the normals' mean and sample standard deviation
+  if (f.q == 1) {  // no model: the normals' mean and sample standard deviation
     if (r.count[ue] < 2) return;
     const double mean = s[1] / n;
     r.mean[ue] = mean;
     r.std[ue] = std::sqrt(std::max(0.0, s[2] - s[1] * mean) / (n - 1));
     return;
   }
-  if (r.count[ue] <= q) return;
-  Mat G(q, q);
-  for (int a = 0; a < q; ++a)
-    for (int b = a; b < q; ++b) G(a, b) = G(b, a) = s[packed(a, b, q)];
-  Vec bv(q), x0 = Vec::Zero(q);
-  for (int a = 0; a < q; ++a) bv(a) = s[P + a];
-  const double yy = s[P + q];
-  for (int j = 0; j < f.p; ++j) x0(1 + j) = f.centre[static_cast<size_t>(j)];
-  if (f.image) x0(q - 1) = G(0, q - 1) / n;
-  // centred: x_c = x - x0 (the intercept column stays 1), y taken about its mean
-  const Vec g = G.col(0);
-  const Mat Gc = G - x0 * g.transpose() - g * x0.transpose() + n * x0 * x0.transpose();
-  const double ybar = bv(0) / n;
-  const Vec bc = bv - x0 * bv(0) - ybar * Gc.col(0);
-  const double yyc = yy - bv(0) * ybar;
-  Eigen::LDLT<Mat> ldlt(Gc);
-  if (ldlt.info() != Eigen::Success || ldlt.vectorD().minCoeff() <= 1e-12 * ldlt.vectorD().maxCoeff()) return;
-  Vec beta = ldlt.solve(bc);
-  const double rss = std::max(0.0, yyc - beta.dot(bc));
-  beta(0) += ybar;
-  const Mat Gi = ldlt.solve(Mat::Identity(q, q));
-  r.mean[ue] = beta(0);
-  r.std[ue] = std::sqrt(rss / (n - q));
-  if (f.image) r.image_covariate_centre[ue] = x0(q - 1);
-  for (int a = 0; a < q; ++a) {
-    r.coefficients[ue * q + a] = beta(a);
-    for (int b = 0; b < q; ++b) r.gram_inverse[(ue * q + a) * q + b] = Gi(a, b);
+  if (r.count[ue] <= f.q) return;
+  switch (f.q) {
+    case 2: return fit_line(s, f, ue, r);
+    case 3: return fit_model<3>(s, f, ue, r);
+    case 4: return fit_model<4>(s, f, ue, r);
+    default: return fit_model<0>(s, f, ue, r);
   }
 }
 
@@ -198,19 +256,16 @@ void ReferenceSums::add(const std::string& name, const NormalValues& v, const st
     if (!std::isfinite(x)) throw InputError(name + ": a covariate value is missing");
   if (std::find(names_.begin(), names_.end(), name) != names_.end())
     throw InputError(name + ": this normal is in the reference already");
-  const int q = q_, P = q * (q + 1) / 2;
-  detail::parallel_for(static_cast<int>(n), 8192, [&](int begin, int end) {
-    Vec x(q);
+  const int q = q_;
+  detail::parallel_for(static_cast<int>(n), 65536, [&](int begin, int end) {
+    double x[kMaxColumns];
+    design_x(row, false, 0.0, q, x);
     for (int e = begin; e < end; ++e) {
       const double y = v.feature[static_cast<size_t>(e)];
       const double im = image ? v.image[static_cast<size_t>(e)] : 0.0;
       if (std::isnan(y) || std::isnan(im)) continue;
-      design_x(row, image, im, x);
-      double* s = sums_.data() + static_cast<size_t>(e) * static_cast<size_t>(stride_);
-      for (int a = 0; a < q; ++a)
-        for (int b = a; b < q; ++b) s[packed(a, b, q)] += x(a) * x(b);
-      for (int a = 0; a < q; ++a) s[P + a] += x(a) * y;
-      s[P + q] += y * y;
+      if (image) x[q - 1] = im;
+      accumulate_any(sums_.data() + static_cast<size_t>(e) * static_cast<size_t>(stride_), q, x, y, 1.0);
     }
   });
   names_.push_back(name);
@@ -295,10 +350,10 @@ Reference ReferenceSums::fit(const CanonicalElements* el, double shrinkage, cons
     r.coefficients.assign(n * static_cast<size_t>(q_), kNaN);
     r.gram_inverse.assign(n * static_cast<size_t>(q_ * q_), kNaN);
   }
-  const int P = q_ * (q_ + 1) / 2;
-  detail::parallel_for(static_cast<int>(n), 4096, [&](int begin, int end) {
+  detail::parallel_for(static_cast<int>(n), 65536, [&](int begin, int end) {
     std::vector<double> local(static_cast<size_t>(stride_));
-    Vec x(q_);
+    double x[kMaxColumns];
+    if (out) design_x(*out_row, false, 0.0, q_, x);
     for (int e = begin; e < end; ++e) {
       const double* s = element(e);
       if (out) {  // the totals minus the normal left out, where it has data
@@ -306,11 +361,8 @@ Reference ReferenceSums::fit(const CanonicalElements* el, double shrinkage, cons
         const double im = f.image ? out->image[static_cast<size_t>(e)] : 0.0;
         std::copy(s, s + stride_, local.begin());
         if (!std::isnan(y) && !std::isnan(im)) {
-          design_x(*out_row, f.image, im, x);
-          for (int a = 0; a < q_; ++a)
-            for (int b = a; b < q_; ++b) local[static_cast<size_t>(packed(a, b, q_))] -= x(a) * x(b);
-          for (int a = 0; a < q_; ++a) local[static_cast<size_t>(P + a)] -= x(a) * y;
-          local[static_cast<size_t>(P + q_)] -= y * y;
+          if (f.image) x[q_ - 1] = im;
+          accumulate_any(local.data(), q_, x, y, -1.0);
         }
         s = local.data();
       }

@@ -90,7 +90,7 @@ void write_reference_sums(const std::string& path, const ReferenceSums& sums) {
     w.dataset("/normals/design", design.data(), N, p, h5::Stored::f64);
   }
   const size_t n = static_cast<size_t>(sums.definition().elements());
-  w.dataset("/sums", sums.element(0), n, static_cast<size_t>(sums.stride()), h5::Stored::f64);
+  w.dataset("/sums", sums.element(0), n, static_cast<size_t>(sums.stride()), h5::Stored::f64, false);
   w.commit();
 }
 

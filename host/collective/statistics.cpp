@@ -66,7 +66,7 @@ std::vector<double> smooth_over_elements(const CanonicalElements& el, const std:
           weight += el.volume(a);
         }
         if (r < rings)
-          for (int b : el.neighbours(a))
+          for (int b : el.adjacent(a))
             if (mark[b] != e) {
               mark[b] = e;
               next.push_back(b);
@@ -180,7 +180,7 @@ std::vector<FocusCluster> clusters_of(const CanonicalElements& el, const std::ve
       c.elements.push_back(e);
       core += z[e] * sign >= cut;
       top = std::max(top, z[e] * sign);
-      for (int nb : el.neighbours(e))
+      for (int nb : el.adjacent(e))
         if (!seen[nb] && in(nb)) {
           seen[nb] = 1;
           stack.push_back(nb);
@@ -212,7 +212,7 @@ void delineate(const CanonicalElements& el, const std::vector<double>& z, double
     const int e = c.elements[i];
     double sum = z[e] * c.sign;
     int n = 1;
-    for (int nb : el.neighbours(e))
+    for (int nb : el.adjacent(e))
       if (!std::isnan(z[nb])) sum += z[nb] * c.sign, ++n;
     local[i] = sum / n;
     top = std::max(top, local[i]);
@@ -233,7 +233,7 @@ void delineate(const CanonicalElements& el, const std::vector<double>& z, double
     const int e = stack.back();
     stack.pop_back();
     kept.push_back(e);
-    for (int nb : el.neighbours(e)) visit(nb);
+    for (int nb : el.adjacent(e)) visit(nb);
   }
   std::sort(kept.begin(), kept.end());
   c.elements = std::move(kept);

@@ -120,7 +120,7 @@ void Writer::attribute(const std::string& object, const std::string& name, std::
 }
 
 void Writer::write_any(const std::string& path, const void* values, std::int64_t memory_type, std::size_t rows,
-                       std::size_t cols, Stored type) {
+                       std::size_t cols, Stored type, bool compress) {
   Guard g;
   const int rank = cols > 1 ? 2 : 1;
   const hsize_t dims[2] = {rows, cols};
@@ -130,8 +130,10 @@ void Writer::write_any(const std::string& path, const void* values, std::int64_t
     const hsize_t chunk_cols = std::min<hsize_t>(cols, kChunkValues);
     const hsize_t chunk[2] = {std::min<hsize_t>(rows, std::max<hsize_t>(1, kChunkValues / chunk_cols)), chunk_cols};
     H5Pset_chunk(static_cast<hid_t>(dcpl.get()), rank, chunk);
-    H5Pset_shuffle(static_cast<hid_t>(dcpl.get()));
-    H5Pset_deflate(static_cast<hid_t>(dcpl.get()), 4);
+    if (compress) {
+      H5Pset_shuffle(static_cast<hid_t>(dcpl.get()));
+      H5Pset_deflate(static_cast<hid_t>(dcpl.get()), 4);
+    }
   }
   Id d(H5Dcreate2(static_cast<hid_t>(file_.get()), path.c_str(), file_type(type), static_cast<hid_t>(space.get()),
                   H5P_DEFAULT, static_cast<hid_t>(dcpl.get()), H5P_DEFAULT));
@@ -140,18 +142,19 @@ void Writer::write_any(const std::string& path, const void* values, std::int64_t
     throw InputError(path_ + ": " + path + ": the dataset could not be written");
 }
 
-void Writer::dataset(const std::string& path, const double* v, std::size_t rows, std::size_t cols, Stored type) {
-  write_any(path, v, H5T_NATIVE_DOUBLE, rows, cols, type);
+void Writer::dataset(const std::string& path, const double* v, std::size_t rows, std::size_t cols, Stored type,
+                     bool compress) {
+  write_any(path, v, H5T_NATIVE_DOUBLE, rows, cols, type, compress);
 }
 void Writer::dataset(const std::string& path, const int* v, std::size_t rows, std::size_t cols, Stored type) {
-  write_any(path, v, H5T_NATIVE_INT, rows, cols, type);
+  write_any(path, v, H5T_NATIVE_INT, rows, cols, type, true);
 }
 void Writer::dataset(const std::string& path, const std::int64_t* v, std::size_t rows, std::size_t cols, Stored type) {
-  write_any(path, v, H5T_NATIVE_INT64, rows, cols, type);
+  write_any(path, v, H5T_NATIVE_INT64, rows, cols, type, true);
 }
 
 void Writer::text(const std::string& path, const std::string& value) {
-  write_any(path, value.data(), H5T_NATIVE_CHAR, value.size(), 1, Stored::u8);
+  write_any(path, value.data(), H5T_NATIVE_CHAR, value.size(), 1, Stored::u8, true);
 }
 
 void Writer::commit() {

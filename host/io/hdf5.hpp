@@ -49,8 +49,10 @@ class Writer {
   void attribute(const std::string& object, const std::string& name, const std::string& value);
   void attribute(const std::string& object, const std::string& name, std::int64_t value);
   /// A dataset of `rows` x `cols` values (cols 1: one dimension), row-major, stored as `type`,
-  /// chunked along the rows and compressed (shuffle + deflate).
-  void dataset(const std::string& path, const double* values, std::size_t rows, std::size_t cols, Stored type);
+  /// chunked along the rows and, with `compress`, compressed (shuffle + deflate: float32 tables
+  /// shrink to about half; float64 sums hardly shrink and would take seconds).
+  void dataset(const std::string& path, const double* values, std::size_t rows, std::size_t cols, Stored type,
+               bool compress = true);
   void dataset(const std::string& path, const int* values, std::size_t rows, std::size_t cols, Stored type);
   void dataset(const std::string& path, const std::int64_t* values, std::size_t rows, std::size_t cols, Stored type);
   /// A text of any length as a dataset of bytes (attributes are for short texts).
@@ -60,7 +62,7 @@ class Writer {
 
  private:
   void write_any(const std::string& path, const void* values, std::int64_t memory_type, std::size_t rows,
-                 std::size_t cols, Stored type);
+                 std::size_t cols, Stored type, bool compress);
   std::string path_;
   Id file_;
 };

@@ -14,6 +14,9 @@
 // at the same places of the ball.
 #include <Eigen/Core>
 #include <array>
+#include <memory>
+#include <mutex>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -117,8 +120,24 @@ class CanonicalElements {
   std::vector<int> neighbours(int id) const;
 
   /// The sample points of every element: row id * S + s, S = definition().samples (ball
-  /// coordinates). The same for every call and every machine.
-  const Points& samples() const { return samples_; }
+  /// coordinates). The same for every call and every machine. Made on the first call (thread-safe;
+  /// copies of this object share them): 17 million points at level 6 graded, which the
+  /// statistics never need.
+  const Points& samples() const;
+
+  /// Every element's neighbours(id) in one table (compressed rows), built on the first call
+  /// (thread-safe; shared by copies): the loops over every element's neighbours (shrinkage,
+  /// smoothing, clusters) read it without allocating.
+  struct Adjacency {
+    std::vector<int> offset, list;  ///< element e's neighbours are list[offset[e] .. offset[e + 1])
+    std::span<const int> of(int e) const {
+      const size_t i = static_cast<size_t>(e);
+      return {list.data() + offset[i], static_cast<size_t>(offset[i + 1] - offset[i])};
+    }
+  };
+  const Adjacency& adjacency() const;
+  /// adjacency().of(id)
+  std::span<const int> adjacent(int id) const { return adjacency().of(id); }
 
   /// The element containing ball point `p` (|p| <= 1; points on a boundary go to one side),
   /// or -1 when |p| > 1 + 1e-9.
@@ -133,7 +152,12 @@ class CanonicalElements {
   std::vector<double> radius3_;     // r_k^3, k = 0..K
   std::vector<std::vector<double>> solid_angle_;     // per level, per triangle
   std::vector<std::vector<int>> edge_neighbours_;    // per level: 3 per triangle, across its edges
-  Points samples_;
+  struct Lazy {  // what is made on first use
+    std::once_flag samples_once, adjacency_once;
+    Points samples;
+    Adjacency adjacency;
+  };
+  std::shared_ptr<Lazy> lazy_;
 };
 
 /// Writes the element table of `elements`: a TSV at `tsv_path` with a header line and one row per
