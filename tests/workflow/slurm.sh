@@ -8,10 +8,13 @@
 #   * the participant-level rules go out as group jobs (2 for the 4 subjects, 16 rules), each
 #     within the caps, charged to the account, in the partition, with the group's runtime, and
 #     each rule run as a job step (srun);
-#   * the first run is killed mid-cohort (Snakemake SIGKILLed, its jobs cancelled with scancel);
-#     the next invocation (--unlock, then the profile's --rerun-incomplete) redoes only the jobs
-#     that had not finished: every result written before the kill is kept as it was (same bytes,
-#     same time), every expected result exists afterwards and a further run has nothing to do;
+#   * the first run is killed once a group job has finished its first subject (Snakemake
+#     SIGKILLed, its jobs cancelled with scancel); the next invocation (--unlock, then the
+#     profile's --rerun-incomplete) redoes only what had not finished: the results of the Slurm
+#     jobs and job steps (a subject's chain in a group job) finished before the kill are kept as
+#     they were (same bytes, same time), those of the cut-off subjects' finished rules (which
+#     Snakemake removes when their step is cancelled) come back with the same bytes, every
+#     expected result exists afterwards and a further run has nothing to do;
 #   * in that second run one subject's `vpm sample` fails once: its group job FAILs in Slurm, the
 #     profile's restart-times resubmits it and the workflow completes.
 # Needs root and the packages of scripts/setup.sh; otherwise it fails in CI (CI=true) and
@@ -27,6 +30,7 @@ cannot() {
   exit 77
 }
 [[ $(id -u) -eq 0 ]] || cannot "not root (its daemons run as root)"
+export PATH=$PATH:/usr/sbin:/sbin  # the daemons
 for c in munged munge mariadb-install-db mariadbd slurmdbd slurmctld slurmd sbatch sacct sacctmgr scontrol sinfo squeue scancel; do
   command -v "$c" > /dev/null || cannot "no $c (bash scripts/setup.sh installs it)"
 done
@@ -75,7 +79,7 @@ EOF
 chmod +x "$work/vpm"
 r=$work/results
 conf=(--configfile "$work/config.yaml" --config bids="$bids" out="$r" vpm="$work/vpm")
-on_slurm() { (cd "$work" && exec timeout --foreground 600 snakemake -s "$src/workflow/Snakefile" --profile "$work/profile" \
+on_slurm() { (cd "$work" && exec timeout --foreground 480 snakemake -s "$src/workflow/Snakefile" --profile "$work/profile" \
                 --max-status-checks-per-second 1 "${conf[@]}" "$@"); }
 local_smk() { (cd "$work" && exec snakemake -s "$src/workflow/Snakefile" --cores 1 "${conf[@]}" "$@"); }
 subjects=$(awk -F'\t' 'NR > 1 { print $1 }' "$bids/participants.tsv")
@@ -95,12 +99,12 @@ on_slurm > "$work/killed.log" 2>&1 &
 runner=$!
 set +m
 step_done() {
-  sacct -n -P -o JobID,JobName,State 2>/dev/null | awk -F'|' '
+  sacct -S 2000-01-01 -n -P -o JobID,JobName,State 2>/dev/null | awk -F'|' '
     $1 !~ /[.]/ && $2 ~ /^snakejob_participant_/ { p[$1] = 1 }
     $1 ~ /^[0-9]+[.][0-9]+$/ && $3 == "COMPLETED" { split($1, a, "."); if (a[1] in p) found = 1 }
     END { exit !found }'
 }
-for _ in $(seq 1 1200); do
+for _ in $(seq 1 600); do
   step_done && break
   kill -0 "$runner" 2>/dev/null || break
   sleep 0.5
@@ -164,10 +168,10 @@ grep -q "Trying to restart job" "$work/resumed.log" || { tail -60 "$work/resumed
 # what Slurm saw: every job of both runs, from its accounting (once slurmdbd has them all)
 n=$(($(next_job) - 1))
 for _ in $(seq 1 60); do
-  [[ $(sacct -n -X -P -o JobID,State | awk -F'|' '$2 !~ /^(PENDING|RUNNING)$/' | wc -l) -eq $n ]] && break
+  [[ $(sacct -S 2000-01-01 -n -X -P -o JobID,State | awk -F'|' '$2 !~ /^(PENDING|RUNNING)$/' | wc -l) -eq $n ]] && break
   sleep 0.5
 done
-sacct -n -P -o JobID,JobName,Account,Partition,Timelimit,ReqMem,ReqCPUS,State > "$work/sacct.txt"
+sacct -S 2000-01-01 -n -P -o JobID,JobName,Account,Partition,Timelimit,ReqMem,ReqCPUS,State > "$work/sacct.txt"
 /usr/bin/python3 - "$work/sacct.txt" "$first_jobs" "$CLUSTER_ACCOUNT" "$CLUSTER_PARTITION" "$n" "$work/killed.log" "$work/resumed.log" <<'PY' ||
 import collections, re, sys
 rows = [l.rstrip("\n").split("|") for l in open(sys.argv[1])]
