@@ -21,6 +21,11 @@ PKGS=(
   chromium
   linux-perf valgrind  # bench only: bench/ab/compare_builds.py --profile and --instructions
   clang-14 libclang-rt-14-dev llvm-14  # the ASan + UBSan build and libFuzzer (scripts/sanitize.sh, scripts/fuzz.sh); llvm-symbolizer for their stacks
+  # tests only: the one-node Slurm cluster of tests/workflow/slurm.sh (ctest workflow:slurm), whose
+  # daemons that test configures, starts and stops itself; slurmdbd keeps its accounts in a private
+  # MariaDB (its server and my_print_defaults alone: these two packages have no service). The Slurm
+  # packages' start scripts start nothing without /etc/slurm/slurm.conf and slurmdbd.conf
+  slurmctld slurmd slurm-client slurmdbd munge mariadb-server-core mariadb-client-core
 )
 missing=()
 for p in "${PKGS[@]}"; do
