@@ -25,11 +25,12 @@ int main(int argc, char** argv) {
   // a file size limit (ulimit -f, RLIMIT_FSIZE) makes write(2) fail with EFBIG instead of killing
   // the process: the output is then refused with a message and nothing is left (AtomicFile)
   std::signal(SIGXFSZ, SIG_IGN);
-  // large arrays (an element table's columns at level 6 are 17 MB each) come from the heap and go
-  // back to it, not to the system: glibc would otherwise map each one afresh and fault in every
-  // page again (on a virtual machine that was most of the time of summing a reference: 0.14 ->
-  // 0.01 s a normal's values; bench/results/LEDGER.md)
+  // large arrays (an element table's columns at level 6 are 17 MB each) come from one heap and go
+  // back to it, not to the system: glibc would otherwise map each one afresh (and each thread's
+  // in an arena of its own) and fault in every page again; on a virtual machine that was most of
+  // the time of a reference's normal (0.14 -> 0.01 s for its values; bench/results/LEDGER.md)
   mallopt(M_MMAP_MAX, 0);
+  mallopt(M_ARENA_MAX, 1);
   mallopt(M_TRIM_THRESHOLD, 1 << 30);
   std::vector<std::string> args(argv + 1, argv + argc);
   if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {

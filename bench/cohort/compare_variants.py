@@ -44,9 +44,12 @@ def merged(base, extra):
 
 def compare_one(a, name, options, tables, sid):
     """One patient's comparison for one variant; returns (detected, truth) voxel arrays."""
-    normals = ",".join(os.path.join(tables, f"{n}_pet.tsv") for n in a.normals)
+    def table(sid):  # the workflow's HDF5 table, or a TSV export
+        h5 = os.path.join(tables, f"{sid}_pet.h5")
+        return h5 if os.path.exists(h5) else os.path.join(tables, f"{sid}_pet.tsv")
+    normals = ",".join(table(n) for n in a.normals)
     out = os.path.join(a.out, name, "compare", f"{sid}_pet.tsv")
-    argv = [a.vpm, "compare", "--normals", normals, "--patient", os.path.join(tables, f"{sid}_pet.tsv"),
+    argv = [a.vpm, "compare", "--normals", normals, "--patient", table(sid),
             "--feature", "pet", *options, "--mesh", os.path.join(a.results, "subjects", sid, f"{sid}_registered.vtu"),
             "--image", os.path.join(a.bids, sid, "pet", f"{sid}_pet.nii.gz"), "-o", out, "--quiet"]
     r = subprocess.run(argv, capture_output=True, text=True)

@@ -68,7 +68,7 @@ def workflow_options(results, feature):
 
 def one(vpm, tables, feature, options, normal, scratch):
     others = ",".join(t for t in tables if t != normal)
-    out = os.path.join(scratch, os.path.basename(normal))
+    out = os.path.join(scratch, os.path.splitext(os.path.basename(normal))[0] + ".tsv")
     argv = [vpm, "compare", "--normals", others, "--patient", normal, "--feature", feature, *options, "-o", out]
     r = subprocess.run(argv, capture_output=True, text=True)
     if r.returncode != 0:
@@ -114,9 +114,11 @@ def main():
     if a.calibrate is not None and not a.calibrate >= 0:
         fail("--calibrate", f"{a.calibrate}: must be >= 0")
     tables_dir = a.tables or os.path.join(a.results, "tables")
-    tables = sorted(glob.glob(os.path.join(glob.escape(tables_dir), f"{a.normals_glob}_{a.feature}.tsv")))
+    # the workflow's HDF5 tables, or TSV exports
+    tables = sorted(glob.glob(os.path.join(glob.escape(tables_dir), f"{a.normals_glob}_{a.feature}.h5")) or
+                    glob.glob(os.path.join(glob.escape(tables_dir), f"{a.normals_glob}_{a.feature}.tsv")))
     if len(tables) < 4:
-        fail(tables_dir, f"{len(tables)} normals' tables ({a.normals_glob}_{a.feature}.tsv); needs at least 4")
+        fail(tables_dir, f"{len(tables)} normals' tables ({a.normals_glob}_{a.feature}.h5 or .tsv); needs at least 4")
     start = time.time()
     with tempfile.TemporaryDirectory(prefix="vpm-lono-") as scratch, ThreadPoolExecutor(a.jobs) as pool:
         rows = list(pool.map(lambda t: one(a.vpm, tables, a.feature, options, t, scratch), tables))

@@ -53,6 +53,7 @@ std::vector<double> smooth_over_elements(const CanonicalElements& el, const std:
     throw InputError("smoothing: " + std::to_string(values.size()) + " values for " + std::to_string(el.size()) + " elements");
   std::vector<double> out(values.size(), kNaN);
   std::vector<int> mark(values.size(), -1), ring, next;
+  const CanonicalElements::Adjacency& adj = el.adjacency();
   for (int e = 0; e < el.size(); ++e) {
     if (std::isnan(values[e])) continue;
     double sum = 0, weight = 0;
@@ -66,7 +67,7 @@ std::vector<double> smooth_over_elements(const CanonicalElements& el, const std:
           weight += el.volume(a);
         }
         if (r < rings)
-          for (int b : el.adjacent(a))
+          for (int b : adj.of(a))
             if (mark[b] != e) {
               mark[b] = e;
               next.push_back(b);
@@ -165,6 +166,7 @@ std::vector<FocusCluster> clusters_of(const CanonicalElements& el, const std::ve
   const int n = el.size();
   std::vector<char> seen(n, 0);
   std::vector<FocusCluster> out;
+  const CanonicalElements::Adjacency& adj = el.adjacency();
   auto in = [&](int e) { return !std::isnan(z[e]) && z[e] * sign >= low; };
   for (int s0 = 0; s0 < n; ++s0) {
     if (seen[s0] || !in(s0)) continue;
@@ -180,7 +182,7 @@ std::vector<FocusCluster> clusters_of(const CanonicalElements& el, const std::ve
       c.elements.push_back(e);
       core += z[e] * sign >= cut;
       top = std::max(top, z[e] * sign);
-      for (int nb : el.adjacent(e))
+      for (int nb : adj.of(e))
         if (!seen[nb] && in(nb)) {
           seen[nb] = 1;
           stack.push_back(nb);
@@ -206,13 +208,14 @@ std::vector<FocusCluster> clusters_of(const CanonicalElements& el, const std::ve
 // elements: z's unit noise per element would otherwise jitter the edge outwards) reaches
 // fraction x the largest such mean in the focus, connected through such elements to its peak.
 void delineate(const CanonicalElements& el, const std::vector<double>& z, double fraction, FocusCluster& c) {
+  const CanonicalElements::Adjacency& adj = el.adjacency();
   std::vector<double> local(c.elements.size());
   double top = 0;
   for (size_t i = 0; i < c.elements.size(); ++i) {
     const int e = c.elements[i];
     double sum = z[e] * c.sign;
     int n = 1;
-    for (int nb : el.adjacent(e))
+    for (int nb : adj.of(e))
       if (!std::isnan(z[nb])) sum += z[nb] * c.sign, ++n;
     local[i] = sum / n;
     top = std::max(top, local[i]);
@@ -233,7 +236,7 @@ void delineate(const CanonicalElements& el, const std::vector<double>& z, double
     const int e = stack.back();
     stack.pop_back();
     kept.push_back(e);
-    for (int nb : el.adjacent(e)) visit(nb);
+    for (int nb : adj.of(e)) visit(nb);
   }
   std::sort(kept.begin(), kept.end());
   c.elements = std::move(kept);

@@ -95,7 +95,9 @@ Writer::~Writer() = default;
 
 void Writer::group(const std::string& path) {
   Guard g;
-  Id gid(H5Gcreate2(static_cast<hid_t>(file_.get()), path.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+  Id gcpl(H5Pcreate(H5P_GROUP_CREATE));
+  H5Pset_obj_track_times(static_cast<hid_t>(gcpl.get()), false);  // the same bytes for the same contents
+  Id gid(H5Gcreate2(static_cast<hid_t>(file_.get()), path.c_str(), H5P_DEFAULT, static_cast<hid_t>(gcpl.get()), H5P_DEFAULT));
   if (!gid.valid()) throw InputError(path_ + ": " + path + ": the group could not be created");
 }
 
@@ -126,6 +128,7 @@ void Writer::write_any(const std::string& path, const void* values, std::int64_t
   const hsize_t dims[2] = {rows, cols};
   Id space(H5Screate_simple(rank, dims, nullptr));
   Id dcpl(H5Pcreate(H5P_DATASET_CREATE));
+  H5Pset_obj_track_times(static_cast<hid_t>(dcpl.get()), false);  // the same bytes for the same contents
   if (rows > 0) {
     const hsize_t chunk_cols = std::min<hsize_t>(cols, kChunkValues);
     const hsize_t chunk[2] = {std::min<hsize_t>(rows, std::max<hsize_t>(1, kChunkValues / chunk_cols)), chunk_cols};

@@ -62,7 +62,9 @@ enum class TableFormat {
   /// sidecar below), "subject", "level", "shells", "samples", "layout"; datasets
   /// /features/<name>/mean and /std (float32, one value per element), /features/<name>/count
   /// (uint16), and per label image k /labels/<k>/ids (int32, L) and /labels/<k>/fraction
-  /// (float32, L x elements). Level-6 tables of two features take about 20 MB (docs/collective.md).
+  /// (float32, L x elements). The standard deviations keep 12 significant bits (relative 1/4096;
+/// the spread of a few samples is uncertain by far more), the rest full float32. Level-6 tables
+/// of two features take about 20 MB (docs/collective.md).
   hdf5,
   /// .tsv: one row per element (element, shell, triangle, samples, then <name>_mean, <name>_std,
   /// <name>_count per feature, then label_<id> fractions), ten significant digits, with a JSON

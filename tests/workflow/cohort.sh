@@ -35,7 +35,7 @@ for bad in "--foci-free 2" "--foci-free -1" "--reduction 0.3,0.2" "--reduction 0
 done
 smk > "$work/run1.log" 2>&1 || { tail -40 "$work/run1.log"; fail "the workflow failed"; }
 r=$work/results
-for f in tables/sub-N01_pet.tsv tables/sub-N01_pet.json tables/sub-P01_pet.tsv compare/sub-P01_pet.tsv \
+for f in tables/sub-N01_pet.h5 tables/sub-P01_pet.h5 reference/pet.h5 compare/sub-P01_pet.tsv \
          compare/sub-P01_pet.json compare/sub-P01_pet_z.nii.gz compare/sub-P01_pet_foci.nii.gz view/cohort.html \
          compare/sub-P01_pet_native.vtu evaluation.json evaluation.md subjects/sub-P01/sub-P01_registered.vtu; do
   [[ -s $r/$f ]] || fail "missing $r/$f"
@@ -43,8 +43,9 @@ done
 # the tables hold fast.yaml's element set (graded, level 5: 283,060 elements) with the T1w beside
 # the PET (the default image covariate), and the comparison read 3 normals with the default
 # hysteresis, relative extent and image covariate
-[[ $(tail -n +2 "$r/tables/sub-N01_pet.tsv" | wc -l) -eq 283060 ]] || fail "sub-N01_pet.tsv: not 283060 rows"
-head -1 "$r/tables/sub-N01_pet.tsv" | grep -q "	t1w_mean	" || fail "sub-N01_pet.tsv: no t1w columns"
+# (HDF5, read here by h5py as any Python user would)
+elements() { /usr/bin/python3 -c 'import h5py, sys; f = h5py.File(sys.argv[1], "r"); print(f["features/pet/mean"].shape[0], f["features/t1w/mean"].dtype)' "$1"; }
+[[ $(elements "$r/tables/sub-N01_pet.h5") == "283060 float32" ]] || fail "sub-N01_pet.h5: not 283060 float32 PET and T1w values"
 /usr/bin/python3 - "$r" <<'PY' || fail "reports"
 import json, sys
 r = sys.argv[1]
@@ -89,7 +90,7 @@ at60 = [p["false_clusters"] for p in curve if p["min_cluster"] == 60]  # past th
 assert (at60[0] if at60 else 0) == l["false_clusters"] and curve[-1]["false_clusters"] == 0, curve
 rows = {row["normal"]: row for row in l["per_normal"]}
 assert l["normals"] == 4 and len(rows) == 4, l
-assert rows["sub-P01_pet.tsv"]["clusters"] == len(c["result"]["clusters"]), (rows["sub-P01_pet.tsv"], c["result"])
+assert rows["sub-P01_pet.h5"]["clusters"] == len(c["result"]["clusters"]), (rows["sub-P01_pet.h5"], c["result"])
 assert "--extend" in l["options"] and "--relative-extent" in l["options"] and l["options"][l["options"].index("--min-cluster") + 1] == "60", l["options"]
 assert l["options"][l["options"].index("--image-covariate") + 1] == "t1w", l["options"]
 assert abs(l["per_10_normals"] - 10 * l["false_clusters"] / 4) < 1e-12, l
@@ -153,7 +154,7 @@ jobs=$(awk '/^Job stats:/{s=1;next} s&&/^total/{exit} s&&NF==4&&$2~/^[0-9]+$/{pr
 rm -rf "$work/results/subjects/sub-N03"
 smk > "$work/stale.log" 2>&1 || { tail -40 "$work/stale.log"; fail "the rerun of what is stale failed"; }
 [[ -s $r/subjects/sub-N03/sub-N03_registered.vtu ]] || fail "the rerun did not remake sub-N03"
-[[ $r/tables/sub-N02_pet.tsv -nt $work/bids/sub-N02/pet/sub-N02_pet.nii.gz ]] || fail "sub-N02's table not resampled"
+[[ $r/tables/sub-N02_pet.h5 -nt $work/bids/sub-N02/pet/sub-N02_pet.nii.gz ]] || fail "sub-N02's table not resampled"
 smk -n > "$work/run4.log" 2>&1
 grep -q "Nothing to be done" "$work/run4.log" || { cat "$work/run4.log"; fail "after the stale rerun a rerun would redo work"; }
 # a changed truth mask (read by the evaluation, not by the analysis) redoes the evaluation only
@@ -208,7 +209,7 @@ mkdir -p "$d"
 cp -a "$r/subjects" "$r/template" "$d/"
 (cd "$work" && snakemake -s "$src/workflow/Snakefile" --cores 2 -p --config bids="$work/bids" out="$d" \
    vpm="$build/vpm") > "$work/default.log" 2>&1 || { tail -40 "$work/default.log"; fail "the workflow at its defaults"; }
-[[ $(tail -n +2 "$d/tables/sub-N01_pet.tsv" | wc -l) -eq 2167220 ]] || fail "sub-N01_pet.tsv: not the 2,167,220 level-6 elements"
+[[ $(elements "$d/tables/sub-N01_pet.h5") == "2167220 float32" ]] || fail "sub-N01_pet.h5: not the 2,167,220 level-6 elements"
 grep "compare .*--feature" "$work/default.log" | grep -q -- "--relative-extent 0.22 .*--min-cluster 460" ||
   { grep "compare .*--feature" "$work/default.log"; fail "the defaults' comparison options"; }
 /usr/bin/python3 - "$work/default.log" "$d" <<'PY' || fail "the defaults' memory, page or foci"

@@ -49,7 +49,7 @@ smk "$ds" -p > "$work/run.log" 2>&1 || { tail -40 "$work/run.log"; fail "the wor
 pwned=$(find "$work" -name 'pwned*' 2>/dev/null || true)
 [[ -z $pwned ]] || fail "a dataset name was executed: $pwned"
 r="$work/run dir/$out"
-for f in tables/sub-N01_pet.tsv tables/sub-N03_pet.tsv compare/sub-P01_pet.tsv compare/sub-P01_pet_foci.nii.gz \
+for f in tables/sub-N01_pet.h5 tables/sub-N03_pet.h5 compare/sub-P01_pet.tsv compare/sub-P01_pet_foci.nii.gz \
          subjects/sub-N02/sub-N02_registered.vtu; do
   [[ -s $r/$f ]] || fail "missing $r/$f"
 done

@@ -29,7 +29,7 @@ smk() {  # smk OUT [snakemake options...]
 }
 # results a run must produce (reports, logs and benchmarks hold times and are left out)
 results() {
-  (cd "$1" && find . -type f \( -name '*.tsv' -o -name '*.nii.gz' -o -name '*.vtu' \) \
+  (cd "$1" && find . -type f \( -name '*.tsv' -o -name '*.h5' -o -name '*.nii.gz' -o -name '*.vtu' \) \
      ! -path './benchmarks/*' ! -path './logs/*' | sort)
 }
 
