@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <malloc.h>
 #include <map>
 
 #include "core/parallel.hpp"
@@ -90,6 +91,10 @@ ElementTable subject(const CanonicalElements& el, const std::vector<Eigen::Vecto
 }  // namespace
 
 int main(int argc, char** argv) {
+  // the vpm program's memory policy (apps/main.cpp): large arrays stay in one heap
+  mallopt(M_MMAP_MAX, 0);
+  mallopt(M_ARENA_MAX, 1);
+  mallopt(M_TRIM_THRESHOLD, 1 << 30);
   std::map<std::string, std::string> a;
   for (int i = 1; i + 1 < argc; i += 2) a[argv[i]] = argv[i + 1];
   const auto number = [&](const char* key, int fallback) { return a.count(key) ? std::stoi(a[key]) : fallback; };

@@ -1,14 +1,13 @@
 // The HDF5 layer of vpm's binary files (io/hdf5.hpp).
 #include "io/hdf5.hpp"
 
-#include <hdf5.h>
+#include "io/hdf5_lock.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <atomic>
 #include <cstring>
 #include <filesystem>
-#include <mutex>
 #include <unistd.h>
 
 #include "core/atomic_file.hpp"
@@ -17,17 +16,6 @@
 namespace vpm::detail::h5 {
 
 namespace {
-
-// Every call into the library holds this lock, with HDF5's automatic error printing off for the
-// calling thread (the setting is per thread in a thread-safe build).
-struct Guard {
-  Guard() : hold(mutex()) { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
-  static std::recursive_mutex& mutex() {
-    static std::recursive_mutex m;
-    return m;
-  }
-  std::lock_guard<std::recursive_mutex> hold;
-};
 
 // Rows a chunk holds: about 64k values, whatever the column count.
 constexpr std::size_t kChunkValues = 1 << 16;
@@ -321,6 +309,8 @@ Id Reader::open_dataset(const std::string& path, std::size_t rows, std::size_t c
 }
 
 std::vector<double> Reader::doubles(const std::string& path, std::size_t rows, std::size_t cols) const {
+  if (cols <= 1)
+    if (std::optional<std::vector<double>> v = direct(path, rows, false)) return std::move(*v);
   Guard g;
   Id d = open_dataset(path, rows, cols, false);
   std::vector<double> out(rows * std::max<std::size_t>(cols, 1));
@@ -330,6 +320,8 @@ std::vector<double> Reader::doubles(const std::string& path, std::size_t rows, s
 }
 
 std::vector<std::int64_t> Reader::integers(const std::string& path, std::size_t rows, std::size_t cols) const {
+  if (cols <= 1)
+    if (std::optional<std::vector<double>> v = direct(path, rows, true)) return {v->begin(), v->end()};
   Guard g;
   Id d = open_dataset(path, rows, cols, true);
   std::vector<std::int64_t> out(rows * std::max<std::size_t>(cols, 1));

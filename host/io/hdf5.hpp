@@ -98,6 +98,11 @@ class Reader {
 
  private:
   Id open_dataset(const std::string& path, std::size_t rows, std::size_t cols, bool integral) const;
+  /// A one-dimensional dataset stored as Writer stores it (float32 or uint16, shuffle + deflate)
+  /// read chunk by chunk: the compressed chunks under the lock, then inflated, unshuffled and
+  /// converted outside it in parallel, so that tables read on several threads decompress at once
+  /// (io/hdf5_chunks.cpp). Nothing for any other storage (the caller reads through the library).
+  std::optional<std::vector<double>> direct(const std::string& path, std::size_t rows, bool integral) const;
   std::string path_;
   Id file_;
 };
