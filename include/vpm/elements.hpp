@@ -14,6 +14,7 @@
 // at the same places of the ball.
 #include <Eigen/Core>
 #include <array>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,10 @@
 #include "vpm/mesh.hpp"
 
 namespace vpm {
+
+namespace detail {
+struct ElementArrays;  // host/collective/element_arrays.hpp: what the sample generator reads
+}
 
 /// What fixes an element set. Tables computed with different definitions must never be mixed:
 /// compare definitions with ==, and record them with to_json.
@@ -117,14 +122,23 @@ class CanonicalElements {
   std::vector<int> neighbours(int id) const;
 
   /// The sample points of every element: row id * S + s, S = definition().samples (ball
-  /// coordinates). The same for every call and every machine.
-  const Points& samples() const { return samples_; }
+  /// coordinates). The same for every call and every machine. Made on the first call and kept
+  /// (size() * S * 24 bytes: 416 MB at level 6 graded with 8 samples); code that visits the
+  /// samples once makes them one at a time with sample() instead (vpm/element_sampler.hpp).
+  const Points& samples() const;
+  /// Sample point s (0 <= s < S) of element `id`: row id * S + s of samples(), bit for bit, made
+  /// on its own by the generator the device's kernels run too (kernels/element_samples.clh).
+  Eigen::Vector3d sample(int id, int s) const;
+  /// The generator's arrays (private: host/collective/element_arrays.hpp), shared by copies.
+  const detail::ElementArrays& arrays() const { return *arrays_; }
 
   /// The element containing ball point `p` (|p| <= 1; points on a boundary go to one side),
   /// or -1 when |p| > 1 + 1e-9.
   int element_of(const Eigen::Vector3d& p) const;
 
  private:
+  void make_arrays();
+
   ElementDefinition def_;
   TriSurface sphere_;
   std::vector<TriSurface> levels_;  // icosphere(0..level): triangle f of level l has children 4f..4f+3
@@ -133,7 +147,7 @@ class CanonicalElements {
   std::vector<double> radius3_;     // r_k^3, k = 0..K
   std::vector<std::vector<double>> solid_angle_;     // per level, per triangle
   std::vector<std::vector<int>> edge_neighbours_;    // per level: 3 per triangle, across its edges
-  Points samples_;
+  std::shared_ptr<detail::ElementArrays> arrays_;  // the generator's arrays, samples() once made
 };
 
 /// Writes the element table of `elements`: a TSV at `tsv_path` with a header line and one row per
