@@ -4,8 +4,9 @@
 // (kernels/element_sampling.clh and the headers before it), this kernel only loads and stores.
 //
 // Built with -DSP_FEATURES=<feature images> -DSP_LABELS=<label images>.
-// Elements: shells, samples, offset (shells + 1), radius3 (shells + 1), level (shells), first
-//   (per level), corners (9 per triangle of every level): kernels/element_samples.clh.
+// Elements: shells, samples, offset (shells + 1), level (shells), first (per level), corners (9
+//   per triangle of every level), u (samples x 3), radius (shells x samples), dir (per
+//   triangle of every level, samples x 3): kernels/element_samples.clh.
 // Mesh: inv m x 12, nbr m x 4, tets m x 4, native n x 3, the grid (lo, inv_h, dims; cell_start,
 //   cell_tets): kernels/tet_locate.clh.
 // Images (the feature images, then the label images): affine 12 each (the rows of the inverse
@@ -23,8 +24,9 @@
 
 __kernel void sample_elements(const int first_element, const int count, const int shells,
                               const int samples, __global const int* offset,
-                              __global const real* radius3, __global const int* level,
-                              __global const int* first, __global const real* corners,
+                              __global const int* level, __global const int* first,
+                              __global const real* corners, __global const real* u,
+                              __global const real* radius, __global const real* dir,
                               __global const real* inv, __global const int* nbr,
                               __global const int* tets, __global const real* native,
                               const real lox, const real loy, const real loz, const real inv_h,
@@ -36,7 +38,7 @@ __kernel void sample_elements(const int first_element, const int count, const in
                               __global int* labels) {
   const int i = get_global_id(0);
   if (i >= count) return;
-  const EsLayout L = {shells, samples, offset, radius3, level, first, corners};
+  const EsLayout L = {shells, samples, offset, level, first, corners, u, radius, dir};
   SpMesh M;
   M.inv = inv;
   M.nbr = nbr;

@@ -53,6 +53,7 @@ struct ElementSampler::Impl {
     mesh.native = native;
     mesh.nbr = detail::tet_neighbors(mesh.tets);
     detail::build_background(mesh.grid, ball, mesh.tets, mesh.nbr);
+    detail::element_directions(el.arrays());  // the backends read the directions table
     const long long samples = static_cast<long long>(el.size()) * el.definition().samples;
     if (placement.decide(device, PlacedWork::sampling, options.place, samples))
       backend = detail::device_sampler(device, el.arrays(), mesh, block);

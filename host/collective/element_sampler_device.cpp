@@ -3,6 +3,7 @@
 // item per element of each block, the block's statistics and labels read back.
 #include <boost/compute/algorithm/copy.hpp>
 #include <boost/compute/container/vector.hpp>
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -27,11 +28,15 @@ class DeviceSampler final : public SamplerBackend {
   DeviceSampler(Device& d, const ElementArrays& el, const SamplerMesh& mesh, int max_block)
       : dev_(d), samples_(el.samples), shells_(static_cast<int>(el.level.size())), max_block_(max_block) {
     const TetGrid& g = mesh.grid;
-    const unsigned long long bytes = 8ULL * (el.corners.size() + g.inv.size() + mesh.native.size()) +
+    const unsigned long long bytes =
+        8ULL * (el.corners.size() + el.radius.size() + el.directions.size() + g.inv.size() + mesh.native.size()) +
                                      4ULL * (2 * mesh.tets.size() + g.cell_start.size() + g.cell_tets.size());
-    allocate_on_device(d, "sampling: the elements and the mesh", 8ULL * g.inv.size(), bytes, [&] {
+    const unsigned long long largest = 8ULL * std::max(el.directions.size(), g.inv.size());
+    allocate_on_device(d, "sampling: the elements and the mesh", largest, bytes, [&] {
       offset_ = upload(d, el.offset.data(), el.offset.size());
-      radius3_ = upload(d, el.radius3.data(), el.radius3.size());
+      u_ = upload(d, el.u.data(), el.u.size());
+      radius_ = upload(d, el.radius.data(), el.radius.size());
+      dir_ = upload(d, el.directions.data(), el.directions.size());
       level_ = upload(d, el.level.data(), el.level.size());
       first_ = upload(d, el.first.data(), el.first.size());
       corners_ = upload(d, el.corners.data(), el.corners.size());
@@ -59,7 +64,7 @@ class DeviceSampler final : public SamplerBackend {
   int dims_[3] = {1, 1, 1};
   bc::kernel kernel_;
   bc::vector<int> offset_, level_, first_, nbr_, tets_, cell_start_, cell_tets_, dims_img_, in_grid_, labels_;
-  bc::vector<double> radius3_, corners_, inv_, native_, affine_, mean_, std_;
+  bc::vector<double> corners_, u_, radius_, dir_, inv_, native_, affine_, mean_, std_;
   bc::vector<cl_long> voxel_offset_;
   bc::vector<float> voxels_;
 };
@@ -99,7 +104,7 @@ void DeviceSampler::set_images(const std::vector<const Image*>& images, int nf) 
   voxel_offset_ = upload(dev_, offset.data(), offset.size());
   kernel_ = dev_.cl().kernel("sampling", "sample_elements",
                              "-DSP_FEATURES=" + std::to_string(nf_) + " -DSP_LABELS=" + std::to_string(nl_));
-  kernel_.set_args(0, 0, shells_, samples_, offset_, radius3_, level_, first_, corners_, inv_, nbr_, tets_, native_,
+  kernel_.set_args(0, 0, shells_, samples_, offset_, level_, first_, corners_, u_, radius_, dir_, inv_, nbr_, tets_, native_,
                    lo_[0], lo_[1], lo_[2], inv_h_, dims_[0], dims_[1], dims_[2], cell_start_, cell_tets_, affine_,
                    dims_img_, voxel_offset_, voxels_, mean_, std_, in_grid_, labels_);
 }

@@ -160,7 +160,6 @@ void CanonicalElements::make_arrays() {
   auto a = std::make_shared<detail::ElementArrays>();
   a->samples = def_.samples;
   a->offset = offset_;
-  a->radius3 = radius3_;
   a->level = shell_level_;
   for (const TriSurface& s : levels_) {
     a->first.push_back(static_cast<int>(a->corners.size() / 9));
@@ -168,20 +167,42 @@ void CanonicalElements::make_arrays() {
       for (int k = 0; k < 3; ++k)
         for (int c = 0; c < 3; ++c) a->corners.push_back(s.vertices(s.triangles(f, k), c));
   }
+  const int S = def_.samples;
+  a->u.resize(3 * static_cast<size_t>(S));
+  for (int i = 0; i < S; ++i) detail::es_r3(i + 1, &a->u[3 * static_cast<size_t>(i)]);
+  for (size_t k = 0; k < shell_level_.size(); ++k)
+    for (int i = 0; i < S; ++i) a->radius.push_back(detail::es_radius(radius3_[k], radius3_[k + 1], a->u[3 * i + 2]));
   arrays_ = std::move(a);
 }
 
+namespace detail {
+
+const std::vector<double>& element_directions(const ElementArrays& a) {
+  std::call_once(a.directions_made, [&] {
+    const size_t rows = a.corners.size() / 9, S = static_cast<size_t>(a.samples);
+    a.directions.resize(rows * S * 3);
+    const EsLayout L = es_layout(a);
+    parallel_for(static_cast<int>(rows), 1024, [&](int begin, int end) {
+      for (int t = begin; t < end; ++t) es_directions(&L, t, &a.directions[static_cast<size_t>(t) * S * 3]);
+    });
+  });
+  return a.directions;
+}
+
+}  // namespace detail
+
 const Points& CanonicalElements::samples() const {
-  detail::ElementArrays& a = *arrays_;
+  const detail::ElementArrays& a = *arrays_;
+  detail::element_directions(a);
   std::call_once(a.samples_made, [&] {
     const int S = def_.samples;
     a.points.resize(static_cast<Eigen::Index>(size()) * S, 3);
     const detail::EsLayout L = detail::es_layout(a);
     detail::parallel_for(size(), 1024, [&](int begin, int end) {
       for (int e = begin; e < end; ++e) {
-        detail::EsElement el;
-        detail::es_element(&L, e, &el);
-        for (int i = 0; i < S; ++i) detail::es_point(&el, i, &a.points(static_cast<Eigen::Index>(e) * S + i, 0));
+        int k;
+        const long row = detail::es_row(&L, e, &k);
+        for (int i = 0; i < S; ++i) detail::es_sample(&L, row, k, i, &a.points(static_cast<Eigen::Index>(e) * S + i, 0));
       }
     });
   });
@@ -190,10 +211,10 @@ const Points& CanonicalElements::samples() const {
 
 Eigen::Vector3d CanonicalElements::sample(int id, int s) const {
   const detail::EsLayout L = detail::es_layout(*arrays_);
-  detail::EsElement el;
-  detail::es_element(&L, id, &el);
+  int k;
+  const long row = detail::es_row(&L, id, &k);
   Eigen::Vector3d p;
-  detail::es_point(&el, s, p.data());
+  detail::es_sample_direct(&L, row, k, s, p.data());
   return p;
 }
 

@@ -124,7 +124,7 @@ class CanonicalElements {
   /// The sample points of every element: row id * S + s, S = definition().samples (ball
   /// coordinates). The same for every call and every machine. Made on the first call and kept
   /// (size() * S * 24 bytes: 416 MB at level 6 graded with 8 samples); code that visits the
-  /// samples once makes them one at a time with sample() instead (vpm/element_sampler.hpp).
+  /// samples once makes them as it goes instead (sample(); vpm/element_sampler.hpp).
   const Points& samples() const;
   /// Sample point s (0 <= s < S) of element `id`: row id * S + s of samples(), bit for bit, made
   /// on its own by the generator the device's kernels run too (kernels/element_samples.clh).
@@ -147,7 +147,7 @@ class CanonicalElements {
   std::vector<double> radius3_;     // r_k^3, k = 0..K
   std::vector<std::vector<double>> solid_angle_;     // per level, per triangle
   std::vector<std::vector<int>> edge_neighbours_;    // per level: 3 per triangle, across its edges
-  std::shared_ptr<detail::ElementArrays> arrays_;  // the generator's arrays, samples() once made
+  std::shared_ptr<const detail::ElementArrays> arrays_;  // the generator's arrays, samples() once made
 };
 
 /// Writes the element table of `elements`: a TSV at `tsv_path` with a header line and one row per
