@@ -39,7 +39,7 @@ TEST_CASE("placement: requests are honoured on an OpenCL device, automatic follo
     CHECK(place_work(*dev, w, ExecutionPlace::device).on_device);
   }
   CHECK(place_work(*dev, PlacedWork::advection, ExecutionPlace::automatic).on_device);
-  CHECK(place_work(*dev, PlacedWork::sampling, ExecutionPlace::automatic).on_device);
+  CHECK(place_work(*dev, PlacedWork::sampling, ExecutionPlace::automatic).on_device == gpu);
   CHECK(place_work(*dev, PlacedWork::gradients, ExecutionPlace::automatic).on_device == gpu);
   CHECK(place_work(*dev, PlacedWork::polish, ExecutionPlace::automatic).on_device == gpu);
   CHECK_FALSE(place_work(*dev, PlacedWork::density_solve, ExecutionPlace::automatic, 100).on_device);

@@ -48,7 +48,9 @@ Placed automatic_place(const Device& device, PlacedWork work, long long size) {
       return {true, "gpu, boundary of " + std::to_string(size) + " >= " + std::to_string(kDeviceDensityVertices) +
                         " vertices"};
     case PlacedWork::advection: return {true, "OpenCL device: the advection runs on every OpenCL device"};
-    case PlacedWork::sampling: return {true, "OpenCL device: the sampling runs on every OpenCL device"};
+    case PlacedWork::sampling:
+      if (gpu) return {true, "gpu"};
+      return {false, kind + " device: the host threads are faster and read the images where they are"};
     case PlacedWork::gradients:
     case PlacedWork::polish:
       if (gpu) return {true, "gpu"};

@@ -50,8 +50,9 @@ struct Placed {
 ///   - requested device: the device;
 ///   - automatic: density_solve on GPUs for boundaries of at least kDeviceDensityVertices (on CPU
 ///     devices the kernels share the cores with the Poisson solver built beside them and lose);
-///     advection and sampling on every OpenCL device; gradients and polish on GPUs only (on PoCL
-///     the host threads are as fast or faster, and keep the host's round-off: docs/volume_map.md).
+///     advection on every OpenCL device; gradients, polish and sampling on GPUs only (on PoCL the
+///     host threads are as fast or faster, and keep the host's round-off: docs/volume_map.md,
+///     docs/collective.md).
 /// Gradients are only placed on the device next to a device advection: ask for them with the
 /// advection's request and place them only when the advection is on the device.
 Placed place_work(const Device& device, PlacedWork work, ExecutionPlace requested, long long size = 0);
