@@ -3,6 +3,7 @@
 
 #include "cli.hpp"
 #include "element_options.hpp"
+#include "vpm/element_sampler.hpp"
 #include "vpm/elements.hpp"
 #include "vpm/error.hpp"
 #include "vpm/image.hpp"
@@ -47,14 +48,24 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   const vpm::TetMesh mesh = vpm::read_mesh(mesh_path);
   const vpm::Points native = vpm::native_positions(mesh, mesh_path);
   const vpm::CanonicalElements el(table.definition);
-  const vpm::Points positions = vpm::pull_back_samples(el, mesh.vertices, mesh.tets, native);
-  for (const auto& [name, path] : images) table.features.push_back(vpm::sample_feature(el, positions, vpm::read_image(path), name));
-  if (const auto labels = args.get("--labels"))
-    table.label_images.push_back(vpm::sample_label_fractions(el, positions, vpm::read_image(*labels)));
+  const vpm::ElementSampler sampler(el, mesh.vertices, mesh.tets, native, vpm::Device::current());
+  std::vector<vpm::Image> read;  // the images, then the label image
+  for (const auto& [name, path] : images) read.push_back(vpm::read_image(path));
+  if (const auto labels = args.get("--labels")) read.push_back(vpm::read_image(*labels));
+  std::vector<vpm::NamedImage> features;
+  for (size_t k = 0; k < images.size(); ++k) features.push_back({images[k].first, &read[k]});
+  std::vector<const vpm::Image*> label_images;
+  if (read.size() > images.size()) label_images.push_back(&read.back());
+  vpm::ElementTable sampled = sampler.sample(features, label_images);
+  table.features = std::move(sampled.features);
+  table.label_images = std::move(sampled.label_images);
   vpm::write_subject_table(*out, table);
+  const vpm::Placed& sampling = *sampler.placement().sampling;
   vpm::cli::info("wrote " + *out + (vpm::table_format(*out) == vpm::TableFormat::tsv ? " and " + vpm::sidecar_path(*out) : "") + ": " + std::to_string(el.size()) +
                  " elements x " + std::to_string(table.definition.samples) + " samples, " +
-                 std::to_string(images.size()) + " features" + (args.has("--labels") ? " and label fractions" : ""));
+                 std::to_string(images.size()) + " features" + (args.has("--labels") ? " and label fractions" : "") +
+                 "; sampled on " + (sampling.on_device ? "the device " + sampler.placement().device : "the host") + " (" +
+                 sampling.reason + ")");
   return 0;
 }
 

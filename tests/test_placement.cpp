@@ -14,7 +14,7 @@ using namespace vpm;
 
 namespace {
 const PlacedWork kAll[] = {PlacedWork::density_solve, PlacedWork::advection, PlacedWork::gradients,
-                           PlacedWork::polish};
+                           PlacedWork::polish, PlacedWork::sampling};
 }
 
 TEST_CASE("placement: the host device runs everything on the host whatever is asked") {
@@ -39,6 +39,7 @@ TEST_CASE("placement: requests are honoured on an OpenCL device, automatic follo
     CHECK(place_work(*dev, w, ExecutionPlace::device).on_device);
   }
   CHECK(place_work(*dev, PlacedWork::advection, ExecutionPlace::automatic).on_device);
+  CHECK(place_work(*dev, PlacedWork::sampling, ExecutionPlace::automatic).on_device == gpu);
   CHECK(place_work(*dev, PlacedWork::gradients, ExecutionPlace::automatic).on_device == gpu);
   CHECK(place_work(*dev, PlacedWork::polish, ExecutionPlace::automatic).on_device == gpu);
   CHECK_FALSE(place_work(*dev, PlacedWork::density_solve, ExecutionPlace::automatic, 100).on_device);

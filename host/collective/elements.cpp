@@ -7,6 +7,8 @@
 #include <map>
 #include <utility>
 
+#include "collective/element_arrays.hpp"
+#include "core/parallel.hpp"
 #include "vpm/error.hpp"
 #include "vpm/icosphere.hpp"
 
@@ -28,37 +30,6 @@ double solid_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
 // great-circle planes (ties count as inside, so every direction is in at least one triangle).
 bool contains(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
   return a.cross(b).dot(d) >= 0 && b.cross(c).dot(d) >= 0 && c.cross(a).dot(d) >= 0;
-}
-
-// The unit vector of x orthogonal to unit vector n (x not parallel to n).
-Vec3 orthonormal(const Vec3& x, const Vec3& n) { return (x - x.dot(n) * n).normalized(); }
-
-// Arvo, "Stratified sampling of spherical triangles" (SIGGRAPH 1995): maps (u1, u2) in [0,1]^2
-// to a point of the spherical triangle (a, b, c), area-uniformly.
-Vec3 arvo_sample(const Vec3& a, const Vec3& b, const Vec3& c, double u1, double u2) {
-  // interior angles: between the great circles through each corner
-  const double alpha = std::acos(std::clamp(orthonormal(b, a).dot(orthonormal(c, a)), -1.0, 1.0));
-  const double beta = std::acos(std::clamp(orthonormal(a, b).dot(orthonormal(c, b)), -1.0, 1.0));
-  const double gamma = std::acos(std::clamp(orthonormal(a, c).dot(orthonormal(b, c)), -1.0, 1.0));
-  const double area = alpha + beta + gamma - M_PI;
-  const double sub = u1 * area;  // area of the sub-triangle (a, b, c_hat)
-  const double s = std::sin(sub - alpha), t = std::cos(sub - alpha);
-  const double cos_c = a.dot(b);
-  const double u = t - std::cos(alpha), v = s + std::sin(alpha) * cos_c;
-  const double q = std::clamp(((v * t - u * s) * std::cos(alpha) - v) / ((v * s + u * t) * std::sin(alpha)), -1.0, 1.0);
-  const Vec3 c_hat = q * a + std::sqrt(std::max(0.0, 1 - q * q)) * orthonormal(c, a);  // on the arc a-c
-  const double z = 1 - u2 * (1 - c_hat.dot(b));  // cosine of the angle from b, uniform in area
-  return (z * b + std::sqrt(std::max(0.0, 1 - z * z)) * orthonormal(c_hat, b)).normalized();
-}
-
-// The additive recurrence of Roberts' R3 sequence: point n of a low-discrepancy sequence in
-// [0,1)^3 (alpha_i = phi^-i, phi the real root of x^4 = x + 1).
-Vec3 r3(int n) {
-  const double phi = 1.2207440845469035;
-  const Vec3 alpha(1 / phi, 1 / (phi * phi), 1 / (phi * phi * phi));
-  Vec3 x;
-  for (int i = 0; i < 3; ++i) x(i) = std::fmod(0.5 + alpha(i) * n, 1.0);
-  return x;
 }
 
 void check(const ElementDefinition& d) {
@@ -182,29 +153,70 @@ CanonicalElements::CanonicalElements(const ElementDefinition& definition) : def_
   radius3_.resize(offset_.size());
   for (size_t k = 0; k < offset_.size(); ++k) radius3_[k] = static_cast<double>(offset_[k]) / offset_.back();
   radius3_.back() = 1.0;
+  make_arrays();
   lazy_ = std::make_shared<Lazy>();
 }
 
-// The sample points (Arvo on the triangle, r^3 uniform in the shell), made on first use: a
-// reference or a comparison never reads them (17 million points at level 6, 416 MB).
-const Points& CanonicalElements::samples() const {
-  std::call_once(lazy_->samples_once, [this] {
-    const int S = def_.samples;
-    Points& out = lazy_->samples;
-    out.resize(static_cast<Eigen::Index>(size()) * S, 3);
-    for (int e = 0; e < size(); ++e) {
-      const int k = shell_of(e), f = e - offset_[k];
-      const TriSurface& s = levels_[shell_level_[k]];
-      const Vec3 a = corner(s, f, 0), b = corner(s, f, 1), c = corner(s, f, 2);
-      const double r0 = radius3_[k], r1 = radius3_[k + 1];
-      for (int i = 0; i < S; ++i) {
-        const Vec3 u = r3(i + 1);
-        const double r = std::cbrt(r0 + u(2) * (r1 - r0));
-        out.row(static_cast<Eigen::Index>(e) * S + i) = r * arvo_sample(a, b, c, u(0), u(1)).transpose();
-      }
-    }
+void CanonicalElements::make_arrays() {
+  auto a = std::make_shared<detail::ElementArrays>();
+  a->samples = def_.samples;
+  a->offset = offset_;
+  a->level = shell_level_;
+  for (const TriSurface& s : levels_) {
+    a->first.push_back(static_cast<int>(a->corners.size() / 9));
+    for (int f = 0; f < s.triangles.rows(); ++f)
+      for (int k = 0; k < 3; ++k)
+        for (int c = 0; c < 3; ++c) a->corners.push_back(s.vertices(s.triangles(f, k), c));
+  }
+  const int S = def_.samples;
+  a->u.resize(3 * static_cast<size_t>(S));
+  for (int i = 0; i < S; ++i) detail::es_r3(i + 1, &a->u[3 * static_cast<size_t>(i)]);
+  for (size_t k = 0; k < shell_level_.size(); ++k)
+    for (int i = 0; i < S; ++i) a->radius.push_back(detail::es_radius(radius3_[k], radius3_[k + 1], a->u[3 * i + 2]));
+  arrays_ = std::move(a);
+}
+
+namespace detail {
+
+const std::vector<double>& element_directions(const ElementArrays& a) {
+  std::call_once(a.directions_made, [&] {
+    const size_t rows = a.corners.size() / 9, S = static_cast<size_t>(a.samples);
+    a.directions.resize(rows * S * 3);
+    const EsLayout L = es_layout(a);
+    parallel_for(static_cast<int>(rows), 1024, [&](int begin, int end) {
+      for (int t = begin; t < end; ++t) es_directions(&L, t, &a.directions[static_cast<size_t>(t) * S * 3]);
+    });
   });
-  return lazy_->samples;
+  return a.directions;
+}
+
+}  // namespace detail
+
+const Points& CanonicalElements::samples() const {
+  const detail::ElementArrays& a = *arrays_;
+  detail::element_directions(a);
+  std::call_once(a.samples_made, [&] {
+    const int S = def_.samples;
+    a.points.resize(static_cast<Eigen::Index>(size()) * S, 3);
+    const detail::EsLayout L = detail::es_layout(a);
+    detail::parallel_for(size(), 1024, [&](int begin, int end) {
+      for (int e = begin; e < end; ++e) {
+        int k;
+        const long row = detail::es_row(&L, e, &k);
+        for (int i = 0; i < S; ++i) detail::es_sample(&L, row, k, i, &a.points(static_cast<Eigen::Index>(e) * S + i, 0));
+      }
+    });
+  });
+  return a.points;
+}
+
+Eigen::Vector3d CanonicalElements::sample(int id, int s) const {
+  const detail::EsLayout L = detail::es_layout(*arrays_);
+  int k;
+  const long row = detail::es_row(&L, id, &k);
+  Eigen::Vector3d p;
+  detail::es_sample_direct(&L, row, k, s, p.data());
+  return p;
 }
 
 const CanonicalElements::Adjacency& CanonicalElements::adjacency() const {

@@ -25,12 +25,16 @@ const char* to_string(PlacedWork w) {
     case PlacedWork::density_solve: return "density_solve";
     case PlacedWork::advection: return "advection";
     case PlacedWork::gradients: return "gradients";
-    case PlacedWork::polish: break;
+    case PlacedWork::polish: return "polish";
+    case PlacedWork::sampling: break;
   }
-  return "polish";
+  return "sampling";
 }
 
 namespace {
+
+constexpr PlacedWork kAllWork[] = {PlacedWork::density_solve, PlacedWork::advection, PlacedWork::gradients,
+                                   PlacedWork::polish, PlacedWork::sampling};
 
 Placed automatic_place(const Device& device, PlacedWork work, long long size) {
   const bool gpu = device.description().kind == DeviceKind::gpu;
@@ -44,6 +48,9 @@ Placed automatic_place(const Device& device, PlacedWork work, long long size) {
       return {true, "gpu, boundary of " + std::to_string(size) + " >= " + std::to_string(kDeviceDensityVertices) +
                         " vertices"};
     case PlacedWork::advection: return {true, "OpenCL device: the advection runs on every OpenCL device"};
+    case PlacedWork::sampling:
+      if (gpu) return {true, "gpu"};
+      return {false, kind + " device: the host threads are faster and read the images where they are"};
     case PlacedWork::gradients:
     case PlacedWork::polish:
       if (gpu) return {true, "gpu"};
@@ -66,9 +73,10 @@ std::optional<Placed>& Placement::at(PlacedWork w) {
     case PlacedWork::density_solve: return density_solve;
     case PlacedWork::advection: return advection;
     case PlacedWork::gradients: return gradients;
-    case PlacedWork::polish: break;
+    case PlacedWork::polish: return polish;
+    case PlacedWork::sampling: break;
   }
-  return polish;
+  return sampling;
 }
 
 const std::optional<Placed>& Placement::at(PlacedWork w) const { return const_cast<Placement*>(this)->at(w); }
@@ -85,7 +93,7 @@ void Placement::merge(const Placement& other) {
     device = other.device;
     kind = other.kind;
   }
-  for (PlacedWork w : {PlacedWork::density_solve, PlacedWork::advection, PlacedWork::gradients, PlacedWork::polish})
+  for (PlacedWork w : kAllWork)
     if (other.at(w)) at(w) = other.at(w);
 }
 
@@ -93,7 +101,7 @@ Json to_json(const Placement& p) {
   Json j = Json::object();
   j["device"] = p.device;
   j["kind"] = to_string(p.kind);
-  for (PlacedWork w : {PlacedWork::density_solve, PlacedWork::advection, PlacedWork::gradients, PlacedWork::polish}) {
+  for (PlacedWork w : kAllWork) {
     if (!p.at(w)) continue;
     Json e = Json::object();
     e["where"] = p.at(w)->on_device ? "device" : "host";

@@ -3,54 +3,60 @@
 #include <vector>
 
 #include "core/parallel.hpp"
-#include "vpm/image.hpp"
+#include "image/image_read.hpp"
 
 namespace vpm {
 
+namespace detail {
+
+IrImage ir_image(const Image& image) {
+  IrImage im;
+  const Eigen::Matrix3d inv = image.affine.topLeftCorner<3, 3>().inverse();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) im.inv[3 * r + c] = inv(r, c);
+    im.t[r] = image.affine(r, 3);
+    im.dims[r] = image.dims[r];
+  }
+  im.data = image.data.data();
+  return im;
+}
+
+}  // namespace detail
+
 namespace {
-float sample(const Image& im, const Eigen::Vector3d& v, Interpolation mode) {
-  const auto& d = im.dims;
-  if (mode == Interpolation::nearest) {
-    const int i = static_cast<int>(std::lround(v.x())), j = static_cast<int>(std::lround(v.y())),
-              k = static_cast<int>(std::lround(v.z()));
-    if (i < 0 || j < 0 || k < 0 || i >= d[0] || j >= d[1] || k >= d[2]) return 0.0f;
-    return im.at(i, j, k);
-  }
-  const int i0 = static_cast<int>(std::floor(v.x())), j0 = static_cast<int>(std::floor(v.y())),
-            k0 = static_cast<int>(std::floor(v.z()));
-  const double fx = v.x() - i0, fy = v.y() - j0, fz = v.z() - k0;
-  double acc = 0;
-  for (int c = 0; c < 8; ++c) {
-    const int i = i0 + (c & 1), j = j0 + ((c >> 1) & 1), k = k0 + ((c >> 2) & 1);
-    if (i < 0 || j < 0 || k < 0 || i >= d[0] || j >= d[1] || k >= d[2]) continue;
-    const double w = ((c & 1) ? fx : 1 - fx) * (((c >> 1) & 1) ? fy : 1 - fy) * (((c >> 2) & 1) ? fz : 1 - fz);
-    acc += w * im.at(i, j, k);
-  }
-  return static_cast<float>(acc);
+float sample(const detail::IrImage& im, const double* v, Interpolation mode) {
+  return mode == Interpolation::nearest ? detail::ir_nearest(&im, v) : detail::ir_linear(&im, v);
 }
 }  // namespace
 
 float sample_image(const Image& image, const Eigen::Vector3d& x, Interpolation interpolation) {
-  return sample(image, image.to_voxel(x), interpolation);
+  const detail::IrImage im = detail::ir_image(image);
+  double v[3];
+  detail::ir_to_voxel(&im, x.data(), v);
+  return sample(im, v, interpolation);
 }
 
 bool inside_grid(const Image& image, const Eigen::Vector3d& x) {
-  const Eigen::Vector3d v = image.to_voxel(x);
-  for (int c = 0; c < 3; ++c)
-    if (!(v(c) >= -0.5 && v(c) <= image.dims[c] - 0.5)) return false;
-  return true;
+  const detail::IrImage im = detail::ir_image(image);
+  double v[3];
+  detail::ir_to_voxel(&im, x.data(), v);
+  return detail::ir_inside(&im, v);
 }
 
 Image resample_image(const Image& image, const std::function<Eigen::Vector3d(const Eigen::Vector3d&)>& pull,
                      Interpolation interpolation) {
   Image out = image;
+  const detail::IrImage im = detail::ir_image(image);
   const int nk = image.dims[2];
   auto work = [&](int k_begin, int k_end) {
     for (int k = k_begin; k < k_end; ++k)
       for (int j = 0; j < image.dims[1]; ++j)
         for (int i = 0; i < image.dims[0]; ++i) {
           const Eigen::Vector3d x = image.to_world(Eigen::Vector3d(i, j, k));
-          out.data[image.index(i, j, k)] = sample(image, image.to_voxel(pull(x)), interpolation);
+          const Eigen::Vector3d y = pull(x);
+          double v[3];
+          detail::ir_to_voxel(&im, y.data(), v);
+          out.data[image.index(i, j, k)] = sample(im, v, interpolation);
         }
   };
   detail::parallel_for(nk, 2, work);

@@ -39,13 +39,7 @@ Location TetLocator::locate(const Eigen::Vector3d& p, int hint) const {
   Location out;
   const detail::TetGrid& f = impl_->background;
   if (f.m == 0) return out;
-  if (hint < 0 || hint >= f.m) {  // start from a tet of p's grid cell when it has one
-    int idx[3];
-    for (int c = 0; c < 3; ++c)
-      idx[c] = std::clamp(static_cast<int>(std::floor((p(c) - f.lo[c]) * f.inv_h)), 0, f.dims[c] - 1);
-    const size_t cell = idx[0] + f.dims[0] * (idx[1] + static_cast<size_t>(f.dims[1]) * idx[2]);
-    hint = f.cell_start[cell] < f.cell_start[cell + 1] ? f.cell_tets[f.cell_start[cell]] : 0;
-  }
+  if (hint < 0 || hint >= f.m) hint = detail::start_tet(f, p);  // a tet of p's grid cell when it has one
   long long st[3] = {0, 0, 0};
   out.tet = detail::locate(f, p, hint, out.bary, st);
   double raw[4];

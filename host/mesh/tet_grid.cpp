@@ -1,5 +1,5 @@
 // Point location in a tet mesh (mesh/tet_grid.hpp): the background built here, the walk itself
-// in kernels/tet_locate.clh, compiled here and in the kernels (kernels/moser.cl).
+// in kernels/tet_locate.clh (included by mesh/tet_grid.hpp), compiled here and in the kernels.
 #include "mesh/tet_grid.hpp"
 
 #include <Eigen/Dense>
@@ -96,14 +96,11 @@ void build_background(TetGrid& f, const Points& x, const Tets& tets, const std::
 }
 
 
-// The walk, shared with the kernels (kernels/moser.cl includes the same file).
-#include "kernels/tet_locate.clh"
-
 void bary(const TetGrid& f, int t, const Eigen::Vector3d& p, double* l) {
   tl_bary(f.inv.data(), t, p.x(), p.y(), p.z(), l);
 }
 
-int locate(const TetGrid& f, const Eigen::Vector3d& p, int t, double* l, long long* st) {
+TlGrid tl_grid(const TetGrid& f) {
   TlGrid g;
   for (int c = 0; c < 3; ++c) {
     g.lo[c] = f.lo[c];
@@ -112,6 +109,16 @@ int locate(const TetGrid& f, const Eigen::Vector3d& p, int t, double* l, long lo
   g.inv_h = f.inv_h;
   g.cell_start = f.cell_start.data();
   g.cell_tets = f.cell_tets.data();
+  return g;
+}
+
+int start_tet(const TetGrid& f, const Eigen::Vector3d& p) {
+  const TlGrid g = tl_grid(f);
+  return tl_start(&g, p.x(), p.y(), p.z());
+}
+
+int locate(const TetGrid& f, const Eigen::Vector3d& p, int t, double* l, long long* st) {
+  const TlGrid g = tl_grid(f);
   return tl_locate(p.x(), p.y(), p.z(), t, f.inv.data(), f.nbr->data(), &g, l, st);
 }
 

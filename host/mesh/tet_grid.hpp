@@ -4,12 +4,16 @@
 // volume map's Moser field (map/moser_field.hpp). The walk is kernels/tet_locate.clh, compiled
 // both here and in kernels/moser.cl.
 #include <Eigen/Core>
+#include <cmath>
 #include <vector>
 
 #include "core/uninitialized.hpp"
 #include "vpm/mesh.hpp"
 
 namespace vpm::detail {
+
+// The walk, shared with the kernels (kernels/moser.cl and kernels/sampling.cl include it too).
+#include "kernels/tet_locate.clh"
 
 /// nbr[4 t + k] = the tet sharing the face of tet t opposite its corner k, or -1 (boundary).
 /// `boundary`, when given, receives vpm::boundary_faces(tets) from the same face sort.
@@ -38,6 +42,12 @@ void build_grid(TetGrid& f, const Points& x, const Tets& tets, const std::vector
 
 /// Barycentric coordinates l[0..3] of `p` in tet `t` of the background `f`.
 void bary(const TetGrid& f, int t, const Eigen::Vector3d& p, double* l);
+
+/// The walk's view of `f` (kernels/tet_locate.clh): its grid, pointing into f's arrays.
+TlGrid tl_grid(const TetGrid& f);
+
+/// The tet a location of `p` without a hint starts from: the first tet of p's grid cell.
+int start_tet(const TetGrid& f, const Eigen::Vector3d& p);
 
 /// Point location: walks from tet `t` towards `p` through face neighbours (at most 64 steps),
 /// else searches the grid cell of `p`. Returns the tet containing `p` with its barycentric

@@ -25,6 +25,10 @@
 
 namespace vpm {
 
+namespace detail {
+struct ElementArrays;  // host/collective/element_arrays.hpp: what the sample generator reads
+}
+
 /// What fixes an element set. Tables computed with different definitions must never be mixed:
 /// compare definitions with ==, and record them with to_json.
 enum class ElementLayout {
@@ -120,10 +124,15 @@ class CanonicalElements {
   std::vector<int> neighbours(int id) const;
 
   /// The sample points of every element: row id * S + s, S = definition().samples (ball
-  /// coordinates). The same for every call and every machine. Made on the first call (thread-safe;
-  /// copies of this object share them): 17 million points at level 6 graded, which the
-  /// statistics never need.
+  /// coordinates). The same for every call and every machine. Made on the first call and kept
+  /// (size() * S * 24 bytes: 416 MB at level 6 graded with 8 samples); code that visits the
+  /// samples once makes them as it goes instead (sample(); vpm/element_sampler.hpp).
   const Points& samples() const;
+  /// Sample point s (0 <= s < S) of element `id`: row id * S + s of samples(), bit for bit, made
+  /// on its own by the generator the device's kernels run too (kernels/element_samples.clh).
+  Eigen::Vector3d sample(int id, int s) const;
+  /// The generator's arrays (private: host/collective/element_arrays.hpp), shared by copies.
+  const detail::ElementArrays& arrays() const { return *arrays_; }
 
   /// Every element's neighbours(id) in one table (compressed rows), built on the first call
   /// (thread-safe; shared by copies): the loops over every element's neighbours (shrinkage,
@@ -144,6 +153,8 @@ class CanonicalElements {
   int element_of(const Eigen::Vector3d& p) const;
 
  private:
+  void make_arrays();
+
   ElementDefinition def_;
   TriSurface sphere_;
   std::vector<TriSurface> levels_;  // icosphere(0..level): triangle f of level l has children 4f..4f+3
@@ -152,9 +163,9 @@ class CanonicalElements {
   std::vector<double> radius3_;     // r_k^3, k = 0..K
   std::vector<std::vector<double>> solid_angle_;     // per level, per triangle
   std::vector<std::vector<int>> edge_neighbours_;    // per level: 3 per triangle, across its edges
-  struct Lazy {  // what is made on first use
-    std::once_flag samples_once, adjacency_once;
-    Points samples;
+  std::shared_ptr<const detail::ElementArrays> arrays_;  // the generator's arrays, samples() once made
+  struct Lazy {  // the adjacency, made on first use
+    std::once_flag adjacency_once;
     Adjacency adjacency;
   };
   std::shared_ptr<Lazy> lazy_;

@@ -28,8 +28,10 @@ enum class PlacedWork {
   advection,      ///< the Moser rounds' RK4 advection (point location, field interpolation)
   gradients,      ///< the Moser field's vertex gradients (next to a device advection only)
   polish,         ///< the polish's CGLS (volume map, registration's restoration)
+  sampling,       ///< a subject's images read at the element samples (vpm/element_sampler.hpp)
 };
-const char* to_string(PlacedWork w);  ///< "density_solve", "advection", "gradients", "polish"
+/// "density_solve", "advection", "gradients", "polish", "sampling"
+const char* to_string(PlacedWork w);
 
 /// Boundaries of at least this many vertices have their equal-area steps solved on a GPU under
 /// ExecutionPlace::automatic (at 32k vertices the host and the CPU device tie; docs/gpu.md).
@@ -48,8 +50,9 @@ struct Placed {
 ///   - requested device: the device;
 ///   - automatic: density_solve on GPUs for boundaries of at least kDeviceDensityVertices (on CPU
 ///     devices the kernels share the cores with the Poisson solver built beside them and lose);
-///     advection on every OpenCL device; gradients and polish on GPUs only (on PoCL the host
-///     threads are as fast or faster, and keep the host's round-off: docs/volume_map.md).
+///     advection on every OpenCL device; gradients, polish and sampling on GPUs only (on PoCL the
+///     host threads are as fast or faster, and keep the host's round-off: docs/volume_map.md,
+///     docs/collective.md).
 /// Gradients are only placed on the device next to a device advection: ask for them with the
 /// advection's request and place them only when the advection is on the device.
 Placed place_work(const Device& device, PlacedWork work, ExecutionPlace requested, long long size = 0);
@@ -58,7 +61,7 @@ Placed place_work(const Device& device, PlacedWork work, ExecutionPlace requeste
 struct Placement {
   std::string device;  ///< Device::name()
   DeviceKind kind = DeviceKind::host;
-  std::optional<Placed> density_solve, advection, gradients, polish;
+  std::optional<Placed> density_solve, advection, gradients, polish, sampling;
 
   /// The part's slot (density_solve, advection, ...).
   std::optional<Placed>& at(PlacedWork w);

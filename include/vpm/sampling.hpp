@@ -4,6 +4,8 @@
 // space through its registered ball mesh (containing tet -> barycentric coordinates -> the same
 // combination of the vertices' native positions), and the subject's images are read there.
 // Every subject gets the same number of samples per element, at the same places of the ball.
+// The functions below hold every sample's native position (24 bytes a sample); ElementSampler
+// (vpm/element_sampler.hpp) computes the same table without, on the host threads or a GPU.
 #include <string>
 #include <vector>
 
