@@ -7,16 +7,21 @@
 #include <cmath>
 #include <atomic>
 #include <cstring>
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <unistd.h>
 
 #include "core/atomic_file.hpp"
+#include "core/file_digest.hpp"
 #include "vpm/error.hpp"
 
 namespace vpm::detail::h5 {
 
 namespace {
 
+// Bytes of the user block before the superblock: the digest (HDF5's smallest user block).
+constexpr std::size_t kDigestBytes = 512;
 // Rows a chunk holds: about 64k values, whatever the column count.
 constexpr std::size_t kChunkValues = 1 << 16;
 // The most values one chunk of a file being read may declare (a larger one is refused before
@@ -70,12 +75,15 @@ bool is_hdf5_path(const std::string& path) {
 Writer::Writer(std::string path) : path_(std::move(path)) {
   Guard g;
   static std::atomic<long> serial{0};
-  Id fapl(H5Pcreate(H5P_FILE_ACCESS));
-  // in memory, never on disk (commit() writes the image); metadata with checksums (format 1.8+)
+  Id fapl(H5Pcreate(H5P_FILE_ACCESS)), fcpl(H5Pcreate(H5P_FILE_CREATE));
+  // in memory, never on disk (commit() writes the image), in the earliest format that holds it
+  // (the core driver's image of a newer superblock does not match its own checksum); the user
+  // block before the superblock holds the digest (kDigestBytes)
   H5Pset_fapl_core(static_cast<hid_t>(fapl.get()), 1 << 20, 0);
   H5Pset_libver_bounds(static_cast<hid_t>(fapl.get()), H5F_LIBVER_EARLIEST, H5F_LIBVER_V18);
+  H5Pset_userblock(static_cast<hid_t>(fcpl.get()), kDigestBytes);
   const std::string name = "vpm-memory-" + std::to_string(getpid()) + "-" + std::to_string(serial++) + ".h5";
-  file_ = Id(H5Fcreate(name.c_str(), H5F_ACC_EXCL, H5P_DEFAULT, static_cast<hid_t>(fapl.get())));
+  file_ = Id(H5Fcreate(name.c_str(), H5F_ACC_EXCL, static_cast<hid_t>(fcpl.get()), static_cast<hid_t>(fapl.get())));
   if (!file_.valid()) throw InputError(path_ + ": HDF5 could not create the file in memory");
 }
 
@@ -157,9 +165,11 @@ void Writer::commit() {
     const ssize_t size = H5Fget_file_image(f, nullptr, 0);
     if (size <= 0) throw InputError(path_ + ": HDF5 could not produce the file's image");
     image.resize(static_cast<std::size_t>(size));
-    if (H5Fget_file_image(f, image.data(), image.size()) != size)
+    if (H5Fget_file_image(f, image.data(), image.size()) != size || image.size() <= kDigestBytes)
       throw InputError(path_ + ": HDF5 could not produce the file's image");
   }
+  const std::string digest = digest_line(image.data() + kDigestBytes, image.size() - kDigestBytes);
+  std::copy(digest.begin(), digest.end(), image.begin());
   AtomicFile out(path_, true);
   out.stream().write(image.data(), static_cast<std::streamsize>(image.size()));
   out.commit();
@@ -170,6 +180,9 @@ void Writer::commit() {
 Reader::Reader(std::string path) : path_(std::move(path)) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path_, ec)) throw InputError(path_ + ": no such file");
+  check_digest(path_, kDigestBytes,
+               "not an HDF5 file vpm wrote (no digest in its user block): vpm reads the HDF5 files it writes; give "
+               "other tools' tables as TSV");
   Guard g;
   file_ = Id(H5Fopen(path_.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT));
   if (!file_.valid()) throw InputError(path_ + ": not an HDF5 file (or a truncated or corrupt one)");
