@@ -165,12 +165,15 @@ void Writer::commit() {
     const ssize_t size = H5Fget_file_image(f, nullptr, 0);
     if (size <= 0) throw InputError(path_ + ": HDF5 could not produce the file's image");
     image.resize(static_cast<std::size_t>(size));
-    if (H5Fget_file_image(f, image.data(), image.size()) != size || image.size() <= kDigestBytes)
+    if (H5Fget_file_image(f, image.data(), image.size()) != size)
       throw InputError(path_ + ": HDF5 could not produce the file's image");
   }
-  const std::string digest = digest_line(image.data() + kDigestBytes, image.size() - kDigestBytes);
-  std::copy(digest.begin(), digest.end(), image.begin());
+  // the image starts at the superblock, which places the HDF5 data after a user block of
+  // kDigestBytes: that block is the digest line and zeros
+  std::string block = digest_line(image.data(), image.size());
+  block.resize(kDigestBytes, '\0');
   AtomicFile out(path_, true);
+  out.stream().write(block.data(), static_cast<std::streamsize>(block.size()));
   out.stream().write(image.data(), static_cast<std::streamsize>(image.size()));
   out.commit();
 }

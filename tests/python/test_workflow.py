@@ -73,7 +73,7 @@ def test_fmriprep_and_freesurfer_subjects_through_the_workflow(dataset):
     assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
     r = dataset / "results"
     for s in ("sub-N01", "sub-N02", "sub-N03", "sub-P01"):
-        assert (r / "tables" / f"{s}_pet.tsv").stat().st_size > 0
+        assert (r / "tables" / f"{s}_pet.h5").stat().st_size > 0
     assert (r / "compare" / "sub-P01_pet_z.nii.gz").stat().st_size > 0
     for s, source in (("sub-N02", "fMRIPrep"), ("sub-N03", "FreeSurfer")):
         rep = json.load(open(r / "subjects" / s / f"{s}_register.json"))
