@@ -22,6 +22,8 @@ namespace {
 
 // Bytes of the user block before the superblock: the digest (HDF5's smallest user block).
 constexpr std::size_t kDigestBytes = 512;
+// Datasets of at most this many values are stored contiguous, without chunks or filters.
+constexpr std::size_t kSmallValues = 4096;
 // Rows a chunk holds: about 64k values, whatever the column count.
 constexpr std::size_t kChunkValues = 1 << 16;
 // The most values one chunk of a file being read may declare (a larger one is refused before
@@ -125,7 +127,8 @@ void Writer::write_any(const std::string& path, const void* values, std::int64_t
   Id space(H5Screate_simple(rank, dims, nullptr));
   Id dcpl(H5Pcreate(H5P_DATASET_CREATE));
   H5Pset_obj_track_times(static_cast<hid_t>(dcpl.get()), false);  // the same bytes for the same contents
-  if (rows > 0) {
+  // small datasets (a label list, a test's table) contiguous: a chunk index alone is kilobytes
+  if (double(rows) * double(std::max<std::size_t>(cols, 1)) > double(kSmallValues)) {
     const hsize_t chunk_cols = std::min<hsize_t>(cols, kChunkValues);
     const hsize_t chunk[2] = {std::min<hsize_t>(rows, std::max<hsize_t>(1, kChunkValues / chunk_cols)), chunk_cols};
     H5Pset_chunk(static_cast<hid_t>(dcpl.get()), rank, chunk);
