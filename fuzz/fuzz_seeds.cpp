@@ -15,6 +15,7 @@
 #include "vpm/io.hpp"
 #include "vpm/landmarks.hpp"
 #include "vpm/map_back.hpp"
+#include "vpm/reference_sums.hpp"
 #include "vpm/sampling.hpp"
 #include "vpm/topology.hpp"
 
@@ -161,6 +162,15 @@ void table_seeds(const fs::path& out, const fs::path& tmp) {
   const fs::path h5 = tmp / "sub-01.h5";  // the same table in HDF5
   write_subject_table(h5.string(), t);
   take(out, "table_hdf5", h5);
+  ReferenceRecipe recipe;  // the sums of three normals made from it, with an age covariate
+  recipe.feature = "pet";
+  recipe.covariates = recipe.covariate_columns = {"age"};
+  ReferenceSums sums(t.definition, recipe);
+  for (int i = 0; i < 3; ++i)
+    sums.add("n" + std::to_string(i) + ".h5", normal_values(nullptr, t, "n", recipe), {30.0 + 10 * i});
+  const fs::path sums_path = tmp / "sums.h5";
+  write_reference_sums(sums_path.string(), sums);
+  take(out, "reference_sums", sums_path);
   const fs::path elements = tmp / "elements.tsv";
   write_element_table(elements.string(), CanonicalElements(ElementDefinition{1, 2, 4, ElementLayout::shells}));
   take(out, "json", sidecar_path(elements.string()));
