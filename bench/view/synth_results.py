@@ -119,6 +119,16 @@ def source_cohort(src):
     return side, [resolve(t) for t in side["reference"]["tables"]], resolve(side["patient"])
 
 
+def as_tsv(vpm, path, scratch):
+    """The table at `path` as TSV with its sidecar: the workflow's HDF5 tables exported (vpm convert)."""
+    if not path.endswith(".h5"):
+        return path
+    tsv = os.path.join(scratch, os.path.basename(path)[:-3] + ".tsv")
+    if not os.path.exists(tsv):
+        subprocess.run([vpm, "convert", path, tsv, "--quiet"], check=True)
+    return tsv
+
+
 def compare(vpm, side, normals, patient, mesh, image, labels, out):
     o = side["options"]
     args = [vpm, "compare", "--normals", ",".join(normals), "--patient", patient, "--feature", side["reference"]["feature"],
@@ -151,8 +161,11 @@ def main():
     src, out = os.path.abspath(a.src), os.path.abspath(a.out)
     side, src_normals, src_patient = source_cohort(src)
     feature = side["reference"]["feature"]
-    for d in ("tables", "subjects", "compare", "template"):
+    for d in ("tables", "subjects", "compare", "template", "source_tables"):
         os.makedirs(os.path.join(out, d), exist_ok=True)
+    scratch = os.path.join(out, "source_tables")
+    src_normals = [as_tsv(a.vpm, t, scratch) for t in src_normals]
+    src_patient = as_tsv(a.vpm, src_patient, scratch)
     shutil.copy(os.path.join(src, "template", "template_ball.vtu"), os.path.join(out, "template", "template_ball.vtu"))
     head, first = read_table(src_normals[0])
     sidecar = json.load(open(src_normals[0][:-4] + ".json"))

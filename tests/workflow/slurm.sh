@@ -209,7 +209,8 @@ assert run1 == ["snakejob_participant"] * 2 + ["snakejob_template_map", "snakejo
 # the second run: the group job with the failing subject failed once and was submitted again
 run2 = [j for j in jobs.values() if int(j["id"]) > first]
 assert [j["state"] for j in run2 if kind(j) == "snakejob_participant"].count("FAILED") == 1, run2
-assert sorted(kind(j) for j in run2 if kind(j) != "snakejob_participant") == ["snakejob_compare", "snakejob_evaluate"], run2
+assert sorted(kind(j) for j in run2 if kind(j) != "snakejob_participant") == \
+    ["snakejob_compare", "snakejob_evaluate", "snakejob_reference", "snakejob_reference_group"], run2
 assert all(j["state"] == "COMPLETED" for j in run2 if j["state"] != "FAILED"), run2
 # every job ran its rules as job steps (srun), but those cancelled before starting any
 assert all(steps[j["id"]] >= 1 for j in jobs.values() if j["state"] in ("COMPLETED", "FAILED")), (jobs, steps)
