@@ -78,7 +78,7 @@ def main():
         with open(listed, "w") as f:
             f.writelines(p + "\n" for p in normals)
         patient = os.path.join(tables, "sub-P000_pet.h5")
-        sums, cal, out = (os.path.join(a.data, f"{x}_{n}") for x in ("sums.h5", "cal.json", "compare.tsv"))
+        sums, cal, out = (os.path.join(a.data, f"{x}_{n}.{ext}") for x, ext in (("sums", "h5"), ("cal", "json"), ("compare", "tsv")))
         steps = {
             "reference": [vpm, "reference", "--normals", "@" + listed, *RECIPE, "-o", sums, "--quiet"],
             "calibrate": [vpm, "calibrate", "--reference", sums, "--normals", "@" + listed, *COMPARE, "--peak", "auto",
