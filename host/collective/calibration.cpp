@@ -15,56 +15,75 @@ namespace vpm {
 
 namespace {
 
-// Whether a cluster with `candidates` elements at the cut and peak |z| `peak` is kept at
-// min_cluster m (compare_to_reference's rule: the size, or the peak rule).
-bool kept(int candidates, double peak_z, int m, double peak) {
-  return candidates >= m || (peak > 0 && candidates > 0 && std::abs(peak_z) >= peak);
-}
-
-// Normal `values` (normals()[index] of the totals) compared with the reference of the others.
-LeftOutNormal leave_out(const CanonicalElements& el, const ReferenceSums& totals, size_t index, const NormalValues& values,
-                        const CalibrationSettings& s) {
+// The clusters of normal `values` (normals()[index] of the totals) compared with the reference of
+// the others at min_cluster 1: (candidates, peak_z) each.
+std::vector<std::pair<int, double>> leave_out(const CanonicalElements& el, const ReferenceSums& totals, size_t index,
+                                              const NormalValues& values, const CalibrationSettings& s) {
   const Reference ref = totals.reference_without(&el, s.shrinkage, index, values);
   CompareOptions o = s.compare;
   o.min_cluster = 1;
-  const std::string& name = totals.normals()[index];
-  const Comparison c = detail::compare_values(el, ref, values, o, totals.design()[index], name);
-  LeftOutNormal r;
-  r.name = name;
-  for (const FocusCluster& f : c.clusters) {
-    r.candidates.push_back(f.candidates);
-    r.peak_z.push_back(f.peak_z);
-  }
-  return r;
+  const Comparison c = detail::compare_values(el, ref, values, o, totals.design()[index], totals.normals()[index]);
+  std::vector<std::pair<int, double>> out;
+  for (const FocusCluster& f : c.clusters) out.emplace_back(f.candidates, f.peak_z);
+  return out;
 }
 
+// The order of strong clusters: highest |peak_z| first, ties by normal, then candidates (a total
+// order, so the k + 1 kept do not depend on how the normals were split among threads).
+bool stronger(const StrongCluster& a, const StrongCluster& b) {
+  const double pa = std::abs(a.peak_z), pb = std::abs(b.peak_z);
+  if (pa != pb) return pa > pb;
+  if (a.normal != b.normal) return a.normal < b.normal;
+  return a.candidates > b.candidates;
+}
+
+// What one thread gathers from its normals left out: the sizes' histogram and the strong clusters.
+struct Gathered {
+  std::vector<long> sizes;
+  std::vector<StrongCluster> strong;
+  // keep the first `keep` by stronger() (all that reach `fixed` when it is > 0)
+  void add(int normal, int candidates, double peak_z, size_t keep, double fixed) {
+    if (static_cast<size_t>(candidates) >= sizes.size()) sizes.resize(static_cast<size_t>(candidates) + 1, 0);
+    ++sizes[static_cast<size_t>(candidates)];
+    if (candidates <= 0) return;
+    if (fixed > 0) {
+      if (std::abs(peak_z) >= fixed) strong.push_back({normal, candidates, peak_z});
+      return;
+    }
+    if (keep == 0) return;
+    strong.push_back({normal, candidates, peak_z});
+    if (strong.size() >= 2 * keep) prune(keep);
+  }
+  void prune(size_t keep) {
+    std::sort(strong.begin(), strong.end(), stronger);
+    if (strong.size() > keep) strong.resize(keep);
+  }
+};
+
 // CalibrationSettings::calibrate_peak's level: at most half the rate's clusters (over all
-// normals left out) peak at or beyond it.
-double calibrated_peak(const std::vector<LeftOutNormal>& per_normal, const CalibrationSettings& s) {
-  std::vector<double> peaks;
-  for (const LeftOutNormal& n : per_normal)
-    for (size_t i = 0; i < n.candidates.size(); ++i)
-      if (n.candidates[i] > 0) peaks.push_back(std::abs(n.peak_z[i]));
-  std::sort(peaks.begin(), peaks.end(), std::greater<>());
-  const double allowed = 0.5 * s.rate * static_cast<double>(per_normal.size()) / 10.0;
-  const size_t k = static_cast<size_t>(std::floor(allowed + 1e-12));  // clusters the rule may keep
-  if (k >= peaks.size()) return s.compare.threshold;                  // every cluster may pass
-  if (!std::isfinite(peaks[k])) return 0;  // no level is beyond it (a reference without spread): off
-  const double level = (std::floor(peaks[k] * 100.0 + 1e-9) + 1.0) / 100.0;  // the next 0.01 step
-  return std::max(level, std::nextafter(peaks[k], HUGE_VAL));        // strictly beyond the (k+1)-th
+// normals left out) peak at or beyond it; `k` those clusters, `strong` the k + 1 strongest.
+double calibrated_peak(const ClusterCalibration& cal, size_t k, const CalibrationSettings& s) {
+  long total = 0;
+  for (size_t c = 1; c < cal.sizes.size(); ++c) total += cal.sizes[c];
+  if (k >= static_cast<size_t>(total)) return s.compare.threshold;  // every cluster may pass
+  const double kth = std::abs(cal.strong[k].peak_z);
+  if (!std::isfinite(kth)) return 0;  // no level is beyond it (a reference without spread): off
+  const double level = (std::floor(kth * 100.0 + 1e-9) + 1.0) / 100.0;  // the next 0.01 step
+  return std::max(level, std::nextafter(kth, HUGE_VAL));               // strictly beyond the (k+1)-th
 }
 
 }  // namespace
 
-int ClusterCalibration::clusters_at(int m) const {
-  int count = 0;
-  for (const LeftOutNormal& n : per_normal)
-    for (size_t i = 0; i < n.candidates.size(); ++i)
-      count += kept(n.candidates[i], n.peak_z[i], std::max(m, 1), peak);
+long ClusterCalibration::clusters_at(int m) const {
+  m = std::max(m, 1);
+  long count = 0;
+  for (size_t c = static_cast<size_t>(m); c < sizes.size(); ++c) count += sizes[c];
+  if (peak > 0)  // the small clusters the peak rule keeps (every one reaching the level is in strong)
+    for (const StrongCluster& c : strong) count += c.candidates > 0 && c.candidates < m && std::abs(c.peak_z) >= peak;
   return count;
 }
 
-double ClusterCalibration::rate_at(int m) const { return normals > 0 ? 10.0 * clusters_at(m) / normals : 0; }
+double ClusterCalibration::rate_at(int m) const { return normals > 0 ? 10.0 * double(clusters_at(m)) / normals : 0; }
 
 ClusterCalibration calibrate_min_cluster(const CanonicalElements& el, const ReferenceSums& totals,
                                          const NormalSource& left_out, const CalibrationSettings& s) {
@@ -90,24 +109,39 @@ ClusterCalibration calibrate_min_cluster(const CanonicalElements& el, const Refe
   cal.settings = s;
   cal.normals = static_cast<int>(left_out.names.size());
   cal.per_normal.resize(left_out.names.size());
+  // the clusters half the rate lets the peak rule keep
+  const size_t k = static_cast<size_t>(std::floor(0.5 * s.rate * static_cast<double>(cal.normals) / 10.0 + 1e-12));
+  const size_t keep = s.calibrate_peak ? k + 1 : 0;
+  const int threads = detail::host_threads();
+  std::vector<Gathered> gathered(static_cast<size_t>(threads));
   std::vector<std::exception_ptr> errors(left_out.names.size());  // the first normal's is rethrown as it was
-  detail::parallel_for(cal.normals, 2, [&](int b, int e) {
-    for (int i = b; i < e; ++i) try {
-        const size_t k = static_cast<size_t>(i);
-        const NormalValues v = left_out.values(k);
-        cal.per_normal[k] = leave_out(el, totals, index.at(left_out.names[k]), v, s);
-      } catch (...) {
-        errors[static_cast<size_t>(i)] = std::current_exception();
-      }
+  const int chunk = (cal.normals + threads - 1) / threads;
+  detail::parallel_for(threads, 2, [&](int tb, int te) {
+    for (int t = tb; t < te; ++t)
+      for (int i = t * chunk; i < std::min(cal.normals, (t + 1) * chunk); ++i) try {
+          const size_t n = static_cast<size_t>(i);
+          const NormalValues v = left_out.values(n);
+          const auto clusters = leave_out(el, totals, index.at(left_out.names[n]), v, s);
+          cal.per_normal[n] = {left_out.names[n], static_cast<int>(clusters.size())};
+          for (const auto& [candidates, peak_z] : clusters)
+            gathered[static_cast<size_t>(t)].add(i, candidates, peak_z, keep, s.compare.peak);
+        } catch (...) {
+          errors[static_cast<size_t>(i)] = std::current_exception();
+        }
   });
   for (const std::exception_ptr& x : errors)
     if (x) std::rethrow_exception(x);
-  cal.peak = s.calibrate_peak ? calibrated_peak(cal.per_normal, s) : s.compare.peak;
-  int largest = 0;
-  for (const LeftOutNormal& n : cal.per_normal)
-    for (int c : n.candidates) largest = std::max(largest, c);
-  for (int m = 1; m <= largest + 1; ++m) {
-    cal.false_clusters.push_back(cal.clusters_at(m));
+  for (Gathered& g : gathered) {
+    if (g.sizes.size() > cal.sizes.size()) cal.sizes.resize(g.sizes.size(), 0);
+    for (size_t c = 0; c < g.sizes.size(); ++c) cal.sizes[c] += g.sizes[c];
+    cal.strong.insert(cal.strong.end(), g.strong.begin(), g.strong.end());
+  }
+  std::sort(cal.strong.begin(), cal.strong.end(), stronger);
+  if (keep > 0 && cal.strong.size() > keep) cal.strong.resize(keep);
+  cal.peak = s.calibrate_peak ? calibrated_peak(cal, k, s) : s.compare.peak;
+  const int largest = static_cast<int>(cal.sizes.size()) - 1;
+  for (int m = 1; m <= std::max(largest, 0) + 1; ++m) {
+    cal.false_clusters.push_back(static_cast<int>(cal.clusters_at(m)));
     if (cal.min_cluster == 0 && cal.rate_at(m) <= s.rate) cal.min_cluster = m;
   }
   return cal;
@@ -168,15 +202,23 @@ Json to_json(const ClusterCalibration& c) {
     curve.push_back(p);
   }
   j["curve"] = curve;
+  Json sizes = Json::array();
+  for (long v : c.sizes) sizes.push_back(v);
+  j["sizes"] = sizes;
+  Json strong = Json::array();
+  for (const StrongCluster& x : c.strong) {
+    Json o = Json::object();
+    o["normal"] = c.per_normal[static_cast<size_t>(x.normal)].name;
+    o["candidates"] = x.candidates;
+    o["peak_z"] = x.peak_z;
+    strong.push_back(o);
+  }
+  j["strong"] = strong;
   Json per = Json::array();
   for (const LeftOutNormal& n : c.per_normal) {
     Json o = Json::object();
     o["normal"] = n.name;
-    Json cand = Json::array(), peak = Json::array();
-    for (int v : n.candidates) cand.push_back(v);
-    for (double v : n.peak_z) peak.push_back(v);
-    o["candidates"] = cand;
-    o["peak_z"] = peak;
+    o["clusters"] = n.clusters;
     per.push_back(o);
   }
   j["per_normal"] = per;

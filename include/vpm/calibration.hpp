@@ -37,11 +37,19 @@ struct CalibrationSettings {
   bool calibrate_peak = false;
 };
 
-/// One normal left out: its clusters' candidate counts and peaks at min_cluster 1.
+/// One normal left out: how many clusters it showed at min_cluster 1 (their sizes and peaks are
+/// folded into ClusterCalibration::sizes and ::strong, so that a calibration of thousands of
+/// normals holds no list of their clusters).
 struct LeftOutNormal {
   std::string name;
-  std::vector<int> candidates;
-  std::vector<double> peak_z;
+  int clusters = 0;
+};
+
+/// A left-out normal's cluster that the peak rule can keep, small as it is.
+struct StrongCluster {
+  int normal = 0;      ///< index into ClusterCalibration::per_normal
+  int candidates = 0;  ///< FocusCluster::candidates
+  double peak_z = 0;
 };
 
 struct ClusterCalibration {
@@ -57,10 +65,16 @@ struct ClusterCalibration {
   /// the peak rule's level the curve and min_cluster hold with: the calibrated one
   /// (CalibrationSettings::calibrate_peak), else settings.compare.peak (0: off)
   double peak = 0;
+  /// sizes[c]: the clusters with c candidates over all normals left out, at min_cluster 1
+  std::vector<long> sizes;
+  /// The clusters a peak rule can keep: with a calibrated level the k + 1 of highest |peak_z|
+  /// (k: the clusters half the rate allows; the level lies beyond the (k + 1)-th), strongest
+  /// first; with a fixed level every cluster reaching it; none without a peak rule.
+  std::vector<StrongCluster> strong;
   std::vector<LeftOutNormal> per_normal;
   /// The false clusters min_cluster m keeps over all left-out normals (0 past the curve's end
   /// unless a peak rule keeps small ones), and that per 10 normals.
-  int clusters_at(int m) const;
+  long clusters_at(int m) const;
   double rate_at(int m) const;
 };
 
@@ -84,7 +98,8 @@ ClusterCalibration calibrate_min_cluster(const CanonicalElements& elements, cons
 /// ("" for none), "options": {threshold, fdr_q, extend, peak (the fixed one; 0 when
 ///  calibrated), sign, test}, "rate", "normals", "min_cluster", "calibrate_peak", "peak" (the
 ///  level applied), "curve": [{"min_cluster", "false_clusters", "per_10_normals"}],
-///  "per_normal": [{"normal", "candidates", "peak_z"}]}
+///  "sizes": [clusters with 0, 1, 2, ... candidates], "strong": [{"normal", "candidates", "peak_z"}],
+///  "per_normal": [{"normal", "clusters"}]}
 Json to_json(const ClusterCalibration& calibration);
 
 /// What a calibration sets in a comparison: CompareOptions::min_cluster and ::peak.
