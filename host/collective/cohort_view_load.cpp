@@ -12,6 +12,7 @@
 #include "vpm/io.hpp"
 #include "vpm/json.hpp"
 #include "vpm/label_names.hpp"
+#include "vpm/reference_sums.hpp"
 
 namespace vpm {
 
@@ -121,31 +122,24 @@ std::vector<ComparisonFile> read_comparisons(const fs::path& results, const std:
   return out;
 }
 
-/// Subject tables by path, read once.
+/// Subject tables by path, without their element values: what the page still needs of them (the
+/// definition, the subject, the registered mesh, the features' images). The values are read a
+/// table at a time where they are used, so memory does not grow with the cohort's tables.
 struct Tables {
   std::map<std::string, ElementTable> by_path;
-  const ElementTable& get(const std::string& path) {
-    auto it = by_path.find(path);
-    if (it == by_path.end()) it = by_path.emplace(path, read_subject_table(path)).first;
-    return it->second;
+  /// `t` (read from `path`) kept without its values.
+  const ElementTable& keep(const std::string& path, ElementTable t) {
+    for (ElementFeature& f : t.features) std::vector<double>().swap(f.mean), std::vector<double>().swap(f.std), std::vector<int>().swap(f.count);
+    t.label_images.clear();
+    return by_path.insert_or_assign(path, std::move(t)).first->second;
   }
-  /// The tables of `paths`, moved out of the cache (give them back with put: a thousand normals'
-  /// tables are 640 MB, not to be held twice).
-  std::vector<ElementTable> take(const std::vector<std::string>& paths) {
-    std::vector<ElementTable> out;
-    for (const std::string& p : paths) {
-      get(p);
-      out.push_back(std::move(by_path[p]));
-    }
-    return out;
-  }
-  void put(const std::vector<std::string>& paths, std::vector<ElementTable>& tables) {
-    for (size_t i = 0; i < paths.size(); ++i) by_path[paths[i]] = std::move(tables[i]);
-  }
-  /// Drops the element values (the meshes and image names are what is still read).
-  void release_values() {
-    for (auto& [path, t] : by_path)
-      for (ElementFeature& f : t.features) f.mean = f.std = {}, f.count = {};
+  /// The table at `path`: its metadata (features named only when `features`), read once.
+  const ElementTable& meta(const std::string& path, bool features = false) {
+    if (auto it = by_path.find(path); it != by_path.end()) return it->second;
+    TableColumns columns;
+    if (!features) columns.features = {""};  // no feature has an empty name
+    columns.spread = columns.labels = false;
+    return keep(path, read_subject_table(path, columns));
   }
 };
 
@@ -189,45 +183,73 @@ std::vector<std::vector<double>> leave_one_out_z(const std::vector<std::vector<d
 
 namespace {
 
-/// The reference of one feature, every subject's values and the patients' z-scores against it.
-void add_feature(CohortView& v, const CanonicalElements& el, const std::vector<const ComparisonFile*>& comps,
-                 Tables& tables, std::map<std::string, size_t>& index) {
+/// The recipe the comparisons of `c` summed their normals with.
+ReferenceRecipe recipe_of(const ComparisonFile& c, const std::optional<Covariates>& cov) {
+  ReferenceRecipe r;
+  r.feature = c.feature;
+  r.normalisation = c.normalisation;
+  r.smoothing = c.smoothing;
+  r.image_covariate = c.image_covariate;
+  if (cov) r.covariates = cov->names, r.covariate_columns = cov->columns, r.covariate_table = cov->source;
+  return r;
+}
+
+/// The reference of one feature, built in one streaming pass over the normals' tables (each
+/// normal's display values kept as it is read), every subject's values and the patients'
+/// z-scores against it, all carried to the display elements by `to`.
+void add_feature(CohortView& v, const CanonicalElements& el, const detail::ElementCoarsening& to,
+                 const std::vector<const ComparisonFile*>& comps, Tables& tables, std::map<std::string, size_t>& index) {
   const ComparisonFile& first = *comps.front();
-  std::vector<ElementTable> normals = tables.take(first.normal_tables);
+  if (first.normal_tables.size() < 3)
+    throw InputError(first.tsv + ": its reference names " + std::to_string(first.normal_tables.size()) + " normals, at least 3 are needed");
+  if (!(first.shrinkage >= 0 && first.shrinkage <= 1))
+    throw InputError(first.tsv + ": shrinkage " + std::to_string(first.shrinkage) + " is not in [0, 1]");
   std::optional<Covariates> cov;
   if (!first.covariate_names.empty()) cov = read_covariates(first.covariate_table, first.covariate_names);
-  const Reference ref = build_reference(el, normals, first.normal_tables, first.feature, first.normalisation, first.smoothing,
-                                        first.shrinkage,
-                                        cov ? covariate_design(*cov, normals, first.normal_tables) : CovariateDesign{},
-                                        first.image_covariate);
+  const ReferenceRecipe recipe = recipe_of(first, cov);
+  NormalSource source = table_files(first.normal_tables, v.compared, recipe, &el, cov ? &*cov : nullptr);
+  std::vector<std::vector<float>> shown(first.normal_tables.size());
+  std::vector<std::string> ids(first.normal_tables.size());
+  source.values = [&, read = source.values](size_t i) {  // called from several threads, each i once
+    NormalValues nv = read(i);
+    shown[i] = to.mean(to_float(nv.feature));
+    ids[i] = nv.subject.empty() ? fs::path(first.normal_tables[i]).stem().string() : nv.subject;
+    return nv;
+  };
+  const Reference ref = sum_normals(v.compared, recipe, source).reference(&el, first.shrinkage);
   v.features.push_back({first.feature, first.normalisation, first.smoothing, first.shrinkage, first.covariate_names,
-                        first.image_covariate, first.options, ref.subjects, to_float(ref.mean),
-                        to_float(ref.std), ref.count});
-  for (size_t i = 0; i < normals.size(); ++i) {
-    ViewSubject& s = subject_for(v, index, subject_id(normals[i], first.normal_tables[i]), false);
-    s.values[first.feature] =
-        to_float(smooth_over_elements(el, normalised_feature(normals[i], first.feature, first.normalisation), first.smoothing));
+                        first.image_covariate, first.options, ref.subjects, to.mean(to_float(ref.mean)),
+                        to.rms(to_float(ref.std)), to.least(ref.count)});
+  for (size_t i = 0; i < shown.size(); ++i) {
+    subject_for(v, index, ids[i], false).values[first.feature] = std::move(shown[i]);
+    tables.meta(first.normal_tables[i]);
   }
-  tables.put(first.normal_tables, normals);
   for (const ComparisonFile* c : comps) {
     if (c->normal_tables != first.normal_tables || c->normalisation != first.normalisation ||
         c->smoothing != first.smoothing || c->shrinkage != first.shrinkage ||
         c->covariate_names != first.covariate_names || c->covariate_table != first.covariate_table ||
         c->image_covariate != first.image_covariate)
       throw InputError(c->tsv + ": compared against other normals than " + first.tsv + "; one reference per feature");
-    const ElementTable& t = tables.get(c->patient_table);
+    ElementTable t = read_subject_table(c->patient_table);
+    if (t.definition != v.compared)
+      throw InputError(c->patient_table + ": element definition differs from " + comps.front()->patient_table + "'s");
     const Comparison cmp =
         compare_to_reference(el, ref, t, c->options, cov ? covariate_row(*cov, t.subject, c->patient_table) : std::vector<double>{});
     if (cmp.clusters.size() != c->clusters)
       throw InputError(c->tsv + ": its " + std::to_string(c->clusters) + " foci differ from the " +
                        std::to_string(cmp.clusters.size()) + " its tables give now; rerun vpm compare");
     ViewSubject& s = subject_for(v, index, subject_id(t, c->patient_table), true);
-    s.values[c->feature] = to_float(cmp.patient);
-    s.z[c->feature] = to_float(cmp.z);
+    s.values[c->feature] = to.mean(to_float(cmp.patient));
+    s.z[c->feature] = to.mean(to_float(cmp.z));
     s.foci_count[c->feature] = static_cast<int>(cmp.clusters.size());
-    s.cluster[c->feature].assign(cmp.cluster.begin(), cmp.cluster.end());
+    s.cluster[c->feature] = to.most_frequent(std::vector<std::int32_t>(cmp.cluster.begin(), cmp.cluster.end()));
     const std::string base = c->tsv.substr(0, c->tsv.size() - 4);
-    if (fs::exists(base + "_foci.tsv")) s.foci[c->feature] = detail::read_view_foci(base + "_foci.tsv", cmp);
+    if (fs::exists(base + "_foci.tsv")) {
+      std::vector<ViewFocus> foci = detail::read_view_foci(base + "_foci.tsv", cmp);
+      for (ViewFocus& f : foci) f.peak_element = f.peak_element >= 0 ? to.of(f.peak_element) : -1;
+      s.foci[c->feature] = std::move(foci);
+    }
+    tables.keep(c->patient_table, std::move(t));
   }
 }
 
@@ -238,7 +260,7 @@ void add_geometry(CohortView& v, const CanonicalElements& el, Tables& tables, co
   std::map<std::string, std::map<std::string, std::pair<std::string, std::string>>> slices_of;  // id -> feature -> image, z
   for (const auto& [path, t] : tables.by_path) mesh_of[subject_id(t, path)] = resolve(t.mesh, results, "the registered mesh named in " + path);
   for (const ComparisonFile& c : comps) {
-    const ElementTable& t = tables.get(c.patient_table);
+    const ElementTable& t = tables.meta(c.patient_table);
     const std::string id = subject_id(t, c.patient_table), z = c.tsv.substr(0, c.tsv.size() - 4) + "_z.nii.gz";
     for (const ElementFeature& f : t.features)
       if (std::error_code ec; f.name == c.feature && fs::is_regular_file(f.source, ec) && fs::exists(z, ec))
@@ -256,23 +278,6 @@ void add_geometry(CohortView& v, const CanonicalElements& el, Tables& tables, co
 
 }  // namespace
 
-namespace {
-
-/// Carries every per-element array of `v` (built over the tables' elements) to its display elements.
-void coarsen(CohortView& v, const detail::ElementCoarsening& to) {
-  if (to.identity()) return;
-  for (ViewFeature& f : v.features) f.mean = to.mean(f.mean), f.std = to.rms(f.std), f.count = to.least(f.count);
-  for (ViewSubject& s : v.subjects) {
-    for (auto& [feature, x] : s.values) x = to.mean(x);
-    for (auto& [feature, z] : s.z) z = to.mean(z);
-    for (auto& [feature, ids] : s.cluster) ids = to.most_frequent(ids);
-    for (auto& [feature, foci] : s.foci)
-      for (ViewFocus& f : foci) f.peak_element = f.peak_element >= 0 ? to.of(f.peak_element) : -1;
-  }
-}
-
-}  // namespace
-
 CohortView load_cohort_view(const std::string& results_dir, const CohortViewOptions& opt) {
   if (opt.max_display_level < 0) throw InputError("view: the display level " + std::to_string(opt.max_display_level) + " is negative");
   const fs::path results = fs::absolute(results_dir).lexically_normal();
@@ -280,7 +285,7 @@ CohortView load_cohort_view(const std::string& results_dir, const CohortViewOpti
   Tables tables;
   CohortView v;
   v.title = opt.title.empty() ? "vpm cohort: " + results.parent_path().filename().string() : opt.title;
-  v.compared = tables.get(comps.front().patient_table).definition;
+  v.compared = tables.meta(comps.front().patient_table).definition;
   v.definition = detail::display_definition(v.compared, opt.max_display_level);
   const CanonicalElements el(v.compared), shown(v.definition);
   v.mid_radii = shell_mid_radii(shown);
@@ -288,6 +293,7 @@ CohortView load_cohort_view(const std::string& results_dir, const CohortViewOpti
   // and subject: at level 5 the page of a 60-subject cohort with 19 graded shells held 70 MB of them)
   v.display = icosphere(v.definition.level < 4 ? v.definition.level + 1 : v.definition.level);
   v.display_triangle_element = display_triangle_elements(shown, v.display);
+  const detail::ElementCoarsening to(el, shown);
   std::map<std::string, size_t> index;
   std::vector<std::string> order;
   for (const ComparisonFile& c : comps)
@@ -296,13 +302,11 @@ CohortView load_cohort_view(const std::string& results_dir, const CohortViewOpti
     std::vector<const ComparisonFile*> of;
     for (const ComparisonFile& c : comps)
       if (c.feature == f) of.push_back(&c);
-    add_feature(v, el, of, tables, index);
+    add_feature(v, el, to, of, tables, index);
   }
   for (const auto& [path, t] : tables.by_path)
     if (t.definition != v.compared)
       throw InputError(path + ": element definition differs from " + comps.front().patient_table + "'s");
-  tables.release_values();
-  coarsen(v, detail::ElementCoarsening(el, shown));
   add_geometry(v, shown, tables, comps, results, opt);
   std::stable_sort(v.subjects.begin(), v.subjects.end(), [](const ViewSubject& a, const ViewSubject& b) {
     return a.patient != b.patient ? a.patient : a.id < b.id;
