@@ -111,14 +111,17 @@ for _ in $(seq 1 600); do
 done
 kill -0 "$runner" 2>/dev/null || { tail -40 "$work/killed.log"; fail "the first run ended before a subject was done"; }
 { kill -KILL -- "-$runner"; wait "$runner"; } 2>/dev/null || true
-snapshot > "$work/at_kill.txt"
 squeue -h -o '%i %j %T' > "$work/queue_at_kill.txt"
-echo "slurm: Snakemake killed $((SECONDS - t0)) s in, $(grep -c . "$work/at_kill.txt") results written, $(grep -c RUNNING "$work/queue_at_kill.txt") jobs running"
 grep -q 'snakejob_participant_.* RUNNING' "$work/queue_at_kill.txt" ||
   { cat "$work/queue_at_kill.txt"; fail "no participant group job running at the kill"; }
 scancel -u "$USER"
 for _ in $(seq 1 150); do [[ -z $(squeue -h -o %i) ]] && break; sleep 0.2; done
 [[ -z $(squeue -h -o %i) ]] || { squeue; fail "jobs still in the queue 30 s after scancel"; }
+# the results as the next invocation finds them, once every job has stopped (a group job that
+# finishes between the kill and scancel touches its outputs as it ends: taken earlier, this
+# snapshot would see that as a redone result)
+snapshot > "$work/at_kill.txt"
+echo "slurm: Snakemake killed $((SECONDS - t0)) s in, $(grep -c . "$work/at_kill.txt") results written, $(grep -c RUNNING "$work/queue_at_kill.txt") jobs running"
 next_job() { scontrol show config | sed -n 's/^NEXT_JOB_ID *= *//p'; }
 first_jobs=$(($(next_job) - 1))   # the jobs of the first run: 1 to this
 left=$(find "$r" -name '.*.tmp.*' 2>/dev/null || true)
