@@ -133,11 +133,11 @@ struct Tables {
     t.label_images.clear();
     return by_path.insert_or_assign(path, std::move(t)).first->second;
   }
-  /// The table at `path`: its metadata (features named only when `features`), read once.
-  const ElementTable& meta(const std::string& path, bool features = false) {
+  /// The table at `path` as kept, or its metadata alone (no features), read once.
+  const ElementTable& meta(const std::string& path) {
     if (auto it = by_path.find(path); it != by_path.end()) return it->second;
     TableColumns columns;
-    if (!features) columns.features = {""};  // no feature has an empty name
+    columns.features = {""};  // no feature has an empty name
     columns.spread = columns.labels = false;
     return keep(path, read_subject_table(path, columns));
   }
