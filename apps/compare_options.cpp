@@ -95,17 +95,7 @@ std::vector<std::string> normal_paths(const Args& args, size_t at_least) {
 }
 
 ReferenceRecipe reference_recipe(const CalibrationSettings& s, const std::optional<Covariates>& cov) {
-  ReferenceRecipe r;
-  r.feature = s.feature;
-  r.normalisation = s.normalisation;
-  r.smoothing = s.smoothing;
-  r.image_covariate = s.image_covariate;
-  if (cov) {
-    r.covariates = cov->names;
-    r.covariate_columns = cov->columns;
-    r.covariate_table = cov->source;
-  }
-  return r;
+  return vpm::reference_recipe(s.feature, s.normalisation, s.smoothing, s.image_covariate, cov ? &*cov : nullptr);
 }
 
 ElementDefinition table_definition(const std::string& path) {

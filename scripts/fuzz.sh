@@ -2,13 +2,15 @@
 # Fuzzes every reader (docs/robustness.md "Fuzzing"): builds the libFuzzer targets of fuzz/ with
 # ASan + UBSan in build-san/ (the tree of scripts/sanitize.sh), writes their seeds (fuzz_seeds:
 # vpm's writers and tests/data), runs each target for FUZZ_SECONDS (or FUZZ_CPU_SECONDS) on one
-# core, one after the other, and writes FUZZ_OUT/summary.json (per target: executions, coverage, features, corpus,
-# findings). Exits 1 when a target crashed, hung, leaked or ran out of memory; its input is in
-# FUZZ_OUT/<target>/ (crash-*, timeout-*, leak-*, oom-*): fix the reader, then keep the input in
-# fuzz/regressions/<target>/ (ctest fuzz:replay:<target> replays it in every build).
+# core, FUZZ_JOBS targets at a time, and writes FUZZ_OUT/summary.json (per target: executions,
+# coverage, features, corpus, findings). Exits 1 when a target crashed, hung, leaked or ran out
+# of memory; its input is in FUZZ_OUT/<target>/ (crash-*, timeout-*, leak-*, oom-*): fix the
+# reader, then keep the input in fuzz/regressions/<target>/ (ctest fuzz:replay:<target> replays it
+# in every build).
 #   FUZZ_SECONDS  wall seconds per target (default 10)
 #   FUZZ_CPU_SECONDS  instead: CPU seconds per target (a campaign on a busy machine; FUZZ_SECONDS
 #                 then only caps the wall time, set it high)
+#   FUZZ_JOBS     targets run at once, each on one core (default JOBS, else 2)
 #   FUZZ_TARGETS  space-separated targets (default: all of fuzz/CMakeLists.txt)
 #   FUZZ_OUT      logs, findings and summary.json (default build-san/fuzz-run)
 #   FUZZ_CORPUS   a folder kept between runs (<target>/ under it; default: a fresh one in FUZZ_OUT)
@@ -20,6 +22,7 @@ cd "$(dirname "$0")/.."
 root=$PWD
 SAN_DIR=${SAN_DIR:-build-san}
 FUZZ_SECONDS=${FUZZ_SECONDS:-10}
+FUZZ_JOBS=${FUZZ_JOBS:-${JOBS:-2}}
 FUZZ_OUT=$(realpath -m "${FUZZ_OUT:-$SAN_DIR/fuzz-run}")
 FUZZ_MAX_LEN=${FUZZ_MAX_LEN:-16384}
 all=$(sed -n 's/^set(VPM_FUZZ_TARGETS \(.*\))$/\1/p' fuzz/CMakeLists.txt)
@@ -45,10 +48,10 @@ rm -rf "$FUZZ_OUT"
 mkdir -p "$FUZZ_OUT"
 "$SAN_DIR/fuzz/fuzz_seeds" "$FUZZ_OUT/seeds" tests/data
 corpus_root=$(realpath -m "${FUZZ_CORPUS:-$FUZZ_OUT/corpus}")
-status=0
-for t in $FUZZ_TARGETS; do
+# One target: its findings make $FUZZ_OUT/<target>/found.
+fuzz_one() {
+  local t=$1 dict=()
   mkdir -p "$FUZZ_OUT/$t" "$corpus_root/$t"
-  dict=()
   [[ -f fuzz/dict/$t.dict ]] && dict=(-dict="$root/fuzz/dict/$t.dict")
   echo "fuzz: $t for ${FUZZ_SECONDS}s"
   # libFuzzer reads the corpus and the seeds, adds new inputs to the corpus (the first folder);
@@ -59,9 +62,18 @@ for t in $FUZZ_TARGETS; do
         -artifact_prefix="$FUZZ_OUT/$t/" "$corpus_root/$t" "$FUZZ_OUT/seeds/$t" >"$FUZZ_OUT/$t/log" 2>&1); then
     echo "fuzz: $t FOUND A PROBLEM: $FUZZ_OUT/$t/log"
     grep -E "^(==[0-9]+==ERROR|SUMMARY|vpm fuzz:|.*runtime error)" "$FUZZ_OUT/$t/log" | head -5 || true
-    status=1
+    touch "$FUZZ_OUT/$t/found"
   fi
+}
+running=0
+for t in $FUZZ_TARGETS; do
+  if ((running >= FUZZ_JOBS)); then wait -n || true; running=$((running - 1)); fi
+  fuzz_one "$t" &
+  running=$((running + 1))
 done
+wait
+status=0
+for t in $FUZZ_TARGETS; do [[ -f $FUZZ_OUT/$t/found ]] && status=1; done
 python3 scripts/fuzz_summary.py "$FUZZ_OUT" "$corpus_root" $FUZZ_TARGETS > "$FUZZ_OUT/summary.json"
 cat "$FUZZ_OUT/summary.json"
 exit $status

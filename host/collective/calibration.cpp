@@ -156,8 +156,7 @@ ClusterCalibration calibrate_min_cluster(const CanonicalElements& el, const std:
   if (normals.size() < 4)
     throw InputError("calibration: needs at least 4 normals (3 in each reference), got " +
                      std::to_string(normals.size()));
-  const ReferenceRecipe recipe =
-      detail::recipe_for(s.feature, s.normalisation, s.smoothing, s.image_covariate, design);
+  const ReferenceRecipe recipe = reference_recipe(s.feature, s.normalisation, s.smoothing, s.image_covariate, design);
   const NormalSource source = tables_in_memory(normals, names, recipe, &el, design);
   return calibrate_min_cluster(el, sum_normals(normals[0].definition, recipe, source), source, s);
 }

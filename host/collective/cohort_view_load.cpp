@@ -183,17 +183,6 @@ std::vector<std::vector<double>> leave_one_out_z(const std::vector<std::vector<d
 
 namespace {
 
-/// The recipe the comparisons of `c` summed their normals with.
-ReferenceRecipe recipe_of(const ComparisonFile& c, const std::optional<Covariates>& cov) {
-  ReferenceRecipe r;
-  r.feature = c.feature;
-  r.normalisation = c.normalisation;
-  r.smoothing = c.smoothing;
-  r.image_covariate = c.image_covariate;
-  if (cov) r.covariates = cov->names, r.covariate_columns = cov->columns, r.covariate_table = cov->source;
-  return r;
-}
-
 /// The reference of one feature, built in one streaming pass over the normals' tables (each
 /// normal's display values kept as it is read), every subject's values and the patients'
 /// z-scores against it, all carried to the display elements by `to`.
@@ -206,7 +195,8 @@ void add_feature(CohortView& v, const CanonicalElements& el, const detail::Eleme
     throw InputError(first.tsv + ": shrinkage " + std::to_string(first.shrinkage) + " is not in [0, 1]");
   std::optional<Covariates> cov;
   if (!first.covariate_names.empty()) cov = read_covariates(first.covariate_table, first.covariate_names);
-  const ReferenceRecipe recipe = recipe_of(first, cov);
+  const ReferenceRecipe recipe =
+      reference_recipe(first.feature, first.normalisation, first.smoothing, first.image_covariate, cov ? &*cov : nullptr);
   NormalSource source = table_files(first.normal_tables, v.compared, recipe, &el, cov ? &*cov : nullptr);
   std::vector<std::vector<float>> shown(first.normal_tables.size());
   std::vector<std::string> ids(first.normal_tables.size());

@@ -13,9 +13,6 @@ namespace vpm::detail {
 
 /// The recipe of `ref` (what its normals' values were read with).
 ReferenceRecipe recipe_of(const Reference& ref);
-/// The recipe of build_reference's arguments.
-ReferenceRecipe recipe_for(const std::string& feature, Normalisation normalisation, int smoothing,
-                           const std::string& image_covariate, const CovariateDesign& design);
 
 /// compare_to_reference of a subject whose values (normal_values with recipe_of(ref)) are given;
 /// `who` names it in messages.

@@ -179,6 +179,33 @@ void fit_element(const double* s, const FitShape& f, int e, Reference& r) {
 
 // ---- the recipe ------------------------------------------------------------------------
 
+namespace {
+
+ReferenceRecipe make_recipe(const std::string& feature, Normalisation normalisation, int smoothing,
+                            const std::string& image_covariate, const std::string* source,
+                            const std::vector<std::string>* names, const std::vector<std::string>* columns) {
+  ReferenceRecipe r;
+  r.feature = feature;
+  r.normalisation = normalisation;
+  r.smoothing = smoothing;
+  r.image_covariate = image_covariate;
+  if (source) r.covariate_table = *source, r.covariates = *names, r.covariate_columns = *columns;
+  return r;
+}
+
+}  // namespace
+
+ReferenceRecipe reference_recipe(const std::string& feature, Normalisation normalisation, int smoothing,
+                                 const std::string& image_covariate, const Covariates* c) {
+  if (!c) return make_recipe(feature, normalisation, smoothing, image_covariate, nullptr, nullptr, nullptr);
+  return make_recipe(feature, normalisation, smoothing, image_covariate, &c->source, &c->names, &c->columns);
+}
+
+ReferenceRecipe reference_recipe(const std::string& feature, Normalisation normalisation, int smoothing,
+                                 const std::string& image_covariate, const CovariateDesign& d) {
+  return make_recipe(feature, normalisation, smoothing, image_covariate, &d.source, &d.names, &d.columns);
+}
+
 int ReferenceRecipe::model_columns() const {
   return 1 + static_cast<int>(covariate_columns.size()) + (image_covariate.empty() ? 0 : 1);
 }

@@ -96,7 +96,7 @@ Reference build_reference(const CanonicalElements& elements, const std::vector<E
   if (normals.size() < 3) throw InputError("reference: needs at least 3 normals, got " + std::to_string(normals.size()));
   if (!(shrinkage >= 0 && shrinkage <= 1))
     throw InputError("reference: shrinkage " + std::to_string(shrinkage) + " is not in [0, 1]");
-  const ReferenceRecipe recipe = detail::recipe_for(feature, normalisation, smoothing, image_covariate, covariates);
+  const ReferenceRecipe recipe = reference_recipe(feature, normalisation, smoothing, image_covariate, covariates);
   return sum_normals(normals[0].definition, recipe, tables_in_memory(normals, names, recipe, &elements, covariates))
       .reference(&elements, shrinkage);
 }
@@ -265,19 +265,6 @@ ReferenceRecipe recipe_of(const Reference& ref) {
   r.covariates = ref.covariate_names;
   r.covariate_columns = ref.covariates;
   r.covariate_table = ref.covariate_table;
-  return r;
-}
-
-ReferenceRecipe recipe_for(const std::string& feature, Normalisation normalisation, int smoothing,
-                           const std::string& image_covariate, const CovariateDesign& design) {
-  ReferenceRecipe r;
-  r.feature = feature;
-  r.normalisation = normalisation;
-  r.smoothing = smoothing;
-  r.image_covariate = image_covariate;
-  r.covariates = design.names;
-  r.covariate_columns = design.columns;
-  r.covariate_table = design.source;
   return r;
 }
 

@@ -36,6 +36,14 @@ struct ReferenceRecipe {
   bool operator==(const ReferenceRecipe& o) const;
 };
 
+/// The recipe of `feature` read with `normalisation` and `smoothing`, with `image_covariate`
+/// (empty: none) and the subject covariates of `covariates` (null: none).
+ReferenceRecipe reference_recipe(const std::string& feature, Normalisation normalisation, int smoothing,
+                                 const std::string& image_covariate, const Covariates* covariates = nullptr);
+/// The same with the subject covariates of a design (its names, columns and source).
+ReferenceRecipe reference_recipe(const std::string& feature, Normalisation normalisation, int smoothing,
+                                 const std::string& image_covariate, const CovariateDesign& design);
+
 /// The first way the recipe `made` (of sums) differs from `wanted` (a comparison's), as
 /// "feature fdg, not pet"; nothing when they agree (the covariate table's path is not compared).
 std::optional<std::string> recipe_difference(const ReferenceRecipe& wanted, const ReferenceRecipe& made);
