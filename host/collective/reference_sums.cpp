@@ -16,13 +16,7 @@ namespace vpm {
 
 namespace {
 
-const double kSumsNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr int kMaxColumns = 16;
-
-std::string sums_definition_text(const ElementDefinition& d) {
-  return std::to_string(d.level) + "/" + std::to_string(d.shells) + "/" + std::to_string(d.samples) + " " +
-         to_string(d.layout);
-}
 
 // The design row x (q values) of a normal at one element: 1, its covariates, its image covariate there.
 inline void design_x(const std::vector<double>& row, bool image, double image_value, int q, double* x) {
@@ -274,8 +268,8 @@ void ReferenceSums::add(const std::string& name, const NormalValues& v, const st
 
 void ReferenceSums::merge(const ReferenceSums& o) {
   if (o.definition_ != definition_)
-    throw InputError("reference: the element definitions differ (" + sums_definition_text(o.definition_) + " vs " +
-                     sums_definition_text(definition_) + ")");
+    throw InputError("reference: the element definitions differ (" + to_string(o.definition_) + " vs " +
+                     to_string(definition_) + ")");
   if (!(o.recipe_ == recipe_))
     throw InputError("reference: the recipes differ (" + to_json(o.recipe_).dump(-1) + " vs " + to_json(recipe_).dump(-1) + ")");
   const std::set<std::string> mine(names_.begin(), names_.end());
@@ -342,13 +336,14 @@ Reference ReferenceSums::fit(const CanonicalElements* el, double shrinkage, cons
     r.covariate_centre = f.centre;
   }
   const size_t n = static_cast<size_t>(definition_.elements());
-  r.mean.assign(n, kSumsNaN);
-  r.std.assign(n, kSumsNaN);
+  const double kNaN = std::numeric_limits<double>::quiet_NaN();
+  r.mean.assign(n, kNaN);
+  r.std.assign(n, kNaN);
   r.count.assign(n, 0);
   if (q_ > 1) {
-    r.image_covariate_centre.assign(f.image ? n : 0, kSumsNaN);
-    r.coefficients.assign(n * static_cast<size_t>(q_), kSumsNaN);
-    r.gram_inverse.assign(n * static_cast<size_t>(q_ * q_), kSumsNaN);
+    r.image_covariate_centre.assign(f.image ? n : 0, kNaN);
+    r.coefficients.assign(n * static_cast<size_t>(q_), kNaN);
+    r.gram_inverse.assign(n * static_cast<size_t>(q_ * q_), kNaN);
   }
   detail::parallel_for(static_cast<int>(n), 65536, [&](int begin, int end) {
     std::vector<double> local(static_cast<size_t>(stride_));
