@@ -54,6 +54,11 @@ ElementLayout parse_element_layout(const std::string& name) {
 
 const char* to_string(ElementLayout layout) { return layout == ElementLayout::graded ? "graded" : "shells"; }
 
+std::string to_string(const ElementDefinition& d) {
+  return std::to_string(d.level) + "/" + std::to_string(d.shells) + "/" + std::to_string(d.samples) + " " +
+         to_string(d.layout);
+}
+
 std::vector<int> shell_levels(const ElementDefinition& d) {
   if (d.layout == ElementLayout::shells) return std::vector<int>(static_cast<size_t>(std::max(d.shells, 0)), d.level);
   // the volume of a cube as wide as a level-L triangle at r = 1, as a fraction of the ball's

@@ -9,15 +9,6 @@
 
 namespace vpm {
 
-namespace {
-
-std::string definition_text(const ElementDefinition& d) {
-  return std::to_string(d.level) + "/" + std::to_string(d.shells) + "/" + std::to_string(d.samples) + " " +
-         to_string(d.layout);
-}
-
-}  // namespace
-
 // ---- one normal's values -----------------------------------------------------------------
 
 NormalValues normal_values(const CanonicalElements* el, const ElementTable& t, const std::string& name,
@@ -56,7 +47,7 @@ NormalSource table_files(const std::vector<std::string>& paths, const ElementDef
     const ElementTable t = read_subject_table(paths[i], columns);
     if (t.definition != definition)
       throw InputError(paths[i] + ": element definition differs from the reference's (level/shells/samples " +
-                       definition_text(t.definition) + " vs " + definition_text(definition) + ")");
+                       to_string(t.definition) + " vs " + to_string(definition) + ")");
     return normal_values(el, t, paths[i], recipe);
   };
   if (covariates && !recipe.covariate_columns.empty())
@@ -75,7 +66,7 @@ NormalSource tables_in_memory(const std::vector<ElementTable>& tables, const std
   s.values = [&tables, &names, recipe, el](size_t i) {
     if (tables[i].definition != tables[0].definition)
       throw InputError(names[i] + ": element definition differs from " + names[0] + "'s (level/shells/samples " +
-                       definition_text(tables[i].definition) + " vs " + definition_text(tables[0].definition) + ")");
+                       to_string(tables[i].definition) + " vs " + to_string(tables[0].definition) + ")");
     return normal_values(el, tables[i], names[i], recipe);
   };
   if (!design.empty()) s.design_row = [&design](size_t i, const NormalValues&) { return design.rows[i]; };

@@ -16,13 +16,7 @@ namespace vpm {
 
 namespace {
 
-const double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr int kMaxColumns = 16;
-
-std::string definition_text(const ElementDefinition& d) {
-  return std::to_string(d.level) + "/" + std::to_string(d.shells) + "/" + std::to_string(d.samples) + " " +
-         to_string(d.layout);
-}
 
 // The design row x (q values) of a normal at one element: 1, its covariates, its image covariate there.
 inline void design_x(const std::vector<double>& row, bool image, double image_value, int q, double* x) {
@@ -301,8 +295,8 @@ void ReferenceSums::add(const std::string& name, const NormalValues& v, const st
 
 void ReferenceSums::merge(const ReferenceSums& o) {
   if (o.definition_ != definition_)
-    throw InputError("reference: the element definitions differ (" + definition_text(o.definition_) + " vs " +
-                     definition_text(definition_) + ")");
+    throw InputError("reference: the element definitions differ (" + to_string(o.definition_) + " vs " +
+                     to_string(definition_) + ")");
   if (!(o.recipe_ == recipe_))
     throw InputError("reference: the recipes differ (" + to_json(o.recipe_).dump(-1) + " vs " + to_json(recipe_).dump(-1) + ")");
   const std::set<std::string> mine(names_.begin(), names_.end());
@@ -369,6 +363,7 @@ Reference ReferenceSums::fit(const CanonicalElements* el, double shrinkage, cons
     r.covariate_centre = f.centre;
   }
   const size_t n = static_cast<size_t>(definition_.elements());
+  const double kNaN = std::numeric_limits<double>::quiet_NaN();
   r.mean.assign(n, kNaN);
   r.std.assign(n, kNaN);
   r.count.assign(n, 0);

@@ -142,7 +142,7 @@ TetMesh read_medit(const std::string& path) {
 
 void write_medit(const std::string& path, const TetMesh& mesh) {
   const std::vector<int> labels = integer_labels(mesh);
-  const Triangles faces = boundary_faces(mesh.tets);
+  const Triangles faces = vpm::boundary_faces(mesh.tets);
   AtomicFile file(path);
   TextOut o(file.stream());
   o << "MeshVersionFormatted 2\n\nDimension 3\n\nVertices\n";

@@ -136,7 +136,7 @@ TetMesh read_tetgen(const std::string& path) {
 
 void write_tetgen(const std::string& path, const TetMesh& mesh) {
   const std::string stem = stem_of(path);
-  const Triangles faces = boundary_faces(mesh.tets);
+  const Triangles faces = vpm::boundary_faces(mesh.tets);
   const std::vector<char> on_boundary =
       boundary_vertex_mask(mesh.num_vertices(), faces);
   const std::vector<int> labels = integer_labels(mesh);

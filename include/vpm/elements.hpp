@@ -55,6 +55,8 @@ struct ElementDefinition {
   }
   bool operator!=(const ElementDefinition& o) const { return !(*this == o); }
 };
+/// "level/shells/samples layout", e.g. "6/41/8 graded": how messages name a definition.
+std::string to_string(const ElementDefinition& definition);
 
 /// The triangle level of each shell of `definition`, innermost first (K entries, nondecreasing,
 /// the last one `level`). shells: K times L. graded: from the outside in, radii r with
