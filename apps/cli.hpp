@@ -72,7 +72,7 @@ auto parse_option(const std::string& flag, F&& parse) -> decltype(parse()) {
 }
 
 /// One option of a command. The table of a command's options is the single source of its
-/// parsing (Args), its synopsis and its --help text; README's command synopsis is checked
+/// parsing (Args), its synopsis and its --help text; docs/cli.md's command synopsis is checked
 /// against `vpm --help` by tests/test_cli.cpp.
 struct OptionSpec {
   std::string flag;         ///< "--rounds"

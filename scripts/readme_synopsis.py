@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
-"""Prints the command synopsis block of README.md from `vpm --help` (BINARY, default build/vpm),
-wrapped at 100 columns between options; with --check README.md, exits 1 when README's block
+"""Prints the command synopsis block of docs/cli.md from `vpm --help` (BINARY, default build/vpm),
+wrapped at 100 columns between options; with --check docs/cli.md, exits 1 when the page's block
 differs (tests/test_cli.cpp runs it that way).
 
-Usage: readme_synopsis.py [BINARY] [--check README.md | --check --write]  (--write: rewrite README.md's block)
+Usage: readme_synopsis.py [BINARY] [--check docs/cli.md | --check --write]  (--write: rewrite docs/cli.md's block)
 """
 import subprocess
 import sys
@@ -57,8 +57,8 @@ def main():
         sys.stdout.write(want)
         return 0
     if check == "--write":
-        text, start, end = readme_block("README.md")
-        open("README.md", "w").write(text[:start] + want + text[end:])
+        text, start, end = readme_block("docs/cli.md")
+        open("docs/cli.md", "w").write(text[:start] + want + text[end:])
         return 0
     text, start, end = readme_block(check)
     if text[start:end] == want:

@@ -1,4 +1,4 @@
-// The `vpm` program's plumbing (apps/cli.*): option tables, --help, README's synopsis, exit
+// The `vpm` program's plumbing (apps/cli.*): option tables, --help, docs/cli.md's synopsis, exit
 // codes of bad usage. The end-to-end runs of each command live with the module they exercise
 // (test_volume_map: vpm map; test_io: convert, stats; test_registration: register;
 // test_mesh_image: mesh-image; test_collective: demo).
@@ -35,13 +35,13 @@ TEST_CASE("cli: vpm CMD --help prints the synopsis, every option and exits 0") {
   CHECK_THAT(slurp(tmp("reg.txt")), Catch::Contains("--boundary-samples N"));
 }
 
-TEST_CASE("cli: README's command synopsis is what `vpm --help` prints") {
+TEST_CASE("cli: docs/cli.md's command synopsis is what `vpm --help` prints") {
   const std::string script = std::string(VPM_SOURCE_DIR) + "/scripts/readme_synopsis.py";
-  const std::string readme = std::string(VPM_SOURCE_DIR) + "/README.md";
+  const std::string readme = std::string(VPM_SOURCE_DIR) + "/docs/cli.md";
   CHECK(run_status("python3 " + script + " " + kVpm + " --check " + readme + " 2> " + tmp("readme.err")) == 0);
   INFO(slurp(tmp("readme.err")));
   // and the check notices a difference
-  const std::string changed = tmp("README.md");
+  const std::string changed = tmp("cli.md");
   REQUIRE(run_status("sed 's/--rk-steps N/--rk-steps K/' " + readme + " > " + changed) == 0);
   CHECK(run_status("python3 " + script + " " + kVpm + " --check " + changed + " 2>/dev/null") == 1);
 }
