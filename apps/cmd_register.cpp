@@ -110,10 +110,10 @@ Inputs read_inputs(const cli::Args& args, const cli::Command& self) {
   if (from != "regions" && from != "moments")
     throw InputError("--template-landmarks: '" + from + "' is not one of regions, moments");
   io.moments = from == "moments";
-  for (const char* flag : {"--dense-iterations", "--dense-widths", "--dense-step", "--dense-force", "--image",
+  for (const char* flag : {"--preset", "--dense-iterations", "--dense-widths", "--dense-step", "--dense-force", "--image",
                            "--template-image", "--dense-image-grid", "--dense-image-smoothing"})
     if (!templ && args.has(flag)) throw InputError(std::string(flag) + " needs --template");
-  io.dense = cli::dense_options(args);
+  io.dense = cli::dense_options(args, cli::preset_option(args));
   io.image = args.get("--image").value_or("");
   io.templ_image = args.get("--template-image").value_or("");
   if (io.image.empty() != io.templ_image.empty())
@@ -302,6 +302,7 @@ vpm::cli::Registrar reg(cli::with_dense_options(
       {"--template", "TEMPLATE.vtu", "instead of the two files: the centroids of the atlas regions (cell field label) MAPPED shares with this mapped template", false, 0, true},
       {"--template-landmarks", "regions|moments", "with --template: centroids of the atlas regions both carry (default), or, for a subject without atlas labels, points paired by the affine matching the two native solids' moments (then --dense-force image)"},
       {"--exclude-labels", "L[,L...]", "with --template: regions never used as landmarks (held out)"},
+      {"--preset", "landmarks|standard|accurate", "with --template: the dense settings by name: landmarks (none; the default), standard (12 iterations), accurate (32 iterations to width 0.1, 2 restore cycles); --dense-* flags override it"},
       {"--image", "SUBJECT.nii.gz", "with --template: MAPPED's image in its native space (for --dense-force image|both)"},
       {"--template-image", "TEMPLATE.nii.gz", "the template's image in its native space (with --image)"},
       {"--steps", "K", "pathline samples and RK4 steps (default 50)"},
@@ -322,5 +323,5 @@ vpm::cli::Registrar reg(cli::with_dense_options(
        0, true},
       {"--max-seconds", "S", "time budget: the dense iterations stop when it is spent (the landmarks and volumes are still restored; exit 4)"},
       {"--allow-partial", "", "exit 0 even when a landmark misses its target by over 1e-3 or the time budget stopped the iterations (the warning stays)"}},
-     run}, "--exclude-labels", 0));
+     run}, "--preset", 0));
 }  // namespace

@@ -8,6 +8,16 @@
 
 namespace vpm::cli {
 
+DenseRegistrationOptions preset_option(const Args& args) {
+  const auto word = args.get("--preset");
+  if (!word) return {};
+  try {
+    return with_preset(registration_preset_from_string(*word));
+  } catch (const InputError& e) {
+    throw InputError(std::string("--preset: ") + e.what());
+  }
+}
+
 DenseRegistrationOptions dense_options(const Args& args, DenseRegistrationOptions o) {
   o.iterations = args.get_int("--dense-iterations", o.iterations);
   if (o.iterations < 0 || o.iterations > 1000) throw InputError("--dense-iterations: expected 0 to 1000");

@@ -4,8 +4,13 @@
 
 #include "cli.hpp"
 #include "vpm/dense_registration.hpp"
+#include "vpm/registration_preset.hpp"
 
 namespace vpm::cli {
+
+/// The dense options of --preset landmarks|standard|accurate (the library's defaults without it),
+/// InputError naming the flag for another word.
+DenseRegistrationOptions preset_option(const Args& args);
 
 /// --dense-iterations N, --dense-widths W[,W...], --dense-step S, --dense-force F,
 /// --dense-image-grid N into `options` (InputError naming the flag for bad values).

@@ -15,6 +15,7 @@
 #include "support/shapes.hpp"
 #include "vpm/collective.hpp"
 #include "vpm/dense_registration.hpp"
+#include "vpm/registration_preset.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/image.hpp"
@@ -553,6 +554,50 @@ TEST_CASE("vpm register --dense-iterations: dense registration from the command 
   CHECK(test::run_status(vpm + "--landmarks a.csv --targets b.csv --dense-iterations 2 2>" + dir + "err.txt") == 2);
   CHECK(test::slurp(dir + "err.txt").find("--dense-iterations needs --template") != std::string::npos);
   CHECK(test::run_status(vpm + "--template " + dir + "templ.vtu --dense-iterations -1 2>" + dir + "err.txt") == 2);
+}
+
+TEST_CASE("registration presets: the settings they name, and --preset equals those settings") {
+  const DenseRegistrationOptions d;
+  CHECK(with_preset(RegistrationPreset::landmarks).iterations == 0);
+  const DenseRegistrationOptions standard = with_preset(RegistrationPreset::standard);
+  CHECK(standard.iterations == 12);
+  CHECK(standard.widths == d.widths);
+  CHECK(standard.restore_cycles == 0);
+  const DenseRegistrationOptions accurate = with_preset(RegistrationPreset::accurate);
+  CHECK(accurate.iterations == 32);
+  CHECK(accurate.widths == std::vector<double>{0.3, 0.2, 0.14, 0.1});
+  CHECK(accurate.restore_cycles == 2);
+  // what the preset does not name is the caller's
+  DenseRegistrationOptions mine;
+  mine.force = DenseForce::both;
+  mine.exclude_labels = {7};
+  const DenseRegistrationOptions kept = with_preset(RegistrationPreset::accurate, mine);
+  CHECK(kept.force == DenseForce::both);
+  CHECK(kept.exclude_labels == std::vector<int>{7});
+  for (RegistrationPreset p : {RegistrationPreset::landmarks, RegistrationPreset::standard, RegistrationPreset::accurate})
+    CHECK(registration_preset_from_string(to_string(p)) == p);
+  CHECK_THROWS_AS(registration_preset_from_string("fast"), InputError);
+  // on the command line: --preset standard writes what --dense-iterations 12 writes, byte for
+  // byte; a --dense-* flag after it overrides it; a bad word or no template is refused
+  const Case c = make_case();
+  const std::string dir = std::string(VPM_TEST_TMP) + "/preset_";
+  TetMesh subject = c.subject;
+  subject.set_point_field("original_position", FieldValues(c.templ.vertices));
+  write_mesh(dir + "templ.vtu", c.templ);
+  write_mesh(dir + "subject.vtu", subject);
+  const std::string vpm = std::string(VPM_BINARY) + " register " + dir + "subject.vtu --quiet ";
+  const std::string templ = "--template " + dir + "templ.vtu ";
+  REQUIRE(test::run_status(vpm + templ + "--preset standard -o " + dir + "a.vtu 2>" + dir + "err.txt") == 0);
+  REQUIRE(test::run_status(vpm + templ + "--dense-iterations 12 -o " + dir + "b.vtu 2>" + dir + "err.txt") == 0);
+  CHECK(test::slurp(dir + "a.vtu") == test::slurp(dir + "b.vtu"));
+  REQUIRE(test::run_status(vpm + templ + "--preset standard --dense-iterations 2 -o " + dir + "c.vtu --report " + dir +
+                           "c.json 2>" + dir + "err.txt") == 0);
+  CHECK(Json::parse(test::slurp(dir + "c.json")).find("dense")->find("iterations")->size() == 2);
+  CHECK(test::run_status(vpm + templ + "--preset fast -o " + dir + "d.vtu 2>" + dir + "err.txt") == 2);
+  CHECK(test::slurp(dir + "err.txt").find("--preset: unknown preset 'fast'") != std::string::npos);
+  CHECK(test::run_status(vpm + "--landmarks a.csv --targets b.csv --preset standard -o " + dir + "d.vtu 2>" + dir +
+                         "err.txt") == 2);
+  CHECK(test::slurp(dir + "err.txt").find("--preset needs --template") != std::string::npos);
 }
 
 TEST_CASE("vpm register --dense-force image: the image force from the command line") {

@@ -7,6 +7,7 @@
 #include "vpm/image.hpp"
 #include "vpm/metrics.hpp"
 #include "vpm/registration.hpp"
+#include "vpm/registration_preset.hpp"
 #include "vpm/timing.hpp"
 
 namespace vpm::python {
@@ -78,7 +79,8 @@ RegistrationResult run(const Request& r, Device& dev, Points& ball) {
 // long: one keyword argument a line, as `vpm register`'s options
 py::tuple register_py(const py::object& mesh, const py::object& landmarks, const py::object& targets,
                       const py::object& templ, const std::string& template_landmarks, std::vector<int> exclude,
-                      int dense_iterations, const std::string& dense_force, std::shared_ptr<Image> image,
+                      const std::optional<std::string>& preset, std::optional<int> dense_iterations,
+                      const std::string& dense_force, std::shared_ptr<Image> image,
                       std::shared_ptr<Image> template_image, int steps, std::optional<double> width,
                       double width_factor, const std::string& boundary, const std::string& field, bool rigid,
                       bool untangle, bool restore, double max_seconds, std::optional<std::string> device,
@@ -113,7 +115,8 @@ py::tuple register_py(const py::object& mesh, const py::object& landmarks, const
   r.options.boundary = parse_registration_boundary(boundary);
   r.options.field = parse_registration_field(field);
   r.options.rigid = rigid, r.options.untangle = untangle, r.options.restore_volumes = restore;
-  r.dense.iterations = dense_iterations;
+  if (preset) r.dense = with_preset(registration_preset_from_string(*preset));
+  if (dense_iterations) r.dense.iterations = *dense_iterations;
   r.dense.force = dense_force_from_string(dense_force);
   r.dense.exclude_labels = std::move(exclude);
   r.image = std::move(image), r.templ_image = std::move(template_image);
@@ -154,7 +157,8 @@ void bind_register(py::module_& m) {
       .def_readonly("metrics", &RegistrationReportPy::metrics, "the registered mesh against the mapped one");
   m.def("_register", &register_py, py::arg("mesh"), py::kw_only(), py::arg("landmarks") = py::none(),
         py::arg("targets") = py::none(), py::arg("template") = py::none(), py::arg("template_landmarks") = "regions",
-        py::arg("exclude_labels") = std::vector<int>{}, py::arg("dense_iterations") = 0,
+        py::arg("exclude_labels") = std::vector<int>{}, py::arg("preset") = py::none(),
+        py::arg("dense_iterations") = py::none(),
         py::arg("dense_force") = "labels", py::arg("image") = nullptr, py::arg("template_image") = nullptr,
         py::arg("steps") = RegistrationOptions{}.steps, py::arg("width") = py::none(),
         py::arg("width_factor") = RegistrationOptions{}.width_factor, py::arg("boundary") = "tangent",

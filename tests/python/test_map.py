@@ -47,6 +47,14 @@ def test_register_landmarks_template_and_moments(vpm, image_array):
     reg, rep = vpm.register(s_ball, template=t_ball)
     assert rep.landmarks == 4 and rep.landmark_rms_error < 1e-6
     assert "tet_volume_ratio" in reg.cell_data
+    # presets: 'landmarks' is the registration above; a preset's iterations give way to
+    # dense_iterations=; an unknown name is a ValueError
+    same, _ = vpm.register(s_ball, template=t_ball, preset="landmarks")
+    assert np.array_equal(same.vertices, reg.vertices)
+    one, rep1 = vpm.register(s_ball, template=t_ball, preset="accurate", dense_iterations=1)
+    assert rep1.inverted_tets == 0 and not np.array_equal(one.vertices, reg.vertices)
+    with pytest.raises(ValueError, match="unknown preset 'fast'"):
+        vpm.register(s_ball, template=t_ball, preset="fast")
     # no labels: the moments' affine and the image force
     bare = s_ball.copy()
     bare = vpm.Mesh(bare.vertices, bare.tets, point_data={"original_position": bare.point_data["original_position"]})
