@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
+#include <sstream>
+#include <stdexcept>
 
 #include "vpm/error.hpp"
 #include "vpm/format.hpp"
@@ -65,7 +67,7 @@ std::string synopsis(const Command& c) {
   if (!c.operands.empty()) s += " " + c.operands;
   for (size_t i = 0; i < c.options.size(); ++i) {
     const OptionSpec& o = c.options[i];
-    if (o.hidden) continue;
+    if (o.hidden || o.expert) continue;
     std::string item = option_text(o);
     while (o.group != 0 && i + 1 < c.options.size() && c.options[i + 1].group == o.group)
       item += " | " + option_text(c.options[++i]);
@@ -74,14 +76,79 @@ std::string synopsis(const Command& c) {
   return s;
 }
 
-std::string help_text(const Command& c) {
-  std::string s = "usage: " + synopsis(c) + "\n" + c.summary + "\n";
-  size_t width = 0;
-  for (const OptionSpec& o : c.options) width = std::max(width, option_text(o).size());
+namespace {
+// `text` wrapped at 100 columns between words, continuation lines indented by `indent`; the
+// first line starts at column `indent` too.
+std::string wrapped(const std::string& text, size_t indent) {
+  constexpr size_t kColumns = 100;
+  std::string out, word;
+  size_t column = indent;
+  std::istringstream words(text);
+  bool first = true;
+  while (words >> word) {
+    if (!first && column + 1 + word.size() > kColumns) {
+      out += "\n" + std::string(indent, ' ');
+      column = indent;
+    } else if (!first) {
+      out += ' ';
+      ++column;
+    }
+    out += word;
+    column += word.size();
+    first = false;
+  }
+  return out;
+}
+
+// "  FLAG VALUE   help..." wrapped at 100 columns, continuation lines under the help's first column.
+std::string option_lines(const OptionSpec& o, size_t width) {
+  const std::string t = option_text(o);
+  return "  " + t + std::string(width + 2 - t.size(), ' ') + wrapped(o.help, width + 4) + "\n";
+}
+
+// The synopsis wrapped at 100 columns before an optional item ("[..." or "(..."), continuation
+// lines indented.
+std::string wrapped_synopsis(const std::string& text) {
+  constexpr size_t kColumns = 100;
+  std::vector<std::string> items(1);
+  int depth = 0;
+  for (char ch : text) {
+    depth += (ch == '[' || ch == '(') - (ch == ']' || ch == ')');
+    if (ch == ' ' && depth == 0)
+      items.emplace_back();
+    else
+      items.back() += ch;
+  }
+  std::string out, line;
+  for (const std::string& item : items) {
+    if (!line.empty() && (item[0] == '[' || item[0] == '(') && line.size() + 1 + item.size() > kColumns) {
+      out += line + "\n";
+      line = "      " + item;
+    } else {
+      line += (line.empty() ? "" : " ") + item;
+    }
+  }
+  return out + line + "\n";
+}
+}  // namespace
+
+std::string help_text(const Command& c, bool expert) {
+  std::string s = wrapped_synopsis("usage: " + synopsis(c)) + wrapped(c.summary, 0) + "\n";
+  size_t width = 0, experts = 0;
+  for (const OptionSpec& o : c.options)
+    if (!o.expert || expert) width = std::max(width, option_text(o).size());
+  width = std::min<size_t>(width, 30);
   if (!c.options.empty()) s += "options:\n";
   for (const OptionSpec& o : c.options) {
-    const std::string t = option_text(o);
-    s += "  " + t + std::string(width + 2 - t.size(), ' ') + o.help + "\n";
+    experts += o.expert;
+    if (!o.expert) s += option_lines(o, std::max(width, option_text(o).size()));
+  }
+  if (expert && experts > 0) {
+    s += "expert options (experiments and benchmarks; the defaults and presets cover the rest):\n";
+    for (const OptionSpec& o : c.options)
+      if (o.expert) s += option_lines(o, std::max(width, option_text(o).size()));
+  } else if (experts > 0) {
+    s += std::to_string(experts) + " expert options: vpm " + c.name + " --help --expert\n";
   }
   s += "every command also takes --quiet (no messages) and --verbose (progress lines)\n";
   return s;
@@ -171,6 +238,16 @@ int Args::get_int(const std::string& opt, int fallback) const {
 
 void Args::expect_positional(size_t n, const std::string& usage) const {
   if (positional_.size() != n) throw InputError("usage: " + usage);
+}
+
+Command with_expert(Command command, const std::vector<std::string>& flags) {
+  for (const std::string& flag : flags) {
+    auto it = std::find_if(command.options.begin(), command.options.end(),
+                           [&](const OptionSpec& o) { return o.flag == flag; });
+    if (it == command.options.end()) throw std::logic_error("vpm " + command.name + ": no option " + flag);
+    it->expert = true;
+  }
+  return command;
 }
 
 std::vector<Command>& commands() {

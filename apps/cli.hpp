@@ -81,6 +81,9 @@ struct OptionSpec {
   bool required = false;    ///< shown without brackets; the command checks its presence
   int group = 0;            ///< consecutive options with the same non-zero group are alternatives
   bool hidden = false;      ///< accepted and listed by --help, left out of the synopsis
+  /// A setting for experiments and benchmarks (the presets and defaults cover what users need):
+  /// accepted, left out of the synopsis and of --help, listed by `vpm CMD --help --expert`.
+  bool expert = false;
 };
 
 struct Command {
@@ -93,8 +96,13 @@ struct Command {
 
 /// "vpm NAME OPERANDS [--flag VALUE] [--a A | --b B] ..." from the command's table.
 std::string synopsis(const Command& c);
-/// The synopsis, the summary and one line per option (and --quiet, --verbose).
-std::string help_text(const Command& c);
+/// The synopsis, the summary and the options (and --quiet, --verbose), wrapped at 100 columns:
+/// the expert ones only with `expert` (otherwise one line says how many there are).
+std::string help_text(const Command& c, bool expert = false);
+
+/// `command` with the options named in `flags` marked expert (OptionSpec::expert); a flag the
+/// table lacks is a programming error (std::logic_error).
+Command with_expert(Command command, const std::vector<std::string>& flags);
 
 /// Registry filled by static Registrar objects in each cmd_*.cpp.
 std::vector<Command>& commands();

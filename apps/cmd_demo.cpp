@@ -30,6 +30,7 @@
 #include "vpm/mesh_image.hpp"
 #include "vpm/registration.hpp"
 #include "vpm/sampling.hpp"
+#include "vpm/template_registration.hpp"
 #include "vpm/timing.hpp"
 #include "vpm/format.hpp"
 
@@ -117,16 +118,16 @@ Subject mesh_and_map(vpm::Device& dev, const vpm::Image& image, const vpm::Image
   return s;
 }
 
-// The demo's dense registration: 12 iterations pulled by the region boundaries and the T1
-// intensities together (docs/register.md: held-out Dice up by 0.05-0.16 over the landmarks).
-constexpr int kDenseIterations = 12;
+// The demo's dense registration: the standard preset (12 iterations) pulled by the region
+// boundaries and the T1 intensities together (bench/results/register_dense/: held-out Dice up by 0.05-0.16
+// over the landmarks).
 constexpr vpm::DenseForce kDenseForce = vpm::DenseForce::both;
 vpm::DenseRegistrationOptions demo_dense() {
   vpm::DenseRegistrationOptions d;
-  d.iterations = kDenseIterations;
   d.force = kDenseForce;
-  return d;
+  return vpm::with_preset(vpm::RegistrationPreset::standard, d);
 }
+const int kDenseIterations = demo_dense().iterations;
 
 struct Settings {
   fs::path out, data;
@@ -162,7 +163,7 @@ Settings parse_settings(const vpm::cli::Command& self, const std::vector<std::st
   s.seed = static_cast<unsigned>(seed);
   s.max_rotation = args.get_double("--max-rotation", 0);
   if (!(s.max_rotation >= 0 && s.max_rotation <= 90)) throw vpm::InputError("--max-rotation: expected 0 to 90 degrees");
-  s.dense = vpm::cli::dense_options(args, s.dense);
+  s.dense = vpm::cli::dense_options(args, vpm::cli::preset_option(args, s.dense));
   s.meshing.target_vertices = args.get_int("--target-vertices", s.meshing.target_vertices);
   if (s.meshing.target_vertices < 100) throw vpm::InputError("--target-vertices: expected at least 100");
   s.meshing.progress = [](const std::string& line) { vpm::cli::progress("demo: mesh-image: " + line); };
@@ -185,38 +186,29 @@ struct Registration {
   double seconds = 0;
 };
 
-// Registers the subject's ball to the template's by region centroids; writes the landmark
-// files.
+// Registers the subject's ball to the template's by region centroids (register_to_template, the
+// held-out regions excluded); writes the landmark files.
 Registration register_subject(vpm::Device& dev, const Subject& tmpl, const Subject& subj, const Settings& st,
                               const vpm::Image& tmpl_image, const vpm::Image& subj_image) {
   Registration r;
   r.tmpl_labels = vpm::cell_labels(tmpl.map.mesh);
   r.subj_labels = vpm::cell_labels(subj.map.mesh);
   const vpm::TetMesh& sm = subj.map.mesh;
-  const vpm::RegionLandmarks lm = vpm::region_landmarks(sm, tmpl.map.mesh, kEvaluated);
-  r.landmark_labels = lm.labels;
-  const std::vector<int>& labels = r.landmark_labels;
-  const Points &src = lm.source, &dst = lm.target;
-  vpm::write_landmarks_csv((st.out / "landmarks.csv").string(), src);
-  vpm::write_landmarks_csv((st.out / "targets.csv").string(), dst);
-  vpm::cli::info("demo: registering subject to colin27 by " + std::to_string(labels.size()) + " region centroids");
+  vpm::TemplateRegistrationOptions opt;
+  opt.exclude_labels = kEvaluated;  // held out: neither landmarks nor the dense force see them
+  opt.flow = st.registration;
+  opt.dense = st.dense;
   const auto t0 = Clock::now();
-  r.registered = sm.vertices;
-  vpm::DenseRegistrationOptions dense = st.dense;
-  dense.exclude_labels = kEvaluated;  // the held-out regions stay invisible to the dense force
-  vpm::DenseImages images;  // T1 intensities of both, for the image force
-  images.subject = &subj_image;
-  images.subject_native = vpm::native_positions(sm, "demo: the subject's ball map");
-  images.templ = &tmpl_image;
-  images.template_native = vpm::native_positions(tmpl.map.mesh, "demo: colin27's ball map");
-  r.dense = vpm::register_dense(dev, {r.registered, sm.tets, r.subj_labels},
-                                {tmpl.map.mesh.vertices, tmpl.map.mesh.tets, r.tmpl_labels}, src, dst, st.registration,
-                                dense, &images);
-  r.result = r.dense.landmark;
-  r.result.landmark_rms_error = r.dense.landmark_rms_error;
-  r.result.landmark_max_error = r.dense.landmark_max_error;
-  r.result.max_normal_velocity = r.dense.max_normal_velocity;
+  vpm::TemplateRegistration out = vpm::register_to_template(dev, sm, tmpl.map.mesh, opt, {&subj_image, &tmpl_image});
   r.seconds = seconds_since(t0);
+  r.landmark_labels = std::move(out.landmark_labels);
+  vpm::write_landmarks_csv((st.out / "landmarks.csv").string(), out.landmarks);
+  vpm::write_landmarks_csv((st.out / "targets.csv").string(), out.targets);
+  vpm::cli::info("demo: registered subject to colin27 by " + std::to_string(r.landmark_labels.size()) +
+                 " region centroids");
+  r.registered = std::move(out.ball);
+  r.result = out.result;
+  if (out.dense) r.dense = std::move(*out.dense);
   r.metrics = vpm::map_metrics(dev, sm.vertices, r.registered, sm.tets);
   return r;  // subject_registered.vtu is written with the ideal registration's error (run)
 }
@@ -376,12 +368,14 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   return 0;
 }
 
-vpm::cli::Registrar reg(vpm::cli::with_dense_options(
+vpm::cli::Registrar reg(vpm::cli::with_expert(vpm::cli::with_dense_options(
     {"demo", "", "the whole pipeline on Debian's Colin27 brain and a deformed copy",
      {{"--out", "DIR", "output folder (default out/demo)"},
       {"--data", "DIR", "mricron templates folder (default /usr/share/mricron/templates)"},
       {"--target-vertices", "N", "mesh density (default 5200, the paper's size)"},
       {"--grid", "N", "ball grid for the Dice overlap, N^3 points (default 96)"},
+      {"--preset", "landmarks|standard|accurate", "the registration's dense settings by name (default standard: 12 "
+       "iterations; docs/register.md \"Presets\"); --dense-* flags override it"},
       {"--width-factor", "F", "registration kernel width factor (default 0.5)"},
       {"--restore-iterations", "N",
        "CGLS iterations per step of the registration's volume restoration (default 10; more: lower volume "
@@ -394,5 +388,7 @@ vpm::cli::Registrar reg(vpm::cli::with_dense_options(
       {"--max-rotation", "DEG", "rotate the subject by up to DEG degrees about the brain centre (default 0)"},
       {"--incompressible", "", "the subject's deformation keeps local volumes (the default one changes them by up to 20 %)"},
       {"--ceiling", "", "the subject is Colin27 itself meshed at 1.3x the vertices: the best overlap reachable"}},
-     run}, "--width-factor", kDenseIterations, kDenseForce));
+     run}, "--preset", kDenseIterations, kDenseForce),
+    {"--grid", "--width-factor", "--restore-iterations", "--restore-rounds", "--restore-min-gain", "--no-restore",
+     "--max-rotation", "--incompressible", "--ceiling"}));
 }  // namespace

@@ -12,9 +12,9 @@
 #include "vpm/io.hpp"
 #include "vpm/json.hpp"
 #include "vpm/metrics.hpp"
-#include "vpm/collective.hpp"
 #include "vpm/dense_registration.hpp"
 #include "vpm/registration.hpp"
+#include "vpm/template_registration.hpp"
 #include "vpm/timing.hpp"
 
 namespace {
@@ -60,18 +60,15 @@ RegistrationOptions parse_options(const cli::Args& args) {
   return opt;
 }
 
-// The mapped mesh and its landmarks: two files checked against each other, or the centroids of
-// the atlas regions it shares with a template's registered or mapped mesh (--template).
+// The mapped mesh and its landmarks: two files checked against each other, or the landmarks
+// register_to_template pairs with a template's registered or mapped mesh (--template).
 struct Inputs {
   std::string in, out, src, dst, templ;
-  bool moments = false;      // --template-landmarks moments: no atlas regions, the moments' affine
-  std::vector<int> exclude;  // --exclude-labels: regions never used as landmarks
   TetMesh mesh, templ_mesh;
   LandmarkFile landmarks, targets;
-  DenseRegistrationOptions dense;  // --dense-iterations etc.: dense registration after the landmarks
+  TemplateRegistrationOptions by_template;  // --template-landmarks, --exclude-labels, the dense step
   std::string image, templ_image;  // --image, --template-image: the image force's two images
   Image subject_image, template_image;
-  DenseImages images;
 };
 
 std::vector<int> label_list(const std::string& option, const std::string& text) {
@@ -90,6 +87,32 @@ std::vector<int> label_list(const std::string& option, const std::string& text) 
   return out;
 }
 
+// The template's options (--template-landmarks, --exclude-labels, --preset and the dense flags,
+// the images), checked against each other.
+void template_options(const cli::Args& args, Inputs& io) {
+  for (const char* flag : {"--exclude-labels", "--template-landmarks", "--preset", "--dense-iterations", "--dense-widths",
+                           "--dense-step", "--dense-force", "--image", "--template-image", "--dense-image-grid",
+                           "--dense-image-smoothing"})
+    if (io.templ.empty() && args.has(flag)) throw InputError(std::string(flag) + " needs --template");
+  TemplateRegistrationOptions& t = io.by_template;
+  try {
+    t.landmarks = template_landmarks_from_string(args.get("--template-landmarks", "regions"));
+  } catch (const InputError& e) {
+    throw InputError(std::string("--template-landmarks: ") + e.what());
+  }
+  t.dense = cli::dense_options(args, cli::preset_option(args));
+  io.image = args.get("--image").value_or("");
+  io.templ_image = args.get("--template-image").value_or("");
+  if (io.image.empty() != io.templ_image.empty())
+    throw InputError(io.image.empty() ? "--template-image needs --image" : "--image needs --template-image");
+  if (t.dense.force != DenseForce::labels && io.image.empty())
+    throw InputError(std::string("--dense-force ") + to_string(t.dense.force) +
+                     " needs --image SUBJECT.nii.gz and --template-image TEMPLATE.nii.gz");
+  if (!io.image.empty() && t.dense.force == DenseForce::labels)  // read for nothing otherwise
+    throw InputError("--image and --template-image need --dense-force image or both");
+  if (const auto ex = args.get("--exclude-labels")) t.exclude_labels = label_list("--exclude-labels", *ex);
+}
+
 Inputs read_inputs(const cli::Args& args, const cli::Command& self) {
   const std::string usage = cli::synopsis(self);
   args.expect_positional(1, usage);
@@ -104,42 +127,13 @@ Inputs read_inputs(const cli::Args& args, const cli::Command& self) {
     throw InputError(std::string("missing ") +
                      (!out ? "-o OUT" : !src ? "--landmarks SRC.csv (or --template)" : "--targets DST.csv") +
                      "; usage: " + usage);
-  if (!templ && args.has("--exclude-labels")) throw InputError("--exclude-labels needs --template");
-  if (!templ && args.has("--template-landmarks")) throw InputError("--template-landmarks needs --template");
-  const std::string from = args.get("--template-landmarks", "regions");
-  if (from != "regions" && from != "moments")
-    throw InputError("--template-landmarks: '" + from + "' is not one of regions, moments");
-  io.moments = from == "moments";
-  for (const char* flag : {"--preset", "--dense-iterations", "--dense-widths", "--dense-step", "--dense-force", "--image",
-                           "--template-image", "--dense-image-grid", "--dense-image-smoothing"})
-    if (!templ && args.has(flag)) throw InputError(std::string(flag) + " needs --template");
-  io.dense = cli::dense_options(args, cli::preset_option(args));
-  io.image = args.get("--image").value_or("");
-  io.templ_image = args.get("--template-image").value_or("");
-  if (io.image.empty() != io.templ_image.empty())
-    throw InputError(io.image.empty() ? "--template-image needs --image" : "--image needs --template-image");
-  if (io.dense.force != DenseForce::labels && io.image.empty())
-    throw InputError(std::string("--dense-force ") + to_string(io.dense.force) +
-                     " needs --image SUBJECT.nii.gz and --template-image TEMPLATE.nii.gz");
-  if (!io.image.empty() && io.dense.force == DenseForce::labels)  // read for nothing otherwise
-    throw InputError("--image and --template-image need --dense-force image or both");
   io.out = *out;
   io.src = src.value_or("");
   io.dst = dst.value_or("");
   io.templ = templ.value_or("");
-  if (const auto ex = args.get("--exclude-labels")) io.exclude = label_list("--exclude-labels", *ex);
-  io.dense.exclude_labels = io.exclude;  // held-out regions stay out of the dense force too
+  template_options(args, io);
   if (!is_mesh_path(io.out)) throw InputError(io.out + ": unknown file extension for a tet mesh");
   return io;
-}
-
-void read_images(Inputs& io) {
-  io.subject_image = read_image(io.image);
-  io.template_image = read_image(io.templ_image);
-  io.images.subject = &io.subject_image;
-  io.images.templ = &io.template_image;
-  io.images.subject_native = native_positions(io.mesh, io.in);
-  io.images.template_native = native_positions(io.templ_mesh, io.templ);
 }
 
 void read_files(Inputs& io) {
@@ -149,25 +143,13 @@ void read_files(Inputs& io) {
       if (io.mesh.tets(t, c) < 0 || io.mesh.tets(t, c) >= io.mesh.num_vertices())
         throw InputError(io.in + ": tet " + std::to_string(t) + ": vertex index " + std::to_string(io.mesh.tets(t, c)) +
                          " out of range");
-  if (!io.templ.empty() && io.moments) {
-    io.templ_mesh = read_mesh(io.templ);
-    const MomentLandmarks lm = moment_landmarks(io.mesh, io.templ_mesh);
-    io.landmarks.points = lm.source;
-    io.targets.points = lm.target;
-    io.src = io.dst = io.templ + " (moments)";
-    if (!io.image.empty()) read_images(io);
-    return;
-  }
   if (!io.templ.empty()) {
     io.templ_mesh = read_mesh(io.templ);
-    const RegionLandmarks lm = region_landmarks(io.mesh, io.templ_mesh, io.exclude);
-    if (lm.labels.size() < 4)
-      throw InputError(io.in + ", " + io.templ + ": " + std::to_string(lm.labels.size()) +
-                       " atlas regions in common (cell field 'label'); need at least 4 for --template");
-    io.landmarks.points = lm.source;
-    io.targets.points = lm.target;
-    io.src = io.dst = io.templ + " (region centroids)";
-    if (!io.image.empty()) read_images(io);
+    io.src = io.dst = io.templ + (io.by_template.landmarks == TemplateLandmarks::moments ? " (moments)" : " (region centroids)");
+    if (!io.image.empty()) {
+      io.subject_image = read_image(io.image);
+      io.template_image = read_image(io.templ_image);
+    }
     return;
   }
   io.landmarks = read_landmarks_csv(io.src, io.mesh.vertices);
@@ -177,39 +159,25 @@ void read_files(Inputs& io) {
                      " has " + std::to_string(io.targets.points.rows()) + " targets");
 }
 
-// The cell labels the dense force reads; with --template-landmarks moments a mesh without labels
-// has none (all 0: no region), which only the image force can do without.
-std::vector<int> labels_or_none(const Inputs& io, const TetMesh& mesh) {
-  if (mesh.find_cell_field("label") || !io.moments) return cell_labels(mesh);
-  if (io.dense.force != DenseForce::image)
-    throw InputError((&mesh == &io.mesh ? io.in : io.templ) + ": no cell field 'label': --dense-force " +
-                     to_string(io.dense.force) + " needs atlas labels on both meshes; use --dense-force image");
-  return std::vector<int>(static_cast<size_t>(mesh.num_tets()), 0);
-}
-
-// The dense registration (--dense-iterations): register_dense with the held-out regions kept out
-// of its force; the landmark stage's result carries the final landmark errors.
-RegistrationResult register_densely(Device& dev, const Inputs& io, Points& ball, const RegistrationOptions& opt,
-                                    std::optional<DenseRegistrationResult>& dense) {
-  dense = register_dense(dev, {ball, io.mesh.tets, labels_or_none(io, io.mesh)},
-                         {io.templ_mesh.vertices, io.templ_mesh.tets, labels_or_none(io, io.templ_mesh)},
-                         io.landmarks.points, io.targets.points, opt, io.dense,
-                         io.image.empty() ? nullptr : &io.images);
-  RegistrationResult res = dense->landmark;
-  res.landmark_rms_error = dense->landmark_rms_error;
-  res.landmark_max_error = dense->landmark_max_error;
-  res.max_normal_velocity = dense->max_normal_velocity;
-  res.inverted_tets = dense->inverted_tets;
-  return res;
-}
-
-// register_landmarks (or register_dense) with its structured errors turned into file:line and
-// flag messages.
-RegistrationResult register_mapped(Device& dev, const Inputs& io, Points& ball, const RegistrationOptions& opt,
+// register_to_template (--template) or register_landmarks (the two files), with their structured
+// errors turned into file:line and flag messages; io.landmarks holds the paired points after.
+RegistrationResult register_mapped(Device& dev, Inputs& io, Points& ball, const RegistrationOptions& opt,
                                    std::optional<DenseRegistrationResult>& dense) {
   try {
-    if (io.dense.iterations > 0) return register_densely(dev, io, ball, opt, dense);
-    return register_landmarks(dev, ball, io.mesh.tets, io.landmarks.points, io.targets.points, opt);
+    if (io.templ.empty())
+      return register_landmarks(dev, ball, io.mesh.tets, io.landmarks.points, io.targets.points, opt);
+    io.by_template.flow = opt;
+    const TemplateImages images =
+        io.image.empty() ? TemplateImages{} : TemplateImages{&io.subject_image, &io.template_image};
+    TemplateRegistration r = register_to_template(dev, io.mesh, io.templ_mesh, io.by_template, images);
+    ball = std::move(r.ball);
+    dense = std::move(r.dense);
+    io.landmarks.points = std::move(r.landmarks);
+    return r.result;
+  } catch (const TemplateRegistrationError& e) {
+    using Mesh = TemplateRegistrationError::Mesh;
+    throw InputError((e.mesh == Mesh::subject ? io.in : e.mesh == Mesh::templ ? io.templ : io.in + ", " + io.templ) +
+                     ": " + e.what());
   } catch (const RegistrationInputError& e) {
     using Subject = RegistrationInputError::Subject;
     const size_t i = static_cast<size_t>(e.landmark);
@@ -247,15 +215,16 @@ int run(const cli::Command& self, const std::vector<std::string>& argv) {
   const auto t_start = Clock::now();
   const cli::Args args(argv, self);
   Inputs io = read_inputs(args, self);
-  io.dense.deadline = cli::time_budget(args, t_start);
-  io.dense.progress = [](const std::string& line) { cli::progress("register: " + line); };
+  io.by_template.dense.deadline = cli::time_budget(args, t_start);
+  io.by_template.dense.progress = [](const std::string& line) { cli::progress("register: " + line); };
   const RegistrationOptions opt = parse_options(args);
   Json timings = Json::object();
   auto t0 = Clock::now();
   read_files(io);
   timings["read"] = seconds_since(t0);
   cli::info("register: " + std::to_string(io.mesh.num_vertices()) + " vertices, " + std::to_string(io.mesh.num_tets()) +
-            " tets, " + std::to_string(io.landmarks.points.rows()) + " landmarks, " + std::to_string(opt.steps) + " steps");
+            " tets, " + (io.templ.empty() ? std::to_string(io.landmarks.points.rows()) + " landmarks" : "landmarks from " + io.src) +
+            ", " + std::to_string(opt.steps) + " steps");
 
   Device& dev = Device::current();
   Points ball = io.mesh.vertices;
@@ -287,7 +256,7 @@ int run(const cli::Command& self, const std::vector<std::string>& argv) {
   }
   if (dense && dense->time_budget_spent)
     return cli::time_budget_status("register", std::to_string(dense->iterations.size()) + " of " +
-                                                   std::to_string(io.dense.iterations) + " dense iterations",
+                                                   std::to_string(io.by_template.dense.iterations) + " dense iterations",
                                    args.has("--allow-partial"));
   // the flow's landmarks are exact up to the RK4 error (about 1e-10); far from it something is off
   return cli::convergence_status("register", "landmark max error", res.landmark_max_error, kLandmarkTolerance,
@@ -295,7 +264,7 @@ int run(const cli::Command& self, const std::vector<std::string>& argv) {
                                  [](double v) { return strprintf("%.2e", v); });
 }
 
-vpm::cli::Registrar reg(cli::with_dense_options(
+vpm::cli::Registrar reg(cli::with_expert(cli::with_dense_options(
     {"register", "MAPPED -o OUT (--landmarks SRC.csv --targets DST.csv | --template TEMPLATE.vtu)", "register a mapped mesh: move landmarks to targets by a divergence-free flow",
      {{"--landmarks", "SRC.csv", "landmarks in MAPPED's ball (x,y,z or vertex_id a line)", false, 0, true},
       {"--targets", "DST.csv", "their targets, paired line by line", false, 0, true},
@@ -323,5 +292,7 @@ vpm::cli::Registrar reg(cli::with_dense_options(
        0, true},
       {"--max-seconds", "S", "time budget: the dense iterations stop when it is spent (the landmarks and volumes are still restored; exit 4)"},
       {"--allow-partial", "", "exit 0 even when a landmark misses its target by over 1e-3 or the time budget stopped the iterations (the warning stays)"}},
-     run}, "--preset", 0));
+     run}, "--preset", 0),
+    {"--steps", "--width", "--lambda", "--width-factor", "--width-loo", "--boundary", "--boundary-samples", "--field",
+     "--no-rigid", "--no-untangle", "--no-restore", "--restore-iterations", "--restore-rounds", "--restore-min-gain"}));
 }  // namespace

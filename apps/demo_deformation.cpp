@@ -22,7 +22,7 @@ Params draw(unsigned seed, double max_rotation_deg) {
   Params p;
   std::mt19937 rng(seed == 0 ? 2014u : seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  if (seed == 0) {  // the demo's fixed subject (README and docs/register.md measure it)
+  if (seed == 0) {  // the demo's fixed subject (bench/results/register_dense/ and register_image_force/ measure it)
     p.scale = Eigen::Vector3d(1 / 1.06, 1 / 0.94, 1 / 1.03);
     p.bumps = {{25, 20, 10, 5, -4, 3}, {-25, -15, 20, -4, 5, -3}, {10, -30, -15, 3, 4, 5}, {-15, 25, -20, -5, -3, -4}};
   } else {

@@ -6,7 +6,7 @@
 // distance of the actual registration to it is the registration's error. It is not a
 // volume-preserving registration: the two meshes' surfaces differ by about a voxel, and near
 // them (at paper size most tets touch the surface) its tets are squeezed or stretched by tens of
-// percent (docs/register.md, "The ideal registration").
+// percent (docs/register.md, "Two Dice measures"; bench/results/register_faster_steps_ideal/).
 #include <functional>
 #include <string>
 

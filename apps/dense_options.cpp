@@ -2,17 +2,18 @@
 #include "dense_options.hpp"
 
 #include <sstream>
+#include <utility>
 
 #include "vpm/error.hpp"
 #include "vpm/format.hpp"
 
 namespace vpm::cli {
 
-DenseRegistrationOptions preset_option(const Args& args) {
+DenseRegistrationOptions preset_option(const Args& args, DenseRegistrationOptions base) {
   const auto word = args.get("--preset");
-  if (!word) return {};
+  if (!word) return base;
   try {
-    return with_preset(registration_preset_from_string(*word));
+    return with_preset(registration_preset_from_string(*word), std::move(base));
   } catch (const InputError& e) {
     throw InputError(std::string("--preset: ") + e.what());
   }
@@ -48,13 +49,6 @@ DenseRegistrationOptions dense_options(const Args& args, DenseRegistrationOption
       throw InputError(std::string("--dense-force: ") + e.what());
     }
   }
-  if (const auto f = args.get("--dense-fit")) {
-    try {
-      o.fit = dense_fit_from_string(*f);
-    } catch (const InputError& e) {
-      throw InputError(std::string("--dense-fit: ") + e.what());
-    }
-  }
   o.restore_image_weight = args.get_double("--dense-restore-image-weight", o.restore_image_weight);
   if (!(o.restore_image_weight >= 0 && o.restore_image_weight <= 1e6))
     throw InputError("--dense-restore-image-weight: expected 0 to 1e6");
@@ -66,12 +60,6 @@ DenseRegistrationOptions dense_options(const Args& args, DenseRegistrationOption
   if (!(o.fit_tolerance >= 1e-14 && o.fit_tolerance <= 0.1)) throw InputError("--dense-fit-tolerance: expected 1e-14 to 0.1");
   o.advect_steps = args.get_int("--dense-advect-steps", o.advect_steps);
   if (o.advect_steps < 1 || o.advect_steps > 64) throw InputError("--dense-advect-steps: expected 1 to 64");
-  o.fine_iterations = args.get_int("--dense-fine-iterations", o.fine_iterations);
-  if (o.fine_iterations < 0 || o.fine_iterations > 1000) throw InputError("--dense-fine-iterations: expected 0 to 1000");
-  o.fine_sigma = args.get_double("--dense-fine-sigma", o.fine_sigma);
-  if (!(o.fine_sigma > 0 && o.fine_sigma <= 0.5)) throw InputError("--dense-fine-sigma: expected (0, 0.5] ball units");
-  o.fine_smoothness = args.get_double("--dense-fine-smoothness", o.fine_smoothness);
-  if (!(o.fine_smoothness >= 0 && o.fine_smoothness <= 1e6)) throw InputError("--dense-fine-smoothness: expected 0 to 1e6");
   o.image_smoothing = args.get_double("--dense-image-smoothing", o.image_smoothing);
   if (!(o.image_smoothing >= 0 && o.image_smoothing <= 2))
     throw InputError("--dense-image-smoothing: expected 0 to 2 (x the level's width)");
@@ -105,42 +93,32 @@ Command with_dense_options(Command command, const std::string& after, int defaul
            "dense iterations after the landmarks: the subject pulled onto the template (--dense-force) by "
            "divergence-free flows (default " + std::to_string(default_iterations) + ")"},
           {"--dense-widths", "W[,W...]", "Gaussian widths of the dense levels, coarse to fine (default " + widths + ")",
-           false, 0, true},
+           false, 0, true, true},
           {"--dense-step", "S", "fraction of the boundary displacement taken per dense iteration (default " +
-                                    format_sig(d.step, 6) + ")", false, 0, true},
+                                    format_sig(d.step, 6) + ")", false, 0, true, true},
           {"--dense-force", "labels|image|both",
            std::string("what the dense flows pull: region boundaries, image intensities, or both (default ") +
                to_string(default_force) + ")", false, 0, true},
-          {"--dense-fit", "systems|translations",
-           std::string("how the force becomes a field: every centre's local least-squares system fitted at once, "
-                       "or one translation per centre (default ") + to_string(d.fit) + ")", false, 0, true},
           {"--dense-restore-image-weight", "W",
            "with an image force, how firmly the final volume restoration holds the image's edges (0: not; default " +
-               format_sig(d.restore_image_weight, 6) + ")", false, 0, true},
+               format_sig(d.restore_image_weight, 6) + ")", false, 0, true, true},
           {"--dense-restore-cycles", "C",
            "cycles of volume restoration then more dense iterations at the finest width, after the others (default " +
-               std::to_string(d.restore_cycles) + ")", false, 0, true},
+               std::to_string(d.restore_cycles) + ")", false, 0, true, true},
           {"--dense-fit-tolerance", "T", "relative residual at which the fit's conjugate gradients stop (default " +
-                                            format_sig(d.fit_tolerance, 6) + ")", false, 0, true},
+                                            format_sig(d.fit_tolerance, 6) + ")", false, 0, true, true},
           {"--dense-advect-steps", "K", "RK4 steps that carry the vertices through each dense iteration's flow (default " +
-                                           std::to_string(d.advect_steps) + ")", false, 0, true},
-          {"--dense-fine-iterations", "N",
-           "fine steps after the others: image-driven displacements on the mesh itself, each followed by the volume "
-           "restoration (default " + std::to_string(d.fine_iterations) + ")", false, 0, true},
-          {"--dense-fine-sigma", "S", "Gaussian width of the fine steps' image systems, ball units (default " +
-                                          format_sig(d.fine_sigma, 6) + ")", false, 0, true},
-          {"--dense-fine-smoothness", "M", "membrane weight of the fine steps on the mesh's edges (default " +
-                                               format_sig(d.fine_smoothness, 6) + ")", false, 0, true},
+                                           std::to_string(d.advect_steps) + ")", false, 0, true, true},
           {"--dense-image-grid", "N", "cells across the ball of the image force's grid (default " +
-                                          std::to_string(d.image_grid) + ")", false, 0, true},
+                                          std::to_string(d.image_grid) + ")", false, 0, true, true},
           {"--dense-image-smoothing", "F", "Gaussian smoothing of the images before the image force, x the level's width (default " +
-                                               format_sig(d.image_smoothing, 6) + ")", false, 0, true},
+                                               format_sig(d.image_smoothing, 6) + ")", false, 0, true, true},
           {"--dense-ridge", "R", "smoothing ridge of the field's fit, x the mean Gram diagonal (default " +
-                                     format_sig(d.ridge, 6) + ")", false, 0, true},
+                                     format_sig(d.ridge, 6) + ")", false, 0, true, true},
           {"--dense-smoothing", "F", "width of the Gaussian gathering the force at a centre, x the level's width (default " +
-                                         format_sig(d.smoothing, 6) + ")", false, 0, true},
+                                         format_sig(d.smoothing, 6) + ")", false, 0, true, true},
           {"--dense-centre-spacing", "F", "grid spacing of the field's centres, x the level's width (default " +
-                                              format_sig(d.centre_spacing, 6) + ")", false, 0, true}};
+                                              format_sig(d.centre_spacing, 6) + ")", false, 0, true, true}};
   auto at = command.options.begin();
   while (at != command.options.end() && at->flag != after) ++at;
   if (at != command.options.end()) ++at;

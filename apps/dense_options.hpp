@@ -8,12 +8,13 @@
 
 namespace vpm::cli {
 
-/// The dense options of --preset landmarks|standard|accurate (the library's defaults without it),
+/// `base` with the settings of --preset landmarks|standard|accurate (`base` itself without it),
 /// InputError naming the flag for another word.
-DenseRegistrationOptions preset_option(const Args& args);
+DenseRegistrationOptions preset_option(const Args& args, DenseRegistrationOptions base = {});
 
-/// --dense-iterations N, --dense-widths W[,W...], --dense-step S, --dense-force F,
-/// --dense-image-grid N into `options` (InputError naming the flag for bad values).
+/// The --dense-* flags (iterations, widths, step, force, image grid and smoothing, restoration
+/// cycles and image weight, the fit's tolerance, ridge, smoothing and centre spacing, RK4 steps)
+/// into `options` (InputError naming the flag for bad values).
 DenseRegistrationOptions dense_options(const Args& args, DenseRegistrationOptions options = {});
 
 /// --restore-rounds N and --restore-min-gain G into `options` (after its restore_volumes is

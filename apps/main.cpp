@@ -47,6 +47,10 @@ int main(int argc, char** argv) {
       std::cout << vpm::cli::help_text(c);
       return vpm::kExitOk;
     }
+    if (args.size() == 3 && (args[1] == "--help" || args[1] == "-h") && args[2] == "--expert") {
+      std::cout << vpm::cli::help_text(c, true);
+      return vpm::kExitOk;
+    }
     try {
       return c.run(c, std::vector<std::string>(args.begin() + 1, args.end()));
     } catch (const vpm::InputError& e) {

@@ -3,7 +3,9 @@
 // (test_volume_map: vpm map; test_io: convert, stats; test_registration: register;
 // test_mesh_image: mesh-image; test_collective: demo).
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <string>
+#include <utility>
 
 #include "support/process.hpp"
 #include "vpm/config.hpp"
@@ -17,7 +19,16 @@ const char* kCommands[] = {"map", "register", "mesh-image", "initial-map", "stat
 std::string tmp(const std::string& name) { return std::string(VPM_TEST_TMP) + "/cli_" + name; }
 }  // namespace
 
-TEST_CASE("cli: vpm CMD --help prints the synopsis, every option and exits 0") {
+// Lines of `text` and the widest of them.
+std::pair<int, size_t> extent(const std::string& text) {
+  int lines = 0;
+  size_t widest = 0, start = 0;
+  for (size_t end; (end = text.find('\n', start)) != std::string::npos; start = end + 1, ++lines)
+    widest = std::max(widest, end - start);
+  return {lines, widest};
+}
+
+TEST_CASE("cli: vpm CMD --help prints the synopsis and the options on one screen, and exits 0") {
   for (const char* c : kCommands) {
     INFO(c);
     const std::string out = tmp(std::string("help_") + c + ".txt");
@@ -25,14 +36,28 @@ TEST_CASE("cli: vpm CMD --help prints the synopsis, every option and exits 0") {
     const std::string text = slurp(out);
     CHECK_THAT(text, Catch::StartsWith(std::string("usage: vpm ") + c));
     CHECK_THAT(text, Catch::Contains("--quiet") && Catch::Contains("--verbose"));
+    const auto [lines, widest] = extent(text);
+    CHECK(lines <= 45);  // one screen
+    CHECK(widest <= 100);
   }
   const std::string text = slurp(tmp("help_map.txt"));
   for (const char* flag : {"--rounds R", "--tolerance T", "--method moser|paper|vsem", "--boundary slide|fixed",
-                           "--solver cg|paper", "--preconditioner auto|jacobi|amg", "--rk-steps N", "--report REPORT.json"})
+                           "--report REPORT.json"})
     CHECK_THAT(text, Catch::Contains(flag));
-  // an option listed only in --help (left out of the synopsis) is still documented
-  REQUIRE(run_status(kVpm + " register --help > " + tmp("reg.txt")) == 0);
-  CHECK_THAT(slurp(tmp("reg.txt")), Catch::Contains("--boundary-samples N"));
+  // an option left out of the synopsis is still listed; expert ones only with --expert
+  const std::string reg = slurp(tmp("help_register.txt"));
+  CHECK_THAT(reg, Catch::Contains("--dense-force labels|image|both") && Catch::Contains("--preset"));
+  CHECK_THAT(reg, !Catch::Contains("--boundary-samples") && !Catch::Contains("--dense-ridge"));
+  CHECK_THAT(reg, Catch::Contains("expert options: vpm register --help --expert"));
+  REQUIRE(run_status(kVpm + " register --help --expert > " + tmp("reg.txt")) == 0);
+  const std::string expert = slurp(tmp("reg.txt"));
+  CHECK_THAT(expert, Catch::Contains("--boundary-samples N") && Catch::Contains("--dense-ridge R") &&
+                         Catch::Contains("--template TEMPLATE.vtu"));
+  CHECK(extent(expert).second <= 100);
+  // expert options stay accepted
+  CHECK(run_status(kVpm + " register m.vtu -o o.vtu --template t.vtu --dense-ridge 0.5 --boundary-samples 10 2> " +
+                   tmp("reg.err")) == 2);
+  CHECK_THAT(slurp(tmp("reg.err")), Catch::Contains("m.vtu") && !Catch::Contains("unknown option"));
 }
 
 TEST_CASE("cli: docs/cli.md's command synopsis is what `vpm --help` prints") {
@@ -43,6 +68,17 @@ TEST_CASE("cli: docs/cli.md's command synopsis is what `vpm --help` prints") {
   // and the check notices a difference
   const std::string changed = tmp("cli.md");
   REQUIRE(run_status("sed 's/--rk-steps N/--rk-steps K/' " + readme + " > " + changed) == 0);
+  CHECK(run_status("python3 " + script + " " + kVpm + " --check " + changed + " 2>/dev/null") == 1);
+}
+
+TEST_CASE("cli: the stage pages' options tables are what `vpm CMD --help --expert` lists") {
+  const std::string script = std::string(VPM_SOURCE_DIR) + "/scripts/doc_options.py";
+  CHECK(run_status("python3 " + script + " " + kVpm + " --check 2> " + tmp("options.err")) == 0);
+  INFO(slurp(tmp("options.err")));
+  // and the check notices a table that lost a row
+  const std::string page = std::string(VPM_SOURCE_DIR) + "/docs/register.md";
+  const std::string changed = tmp("register.md");
+  REQUIRE(run_status("grep -v 'dense-ridge' " + page + " > " + changed) == 0);
   CHECK(run_status("python3 " + script + " " + kVpm + " --check " + changed + " 2>/dev/null") == 1);
 }
 

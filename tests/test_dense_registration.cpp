@@ -16,6 +16,7 @@
 #include "vpm/collective.hpp"
 #include "vpm/dense_registration.hpp"
 #include "vpm/registration_preset.hpp"
+#include "vpm/template_registration.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/image.hpp"
@@ -85,11 +86,9 @@ double overlap(const Case& c, const Points& ball) {
 
 DenseRegistrationResult run_dense(Device& dev, const Case& c, Points& ball, int iterations,
                                   std::vector<int> exclude = {}, bool restore = true,
-                                  DenseForce force = DenseForce::labels, const DenseImages* images = nullptr,
-                                  DenseFit fit = DenseFit::systems) {
+                                  DenseForce force = DenseForce::labels, const DenseImages* images = nullptr) {
   DenseRegistrationOptions o;
   o.iterations = iterations;
-  o.fit = fit;
   o.widths = {0.5, 0.35};
   o.step = 0.8;
   o.exclude_labels = std::move(exclude);
@@ -235,7 +234,7 @@ TEST_CASE("closest_matches: the sorted scan finds what a scan of every face find
 }
 
 TEST_CASE("sparse_gram: the compressed rows written in parallel equal the matrix built from triplets") {
-  const Points c = ball_grid(0.09);
+  const Points c = ball_grid(0.14);
   for (const RbfKernel kind : {RbfKernel::Tangent, RbfKernel::Free}) {
     const double lambda = 1 / (0.1 * 0.1);
     const SparseGram a = sparse_gram(c, kind, lambda);
@@ -343,7 +342,6 @@ TEST_CASE("dense registration by the image force undoes the known flow without l
     CHECK(r.max_normal_velocity < 1e-12);
     const Json j = to_json(r);
     CHECK(j.find("force")->string() == "image");
-    CHECK(j.find("fit")->string() == "systems");
     CHECK(r.restore->held_points > 100);  // the restoration holds the image's edges
     CHECK(j.find("mismatch_after") != nullptr);
     Points flow_only;
@@ -351,17 +349,6 @@ TEST_CASE("dense registration by the image force undoes the known flow without l
     results.push_back(flow_only);
   }
   if (results.size() == 2) CHECK((results[0] - results[1]).cwiseAbs().maxCoeff() < 1e-9);
-  {  // the earlier fit (one translation per centre) registers too, and the report says which ran
-    Points landmark_only, dense;
-    run_dense(*Device::host(), c, landmark_only, 0);
-    const DenseRegistrationResult r =
-        run_dense(*Device::host(), c, dense, 16, {}, true, DenseForce::image, &images, DenseFit::translations);
-    CHECK(overlap(c, dense) > overlap(c, landmark_only) + 0.025);
-    CHECK(r.mismatch_after < 0.35 * r.mismatch_landmarks);
-    CHECK(to_json(r).find("fit")->string() == "translations");
-    CHECK(dense_fit_from_string("systems") == DenseFit::systems);
-    CHECK_THROWS_AS(dense_fit_from_string("samples"), InputError);
-  }
   // the image force of a subject against itself asks for nothing: every iteration is refused
   Case same = c;
   same.subject = same.templ;
@@ -379,52 +366,39 @@ TEST_CASE("dense registration by the image force undoes the known flow without l
   CHECK_THROWS_AS(dense_force_from_string("intensity"), InputError);
 }
 
-TEST_CASE("dense registration: restore cycles and fine steps on the mesh keep every guarantee") {
+TEST_CASE("dense registration: restore cycles keep every guarantee") {
   const Case c = make_case();
   const Image image = native_image();
   const DenseImages images = case_images(c, image);
-  auto run = [&](const Case& k, Points& ball, int cycles, int fine) {
+  auto run = [&](const Case& k, Points& ball, int cycles) {
     DenseRegistrationOptions o;
     o.iterations = 16;
     o.widths = {0.5, 0.35};
     o.force = DenseForce::image;
     o.image_grid = 32;
     o.restore_cycles = cycles;
-    o.fine_iterations = fine;
-    o.fine_sigma = 0.15;  // this test mesh's edges are about 0.15 long
     ball = k.subject.vertices;
     return register_dense(*Device::host(), {ball, k.subject.tets, k.labels}, {k.templ.vertices, k.templ.tets, k.labels},
                           k.landmarks.source, k.landmarks.target, RegistrationOptions{}, o, &images);
   };
-  Points plain, cycled, fine;
-  const DenseRegistrationResult r0 = run(c, plain, 0, 0);
-  const DenseRegistrationResult r1 = run(c, cycled, 2, 0);
-  const DenseRegistrationResult r2 = run(c, fine, 0, 4);
-  for (const auto* r : {&r1, &r2}) {
-    CHECK(r->iterations.size() > r0.iterations.size());
-    CHECK(r->inverted_tets == 0);
-    CHECK(r->landmark_max_error < 1e-6);
-  }
-  for (const Points* p : {&cycled, &fine}) {
-    const MapMetrics m = map_metrics(*Device::host(), c.subject.vertices, *p, c.subject.tets);
-    CHECK(m.inverted_tets == 0);
-    CHECK(m.tet_volume_ratio.mean_abs_dev < 0.02);
-    CHECK(overlap(c, *p) > overlap(c, plain) - 0.01);
-    for (Eigen::Index v = 0; v < p->rows(); ++v)
-      if (std::abs(c.subject.vertices.row(v).norm() - 1) < 1e-9) CHECK(std::abs(p->row(v).norm() - 1) < 1e-9);
-  }
-  // a fine step is kept only when it lowers the mismatch, so they can only lower it further
-  CHECK(r2.mismatch_after <= r0.mismatch_after);
-  int fine_steps = 0;
-  for (const DenseIteration& it : r2.iterations)
-    fine_steps += it.accepted && it.width == 0.15 && it.centres == c.subject.vertices.rows();
-  CHECK(fine_steps >= 1);
-  // a subject against itself: nothing to pull, every fine step refused, the identity stays
+  Points plain, cycled;
+  const DenseRegistrationResult r0 = run(c, plain, 0);
+  const DenseRegistrationResult r1 = run(c, cycled, 2);
+  CHECK(r1.iterations.size() > r0.iterations.size());
+  CHECK(r1.inverted_tets == 0);
+  CHECK(r1.landmark_max_error < 1e-6);
+  const MapMetrics m = map_metrics(*Device::host(), c.subject.vertices, cycled, c.subject.tets);
+  CHECK(m.inverted_tets == 0);
+  CHECK(m.tet_volume_ratio.mean_abs_dev < 0.02);
+  CHECK(overlap(c, cycled) > overlap(c, plain) - 0.01);
+  for (Eigen::Index v = 0; v < cycled.rows(); ++v)
+    if (std::abs(c.subject.vertices.row(v).norm() - 1) < 1e-9) CHECK(std::abs(cycled.row(v).norm() - 1) < 1e-9);
+  // a subject against itself: nothing to pull, every iteration refused, the identity stays
   Case same = c;
   same.subject = same.templ;
   same.landmarks = region_landmarks(same.subject, same.templ);
   Points self;
-  run(same, self, 1, 2);
+  run(same, self, 1);
   CHECK((self - same.templ.vertices).cwiseAbs().maxCoeff() < 1e-9);
 }
 
@@ -506,6 +480,82 @@ TEST_CASE("dense registration: held-out regions stay out of the force and bad op
   o.step = 0.5;
   o.widths = {0.3, -1};
   refused(o, c.labels);
+}
+
+TEST_CASE("register_to_template: regions paired, held out of the landmarks and the force, then the dense step") {
+  const Case c = make_case();
+  const auto host = Device::host();
+  Device& dev = *host;
+  TemplateRegistrationOptions o;
+  o.exclude_labels = {2};
+  o.dense.iterations = 3;
+  o.dense.widths = {0.5, 0.35};
+  o.dense.step = 0.8;
+  const TemplateRegistration r = register_to_template(dev, c.subject, c.templ, o);
+  CHECK(r.landmark_labels == std::vector<int>{1, 3, 4, 5});
+  REQUIRE(r.dense);
+  CHECK(r.dense->regions == std::vector<int>{1, 3, 4, 5});  // region 2 out of the force too
+  // the same as pairing the regions and calling register_dense by hand
+  const RegionLandmarks lm = region_landmarks(c.subject, c.templ, {2});
+  DenseRegistrationOptions d = o.dense;
+  d.exclude_labels = {2};
+  Points ball = c.subject.vertices;
+  const DenseRegistrationResult by_hand = register_dense(dev, {ball, c.subject.tets, c.labels},
+                                                         {c.templ.vertices, c.templ.tets, c.labels}, lm.source,
+                                                         lm.target, RegistrationOptions{}, d);
+  CHECK((r.ball - ball).cwiseAbs().maxCoeff() == 0.0);
+  CHECK((r.landmarks - lm.source).cwiseAbs().maxCoeff() == 0.0);
+  CHECK(r.result.landmark_max_error == by_hand.landmark_max_error);
+  CHECK(r.result.inverted_tets == by_hand.inverted_tets);
+  // no dense iterations: the landmarks' flow alone
+  o.dense.iterations = 0;
+  const TemplateRegistration flow = register_to_template(dev, c.subject, c.templ, o);
+  Points plain = c.subject.vertices;
+  register_landmarks(dev, plain, c.subject.tets, lm.source, lm.target);
+  CHECK(!flow.dense);
+  CHECK((flow.ball - plain).cwiseAbs().maxCoeff() == 0.0);
+}
+
+TEST_CASE("register_to_template: refusals name the mesh at fault") {
+  const Case c = make_case();
+  const auto host = Device::host();
+  Device& dev = *host;
+  using Mesh = TemplateRegistrationError::Mesh;
+  auto fault = [&](const TetMesh& subject, const TetMesh& templ, const TemplateRegistrationOptions& o,
+                   const TemplateImages& images = {}) -> std::optional<Mesh> {
+    try {
+      register_to_template(dev, subject, templ, o, images);
+    } catch (const TemplateRegistrationError& e) {
+      return e.mesh;
+    }
+    return std::nullopt;
+  };
+  TemplateRegistrationOptions o;
+  o.exclude_labels = {1, 2, 3};  // two regions left: too few to pair
+  CHECK(fault(c.subject, c.templ, o) == Mesh::both);
+  // a subject without labels: moments pair it, but the label force cannot pull it
+  TetMesh bare;
+  bare.vertices = c.subject.vertices;
+  bare.tets = c.subject.tets;
+  bare.set_point_field("original_position", FieldValues(kNativeMm * c.templ.vertices));
+  TetMesh templ = c.templ;
+  templ.set_point_field("original_position", FieldValues(kNativeMm * c.templ.vertices));
+  TemplateRegistrationOptions m;
+  m.landmarks = TemplateLandmarks::moments;
+  m.dense.iterations = 1;
+  CHECK(fault(bare, templ, m) == Mesh::subject);
+  m.landmarks = TemplateLandmarks::regions;
+  CHECK(fault(bare, templ, m) == Mesh::subject);  // no labels to pair regions by
+  // the image force without images, or with one of the two
+  const Image image = native_image();
+  TemplateRegistrationOptions i;
+  i.dense.iterations = 1;
+  i.dense.force = DenseForce::image;
+  CHECK(fault(c.subject, templ, i) == Mesh::both);
+  CHECK(fault(c.subject, templ, i, {&image, nullptr}) == Mesh::templ);
+  CHECK(fault(c.subject, templ, i, {&image, &image}) == Mesh::subject);  // no native positions
+  CHECK(template_landmarks_from_string(to_string(TemplateLandmarks::moments)) == TemplateLandmarks::moments);
+  CHECK_THROWS_AS(template_landmarks_from_string("centroids"), InputError);
 }
 
 TEST_CASE("vpm register --dense-iterations: dense registration from the command line") {
@@ -618,15 +668,8 @@ TEST_CASE("vpm register --dense-force image: the image force from the command li
   const Json* d = j.find("dense");
   REQUIRE(d != nullptr);
   CHECK(d->find("force")->string() == "image");
-  CHECK(d->find("fit")->string() == "systems");
   CHECK(d->find("mismatch_after")->number() < d->find("mismatch_landmarks")->number());
   CHECK(j.find("inverted_tets")->number() == 0);
-  // the earlier fit on request
-  REQUIRE(test::run_status(vpm + images + "--dense-force image --dense-fit translations --dense-iterations 6 "
-                           "--dense-image-grid 32 --report " + dir + "r2.json 2>" + dir + "err.txt") == 0);
-  const Json j2 = Json::parse(test::slurp(dir + "r2.json"));
-  CHECK(j2.find("dense")->find("fit")->string() == "translations");
-  CHECK(j2.find("dense")->find("mismatch_after")->number() < j2.find("dense")->find("mismatch_landmarks")->number());
   // refused: an image force without images, one image alone, a mesh without native positions
   auto refused = [&](const std::string& args, const std::string& message) {
     CHECK(test::run_status(vpm + args + " 2>" + dir + "err.txt") == 2);
@@ -637,7 +680,7 @@ TEST_CASE("vpm register --dense-force image: the image force from the command li
   refused("--dense-iterations 2 --dense-force image", "--dense-force image needs --image");
   refused("--dense-iterations 2 --image " + dir + "image.nii.gz", "--image needs --template-image");
   refused("--dense-iterations 2 --dense-force intensity", "expected labels, image or both");
-  refused("--dense-iterations 2 --dense-fit samples", "--dense-fit: dense fit 'samples': expected systems or translations");
+  refused("--dense-iterations 2 --dense-fit translations", "unknown option --dense-fit");
   refused("--dense-iterations 2 " + images, "--image and --template-image need --dense-force image or both");
   Image blank = native_image();
   std::fill(blank.data.begin(), blank.data.end(), 0.0f);

@@ -1,6 +1,6 @@
 #pragma once
 // Private: the page of a cohort whose element tables are finer than it draws (vpm/cohort_view.hpp,
-// CohortViewOptions::max_display_level; docs/view.md "Level-6 tables"). Every per-element array
+// CohortViewOptions::max_display_level; docs/view.md "Tables finer than the page"). Every per-element array
 // is carried to coarser display elements: each fine element belongs to the display element that
 // holds its centre.
 #include <cstdint>

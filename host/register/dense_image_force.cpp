@@ -209,24 +209,4 @@ LocalSystems ImageForce::local_systems(const std::vector<double>& subject_raw, c
   return sys;
 }
 
-Points ImageForce::local_translations(const std::vector<double>& subject, const Points& centres, double sigma,
-                                      double image_sigma, double cap, double* mean_length) const {
-  const LocalSystems sys = local_systems(subject, centres, sigma, image_sigma);
-  const std::vector<Eigen::Matrix3d>& a = sys.a;
-  const Points& b = sys.b;
-  const Eigen::Index nc = centres.rows();
-  double trace = 0;
-  for (const Eigen::Matrix3d& m : a) trace += m.trace();
-  const double eps = kTextureFloor * trace / std::max<double>(1.0, static_cast<double>(nc));
-  Points t(nc, 3);
-  for (Eigen::Index c = 0; c < nc; ++c) {
-    // S(x - t) = T  ->  S - g.t = T  ->  (g g^T) t = g (S - T)
-    Eigen::Vector3d tc = (a[static_cast<size_t>(c)] + eps * Eigen::Matrix3d::Identity()).ldlt().solve(b.row(c).transpose());
-    if (tc.norm() > cap) tc *= cap / tc.norm();
-    t.row(c) = tc.transpose();
-  }
-  if (mean_length) *mean_length = nc > 0 ? t.rowwise().norm().mean() : 0.0;
-  return t;
-}
-
 }  // namespace vpm

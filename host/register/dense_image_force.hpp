@@ -3,7 +3,7 @@
 // one regular grid in the ball through their maps (ball point -> containing tet -> native
 // position -> trilinear voxel value) and compared there. At each centre of the level's field,
 // the translation that best explains the local difference in the least-squares sense
-// (Lucas-Kanade, with the symmetric gradient of the two images). docs/register.md says why not
+// (Lucas-Kanade, with the symmetric gradient of the two images). bench/results/register_image_force/ says why not
 // demons: smoothing per-point demons steps moved about a third as far per iteration and ended
 // at a worse mismatch.
 #include <Eigen/Core>
@@ -31,23 +31,17 @@ class ImageForce {
   std::vector<double> subject_values(const TetLocator& ball) const;
   /// Mean squared difference to the template's values over the grid, / the template's variance.
   double mismatch(const std::vector<double>& subject) const;
-  /// The local translation that moves the subject onto the template at each of `centres`
-  /// (c x 3): with Gaussian weights w_i = exp(-|x_i - centre|^2 / (2 sigma^2)) over the grid
-  /// points within 3 sigma, t = (sum w_i g_i g_i^T + eps I)^-1 sum w_i g_i (S_i - T_i), the
-  /// least-squares solution of S(x - t) = T linearised (Lucas-Kanade), g the mean gradient of the
-  /// two images (central differences), both smoothed by a Gaussian of width `image_sigma` first
-  /// (0: not). eps = kTextureFloor x the mean trace of the centres' matrices, so weakly textured
-  /// centres ask for little; |t| is capped at `cap`. `mean_length` (optional) gets the mean |t|.
-  Points local_translations(const std::vector<double>& subject, const Points& centres, double sigma,
-                            double image_sigma, double cap, double* mean_length = nullptr) const;
-
-  /// The local least-squares systems behind local_translations, without eps and cap: at each
-  /// centre a = sum w_i g_i g_i^T, b = sum w_i g_i (S_i - T_i) (for fit_divfree_weighted).
+  /// The local least-squares systems of the translation that moves the subject onto the
+  /// template at each of `centres` (c x 3): with Gaussian weights w_i = exp(-|x_i - centre|^2 /
+  /// (2 sigma^2)) over the grid points within 3 sigma, a = sum w_i g_i g_i^T and
+  /// b = sum w_i g_i (S_i - T_i), the normal equations of S(x - t) = T linearised
+  /// (Lucas-Kanade), g the mean gradient of the two images (central differences), both smoothed
+  /// by a Gaussian of width `image_sigma` first (0: not). For fit_divfree_weighted.
   LocalSystems local_systems(const std::vector<double>& subject, const Points& centres, double sigma,
                              double image_sigma) const;
 
-  /// eps of local_translations relative to the mean texture (0.01 and 0.2 measured no better on
-  /// the demo; docs/register.md).
+  /// The regularisation eps = kTextureFloor x the mean trace under which a centre's system is
+  /// solved alone to report the translation it asks for (DenseIteration::mean_translation).
   static constexpr double kTextureFloor = 0.05;
 
   const Points& grid() const { return grid_; }

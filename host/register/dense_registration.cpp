@@ -27,9 +27,6 @@ namespace vpm {
 
 namespace {
 
-/// The image force's translations are capped at this fraction of the level's width.
-constexpr double kTranslationCap = 0.5;
-
 void check_dense(const Tets& tets, const std::vector<int>& labels, const Tets& ttets,
                  const std::vector<int>& tlabels, const DenseRegistrationOptions& o) {
   auto bad = [](const std::string& what) { throw InputError("dense registration: " + what); };
@@ -59,25 +56,7 @@ BoundaryMatches boundary_matches(const DenseState& st, const Points& ball, Dense
   return m;
 }
 
-/// The displacements the force asks for at `centres` with the subject at `ball` (c x 3; `fit`
-/// holds its image values there); the matches and their mean length go to `it`.
-Points dense_force(const DenseState& st, const Points& ball, const Fit& fit, const Points& centres, double width,
-                   const DenseRegistrationOptions& o, DenseIteration& it) {
-  Points labels, image;
-  if (st.force != DenseForce::image) labels = smooth_matches(boundary_matches(st, ball, it), centres, o.smoothing * width);
-  if (st.force != DenseForce::labels) {
-    double mean = 0;
-    image = st.image->local_translations(fit.values, centres, o.smoothing * width,
-                                         o.image_smoothing * width, kTranslationCap * width, &mean);
-    it.image_points = static_cast<long>(st.image->grid().rows());
-    it.mean_translation = mean;
-  }
-  if (st.force == DenseForce::labels) return labels;
-  if (st.force == DenseForce::image) return image;
-  return 0.5 * (labels + image);
-}
-
-/// The force as local least-squares systems at `centres` (DenseFit::systems, fit_divfree_weighted):
+/// The force as local least-squares systems at `centres` (fit_divfree_weighted):
 /// the image's structure tensors and mismatch vectors scaled to a mean trace of 3 (so a centre of
 /// average texture weighs as much as one full of boundary matches), the boundary matches as
 /// isotropic systems of their mass (smooth_matches); `both` averages the two.
@@ -98,8 +77,8 @@ LocalSystems dense_systems(const DenseState& st, const Points& ball, const Fit& 
     const double scale = trace > 0 ? 3.0 * static_cast<double>(nc) / trace : 0.0;
     for (Eigen::Matrix3d& a : image.a) a *= scale;
     image.b *= scale;
-    // reported: the mean length of the translations the centres ask for on their own (as with
-    // DenseFit::translations: eps = kTextureFloor x the mean trace, here 3; before its cap)
+    // reported: the mean length of the translations the centres ask for on their own (each
+    // system alone, + eps I: eps = kTextureFloor x the mean trace, here 3)
     double length = 0;
     for (Eigen::Index c = 0; c < nc; ++c)
       length += (image.a[static_cast<size_t>(c)] + 3 * ImageForce::kTextureFloor * Eigen::Matrix3d::Identity())
@@ -113,15 +92,13 @@ LocalSystems dense_systems(const DenseState& st, const Points& ball, const Fit& 
   return image;
 }
 
-/// What the iterations of one level share: the width, the field's centres and (DenseFit::systems)
-/// their Gram matrix.
+/// What the iterations of one level share: the width, the field's centres and their Gram matrix.
 struct Level {
   double width = 0;
   Points centres;
   SparseGram gram;
-  Level(double w, const DenseRegistrationOptions& o) : width(w), centres(ball_grid(o.centre_spacing * w)) {
-    if (o.fit == DenseFit::systems) gram = sparse_gram(centres, RbfKernel::Tangent, 1 / (w * w));
-  }
+  Level(double w, const DenseRegistrationOptions& o)
+      : width(w), centres(ball_grid(o.centre_spacing * w)), gram(sparse_gram(centres, RbfKernel::Tangent, 1 / (w * w))) {}
 };
 
 /// One dense iteration at `level` on `x` (the vertices, then the tracked landmarks): kept in `x`
@@ -142,9 +119,7 @@ DenseIteration dense_step(Device& dev, const DenseState& st, Points& x, const Le
   fo.tolerance = o.fit_tolerance;
   const Points ball = x.topRows(nv);
   DivFreeField field =
-      o.fit == DenseFit::systems
-          ? fit_divfree_weighted(centres, level.gram, dense_systems(st, ball, fit, centres, width, o, it), fo)
-          : fit_divfree(centres, dense_force(st, ball, fit, centres, width, o, it), fo);
+      fit_divfree_weighted(centres, level.gram, dense_systems(st, ball, fit, centres, width, o, it), fo);
   field.coefficients *= o.step;
   max_normal = std::max(max_normal, max_normal_velocity(dev, {field}, 1000));
   Points y = x;
@@ -159,7 +134,7 @@ DenseIteration dense_step(Device& dev, const DenseState& st, Points& x, const Le
   // Untangled against the positions before this step, not the map before registration: the
   // latter pulls the freed rings back towards the unregistered shape, which undid whole patches
   // of the registration (moves of 0.06 ball units around one folded tet) and ended the finest
-  // level at its second iteration (docs/register.md, "Untangling inside the dense steps").
+  // level at its second iteration (bench/results/register_untangle_systems/).
   if (it.folded > 0) {
     const Points before = x.topRows(nv);
     untangle_flow_folds(dev, before, st.tets, after, st.topology.boundary_vertex, st.v0, v1, 2);
@@ -272,7 +247,6 @@ DenseRegistrationResult register_dense(Device& dev, const DenseSubject& subject,
   const DenseState st = dense_state(dev, ball, tets, labels, tball, ttets, tlabels, o, images);
   r.regions = st.regions;
   r.force = o.force;
-  r.fit = o.fit;
   const Fit before(st, ball);
   r.agreement_before = before.agreement;
   r.mismatch_before = before.mismatch;
@@ -309,8 +283,6 @@ DenseRegistrationResult register_dense(Device& dev, const DenseSubject& subject,
       r.mismatch_after = fit.mismatch;
     }
     finest.reset();  // its Gram matrix is large (about 230 MB at width 0.1)
-    if (o.fine_iterations > 0 && st.image && lo.restore_volumes)
-      fine_steps(dev, st, x, ball, landmark_vertices(ball, landmarks), lo, o, fit, r);
     work = x.topRows(work.rows());
     lm = x.bottomRows(lm.rows());
     r.seconds_dense = seconds_since(t0);

@@ -19,14 +19,6 @@ DenseForce dense_force_from_string(const std::string& w) {
   throw InputError("dense force '" + w + "': expected labels, image or both");
 }
 
-const char* to_string(DenseFit f) { return f == DenseFit::systems ? "systems" : "translations"; }
-
-DenseFit dense_fit_from_string(const std::string& w) {
-  for (DenseFit f : {DenseFit::systems, DenseFit::translations})
-    if (w == to_string(f)) return f;
-  throw InputError("dense fit '" + w + "': expected systems or translations");
-}
-
 Json to_json(const DenseIteration& it) {
   Json j = Json::object();
   j["width"] = it.width;
@@ -61,7 +53,6 @@ Json to_json(const DenseRegistrationResult& r) {
   j["agreement_landmarks"] = r.agreement_landmarks;
   j["agreement_after"] = r.agreement_after;
   j["force"] = to_string(r.force);
-  j["fit"] = to_string(r.fit);
   if (r.mismatch_before >= 0) {
     j["mismatch_before"] = r.mismatch_before;
     j["mismatch_landmarks"] = r.mismatch_landmarks;

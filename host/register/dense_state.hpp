@@ -1,7 +1,7 @@
 #pragma once
-// What the dense registration's stages share (dense_registration.cpp, dense_fine.cpp): the
-// state every iteration reads, the fit of a configuration by the force's own measure, the
-// restoration's holds and the fine steps (vpm/dense_registration.hpp).
+// What the dense registration's stages share (dense_registration.cpp, dense_holds.cpp): the
+// state every iteration reads, the fit of a configuration by the force's own measure and the
+// restoration's holds (vpm/dense_registration.hpp).
 #include <memory>
 #include <vector>
 
@@ -70,12 +70,5 @@ std::vector<VolumeHold> image_holds(const DenseState& st, const Points& ball, do
 /// The holds of a restoration of the subject at `ball`: the image's edges with an image force
 /// and DenseRegistrationOptions::restore_image_weight > 0, none otherwise.
 std::vector<VolumeHold> restore_holds(const DenseState& st, const Points& ball, const DenseRegistrationOptions& o);
-
-/// The fine steps (DenseRegistrationOptions::fine_iterations) on `x` (the vertices, then the
-/// tracked landmarks) from `fit`, each restored against `reference` with `pinned` vertices;
-/// they end at the first refused one or when the deadline passes. Iterations go to `r`,
-/// and `fit` ends as that of x.
-void fine_steps(Device& dev, const DenseState& st, Points& x, const Points& reference, const std::vector<char>& pinned,
-                const RegistrationOptions& lo, const DenseRegistrationOptions& o, Fit& fit, DenseRegistrationResult& r);
 
 }  // namespace vpm

@@ -15,17 +15,15 @@
 //    * image: both subjects' images (DenseImages) are read on a regular grid of `image_grid`
 //      cells across the ball through their maps (ball point -> native position -> trilinear
 //      voxel), the subject's scaled to the template's mean and spread; at every centre of the
-//      field (step 2) the translation that best explains the local difference, in the
-//      least-squares sense over the grid points around it (Gaussian weights of width
-//      `smoothing` x w; Lucas-Kanade with the mean gradient of the two images), capped at w / 2.
+//      field (step 2) the least-squares system of the translation that best explains the local
+//      difference over the grid points around it (Gaussian weights of width `smoothing` x w;
+//      Lucas-Kanade with the mean gradient of the two images).
 //    * both: the mean of the two at each centre.
-//    With DenseFit::systems (the default) the force is not reduced to one translation per centre:
-//    each centre keeps its local least-squares system (the image's structure tensor sum w g g^T
-//    and sum w g (S - T); the matches' mass and mean) and the field is fitted to all of them at
-//    once (vpm/rbf.hpp, fit_divfree_weighted), so an edge constrains only the motion across it and
-//    flat white matter nothing: the field there follows from its neighbours instead of being held
-//    still. DenseFit::translations (the earlier method) solves each centre alone (+ eps I, capped)
-//    and fits the field to those translations (steps 2-3).
+//    The force is not reduced to one translation per centre: each centre keeps its local
+//    least-squares system (the image's structure tensor sum w g g^T and sum w g (S - T); the
+//    matches' mass and mean) and the field is fitted to all of them at once (vpm/rbf.hpp,
+//    fit_divfree_weighted), so an edge constrains only the motion across it and flat white
+//    matter nothing: the field there follows from its neighbours instead of being held still.
 // 2. Smoothing (labels): the matches are averaged with a Gaussian of width `smoothing` x w at centres on
 //    a grid of spacing `centre_spacing` x w in the ball (sum w_i g_i d_i / (sum w_i g_i + 1), so
 //    centres without data ask for no motion).
@@ -66,15 +64,6 @@ enum class DenseForce { labels, image, both };
 const char* to_string(DenseForce force);
 DenseForce dense_force_from_string(const std::string& word);
 
-/// How the force becomes a field (see the top of this header): every centre's local
-/// least-squares system fitted at once (systems), or one translation per centre, then fitted
-/// (translations, the earlier method, kept for comparison: docs/register.md).
-enum class DenseFit { systems, translations };
-
-/// "systems", "translations"; and back (InputError naming the accepted words otherwise).
-const char* to_string(DenseFit fit);
-DenseFit dense_fit_from_string(const std::string& word);
-
 /// The images of an intensity-driven dense registration (DenseForce::image or both): each
 /// subject's image in its own native space (world mm), and the native positions of its ball
 /// mesh's vertices (the mesh field original_position), row for row.
@@ -87,7 +76,6 @@ struct DenseImages {
 
 struct DenseRegistrationOptions {
   DenseForce force = DenseForce::labels;  ///< what pulls (images required for image and both)
-  DenseFit fit = DenseFit::systems;       ///< how the force becomes a field
   int image_grid = 48;          ///< cells across the ball of the image force's grid
   /// Gaussian smoothing of both images' grid values before the image force, x the level's width
   /// (coarse levels see coarse features: a larger capture range).
@@ -100,7 +88,7 @@ struct DenseRegistrationOptions {
   double centre_spacing = 1.0;  ///< grid spacing of the field's centres, x the width
   double smoothing = 0.5;       ///< width of the Gaussian averaging the matches, x the width
   double ridge = 0.3;           ///< smoothing ridge of the fit, x the mean Gram diagonal
-  /// Relative residual of the fit's conjugate gradients (DenseFit::systems): a field is a step
+  /// Relative residual of the fit's conjugate gradients: a field is a step
   /// of a fraction of a voxel's worth of ball units, so 1e-6 of it is far below anything an
   /// iteration resolves (1e-6 and 1e-10 gave the same Dice and volumes at 213k tets; 1e-10
   /// takes 93 instead of about 55 Gram products at width 0.1).
@@ -118,14 +106,6 @@ struct DenseRegistrationOptions {
   /// on a volume-preserving configuration (docs/register.md, "Restore cycles"). 0: restore once
   /// at the end only.
   int restore_cycles = 0;
-  /// Fine steps after the others (image force only; needs the volume restoration): each a
-  /// displacement on the mesh itself (register/fine_step.hpp: the image's local systems at the
-  /// vertices with Gaussian width `fine_sigma`, smoothed by a membrane of weight
-  /// `fine_smoothness` on the edges), then the volume restoration; kept when it lowers the
-  /// image mismatch without a fold, and the steps end at the first that does not.
-  int fine_iterations = 0;
-  double fine_sigma = 0.03;      ///< ball units
-  double fine_smoothness = 4;    ///< membrane weight against the mean local system (trace 3)
   /// Move the landmarks back exactly onto their targets after the dense iterations.
   bool exact_landmarks = true;
   /// With an image force: the final volume restoration holds the image grid points across
@@ -171,7 +151,6 @@ struct DenseRegistrationResult {
   /// The image mismatch at the same three stages (-1: no image force).
   double mismatch_before = -1, mismatch_landmarks = -1, mismatch_after = -1;
   DenseForce force = DenseForce::labels;
-  DenseFit fit = DenseFit::systems;
   double landmark_rms_error = 0, landmark_max_error = 0;  ///< at the end (ball units)
   double max_normal_velocity = 0; ///< largest max |u . n| of all flows
   int inverted_tets = 0;          ///< at the end
@@ -181,7 +160,7 @@ struct DenseRegistrationResult {
 };
 /// {"landmark": to_json(RegistrationResult), "correction" (when run), "restore" (when run),
 ///  "iterations": [...], "regions", "agreement_before", "agreement_landmarks", "agreement_after",
-///  "force", "fit", "mismatch_before", "mismatch_landmarks", "mismatch_after" (with the image force),
+///  "force", "mismatch_before", "mismatch_landmarks", "mismatch_after" (with the image force),
 ///  "landmark_rms_error", "landmark_max_error", "max_normal_velocity", "inverted_tets",
 ///  "timings_s": {"landmark", "dense", "correction", "restore", "total"}}
 Json to_json(const DenseRegistrationResult& result);

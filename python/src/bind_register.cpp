@@ -1,13 +1,13 @@
 // vpm.register: landmarks or a template (region centroids or the moments' affine), dense.
 #include "common.hpp"
 #include "report.hpp"
-#include "vpm/collective.hpp"
 #include "vpm/dense_registration.hpp"
 #include "vpm/error.hpp"
 #include "vpm/image.hpp"
 #include "vpm/metrics.hpp"
 #include "vpm/registration.hpp"
 #include "vpm/registration_preset.hpp"
+#include "vpm/template_registration.hpp"
 #include "vpm/timing.hpp"
 
 namespace vpm::python {
@@ -39,41 +39,29 @@ Points landmark_points(const py::object& values, const TetMesh& mesh, const char
 
 struct Request {
   std::shared_ptr<TetMesh> mesh, templ;
-  Points landmarks, targets;
+  Points landmarks, targets;  // landmarks= and targets=; with template=, the pairs it made
   RegistrationOptions options;
-  DenseRegistrationOptions dense;
+  TemplateRegistrationOptions by_template;
   std::shared_ptr<Image> image, templ_image;
-  bool moments = false;
 };
 
-std::vector<int> labels_or_none(const Request& r, const TetMesh& mesh, const char* what) {
-  if (mesh.find_cell_field("label") || !r.moments) return cell_labels(mesh);
-  if (r.dense.force != DenseForce::image)
-    throw InputError(std::string(what) + ": no cell field 'label': dense_force '" + to_string(r.dense.force) +
-                     "' needs atlas labels on both meshes; use dense_force='image'");
-  return std::vector<int>(static_cast<size_t>(mesh.num_tets()), 0);
-}
-
-RegistrationResult run(const Request& r, Device& dev, Points& ball) {
-  if (r.dense.iterations == 0) return register_landmarks(dev, ball, r.mesh->tets, r.landmarks, r.targets, r.options);
-  if (!r.templ) throw InputError("dense_iterations: needs template=");
-  DenseImages images;
-  if (r.dense.force != DenseForce::labels) {
-    if (!r.image || !r.templ_image) throw InputError("dense_force: image and both need image= and template_image=");
-    images = {r.image.get(), native_positions(*r.mesh, "mesh"), r.templ_image.get(),
-              native_positions(*r.templ, "template")};
+RegistrationResult run(Request& r, Device& dev, Points& ball) {
+  if (!r.templ) {
+    if (r.by_template.dense.iterations > 0) throw InputError("dense_iterations: needs template=");
+    return register_landmarks(dev, ball, r.mesh->tets, r.landmarks, r.targets, r.options);
   }
-  const DenseRegistrationResult d =
-      register_dense(dev, {ball, r.mesh->tets, labels_or_none(r, *r.mesh, "mesh")},
-                     {r.templ->vertices, r.templ->tets, labels_or_none(r, *r.templ, "template")}, r.landmarks, r.targets,
-                     r.options, r.dense,
-                     r.dense.force == DenseForce::labels ? nullptr : &images);
-  RegistrationResult res = d.landmark;
-  res.landmark_rms_error = d.landmark_rms_error;
-  res.landmark_max_error = d.landmark_max_error;
-  res.max_normal_velocity = d.max_normal_velocity;
-  res.inverted_tets = d.inverted_tets;
-  return res;
+  r.by_template.flow = r.options;
+  try {
+    TemplateRegistration out = register_to_template(dev, *r.mesh, *r.templ, r.by_template,
+                                                    {r.image.get(), r.templ_image.get()});
+    ball = std::move(out.ball);
+    r.landmarks = std::move(out.landmarks);
+    return out.result;
+  } catch (const TemplateRegistrationError& e) {
+    using Mesh = TemplateRegistrationError::Mesh;
+    throw InputError(std::string(e.mesh == Mesh::subject ? "mesh" : e.mesh == Mesh::templ ? "template" : "mesh, template") +
+                     ": " + e.what());
+  }
 }
 
 // long: one keyword argument a line, as `vpm register`'s options
@@ -88,20 +76,14 @@ py::tuple register_py(const py::object& mesh, const py::object& landmarks, const
   Request r;
   r.mesh = mesh_argument(mesh, py::none());
   if (!templ.is_none()) r.templ = mesh_argument(templ, py::none());
-  if (template_landmarks != "regions" && template_landmarks != "moments")
-    throw InputError("template_landmarks: '" + template_landmarks + "' is not one of regions, moments");
-  r.moments = template_landmarks == "moments";
+  try {
+    r.by_template.landmarks = template_landmarks_from_string(template_landmarks);
+  } catch (const InputError& e) {
+    throw InputError(std::string("template_landmarks: ") + e.what());
+  }
   if (r.templ && (!landmarks.is_none() || !targets.is_none()))
     throw InputError("template= and landmarks=/targets= both given; use one");
-  if (r.templ && r.moments) {
-    const MomentLandmarks lm = moment_landmarks(*r.mesh, *r.templ);
-    r.landmarks = lm.source, r.targets = lm.target;
-  } else if (r.templ) {
-    const RegionLandmarks lm = region_landmarks(*r.mesh, *r.templ, exclude);
-    if (lm.labels.size() < 4)
-      throw InputError(std::to_string(lm.labels.size()) + " atlas regions in common (cell field 'label'); need at least 4");
-    r.landmarks = lm.source, r.targets = lm.target;
-  } else {
+  if (!r.templ) {
     if (landmarks.is_none() || targets.is_none()) throw InputError("landmarks= and targets= (or template=) needed");
     r.landmarks = landmark_points(landmarks, *r.mesh, "landmarks");
     r.targets = landmark_points(targets, *r.mesh, "targets");
@@ -115,14 +97,17 @@ py::tuple register_py(const py::object& mesh, const py::object& landmarks, const
   r.options.boundary = parse_registration_boundary(boundary);
   r.options.field = parse_registration_field(field);
   r.options.rigid = rigid, r.options.untangle = untangle, r.options.restore_volumes = restore;
-  if (preset) r.dense = with_preset(registration_preset_from_string(*preset));
-  if (dense_iterations) r.dense.iterations = *dense_iterations;
-  r.dense.force = dense_force_from_string(dense_force);
-  r.dense.exclude_labels = std::move(exclude);
+  DenseRegistrationOptions& dense = r.by_template.dense;
+  if (preset) dense = with_preset(registration_preset_from_string(*preset));
+  if (dense_iterations) dense.iterations = *dense_iterations;
+  dense.force = dense_force_from_string(dense_force);
+  r.by_template.exclude_labels = std::move(exclude);
+  if (dense.iterations > 0 && dense.force != DenseForce::labels && (!image || !template_image))
+    throw InputError("dense_force: image and both need image= and template_image=");
   r.image = std::move(image), r.templ_image = std::move(template_image);
-  r.dense.deadline = Deadline::in_seconds(max_seconds);  // 0: none
+  dense.deadline = Deadline::in_seconds(max_seconds);  // 0: none
   Progress p(std::move(progress));
-  r.dense.progress = p.function();
+  dense.progress = p.function();
   auto dev = device_for(device);
   auto report = std::make_unique<RegistrationReportPy>();
   auto out = without_gil(&p, [&] {
