@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """The foci of a finished cohort run re-drawn with other `vpm compare` settings, each scored
 against the planted truth as bench/cohort/evaluate.py scores the workflow's (issue 35;
-docs/cohort.md). The registered meshes and element tables are the run's own: only the
+bench/results/cohort_relative_extent/). The registered meshes and element tables are the run's own: only the
 comparison changes, so a setting costs seconds per patient instead of a workflow run.
 
 Every variant starts from the options of the run's own comparisons (a patient's sidecar, read as

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Leave-one-normal-out: how many false foci the comparison draws in subjects that have none
-(issue 35; docs/cohort.md, "Sharper elements, a relative extent, and false foci in normals").
+(issue 35; bench/results/cohort_sharper/).
 
 Each normal's element table is compared, with `vpm compare`, against the reference of all the
 other normals, with exactly the options (threshold, clusters, hysteresis, test, smoothing,

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """The planted-foci benchmark with a perfect registration: how much of what the element analysis
-misses is the registration's fault, and how much the statistics' (docs/cohort.md, "Oracle").
+misses is the registration's fault, and how much the statistics' (bench/results/cohort_oracle/).
 
 A synthetic subject (scripts/synth_cohort.py) is Colin27 read through a known deformation: its
 native point y shows Colin27's point pull(y) (sub-X_deformation.json). So the ideal registered

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """The planted foci found voxel by voxel with a perfect registration: the most a voxel-wise
 comparison can get out of a synthetic cohort (scripts/synth_cohort.py), whatever the alignment
-(docs/cohort.md, "Oracle").
+(bench/results/cohort_oracle/).
 
 Every subject's PET is read on Colin27's 2 mm grid through the inverse of its known deformation
 (sub-X_deformation.json: pull(y) is the template point of native y; the native point of a

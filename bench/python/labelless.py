@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""What registering a subject without atlas labels costs (issue 36; docs/cohort.md).
+"""What registering a subject without atlas labels costs (issue 36; bench/results/cohort_labelless/).
 
 Subjects from scripts/synth_cohort.py (Colin27 through known smooth deformations, their AAL
 labels known) are registered to Colin27 twice, on the same ball map:

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """A synthetic cohort's results folder, in the layout `vpm view` reads (docs/cohort.md), derived
 from a real small cohort's results: for timing the page with hundreds or thousands of subjects,
-which the real pipeline cannot run on a development machine (docs/view.md, "Measured").
+which the real pipeline cannot run on a development machine (docs/view.md, "Performance").
 
 What is real and what is not:
   * shapes: --shapes copies of the source's registered ball meshes, each native position moved by

@@ -5,10 +5,10 @@
 // gives, through each cluster's candidate count (FocusCluster::candidates), the false clusters
 // that every larger min_cluster would keep; the calibration is the smallest min_cluster whose
 // false clusters stay at or under a stated rate per 10 normals. `vpm calibrate` runs it and
-// `vpm compare --min-cluster-from` applies it (docs/cohort.md, "Calibrated cluster size").
+// `vpm compare --min-cluster-from` applies it (bench/results/cohort_calibration/).
 // Optionally the same pass sets the peak rule's level too (CompareOptions::peak: a cluster under
-// min_cluster is a focus when its peak is stronger than the normals' false ones; docs/cohort.md
-// "Calibrated peak").
+// min_cluster is a focus when its peak is stronger than the normals' false ones;
+// bench/results/cohort_peak/).
 #include <string>
 #include <vector>
 

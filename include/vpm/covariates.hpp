@@ -2,7 +2,7 @@
 // Subject covariates (age, sex, ...) for a normative reference (vpm/statistics.hpp): with them the
 // reference's expected value at each element is a linear model of the covariates fitted over the
 // normals, and a patient is compared with the value the model predicts for the patient's own
-// covariates (docs/cohort.md, "Covariates").
+// covariates (bench/results/cohort_covariates/).
 #include <map>
 #include <string>
 #include <vector>

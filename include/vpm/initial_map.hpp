@@ -80,7 +80,7 @@ struct InitialMapOptions {
   /// boundaries of at least kDeviceDensityVertices vertices, else host (place_work,
   /// vpm/placement.hpp):
   /// on CPU devices the kernels share the cores with the Poisson solver being built beside
-  /// them and lose inside `vpm map` (docs/volume_map.md, docs/gpu.md).
+  /// them and lose inside `vpm map` (bench/results/volume_map_10m_cpu_again/).
   using DensitySolve = ExecutionPlace;
   DensitySolve density_solve = DensitySolve::automatic;
   int density_max_steps = 300;

@@ -34,7 +34,8 @@ enum class PlacedWork {
 const char* to_string(PlacedWork w);
 
 /// Boundaries of at least this many vertices have their equal-area steps solved on a GPU under
-/// ExecutionPlace::automatic (at 32k vertices the host and the CPU device tie; docs/gpu.md).
+/// ExecutionPlace::automatic (at 32k vertices the host and the CPU device tie;
+/// bench/results/volume_map_10m_cpu_again/, bench/results/gpu_h200_19s/).
 inline constexpr long long kDeviceDensityVertices = 50'000;
 
 /// Where one part runs and the rule that put it there (one line, for reports).

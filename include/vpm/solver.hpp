@@ -48,7 +48,8 @@ inline constexpr long long kAutoAmgTets = 2'000'000;
 /// "jacobi" and "amg" as parse_preconditioner; "auto": AMG on CPU devices (the host and OpenCL
 /// CPU devices) from kAutoAmgTets tets on, Jacobi below and on GPUs: on CPUs AMG's fewer
 /// iterations win on large meshes for some more memory, on a GPU Jacobi-CG iterations cost
-/// microseconds while AMG's value update runs on the host (measurements: docs/solver.md).
+/// microseconds while AMG's value update runs on the host (measurements:
+/// bench/results/solver_amg_auto/, bench/results/gpu_h200_19s/).
 Preconditioner choose_preconditioner(const std::string& name, const Device& device, long long tets);
 const char* to_string(Preconditioner p);
 

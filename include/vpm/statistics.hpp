@@ -53,7 +53,7 @@ struct Reference {
   int smoothing = 0;  ///< rings of smooth_over_elements applied to every subject's normalised feature
   /// Variance shrinkage across adjacent elements, in [0, 1]: each element's variance is
   /// (1 - shrinkage) s_e^2 + shrinkage * (the mean of s^2 over e and its adjacent elements), a
-  /// spread that few normals estimate more steadily (docs/cohort.md, "Shrunken spread").
+  /// spread that few normals estimate more steadily (bench/results/cohort_shrink/).
   double shrinkage = 0;
   int subjects = 0;
   std::vector<double> mean, std;  ///< per element (sample standard deviation, n - 1); NaN without data
@@ -70,7 +70,7 @@ struct Reference {
   /// none): each element's model gains the normals' own value of that feature there (normalised
   /// and smoothed as `feature`), so that what the structure explains (a residual misalignment
   /// of grey matter, partial volumes) is not read as a loss of function; the patient is compared
-  /// with the value its own structure predicts (docs/cohort.md, "Image covariate").
+  /// with the value its own structure predicts (bench/results/cohort_image_covariate/).
   std::string image_covariate;
   std::vector<double> image_covariate_centre;  ///< per element: the normals' mean of image_covariate
   /// per element q = p + 1 (+ 1 with an image covariate): the value at the centre, then the
@@ -116,8 +116,8 @@ struct CompareOptions {
   /// hysteresis' fixed |z| level draws a strong focus too large (a blurred ball of peak z 10 at
   /// 1.45x its volume). Only trims: every element stays at or above the hysteresis level, and
   /// which foci are found (and their candidates) does not change. A blurred ball's edge lies at
-  /// 0.38-0.49 of its peak; 0.3 drew the best Dice on the synthetic cohorts (docs/cohort.md
-  /// "Relative extent"). 0: off.
+  /// 0.38-0.49 of its peak; 0.3 drew the best Dice on the synthetic cohorts
+  /// (bench/results/cohort_relative_extent/). 0: off.
   double relative_extent = 0;
   /// > 0: a cluster with fewer than min_cluster candidates is a focus too when its peak |z|
   /// reaches this (small but strong losses: peak or extent, as SPM reports both)

@@ -88,7 +88,7 @@ if want extra; then
 fi
 # step `pairs`: the registration benchmark's pair (seed 1, volume-preserving, 10 degrees) through
 # `vpm demo`, once per setting of DEMO_CONFIGS ("VERTICES[:OPTIONS];..."), mesh + map + register
-# timed by the demo's report (docs/register.md, issue 38)
+# timed by the demo's report (bench/results/register_faster_dense/)
 if want pairs; then
   IFS=';' read -ra CONFIGS <<< "${DEMO_CONFIGS:-5200;45000;45000:--dense-widths 0.3,0.2,0.14,0.1 --dense-iterations 32 --dense-restore-cycles 2}"
   k=0
