@@ -5,7 +5,7 @@
 //                         [--area-correction] [--scale S] [MESH ...]
 //
 // Prints one table row per shape (median over R runs of each stage) and writes JSON
-// (default bench/results/initial_map.json). The paper's harmonic start had 32.3 % volume
+// (default <build>/bench-results/initial_map.json). The paper's harmonic start had 32.3 % volume
 // distortion (vertex mean |r-1|) on its 26k-tet brain.
 #include <algorithm>
 #include <cstdio>
@@ -100,7 +100,7 @@ Json bench_shape(Device& dev, const std::string& name, const TetMesh& mesh, cons
 int main(int argc, char** argv) {
   int runs = 3;
   double scale = 1.0;
-  std::string out = "bench/results/initial_map.json";
+  std::string out = VPM_BENCH_OUT "/initial_map.json";
   InitialMapOptions opt;
   std::vector<std::string> paths;
   std::string only;  // run only shapes whose name contains this

@@ -1,6 +1,6 @@
 // Benchmark: mesh the Colin27 brain (Debian mricron-data) at the paper's size and, with
 // --large, at about 1M tets; AAL labels; prints sizes, per-stage times, smallest dihedral
-// angle and label volumes vs voxel counts; writes bench/results/mesh_image.json.
+// angle and label volumes vs voxel counts; writes <build>/bench-results/mesh_image.json
 //
 //   vpm_bench_mesh_image [--runs R] [--large] [--only-large] [--image PATH] [--labels PATH]
 //                        [--target-vertices N] [--max-volume V] [--out JSON]
@@ -91,7 +91,7 @@ int main(int argc, char** argv) {
   int runs = 3;
   bool large = false, only_large = false;
   std::string image = std::string(kDir) + "ch2bet.nii.gz", labels = std::string(kDir) + "aal.nii.gz";
-  std::string out_path = std::string(VPM_SOURCE_DIR) + "/bench/results/mesh_image.json";
+  std::string out_path = VPM_BENCH_OUT "/mesh_image.json";
   vpm::MeshImageOptions paper;
   double large_volume = 3.4;  // mm^3: about 1.1M tets on Colin27
   for (int i = 1; i < argc; ++i) {
@@ -131,6 +131,7 @@ int main(int argc, char** argv) {
     result["large"] = run_case("large (--max-volume " + std::to_string(large_volume) + ")", img,
                                have_atlas ? &atlas : nullptr, o, std::max(1, runs / 3));
   }
+  std::filesystem::create_directories(std::filesystem::path(out_path).parent_path());
   vpm::write_json_file(out_path, result);
   std::printf("\nwrote %s\n", out_path.c_str());
   return 0;

@@ -9,7 +9,7 @@
 //   vpm_bench_paper [--seeds N] [--amplitude F] [--target-vertices V] [--data DIR] [--out FILE]
 //
 // Defaults: 5 seeds, amplitude 1 (F scales the flow), 5200 vertices (the paper's size),
-// bench/results/paper/table1.json.
+// <build>/bench-results/paper/table1.json.
 // Tables 2 and Fig. 3 come from bench/paper/run.sh (docs/paper.md).
 #include <algorithm>
 #include <cmath>
@@ -122,7 +122,7 @@ Json log_histogram(const Eigen::VectorXd& r) {
 struct Settings {
   int seeds = 5, target_vertices = 5200;
   double amplitude = 1;  // scales the flow (1: each term peaks at 3-6 % of R)
-  std::string data = "/usr/share/mricron/templates", out = "bench/results/paper/table1.json";
+  std::string data = "/usr/share/mricron/templates", out = VPM_BENCH_OUT "/paper/table1.json";
 };
 
 Json stats_json(const MapMetrics& m) {

@@ -185,7 +185,7 @@ std::vector<Case> make_cases(bool quick, int runs, int large) {
 int main(int argc, char** argv) {
   bool quick = false;
   int runs = 3, large = 55;
-  std::string out = "bench/results/register.json";
+  std::string out = VPM_BENCH_OUT "/register.json";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--quick") quick = true;

@@ -262,7 +262,7 @@ vpm::Json bench_mesh(vpm::Device& dev, const NamedMesh& named, int runs, const s
 
 int run(int argc, char** argv) {
   int runs = 3;
-  std::string out_dir = "bench/results";
+  std::string out_dir = VPM_BENCH_OUT;
   std::vector<std::string> paths;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--runs") && i + 1 < argc) runs = std::max(1, std::atoi(argv[++i]));

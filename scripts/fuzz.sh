@@ -28,9 +28,8 @@ FUZZ_MAX_LEN=${FUZZ_MAX_LEN:-16384}
 all=$(sed -n 's/^set(VPM_FUZZ_TARGETS \(.*\))$/\1/p' fuzz/CMakeLists.txt)
 FUZZ_TARGETS=${FUZZ_TARGETS:-$all}
 if [[ "${FUZZ_NO_BUILD:-}" != 1 ]]; then
-  cmake -S . -B "$SAN_DIR" -DCMAKE_CXX_COMPILER=clang++-14 -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" -DVPM_SANITIZE=ON -DVPM_BUILD_FUZZ=ON -DVPM_BUILD_TESTS=ON \
-    -DVPM_BUILD_BENCH=OFF >/dev/null
+  source scripts/sanitizers/configure.sh
+  san_configure
   # shellcheck disable=SC2086
   cmake --build "$SAN_DIR" -j"${JOBS:-2}" --target fuzz_seeds $(printf 'fuzz_%s ' $FUZZ_TARGETS)
 fi

@@ -11,16 +11,18 @@
 #                analysis' tables, the page writer, the limits and faults, the small numerics, the
 #                fuzz replays: about 4 minutes of tests under ASan) and only the targets it needs;
 #                default: the whole suite (about 60 CPU-minutes of tests, docs/robustness.md)
+#                (built without CGAL and TetGen: those tests do not mesh images)
+#   SAN_PHASE    "build" or "test": only that half (scripts/test.sh builds beside the normal
+#                build and tests, then tests); default both
 #   SAN_DIR      the build folder (default build-san); extra arguments go to cmake
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SAN_DIR=${SAN_DIR:-build-san}
-# -O1: ASan's recommended level; line tables only (a report's stack names functions, files and
-# lines; full debug information costs a quarter more compile time); no NDEBUG, so Eigen's bounds
-# assertions are on.
-cmake -S . -B "$SAN_DIR" -DCMAKE_CXX_COMPILER=clang++-14 -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" -DVPM_SANITIZE=ON -DVPM_BUILD_FUZZ=ON -DVPM_BUILD_TESTS=ON \
-  -DVPM_BUILD_BENCH=OFF "$@" >/dev/null
+SAN_PHASE=${SAN_PHASE:-all}
+source scripts/sanitizers/configure.sh
+meshing=ON  # CGAL and TetGen: the CI suite does not mesh images
+[[ "${SAN_SUITE:-}" != ci ]] || meshing=OFF
+[[ $SAN_PHASE == test ]] || san_configure -DVPM_WITH_CGAL=$meshing -DVPM_WITH_TETGEN=$meshing "$@"
 targets=()
 if [[ "${SAN_SUITE:-}" == ci ]]; then
   ci_tests=(test_io test_io_vtk_binary test_json test_image_mgh test_limits test_faults test_progress
@@ -32,7 +34,8 @@ if [[ "${SAN_SUITE:-}" == ci ]]; then
            $(printf 'fuzz_%s ' $fuzz_targets))
   SAN_TESTS=${SAN_TESTS:-"^($(IFS='|'; echo "${ci_tests[*]}")|fuzz):"}
 fi
-cmake --build "$SAN_DIR" -j"${JOBS:-2}" "${targets[@]}"
+if [[ $SAN_PHASE != test ]]; then cmake --build "$SAN_DIR" -j"${JOBS:-2}" "${targets[@]}"; fi
+[[ $SAN_PHASE != build ]] || exit 0
 source scripts/sanitizers/env.sh
 export POCL_CACHE_DIR="$PWD/$SAN_DIR/pocl-cache"
 mkdir -p "$POCL_CACHE_DIR"

@@ -3,7 +3,7 @@
 # from its lockfile). Idempotent, non-interactive.
 set -euo pipefail
 PKGS=(
-  cmake g++ make pkg-config git python3
+  cmake g++ make ninja-build pkg-config git python3  # ninja: the sanitizer tree builds its targets in parallel
   pocl-opencl-icd ocl-icd-opencl-dev opencl-headers opencl-clhpp-headers clinfo
   libeigen3-dev libboost-dev catch2
   libtet1.5-dev tetgen libnifti2-dev zlib1g-dev mricron-data

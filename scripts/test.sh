@@ -8,7 +8,25 @@ phase() { echo "test.sh: $1 took $((SECONDS - phase_start)) s"; phase_start=$SEC
 bash scripts/setup.sh
 BUILD_DIR=${BUILD_DIR:-build}
 export BUILD_DIR
-bash scripts/build.sh -DVPM_BUILD_TESTS=ON
+# In CI (or with SANITIZE=1): the quick part of the test suite again under ASan + UBSan, then a
+# short fuzz pass over every reader in the same clang build (docs/robustness.md "Sanitizers" and
+# "Fuzzing"); SANITIZE=full runs the whole suite under them (about an hour on 2 cores).
+sanitize=false
+if [[ "${SANITIZE:-${CI:-}}" == "true" || "${SANITIZE:-}" == "1" || "${SANITIZE:-}" == full ]]; then sanitize=true; fi
+san_suite=ci
+[[ "${SANITIZE:-}" != full ]] || san_suite=
+san_pid=
+if $sanitize; then
+  # The sanitizer tree builds beside the normal build and its tests at the lowest priority: it
+  # takes only the cores they leave idle (link steps, single-threaded tests, a test's waits).
+  mkdir -p "${SAN_DIR:-build-san}"
+  SAN_SUITE=$san_suite SAN_PHASE=build setsid nice -n 19 bash scripts/sanitize.sh > "${SAN_DIR:-build-san}/build.log" 2>&1 &
+  san_pid=$!
+  trap '[[ -z $san_pid ]] || kill -- "-$san_pid" 2>/dev/null || true' EXIT  # its own process group
+fi
+# The benchmarks are not built here (scripts/build.sh builds them by default, and so does
+# scripts/gpu/bundle.sh).
+bash scripts/build.sh -DVPM_BUILD_TESTS=ON -DVPM_BUILD_BENCH=${VPM_BUILD_BENCH:-OFF}
 phase "set-up and build"
 export POCL_CACHE_DIR="$PWD/$BUILD_DIR/pocl-cache"
 mkdir -p "$POCL_CACHE_DIR"
@@ -19,12 +37,14 @@ if [[ "${CI:-}" == "true" ]]; then
 fi
 (cd "$BUILD_DIR" && ctest --output-on-failure -j"${JOBS:-2}" --timeout 900)
 phase "the test suite"
-# In CI (or with SANITIZE=1): the quick part of the test suite again under ASan + UBSan, then a
-# short fuzz pass over every reader in the same clang build (docs/robustness.md "Sanitizers" and
-# "Fuzzing"); SANITIZE=full runs the whole suite under them (about an hour on 2 cores).
-if [[ "${SANITIZE:-${CI:-}}" == "true" || "${SANITIZE:-}" == "1" || "${SANITIZE:-}" == full ]]; then
-  if [[ "${SANITIZE:-}" == full ]]; then bash scripts/sanitize.sh; else SAN_SUITE=ci bash scripts/sanitize.sh; fi
-  phase "the sanitizer build and its tests"
+if $sanitize; then
+  rc=0
+  wait "$san_pid" || rc=$?
+  san_pid=
+  if [[ $rc -ne 0 ]]; then tail -40 "${SAN_DIR:-build-san}/build.log"; echo "test.sh: the sanitizer build failed" >&2; exit 1; fi
+  phase "the rest of the sanitizer build (beside the others until then)"
+  SAN_SUITE=$san_suite SAN_PHASE=test bash scripts/sanitize.sh
+  phase "the sanitizer tests"
   FUZZ_NO_BUILD=1 FUZZ_SECONDS=${FUZZ_SECONDS:-10} bash scripts/fuzz.sh
   phase "the fuzz pass"
 fi
