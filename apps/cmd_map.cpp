@@ -32,13 +32,12 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   if (!(vo.tolerance >= 0)) throw vpm::InputError("option --tolerance: must be >= 0");
   vo.method = vpm::cli::parse_option("--method", [&] { return vpm::parse_volume_map_method(args.get("--method", "moser")); });
   vo.boundary = vpm::cli::parse_option("--boundary", [&] { return vpm::parse_map_boundary(args.get("--boundary", "auto")); });
-  vo.solver = args.get("--solver", "cg");
-  if (vo.solver != "cg" && vo.solver != "paper")
-    throw vpm::InputError("option --solver: '" + vo.solver + "' is not one of cg, paper");
-  vo.preconditioner = vpm::cli::parse_option("--preconditioner", [&] {
-    const std::string p = args.get("--preconditioner", "auto");
-    return p == "auto" ? p : std::string(vpm::to_string(vpm::parse_preconditioner(p)));
-  });
+  const std::string solver = args.get("--solver", "cg");
+  if (solver != "cg" && solver != "paper")
+    throw vpm::InputError("option --solver: '" + solver + "' is not one of cg, paper");
+  vo.solver = vpm::parse_solver_method(solver);
+  vo.preconditioner = vpm::cli::parse_option(
+      "--preconditioner", [&] { return vpm::parse_preconditioner_choice(args.get("--preconditioner", "auto")); });
   vo.rk_steps = args.get_int("--rk-steps", vo.rk_steps);
   if (vo.rk_steps < 1) throw vpm::InputError("option --rk-steps: must be >= 1");
   vo.progress = [](const std::string& line) { vpm::cli::progress(line); };
@@ -89,7 +88,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   return vpm::cli::convergence_status("map", bm.convergence, args.has("--allow-partial"));
 }
 
-vpm::cli::Registrar reg({"map", "MESH -o OUT", "map a tet mesh to the unit ball, preserving local volumes",
+vpm::cli::Registrar reg(vpm::cli::with_expert({"map", "MESH -o OUT", "map a tet mesh to the unit ball, preserving local volumes",
                          {{"--rounds", "R", "Moser rounds (default: until --tolerance, at most 8; 0: the initial map only)"},
                           {"--tolerance", "T", "stop at this vertex mean |r-1| (default 0.01); missing it warns, by over 2x exits 4"},
                           {"--allow-partial", "", "exit 0 even when the map misses --tolerance by over 2x (the warning stays)"},
@@ -103,5 +102,7 @@ vpm::cli::Registrar reg({"map", "MESH -o OUT", "map a tet mesh to the unit ball,
                           {"--rk-steps", "N", "RK4 steps per Moser round (default " + std::to_string(vpm::VolumeMapOptions{}.rk_steps) + ")"},
                           {"--max-seconds", "S", "time budget: the rounds stop when it is spent and the map reached is written (exit 4)"},
                           {"--report", "REPORT.json", "write the report (metrics, rounds, timings)"}},
-                         run});
+                         run},
+    // the peers (paper, vsem; the paper's solver) and the solvers' knobs: for comparison and benchmarks
+    {"--method", "--solver", "--preconditioner", "--rk-steps", "--sphere-start", "--sphere-solve"}));
 }  // namespace

@@ -24,10 +24,17 @@ using namespace vpm;
 // Landmark error (ball units, about 0.07 mm in a brain) above which the registration warns.
 constexpr double kLandmarkTolerance = 5e-4;
 
+// The flag of a RegistrationOptions member a RegistrationInputError names.
+std::string cli_flag(const std::string& option) {
+  if (option == "steps") return "--rk-steps";
+  if (option == "boundary") return "--flow-boundary";
+  return "--" + option;
+}
+
 RegistrationOptions parse_options(const cli::Args& args) {
   RegistrationOptions opt;
-  opt.steps = args.get_int("--steps", opt.steps);
-  if (opt.steps < 1 || opt.steps > 100000) throw InputError("--steps: expected 1 to 100000");
+  opt.steps = args.get_int("--rk-steps", opt.steps);
+  if (opt.steps < 1 || opt.steps > 100000) throw InputError("--rk-steps: expected 1 to 100000");
   if (args.has("--width") && args.has("--lambda")) throw InputError("--width and --lambda both given; use one");
   if (args.has("--width")) {
     const double w = args.get_double("--width", 0);
@@ -42,13 +49,13 @@ RegistrationOptions parse_options(const cli::Args& args) {
   if (!(opt.width_factor > 0)) throw InputError("--width-factor: must be positive");
   opt.width_loo = args.has("--width-loo");
   try {
-    opt.boundary = parse_registration_boundary(args.get("--boundary", "tangent"));
+    opt.boundary = parse_registration_boundary(args.get("--flow-boundary", "tangent"));
     opt.field = parse_registration_field(args.get("--field", "per-step"));
   } catch (const RegistrationInputError& e) {
-    throw InputError("--" + e.option + ": " + e.problem);
+    throw InputError(cli_flag(e.option) + ": " + e.problem);
   }
-  opt.boundary_samples = args.get_int("--boundary-samples", opt.boundary_samples);
-  if (opt.boundary_samples < 1) throw InputError("--boundary-samples: must be positive");
+  opt.boundary_samples = args.get_int("--flow-boundary-samples", opt.boundary_samples);
+  if (opt.boundary_samples < 1) throw InputError("--flow-boundary-samples: must be positive");
   opt.rigid = !args.has("--no-rigid");
   opt.untangle = !args.has("--no-untangle");
   opt.restore_volumes = !args.has("--no-restore");
@@ -185,7 +192,7 @@ RegistrationResult register_mapped(Device& dev, Inputs& io, Points& ball, const 
     if (e.subject == Subject::Landmark && e.landmark >= 0 && i < io.landmarks.lines.size())
       throw InputError(io.src + ":" + std::to_string(io.landmarks.lines[i]) + " / " + io.dst + ":" +
                        std::to_string(io.targets.lines[i]) + ": " + e.what());
-    if (e.subject == Subject::Option) throw InputError("--" + e.option + ": " + e.problem);
+    if (e.subject == Subject::Option) throw InputError(cli_flag(e.option) + ": " + e.problem);
     throw InputError(io.src + ", " + io.dst + ": " + e.what());
   }
 }
@@ -274,14 +281,14 @@ vpm::cli::Registrar reg(cli::with_expert(cli::with_dense_options(
       {"--preset", "landmarks|standard|accurate", "with --template: the dense settings by name: landmarks (none; the default), standard (12 iterations), accurate (32 iterations to width 0.1, 2 restore cycles); --dense-* flags override it"},
       {"--image", "SUBJECT.nii.gz", "with --template: MAPPED's image in its native space (for --dense-force image|both)"},
       {"--template-image", "TEMPLATE.nii.gz", "the template's image in its native space (with --image)"},
-      {"--steps", "K", "pathline samples and RK4 steps (default 50)"},
+      {"--rk-steps", "K", "pathline samples and RK4 steps of the landmarks' flow (default 50)"},
       {"--report", "R.json", "write the report (landmark errors, metrics, timings)"},
       {"--width", "W", "Gaussian width of the RBF kernel in ball units", false, 1},
       {"--lambda", "L", "kernel exponent lambda = 1 / width^2", false, 1},
       {"--width-factor", "F", "width = F x the mean nearest-neighbour spacing of the landmarks (default 0.5)", false, 1},
       {"--width-loo", "", "choose the width factor by leave-one-out", false, 1},
-      {"--boundary", "tangent|samples|none", "sphere-tangent kernel (default), eq. 29 samples, or none"},
-      {"--boundary-samples", "N", "sphere samples for --boundary samples (default 200)", false, 0, true},
+      {"--flow-boundary", "tangent|samples|none", "how the flow keeps the sphere: a sphere-tangent kernel (default), eq. 29 samples, or not at all"},
+      {"--flow-boundary-samples", "N", "sphere samples for --flow-boundary samples (default 200)", false, 0, true},
       {"--field", "per-step|steady", "a field per RK4 stage (default) or the paper's steady field"},
       {"--no-rigid", "", "skip the rotation step"},
       {"--no-untangle", "", "skip local untangling (folded results exit 3)"},
@@ -293,6 +300,6 @@ vpm::cli::Registrar reg(cli::with_expert(cli::with_dense_options(
       {"--max-seconds", "S", "time budget: the dense iterations stop when it is spent (the landmarks and volumes are still restored; exit 4)"},
       {"--allow-partial", "", "exit 0 even when a landmark misses its target by over 1e-3 or the time budget stopped the iterations (the warning stays)"}},
      run}, "--preset", 0),
-    {"--steps", "--width", "--lambda", "--width-factor", "--width-loo", "--boundary", "--boundary-samples", "--field",
+    {"--rk-steps", "--width", "--lambda", "--width-factor", "--width-loo", "--flow-boundary", "--flow-boundary-samples", "--field",
      "--no-rigid", "--no-untangle", "--no-restore", "--restore-iterations", "--restore-rounds", "--restore-min-gain"}));
 }  // namespace

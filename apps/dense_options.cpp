@@ -58,8 +58,8 @@ DenseRegistrationOptions dense_options(const Args& args, DenseRegistrationOption
   if (o.restore_cycles < 0 || o.restore_cycles > 100) throw InputError("--dense-restore-cycles: expected 0 to 100");
   o.fit_tolerance = args.get_double("--dense-fit-tolerance", o.fit_tolerance);
   if (!(o.fit_tolerance >= 1e-14 && o.fit_tolerance <= 0.1)) throw InputError("--dense-fit-tolerance: expected 1e-14 to 0.1");
-  o.advect_steps = args.get_int("--dense-advect-steps", o.advect_steps);
-  if (o.advect_steps < 1 || o.advect_steps > 64) throw InputError("--dense-advect-steps: expected 1 to 64");
+  o.advect_steps = args.get_int("--dense-rk-steps", o.advect_steps);
+  if (o.advect_steps < 1 || o.advect_steps > 64) throw InputError("--dense-rk-steps: expected 1 to 64");
   o.image_smoothing = args.get_double("--dense-image-smoothing", o.image_smoothing);
   if (!(o.image_smoothing >= 0 && o.image_smoothing <= 2))
     throw InputError("--dense-image-smoothing: expected 0 to 2 (x the level's width)");
@@ -107,7 +107,7 @@ Command with_dense_options(Command command, const std::string& after, int defaul
                std::to_string(d.restore_cycles) + ")", false, 0, true, true},
           {"--dense-fit-tolerance", "T", "relative residual at which the fit's conjugate gradients stop (default " +
                                             format_sig(d.fit_tolerance, 6) + ")", false, 0, true, true},
-          {"--dense-advect-steps", "K", "RK4 steps that carry the vertices through each dense iteration's flow (default " +
+          {"--dense-rk-steps", "K", "RK4 steps that carry the vertices through each dense iteration's flow (default " +
                                            std::to_string(d.advect_steps) + ")", false, 0, true, true},
           {"--dense-image-grid", "N", "cells across the ball of the image force's grid (default " +
                                           std::to_string(d.image_grid) + ")", false, 0, true, true},

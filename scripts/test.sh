@@ -20,9 +20,14 @@ if $sanitize; then
   # The sanitizer tree builds beside the normal build and its tests at the lowest priority: it
   # takes only the cores they leave idle (link steps, single-threaded tests, a test's waits).
   mkdir -p "${SAN_DIR:-build-san}"
-  SAN_SUITE=$san_suite SAN_PHASE=build setsid nice -n 19 bash scripts/sanitize.sh > "${SAN_DIR:-build-san}/build.log" 2>&1 &
+  # It runs in a session of its own (setsid: one process group to stop on exit), which Linux
+  # schedules as a group of its own (autogroup) with an equal share whatever its processes' nice
+  # values: the group itself is niced first.
+  SAN_SUITE=$san_suite SAN_PHASE=build setsid bash -c \
+    'echo 19 2>/dev/null > /proc/self/autogroup || true; exec nice -n 19 bash scripts/sanitize.sh' \
+    > "${SAN_DIR:-build-san}/build.log" 2>&1 &
   san_pid=$!
-  trap '[[ -z $san_pid ]] || kill -- "-$san_pid" 2>/dev/null || true' EXIT  # its own process group
+  trap '[[ -z $san_pid ]] || kill -- "-$san_pid" 2>/dev/null || true' EXIT
 fi
 # The benchmarks are not built here (scripts/build.sh builds them by default, and so does
 # scripts/gpu/bundle.sh).

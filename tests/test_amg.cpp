@@ -201,13 +201,16 @@ TEST_CASE("preconditioner auto: AMG on CPU devices for large meshes, Jacobi belo
   for (auto& dev : test::devices()) {
     INFO(dev->name());
     const bool cpu = dev->is_host() || dev->description().kind == DeviceKind::cpu;
-    CHECK(choose_preconditioner("auto", *dev, 1000) == Preconditioner::jacobi);
-    CHECK(choose_preconditioner("auto", *dev, kAutoAmgTets - 1) == Preconditioner::jacobi);
-    CHECK(choose_preconditioner("auto", *dev, kAutoAmgTets) == (cpu ? Preconditioner::amg : Preconditioner::jacobi));
+    const auto automatic = PreconditionerChoice::automatic;
+    CHECK(choose_preconditioner(automatic, *dev, 1000) == Preconditioner::jacobi);
+    CHECK(choose_preconditioner(automatic, *dev, kAutoAmgTets - 1) == Preconditioner::jacobi);
+    CHECK(choose_preconditioner(automatic, *dev, kAutoAmgTets) == (cpu ? Preconditioner::amg : Preconditioner::jacobi));
     // explicit names are kept whatever the size and device
-    CHECK(choose_preconditioner("jacobi", *dev, 10 * kAutoAmgTets) == Preconditioner::jacobi);
-    CHECK(choose_preconditioner("amg", *dev, 10) == Preconditioner::amg);
-    CHECK_THROWS_AS(choose_preconditioner("ilu", *dev, 10), InputError);
+    CHECK(choose_preconditioner(PreconditionerChoice::jacobi, *dev, 10 * kAutoAmgTets) == Preconditioner::jacobi);
+    CHECK(choose_preconditioner(PreconditionerChoice::amg, *dev, 10) == Preconditioner::amg);
+    for (const char* word : {"auto", "jacobi", "amg"})
+      CHECK(std::string(to_string(parse_preconditioner_choice(word))) == word);
+    CHECK_THROWS_AS(parse_preconditioner_choice("ilu"), InputError);
   }
 }
 

@@ -35,8 +35,20 @@ Preconditioner parse_preconditioner(const std::string& name) {
   throw InputError("unknown preconditioner '" + name + "' (expected jacobi or amg)");
 }
 
-Preconditioner choose_preconditioner(const std::string& name, const Device& device, long long tets) {
-  if (name != "auto") return parse_preconditioner(name);
+PreconditionerChoice parse_preconditioner_choice(const std::string& name) {
+  if (name == "auto") return PreconditionerChoice::automatic;
+  if (name == "jacobi") return PreconditionerChoice::jacobi;
+  if (name == "amg") return PreconditionerChoice::amg;
+  throw InputError("unknown preconditioner '" + name + "' (expected auto, jacobi or amg)");
+}
+
+const char* to_string(PreconditionerChoice c) {
+  return c == PreconditionerChoice::automatic ? "auto" : c == PreconditionerChoice::amg ? "amg" : "jacobi";
+}
+
+Preconditioner choose_preconditioner(PreconditionerChoice choice, const Device& device, long long tets) {
+  if (choice == PreconditionerChoice::jacobi) return Preconditioner::jacobi;
+  if (choice == PreconditionerChoice::amg) return Preconditioner::amg;
   const bool cpu = device.is_host() || device.description().kind == DeviceKind::cpu;
   return cpu && tets >= kAutoAmgTets ? Preconditioner::amg : Preconditioner::jacobi;
 }

@@ -181,7 +181,7 @@ VolumeMapResult detail::map_volumes(Device& dev, const Points& reference, const 
   VolumeMapResult res;
   res.method = opt.method;
   res.slide = c.slide;
-  res.solver = opt.solver;
+  res.solver = to_string(opt.solver);
   res.preconditioner = to_string(c.solver->preconditioner());
   res.rk_steps = opt.rk_steps;
   res.device_advection = c.advector && c.advector->on_device();

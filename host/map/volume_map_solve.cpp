@@ -50,12 +50,11 @@ struct MapSolver::Impl {
   std::shared_ptr<PoissonSolver> poisson;
 };
 
-MapSolver::MapSolver(Device& device, int n, const Tets& tets, const std::string& method, double tol,
-                     const std::string& preconditioner, std::shared_ptr<PoissonSolver> reuse)
+MapSolver::MapSolver(Device& device, int n, const Tets& tets, SolverMethod method, double tol,
+                     PreconditionerChoice preconditioner, std::shared_ptr<PoissonSolver> reuse)
     : impl_(new Impl{device, n, tets, SolverOptions{}, nullptr}) {
-  if (method != "cg" && method != "paper")
-    throw InputError("--solver: '" + method + "' is not one of cg, paper");
-  impl_->options.method = parse_solver_method(method);
+  if (method == SolverMethod::bicgstab) throw InputError("volume map: the solver is cg or paper, not bicgstab");
+  impl_->options.method = method;
   impl_->options.relative_tolerance = tol;
   impl_->options.preconditioner = choose_preconditioner(preconditioner, device, tets.rows());
   impl_->options.neumann_tolerance = 1e-8;

@@ -32,12 +32,12 @@ Eigen::SparseMatrix<double> weighted_stiffness(const Points& x, const Tets& tets
 
 class MapSolver {
  public:
-  /// `method`: "cg" or "paper" (normal equations, BiCGSTAB). `tolerance`: relative residual.
-  /// `preconditioner` (of cg): "auto", "jacobi" or "amg" (vpm::choose_preconditioner resolves
-  /// "auto" for the device and the tet count). `reuse`: a PoissonSolver built on the same
-  /// tets and device to use for the Neumann solves (ignored otherwise; nullptr: one is built).
-  MapSolver(Device& device, int num_vertices, const Tets& tets, const std::string& method,
-            double tolerance, const std::string& preconditioner = "jacobi",
+  /// `method`: cg or paper (normal equations, BiCGSTAB; bicgstab is refused). `tolerance`:
+  /// relative residual. `preconditioner` (of cg; vpm::choose_preconditioner resolves automatic
+  /// for the device and the tet count). `reuse`: a PoissonSolver built on the same tets and
+  /// device to use for the Neumann solves (ignored otherwise; nullptr: one is built).
+  MapSolver(Device& device, int num_vertices, const Tets& tets, SolverMethod method, double tolerance,
+            PreconditionerChoice preconditioner = PreconditionerChoice::jacobi,
             std::shared_ptr<PoissonSolver> reuse = nullptr);
   ~MapSolver();
   /// The preconditioner the Neumann solves use (what "auto" resolved to).

@@ -40,6 +40,7 @@
 #include <vector>
 
 #include "vpm/placement.hpp"
+#include "vpm/solver.hpp"
 #include "vpm/json.hpp"
 #include "vpm/mesh.hpp"
 #include "vpm/metrics.hpp"
@@ -94,9 +95,9 @@ struct InitialMapOptions {
   enum class SphereStart { automatic, progressive };
   SphereStart sphere_start = SphereStart::automatic;
   // ---- step 3: harmonic interior
-  /// Preconditioner of the harmonic solve's CG: "auto", "jacobi" or "amg" (vpm/amg.hpp;
-  /// "auto": vpm::choose_preconditioner).
-  std::string preconditioner = "auto";
+  /// Preconditioner of the harmonic solve's CG: jacobi, amg (vpm/amg.hpp) or automatic
+  /// (vpm::choose_preconditioner).
+  PreconditionerChoice preconditioner = PreconditionerChoice::automatic;
   double solver_tolerance = 1e-10;   ///< relative residual when an iterative solver is used
   // ---- step 4: untangling
   enum class Untangle { Never, IfFolded, Always };

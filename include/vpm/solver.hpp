@@ -42,15 +42,21 @@ enum class Preconditioner {
 /// "jacobi", "amg" (InputError otherwise).
 Preconditioner parse_preconditioner(const std::string& name);
 
-/// Meshes from this many tets on get AMG from choose_preconditioner("auto") on CPU devices.
+/// What a caller asks for: one preconditioner, or the choice by device and mesh size.
+enum class PreconditionerChoice { automatic, jacobi, amg };
+/// "auto", "jacobi", "amg" (InputError otherwise), and back.
+PreconditionerChoice parse_preconditioner_choice(const std::string& name);
+const char* to_string(PreconditionerChoice choice);
+
+/// Meshes from this many tets on get AMG from PreconditionerChoice::automatic on CPU devices.
 inline constexpr long long kAutoAmgTets = 2'000'000;
-/// The preconditioner `name` stands for on `device` for the Laplacian of a mesh of `tets` tets:
-/// "jacobi" and "amg" as parse_preconditioner; "auto": AMG on CPU devices (the host and OpenCL
-/// CPU devices) from kAutoAmgTets tets on, Jacobi below and on GPUs: on CPUs AMG's fewer
-/// iterations win on large meshes for some more memory, on a GPU Jacobi-CG iterations cost
-/// microseconds while AMG's value update runs on the host (measurements:
-/// bench/results/solver_amg_auto/, bench/results/gpu_h200_19s/).
-Preconditioner choose_preconditioner(const std::string& name, const Device& device, long long tets);
+/// The preconditioner `choice` stands for on `device` for the Laplacian of a mesh of `tets`
+/// tets: jacobi and amg as named; automatic: AMG on CPU devices (the host and OpenCL CPU
+/// devices) from kAutoAmgTets tets on, Jacobi below and on GPUs: on CPUs AMG's fewer iterations
+/// win on large meshes for some more memory, on a GPU Jacobi-CG iterations cost microseconds
+/// while AMG's value update runs on the host (measurements: bench/results/solver_amg_auto/,
+/// bench/results/gpu_h200_19s/).
+Preconditioner choose_preconditioner(PreconditionerChoice choice, const Device& device, long long tets);
 const char* to_string(Preconditioner p);
 
 struct SolverOptions {

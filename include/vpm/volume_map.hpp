@@ -41,6 +41,7 @@
 #include <vector>
 
 #include "vpm/placement.hpp"
+#include "vpm/solver.hpp"
 #include "vpm/json.hpp"
 #include "vpm/mesh.hpp"
 #include "vpm/metrics.hpp"
@@ -82,12 +83,13 @@ struct VolumeMapOptions {
   /// Explicit steps K of the paper's loop (dt = 1/K).
   int paper_steps = 50;
   MapBoundary boundary = MapBoundary::automatic;
-  /// Linear solver: "cg" (Jacobi CG) or "paper" (BiCGSTAB on the normal equations).
-  std::string solver = "cg";
-  /// Preconditioner of "cg": "auto", "jacobi" or "amg" (smoothed aggregation, vpm/amg.hpp;
-  /// the hierarchy is built once and its values refreshed every solve); "auto": AMG on CPU
-  /// devices from 2M tets on, else Jacobi (vpm::choose_preconditioner).
-  std::string preconditioner = "auto";
+  /// Linear solver: cg (preconditioned CG) or paper (BiCGSTAB on the normal equations);
+  /// bicgstab is refused (InputError).
+  SolverMethod solver = SolverMethod::cg;
+  /// Preconditioner of cg: jacobi, amg (smoothed aggregation, vpm/amg.hpp; the hierarchy is
+  /// built once and its values refreshed every solve) or automatic: AMG on CPU devices from 2M
+  /// tets on, else Jacobi (vpm::choose_preconditioner).
+  PreconditionerChoice preconditioner = PreconditionerChoice::automatic;
   /// Relative residual of each linear solve.
   double solver_tolerance = 1e-8;
   /// Local untangling (theta 0.5, two rings, boundary fixed) of rounds that fold.

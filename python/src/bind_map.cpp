@@ -37,7 +37,7 @@ InitialMapOptions initial_options(const std::string& sphere, const std::string& 
   else if (untangle == "if-folded") o.untangle = InitialMapOptions::Untangle::IfFolded;
   else if (untangle == "always") o.untangle = InitialMapOptions::Untangle::Always;
   else throw InputError("untangle: '" + untangle + "' is not one of never, if-folded, always");
-  o.preconditioner = preconditioner == "auto" ? preconditioner : std::string(to_string(parse_preconditioner(preconditioner)));
+  o.preconditioner = parse_preconditioner_choice(preconditioner);
   o.split_edges = split;
   return o;
 }
@@ -95,7 +95,7 @@ void bind_map_to_ball(py::module_& m) {
         bo.volume.tolerance = tolerance;
         bo.volume.method = parse_volume_map_method(method);
         bo.volume.boundary = parse_map_boundary(boundary);
-        bo.volume.solver = solver;
+        bo.volume.solver = parse_solver_method(solver);
         bo.initial = initial_options(sphere, sphere_start, sphere_solve, "if-folded", preconditioner, true);
         bo.volume.preconditioner = bo.initial.preconditioner;
         bo.volume.rk_steps = rk_steps;

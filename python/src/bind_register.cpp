@@ -145,8 +145,8 @@ void bind_register(py::module_& m) {
         py::arg("exclude_labels") = std::vector<int>{}, py::arg("preset") = py::none(),
         py::arg("dense_iterations") = py::none(),
         py::arg("dense_force") = "labels", py::arg("image") = nullptr, py::arg("template_image") = nullptr,
-        py::arg("steps") = RegistrationOptions{}.steps, py::arg("width") = py::none(),
-        py::arg("width_factor") = RegistrationOptions{}.width_factor, py::arg("boundary") = "tangent",
+        py::arg("rk_steps") = RegistrationOptions{}.steps, py::arg("width") = py::none(),
+        py::arg("width_factor") = RegistrationOptions{}.width_factor, py::arg("flow_boundary") = "tangent",
         py::arg("field") = "per-step", py::arg("rigid") = true, py::arg("untangle") = true,
         py::arg("restore") = true, py::arg("max_seconds") = 0.0, py::arg("device") = py::none(),
         py::arg("progress") = py::none());

@@ -155,9 +155,10 @@ def map_to_ball(vertices: Union[Mesh, ArrayLike], tets: Optional[ArrayLike] = ..
 def register(mesh: Mesh, *, landmarks: Optional[ArrayLike] = ..., targets: Optional[ArrayLike] = ...,
              template: Optional[Mesh] = ..., image: Optional[ImageLike] = ..., template_image: Optional[ImageLike] = ...,
              template_landmarks: Literal["regions", "moments"] = ..., exclude_labels: Sequence[int] = ...,
-             dense_iterations: int = ..., dense_force: Literal["labels", "image", "both"] = ..., steps: int = ...,
-             width: Optional[float] = ..., width_factor: float = ...,
-             boundary: Literal["tangent", "samples", "none"] = ..., field: Literal["per-step", "steady"] = ...,
+             preset: Optional[Literal["landmarks", "standard", "accurate"]] = ...,
+             dense_iterations: Optional[int] = ..., dense_force: Literal["labels", "image", "both"] = ...,
+             rk_steps: int = ..., width: Optional[float] = ..., width_factor: float = ...,
+             flow_boundary: Literal["tangent", "samples", "none"] = ..., field: Literal["per-step", "steady"] = ...,
              rigid: bool = ..., untangle: bool = ..., restore: bool = ..., max_seconds: float = ...,
              device: Optional[str] = ..., progress: Progress = ...) -> tuple[Mesh, RegistrationReport]: ...
 def elements(level: int = ..., shells: int = ..., samples: int = ...,

@@ -36,7 +36,7 @@ def test_numerical_error(vpm, small_mesh):
     ids = rng.choice(inner, 10, replace=False)
     with pytest.raises(vpm.NumericalError, match="registration folded the mesh: [0-9]+ of [0-9]+ tets inverted"):
         vpm.register(out, landmarks=v[ids], targets=v[ids[rng.permutation(10)]], untangle=False, restore=False,
-                     rigid=False, steps=1, device="host")
+                     rigid=False, rk_steps=1, device="host")
 
 
 def test_bad_options_name_themselves(vpm, small_mesh):
