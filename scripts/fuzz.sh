@@ -6,7 +6,7 @@
 # coverage, features, corpus, findings). Exits 1 when a target crashed, hung, leaked or ran out
 # of memory; its input is in FUZZ_OUT/<target>/ (crash-*, timeout-*, leak-*, oom-*): fix the
 # reader, then keep the input in fuzz/regressions/<target>/ (ctest fuzz:replay:<target> replays it
-# in every build).
+# in every build with the tests and VPM_FUZZ_REPLAYS, the default).
 #   FUZZ_SECONDS  wall seconds per target (default 10)
 #   FUZZ_CPU_SECONDS  instead: CPU seconds per target (a campaign on a busy machine; FUZZ_SECONDS
 #                 then only caps the wall time, set it high)

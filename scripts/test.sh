@@ -30,8 +30,11 @@ if $sanitize; then
   trap '[[ -z $san_pid ]] || kill -- "-$san_pid" 2>/dev/null || true' EXIT
 fi
 # The benchmarks are not built here (scripts/build.sh builds them by default, and so does
-# scripts/gpu/bundle.sh).
-bash scripts/build.sh -DVPM_BUILD_TESTS=ON -DVPM_BUILD_BENCH=${VPM_BUILD_BENCH:-OFF}
+# scripts/gpu/bundle.sh). With the sanitizer suite, the fuzz replays run there only (the same
+# inputs, under ASan and UBSan).
+replays=ON
+if $sanitize; then replays=OFF; fi
+bash scripts/build.sh -DVPM_BUILD_TESTS=ON -DVPM_BUILD_BENCH=${VPM_BUILD_BENCH:-OFF} -DVPM_FUZZ_REPLAYS=$replays
 phase "set-up and build"
 export POCL_CACHE_DIR="$PWD/$BUILD_DIR/pocl-cache"
 mkdir -p "$POCL_CACHE_DIR"
@@ -50,6 +53,6 @@ if $sanitize; then
   phase "the rest of the sanitizer build (beside the others until then)"
   SAN_SUITE=$san_suite SAN_PHASE=test bash scripts/sanitize.sh
   phase "the sanitizer tests"
-  FUZZ_NO_BUILD=1 FUZZ_SECONDS=${FUZZ_SECONDS:-10} bash scripts/fuzz.sh
+  FUZZ_NO_BUILD=1 FUZZ_SECONDS=${FUZZ_SECONDS:-6} bash scripts/fuzz.sh
   phase "the fuzz pass"
 fi
