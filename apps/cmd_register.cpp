@@ -26,15 +26,14 @@ constexpr double kLandmarkTolerance = 5e-4;
 
 // The flag of a RegistrationOptions member a RegistrationInputError names.
 std::string cli_flag(const std::string& option) {
-  if (option == "steps") return "--rk-steps";
   if (option == "boundary") return "--flow-boundary";
   return "--" + option;
 }
 
 RegistrationOptions parse_options(const cli::Args& args) {
   RegistrationOptions opt;
-  opt.steps = args.get_int("--rk-steps", opt.steps);
-  if (opt.steps < 1 || opt.steps > 100000) throw InputError("--rk-steps: expected 1 to 100000");
+  opt.steps = args.get_int("--steps", opt.steps);
+  if (opt.steps < 1 || opt.steps > 100000) throw InputError("--steps: expected 1 to 100000");
   if (args.has("--width") && args.has("--lambda")) throw InputError("--width and --lambda both given; use one");
   if (args.has("--width")) {
     const double w = args.get_double("--width", 0);
@@ -281,7 +280,7 @@ vpm::cli::Registrar reg(cli::with_expert(cli::with_dense_options(
       {"--preset", "landmarks|standard|accurate", "with --template: the dense settings by name: landmarks (none; the default), standard (12 iterations), accurate (32 iterations to width 0.1, 2 restore cycles); --dense-* flags override it"},
       {"--image", "SUBJECT.nii.gz", "with --template: MAPPED's image in its native space (for --dense-force image|both)"},
       {"--template-image", "TEMPLATE.nii.gz", "the template's image in its native space (with --image)"},
-      {"--rk-steps", "K", "pathline samples and RK4 steps of the landmarks' flow (default 50)"},
+      {"--steps", "K", "pathline samples and RK4 steps of the landmarks' flow (default 50)"},
       {"--report", "R.json", "write the report (landmark errors, metrics, timings)"},
       {"--width", "W", "Gaussian width of the RBF kernel in ball units", false, 1},
       {"--lambda", "L", "kernel exponent lambda = 1 / width^2", false, 1},
@@ -300,6 +299,6 @@ vpm::cli::Registrar reg(cli::with_expert(cli::with_dense_options(
       {"--max-seconds", "S", "time budget: the dense iterations stop when it is spent (the landmarks and volumes are still restored; exit 4)"},
       {"--allow-partial", "", "exit 0 even when a landmark misses its target by over 1e-3 or the time budget stopped the iterations (the warning stays)"}},
      run}, "--preset", 0),
-    {"--rk-steps", "--width", "--lambda", "--width-factor", "--width-loo", "--flow-boundary", "--flow-boundary-samples", "--field",
+    {"--steps", "--width", "--lambda", "--width-factor", "--width-loo", "--flow-boundary", "--flow-boundary-samples", "--field",
      "--no-rigid", "--no-untangle", "--no-restore", "--restore-iterations", "--restore-rounds", "--restore-min-gain"}));
 }  // namespace

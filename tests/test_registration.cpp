@@ -327,7 +327,7 @@ TEST_CASE("vpm register: registers a mapped mesh, writes fields and the report")
   write_text(tmp("dst.csv"), "0.05,0.0,0.02\n0.35,0.25,0.1\n-0.42,0.05,0.25\n");
   std::filesystem::remove(out);
   const int rc = vpm_register(mesh + " -o " + out + " --landmarks " + tmp("src.csv") + " --targets " +
-                                  tmp("dst.csv") + " --rk-steps 20 --report " + report + " --quiet",
+                                  tmp("dst.csv") + " --steps 20 --report " + report + " --quiet",
                               tmp("err.txt"));
   INFO(slurp(tmp("err.txt")));
   REQUIRE(rc == 0);
@@ -371,7 +371,7 @@ TEST_CASE("vpm register --template: atlas-region centroids as landmarks, held-ou
     INFO(exclude);
     std::filesystem::remove(out);
     const int rc = vpm_register(tmp("tmpl_moving.vtu") + " -o " + out + " --template " + tmp("tmpl_fixed.vtu") +
-                                    exclude + " --rk-steps 10 --quiet --report " + report,
+                                    exclude + " --steps 10 --quiet --report " + report,
                                 tmp("tmpl_err.txt"));
     INFO(slurp(tmp("tmpl_err.txt")));
     REQUIRE(rc == 0);
@@ -417,15 +417,15 @@ TEST_CASE("vpm register: landmarks far from their targets after the flow warn an
   write_text(tmp("few_dst.csv"), "0.6,0.1,0.2\n-0.2,0.4,0.1\n0.3,-0.25,0.45\n0.2,0.1,-0.35\n");
   const std::string args = tmp("few_steps.vtu") + " -o " + tmp("few_out.vtu") + " --landmarks " + tmp("few_src.csv") +
                            " --targets " + tmp("few_dst.csv") + " --no-rigid --report " + tmp("few.json");
-  CHECK(vpm_register(args + " --rk-steps 1", tmp("few_err.txt")) == kExitNotConverged);
+  CHECK(vpm_register(args + " --steps 1", tmp("few_err.txt")) == kExitNotConverged);
   CHECK(slurp(tmp("few_err.txt")).find("warning: not converged: landmark max error") != std::string::npos);
   CHECK(std::filesystem::exists(tmp("few_out.vtu")));
   const Json j = Json::parse(slurp(tmp("few.json")));
   CHECK_FALSE(j.find("converged")->boolean());
   CHECK(j.find("landmark_max_error")->number() > 1e-3);
-  CHECK(vpm_register(args + " --rk-steps 1 --allow-partial", tmp("few_err.txt")) == 0);
+  CHECK(vpm_register(args + " --steps 1 --allow-partial", tmp("few_err.txt")) == 0);
   // enough steps: converged
-  CHECK(vpm_register(args + " --rk-steps 20", tmp("few_err.txt")) == 0);
+  CHECK(vpm_register(args + " --steps 20", tmp("few_err.txt")) == 0);
   CHECK(Json::parse(slurp(tmp("few.json"))).find("converged")->boolean());
 }
 
