@@ -63,7 +63,7 @@ Args::Args(std::vector<std::string> argv, const Command& command)
     : Args(std::move(argv), option_flags(command, true), option_flags(command, false)) {}
 
 std::string synopsis(const Command& c) {
-  std::string s = "vpm " + c.name;
+  std::string s = c.name.empty() ? c.program : c.program + " " + c.name;
   if (!c.operands.empty()) s += " " + c.operands;
   for (size_t i = 0; i < c.options.size(); ++i) {
     const OptionSpec& o = c.options[i];

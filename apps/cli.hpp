@@ -92,6 +92,7 @@ struct Command {
   std::string summary;   ///< one line for `vpm --help`
   std::vector<OptionSpec> options;
   int (*run)(const Command& self, const std::vector<std::string>& argv);
+  std::string program = "vpm";  ///< the program the synopsis names (a benchmark's own, with no NAME)
 };
 
 /// "vpm NAME OPERANDS [--flag VALUE] [--a A | --b B] ..." from the command's table.

@@ -2,7 +2,7 @@
 # bench/paper: the experiments of Hu, Zou & Hua 2014 (Tables 1 and 2, Fig. 3) on this machine.
 #   Table 1: build/bench/vpm_bench_paper (C++, the library directly: it deforms mesh vertices, which no
 #            `vpm` command does, and needs the initial and the volume-preserving map of each mesh).
-#   Table 2: `vpm demo --seed S --max-rotation 10` with --dense-iterations 0 (landmarks only) and
+#   Table 2: `vpm_bench_pairs --seed S --max-rotation 10` with --dense-iterations 0 (landmarks only) and
 #            12 (dense), seeds 0..SEEDS-1 (seed 0 without rotation: the demo's own subject).
 #   Fig. 4: bench/paper/fig4.py maps the demo's Colin27 mesh three times and renders a cut of each
 #            ball headlessly (bench/results/paper/fig4.png, fig4.json).
@@ -28,7 +28,7 @@ for ((seed = 0; seed < SEEDS; ++seed)); do
   for dense in 0 12; do
     dir="$WORK/seed${seed}_dense${dense}"
     rm -f "$OUT/table2/seed${seed}_dense${dense}.json" "$OUT/table2/seed${seed}_dense${dense}.failed"
-    if nice "$BUILD/vpm" demo --quiet --out "$dir" --seed "$seed" --max-rotation "$rot" --dense-iterations "$dense" \
+    if nice "$BUILD/bench/vpm_bench_pairs" --quiet --out "$dir" --seed "$seed" --max-rotation "$rot" --dense-iterations "$dense" \
       > "$dir.txt" 2>&1; then
       cp "$dir/demo.json" "$OUT/table2/seed${seed}_dense${dense}.json"
       echo "table 2: seed $seed, dense iterations $dense done"

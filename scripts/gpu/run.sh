@@ -87,8 +87,8 @@ if want extra; then
   log "extra done"; tail -3 "$W/demo_gpu.txt" | tee -a "$W/log.txt"; save
 fi
 # step `pairs`: the registration benchmark's pair (seed 1, volume-preserving, 10 degrees) through
-# `vpm demo`, once per setting of DEMO_CONFIGS ("VERTICES[:OPTIONS];..."), mesh + map + register
-# timed by the demo's report (bench/results/register_faster_dense/)
+# vpm_bench_pairs, once per setting of DEMO_CONFIGS ("VERTICES[:OPTIONS];..."), mesh + map + register
+# timed by its report (bench/results/register_faster_dense/)
 if want pairs; then
   IFS=';' read -ra CONFIGS <<< "${DEMO_CONFIGS:-5200;45000;45000:--dense-widths 0.3,0.2,0.14,0.1 --dense-iterations 32 --dense-restore-cycles 2}"
   k=0
@@ -96,7 +96,7 @@ if want pairs; then
     v=${c%%:*}; opts=""; [[ $c == *:* ]] && opts=${c#*:}
     log "demo pair seed 1, $v vertices $opts"
     # shellcheck disable=SC2086
-    VPM_DEVICE=$DEV timeout 200 build/vpm demo --out "/tmp/pair$k" --seed 1 --max-rotation 10 --incompressible \
+    VPM_DEVICE=$DEV timeout 200 build/bench/vpm_bench_pairs --out "/tmp/pair$k" --seed 1 --max-rotation 10 --incompressible \
       --target-vertices "$v" $opts > "$W/pair${k}_gpu.txt" 2>&1
     log "rc $?"; cp "/tmp/pair$k/demo.json" "$W/pair${k}_gpu.json" 2>/dev/null; save
     k=$((k + 1))

@@ -1,4 +1,5 @@
-#include "demo_ideal.hpp"
+// The ideal registration (ideal.hpp).
+#include "pairs/ideal.hpp"
 
 #include <algorithm>
 #include <vector>
@@ -8,7 +9,7 @@
 #include "vpm/locate.hpp"
 #include "vpm/topology.hpp"
 
-namespace vpm::cli {
+namespace vpm::bench {
 
 IdealRegistration ideal_registration(const TetMesh& subject, const TetMesh& tmpl,
                                      const std::function<Eigen::Vector3d(const Eigen::Vector3d&)>& pull) {
@@ -87,16 +88,6 @@ Json to_json(const IdealReport& r, const std::vector<int>& evaluated) {
   return j;
 }
 
-void write_registered(const std::string& path, const TetMesh& subject, const Points& registered,
-                      const MapMetrics& metrics, const IdealReport& report) {
-  TetMesh mesh = subject;
-  mesh.vertices = registered;
-  mesh.set_point_field("registration_vertex_volume_ratio", metrics.vertex_ratio);
-  mesh.set_cell_field("registration_tet_volume_ratio", metrics.tet_ratio);
-  mesh.set_point_field("error_to_ideal", report.error);
-  write_mesh(path, mesh);
-}
-
 std::string ideal_summary(const IdealReport& r) {
   std::string dice;
   for (const LabelOverlap& o : r.overlap.image_after) dice += (dice.empty() ? "" : " / ") + strprintf("%.3f", o.dice);
@@ -109,4 +100,4 @@ std::string ideal_summary(const IdealReport& r) {
          " ball units on average (p90 " + strprintf("%.4f", r.error_p90) + ")\n";
 }
 
-}  // namespace vpm::cli
+}  // namespace vpm::bench

@@ -1,6 +1,6 @@
 #pragma once
-// The demo's ideal registration: its subject is Colin27 read through a known deformation, so the
-// registration a perfect method would find is known too. Each subject vertex (native position
+// The ideal registration of the benchmark of registered pairs: the subject is Colin27 read
+// through a known deformation, so the registration a perfect method would find is known too. Each subject vertex (native position
 // y) goes where Colin27's ball map puts the Colin27 point it shows, pull(y); surface vertices
 // go radially onto the sphere. Its overlap is what the two meshes and maps allow, and the
 // distance of the actual registration to it is the registration's error. It is not a
@@ -12,13 +12,13 @@
 
 #include <Eigen/Core>
 
-#include "demo_overlap.hpp"
+#include "pairs/overlap.hpp"
 #include "vpm/device.hpp"
 #include "vpm/json.hpp"
 #include "vpm/mesh.hpp"
 #include "vpm/metrics.hpp"
 
-namespace vpm::cli {
+namespace vpm::bench {
 
 struct IdealRegistration {
   Points ball;        ///< the subject's vertices in the ball, ideally registered (n x 3)
@@ -41,7 +41,7 @@ struct IdealReport {
   Eigen::VectorXd error;  ///< per subject vertex
 };
 
-/// Builds the ideal registration and measures it: `overlap_of(ball)` is the demo's overlap of
+/// Builds the ideal registration and measures it: `overlap_of(ball)` is the benchmark's overlap of
 /// the subject registered to `ball`; `registered` the actual registration's vertices.
 IdealReport measure_ideal(Device& device, const TetMesh& subject, const TetMesh& tmpl, const Points& registered,
                           const std::function<Eigen::Vector3d(const Eigen::Vector3d&)>& pull,
@@ -51,12 +51,7 @@ IdealReport measure_ideal(Device& device, const TetMesh& subject, const TetMesh&
 ///  "tet_volume_ratio", "inverted_tets", "outside_vertices", "error_to_ideal": {"mean", "p90", "max"}}
 Json to_json(const IdealReport& report, const std::vector<int>& evaluated);
 
-/// Writes the registered subject (`subject` at `registered`) to `path` with the point field
-/// `error_to_ideal` (ball units) beside the registration's volume ratios.
-void write_registered(const std::string& path, const TetMesh& subject, const Points& registered,
-                      const MapMetrics& metrics, const IdealReport& report);
-
-/// Two summary lines for the demo's table.
+/// Two summary lines for the benchmark's table.
 std::string ideal_summary(const IdealReport& report);
 
-}  // namespace vpm::cli
+}  // namespace vpm::bench
