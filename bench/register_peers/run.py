@@ -1,11 +1,11 @@
 #!/usr/bin/python3
 """vpm's registration against elastix on the same synthetic pairs, scored the same way.
 
-Each pair is Colin27 and a copy deformed by `vpm demo --seed S --max-rotation DEG
+Each pair is Colin27 and a copy deformed by `vpm_bench_pairs --seed S --max-rotation DEG
 --incompressible` (a volume-preserving flow plus a rotation; seed 0 without --incompressible
 and rotation is the demo's own pair). For each pair:
 
-* vpm: `vpm demo` meshes and maps both brains, registers the subject to Colin27 (caudate and
+* vpm: `vpm_bench_pairs` (bench/pairs.cpp, `vpm demo`'s pipeline) meshes and maps both brains, registers the subject to Colin27 (caudate and
   thalamus held out of the landmarks and forces) and scores the registration; from its report
   this script takes the held-out Dice in the subject's image space (Colin27's atlas carried onto
   the subject's voxels through the maps) and in the ball, the registration's volume change
@@ -18,7 +18,7 @@ and rotation is the demo's own pair). For each pair:
   (the subject's own atlas against the carried one, per held-out label) and by mean |det J - 1|
   over the subject's brain (T1 > 0).
 
-usage: bench/register_peers/run.py [--vpm build/vpm] [--seeds 1,2,3,4,5] [--demo-pair]
+usage: bench/register_peers/run.py [--pairs build/bench/vpm_bench_pairs] [--seeds 1,2,3,4,5] [--demo-pair]
          [--target-vertices N[,N...] | --configs "N[:OPTIONS][;N[:OPTIONS]...]"] [--max-rotation 10]
          [--threads 2] [--no-elastix]
          [--out build/bench-register-peers] [--json FILE]
@@ -59,7 +59,7 @@ def dice(a, b, label):
 
 def vpm_pair(args, seed, vertices, extra, tag, out):
     d = os.path.join(out, f"vpm_v{vertices}{tag}_s{seed}")
-    cmd = [args.vpm, "demo", "--out", d, "--seed", str(seed), "--target-vertices", str(vertices)] + extra
+    cmd = [args.pairs, "--out", d, "--seed", str(seed), "--target-vertices", str(vertices)] + extra
     if seed > 0:
         cmd += ["--incompressible", "--max-rotation", str(args.max_rotation)]
     wall = run(cmd, d + ".log")
@@ -126,12 +126,12 @@ def fmt(row):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--vpm", default="build/vpm")
+    ap.add_argument("--pairs", default="build/bench/vpm_bench_pairs")
     ap.add_argument("--seeds", default="1,2,3,4,5")
     ap.add_argument("--demo-pair", action="store_true", help="also the demo's own pair (seed 0)")
     ap.add_argument("--target-vertices", default="5200")
     ap.add_argument("--configs", help="vpm settings to run, ';'-separated: mesh vertices, then ':' and "
-                    "more `vpm demo` options (e.g. '5200;45000:--dense-restore-cycles 2'); each is labelled "
+                    "more `vpm_bench_pairs` options (e.g. '5200;45000:--dense-restore-cycles 2'); each is labelled "
                     "'vpm N', or 'vpm N+k' when it has options (k: its place in the list, from 0)")
     ap.add_argument("--max-rotation", type=float, default=10)
     ap.add_argument("--threads", type=int, default=2)

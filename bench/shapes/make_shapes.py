@@ -8,6 +8,8 @@ is exact and reproducible.
   slab     a thin curved slab: a spherical cap of a 7 mm thick shell of radius 60 mm, 65 degrees
   coil     a tube (radius 6.5 mm) along 2.25 turns of a helix (radius 24 mm, pitch 22 mm), ends capped
   kidney   a compact control: a bent ellipsoid (110 x 60 x 50 mm)
+  femur    a long bone: a shaft (radius 9 mm, 110 mm) with a neck and a head (radius 21 mm) at
+           one end and two condyles at the other
 
 Usage: make_shapes.py OUT_DIR [NAME ...]
 """
@@ -80,7 +82,16 @@ def kidney(p):
     return ellipsoid(np.stack([x, y - bend + 10, z]), [0, 0, 0], [55, 30, 25])
 
 
-SHAPES = {"limbs": (limbs, 90), "hand": (hand, 80), "slab": (slab, 70), "coil": (coil, 60), "kidney": (kidney, 70)}
+def femur(p):
+    d = capsule(p, [0, 0, -55], [0, 0, 55], 9)
+    d = np.minimum(d, capsule(p, [0, 0, 50], [-22, 0, 68], 11))  # the neck, bent medially
+    d = np.minimum(d, np.linalg.norm(p - np.array([-30, 0, 74.0])[:, None, None, None], axis=0) - 21)
+    for x in (-13, 13):  # the condyles
+        d = np.minimum(d, ellipsoid(p, [x, 3, -62], [14, 20, 16]))
+    return d
+
+
+SHAPES = {"limbs": (limbs, 90), "hand": (hand, 80), "slab": (slab, 70), "coil": (coil, 60), "kidney": (kidney, 70), "femur": (femur, 100)}
 
 
 def main():

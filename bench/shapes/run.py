@@ -113,7 +113,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("out")
     ap.add_argument("--sizes", default="30k")
-    ap.add_argument("--shapes", default="limbs,hand,slab,coil,kidney")
+    ap.add_argument("--shapes", default="limbs,hand,slab,coil,kidney,femur")
     ap.add_argument("--models", default="", help="libcgal-demo models: " + ",".join(MODELS) + " or all")
     ap.add_argument("--vpm", default=os.path.join(HERE, "..", "..", "build", "vpm"))
     ap.add_argument("--timeout", type=int, default=600)

@@ -229,6 +229,25 @@ Json untangle_json(const InitialUntangle& u) {
   return j;
 }
 
+// The smallest tet volume ratio of `ball` against m's input positions, both normalised by their totals.
+double min_volume_ratio(const TetMesh& m, const Points& ball) {
+  const Eigen::VectorXd a = tet_volumes(m.vertices, m.tets), b = tet_volumes(ball, m.tets);
+  return (b.array() / a.array()).minCoeff() * a.sum() / b.sum();
+}
+
+// The conformal redo crowded a thin part: the equal-area attempt `area` is kept (res) and
+// untangled with the global run after the local ones (InitialMapReport::Fallback::crowded).
+void untangle_globally(Device& device, const TetMesh& m, const InitialMapOptions& opt, InitialMapResult area,
+                       InitialMapResult& res) {
+  say(opt, "the conformal sphere map crowds a thin part: the equal-area one, untangled globally");
+  res = std::move(area);
+  InitialMapReport& rep = res.report;
+  const auto t0 = Clock::now();
+  rep.folds_before_untangle = static_cast<int>(inverted_tets(res.ball, m.tets).size());
+  rep.folds_after_untangle = untangle_map(device, m, res.boundary, opt, res.ball, rep, true);
+  rep.timings.untangle += seconds_since(t0);
+}
+
 }  // namespace
 
 InitialMapResult initial_map(Device& device, const TetMesh& input, const InitialMapOptions& opt) {
@@ -285,7 +304,11 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
     rep.untangle_local_failed.reset();
     rep.untangle_cleanup.reset();
     rep.untangle_slide.reset();
+    InitialMapResult area = res;
     map_through_sphere(device, m, surf, conformal, note, res, rep, solver);
+    fb.conformal_min_tet_ratio = min_volume_ratio(m, res.ball);
+    fb.crowded = rep.boundary.flipped_triangles == 0 && fb.conformal_min_tet_ratio < InitialMapReport::kCrowdedRatio;
+    if (fb.crowded) untangle_globally(device, m, opt, std::move(area), res);
     rep.fallback = fb;
   }
   if (rep.folds_after_untangle > 0 && rep.boundary.flipped_triangles == 0)
@@ -343,6 +366,8 @@ Json to_json(const InitialMapReport& r) {
     f["flipped_triangles"] = r.fallback->flipped_triangles;
     f["folds_after_untangle"] = r.fallback->folds_after_untangle;
     f["seconds"] = r.fallback->seconds;
+    f["crowded"] = r.fallback->crowded;
+    f["conformal_min_tet_ratio"] = r.fallback->conformal_min_tet_ratio;
   }
   rep["harmonic"]["solver"] = r.harmonic_on_device ? "PoissonSolver CG (OpenCL)" : "PoissonSolver CG (host)";
   rep["harmonic"]["preconditioner"] = r.harmonic_preconditioner;

@@ -223,13 +223,21 @@ struct InitialMapReport {
   /// put back on the sphere (inverted_after: the folds after that projection); the last attempt.
   std::optional<InitialUntangle> untangle_slide;
   int folds_after_untangle = 0;
-  /// Set when steps 2-4 with the equal-area sphere map left a fold after untangling and were
-  /// redone with the conformal one (the report's other fields are of the redo).
+  /// Set when steps 2-4 with the equal-area sphere map left a fold after local untangling and
+  /// were redone with the conformal one (the report's other fields are of the redo), unless the
+  /// redo crowded a part into a sliver of the ball (`crowded`): the first attempt is then kept
+  /// and untangled globally (the report's other fields are of it).
   struct Fallback {
     std::string from;  ///< to_string(SphereDensity) of the first attempt
     int flipped_triangles = 0, folds_after_untangle = 0;
     double seconds = 0;  ///< spent on the first attempt's steps 2-4
+    /// The conformal redo's smallest tet volume ratio (normalised) was below kCrowdedRatio.
+    bool crowded = false;
+    double conformal_min_tet_ratio = 0;  ///< that ratio
   };
+  /// A conformal map whose smallest normalised tet volume ratio is below this has squeezed a
+  /// thin part (a long bone's shaft, a limb) into a sliver no round can restore.
+  static constexpr double kCrowdedRatio = 1e-6;
   std::optional<Fallback> fallback;
   /// Set when step 5 ran (folds were left after step 4).
   struct Refine {
