@@ -9,6 +9,7 @@
 // DIR/volume_map.json (medians of N runs, default 3) and DIR/histogram.svg (vertex and tet
 // volume ratio histograms of the initial and final maps of the first mesh, paper Fig. 3).
 #include <algorithm>
+#include <optional>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -30,6 +31,7 @@
 #include "vpm/metrics.hpp"
 #include "vpm/validate.hpp"
 #include "vpm/volume_map.hpp"
+#include "vpm/volume_map_peers.hpp"
 #include "vpm/timing.hpp"
 
 namespace {
@@ -55,6 +57,7 @@ vpm::TriSurface ellipsoid_surface(int level, double a, double b, double c) {
 struct Variant {
   std::string name;
   vpm::VolumeMapOptions options;
+  std::optional<vpm::VolumeMapPeer> peer;  // a peer's rounds (vpm/volume_map_peers.hpp)
 };
 
 std::vector<Variant> variants() {
@@ -68,11 +71,8 @@ std::vector<Variant> variants() {
   o.polish_rounds = 0;
   v.push_back({"moser-fixed", o});
   o = {};
-  o.method = vpm::VolumeMapMethod::paper;
-  v.push_back({"paper", o});
-  o = {};
-  o.method = vpm::VolumeMapMethod::vsem;
-  v.push_back({"vsem", o});
+  v.push_back({"paper", o, vpm::VolumeMapPeer::paper});
+  v.push_back({"vsem", o, vpm::VolumeMapPeer::vsem});
   return v;
 }
 
@@ -176,7 +176,8 @@ VariantRuns run_variant(vpm::Device& dev, const vpm::InitialMapResult& im, const
   for (int r = 0; r < runs; ++r) {
     v.ball = im.ball;
     try {
-      v.last = vpm::volume_preserving_map(dev, im.mesh.vertices, im.mesh.tets, v.ball, var.options);
+      v.last = var.peer ? vpm::volume_map_peer(dev, im.mesh.vertices, im.mesh.tets, v.ball, var.options, {*var.peer})
+                        : vpm::volume_preserving_map(dev, im.mesh.vertices, im.mesh.tets, v.ball, var.options);
     } catch (const std::exception& e) {
       v.error = e.what();
       return v;

@@ -43,7 +43,7 @@ TEST_CASE("cli: vpm CMD --help prints the synopsis and the options on one screen
   const std::string text = slurp(tmp("help_map.txt"));
   for (const char* flag : {"--rounds R", "--tolerance T", "--boundary slide|fixed", "--report REPORT.json"})
     CHECK_THAT(text, Catch::Contains(flag));
-  CHECK_THAT(text, !Catch::Contains("--method moser|paper|vsem"));  // a peer: an expert option
+  CHECK_THAT(text, !Catch::Contains("--rk-steps"));  // an expert option
   // an option left out of the synopsis is still listed; expert ones only with --expert
   const std::string reg = slurp(tmp("help_register.txt"));
   CHECK_THAT(reg, Catch::Contains("--dense-force labels|image|both") && Catch::Contains("--preset"));
@@ -90,8 +90,8 @@ TEST_CASE("cli: bad usage exits 2 with one line naming the problem") {
   CHECK_THAT(slurp(err), Catch::Contains("option --rounds needs a value"));
   CHECK(run_status(kVpm + " map in.vtu -o out.vtu --rounds two 2> " + err) == 2);
   CHECK_THAT(slurp(err), Catch::Contains("--rounds") && Catch::Contains("not an integer"));
-  CHECK(run_status(kVpm + " map in.vtu -o out.vtu --method fast 2> " + err) == 2);
-  CHECK_THAT(slurp(err), Catch::Contains("option --method: volume map method 'fast' is not one of moser, paper, vsem"));
+  CHECK(run_status(kVpm + " map in.vtu -o out.vtu --boundary fast 2> " + err) == 2);
+  CHECK_THAT(slurp(err), Catch::Contains("option --boundary: volume map boundary 'fast' is not one of auto, slide, fixed"));
   CHECK(run_status(kVpm + " no-such-command 2> " + err) == 2);
   CHECK(run_status(kVpm + " > " + tmp("usage.txt") + " 2>&1") == 2);  // no command: usage, exit 2
   CHECK_THAT(slurp(tmp("usage.txt")), Catch::Contains("vpm map MESH -o OUT"));

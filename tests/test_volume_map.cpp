@@ -24,6 +24,7 @@
 #include "vpm/solver.hpp"
 #include "vpm/topology.hpp"
 #include "vpm/volume_map.hpp"
+#include "vpm/volume_map_peers.hpp"
 
 using namespace vpm;
 namespace fs = std::filesystem;
@@ -104,21 +105,25 @@ TEST_CASE("volume map: rounds until the tolerance, every method fold-free") {
   const InitialMapResult& im = ellipsoid_start();
   auto host = Device::host();
   const DistortionPair d0 = volume_distortion(im.mesh.vertices, im.ball, im.mesh.tets);
-  for (auto method : {VolumeMapMethod::moser, VolumeMapMethod::paper, VolumeMapMethod::vsem}) {
-    INFO("method " << to_string(method));
+  for (const char* method : {"moser", "paper", "vsem"}) {
+    INFO("method " << method);
+    const std::string name = method;
     Points ball = im.ball;
     VolumeMapOptions o;
-    o.method = method;
-    o.max_rounds = method == VolumeMapMethod::moser ? 4 : 6;
-    const VolumeMapResult r = volume_preserving_map(*host, im.mesh.vertices, im.mesh.tets, ball, o);
+    o.max_rounds = name == "moser" ? 4 : 6;
+    const VolumeMapResult r =
+        name == "moser" ? volume_preserving_map(*host, im.mesh.vertices, im.mesh.tets, ball, o)
+                        : volume_map_peer(*host, im.mesh.vertices, im.mesh.tets, ball, o, {parse_volume_map_peer(name)});
+    CHECK(r.method == name);
     const DistortionPair d1 = volume_distortion(im.mesh.vertices, ball, im.mesh.tets);
     CHECK(d1.folds == 0);
     CHECK(d1.vertex < d0.vertex);
     CHECK(!r.rounds.empty());
-    CHECK(r.rounds.size() <= (method == VolumeMapMethod::moser ? 4u + o.polish_rounds : 6u));
+    CHECK(r.rounds.size() <= (name == "moser" ? 4u + o.polish_rounds : 6u));
     for (const auto& rd : r.rounds) CHECK(rd.folds == 0);
-    if (method == VolumeMapMethod::moser) CHECK(d1.vertex < 0.4 * d0.vertex);
-    if (method == VolumeMapMethod::vsem) {
+    for (const auto& rd : r.rounds) CHECK((rd.kind == name || (name == "moser" && rd.kind == "polish")));
+    if (name == "moser") CHECK(d1.vertex < 0.4 * d0.vertex);
+    if (name == "vsem") {
       // boundary frozen
       const auto mask = boundary_vertex_mask(static_cast<int>(ball.rows()), boundary_faces(im.mesh.tets));
       for (Eigen::Index i = 0; i < ball.rows(); ++i)
@@ -168,6 +173,39 @@ TEST_CASE("volume map: the polish runs the longer CGLS when the Moser rounds sto
       CHECK(r.rounds[k].solver_iterations == (far ? 70 : 20));
     }
   }
+}
+
+TEST_CASE("volume map: short of the tolerance, the polish goes on while a round gains a tenth, up to 4x its rounds") {
+  const InitialMapResult& im = ellipsoid_start();
+  auto host = Device::host();
+  VolumeMapOptions o;
+  o.rounds = 1;
+  o.polish_rounds = 1;
+  o.polish_iterations = 20;
+  o.polish_iterations_far = 20;
+  o.tolerance = 1e-4;  // never reached: every polish round is short of it
+  Points x = im.ball;
+  const VolumeMapResult r = volume_preserving_map(*host, im.mesh.vertices, im.mesh.tets, x, o);
+  REQUIRE(r.rounds.size() >= 2);
+  const size_t polish = r.rounds.size() - 1;
+  CHECK(polish >= 2);  // the first polish round gains far more than a tenth here
+  CHECK(polish <= 4);
+  double before = r.rounds[0].tet_mean_abs_dev;
+  for (size_t k = 1; k < r.rounds.size(); ++k) {
+    INFO("round " << k);
+    CHECK(r.rounds[k].kind == "polish");
+    // a round after the first polish one follows only a round that gained a tenth
+    if (k >= 2) CHECK(r.rounds[k - 1].tet_mean_abs_dev < 0.9 * before);
+    if (k >= 2) before = r.rounds[k - 1].tet_mean_abs_dev;
+  }
+  if (polish < 4 && !r.rounds.back().discarded)  // it stopped because the last round gained less
+    CHECK(r.rounds.back().tet_mean_abs_dev >= 0.9 * r.rounds[r.rounds.size() - 2].tet_mean_abs_dev);
+  CHECK(volume_distortion(im.mesh.vertices, x, im.mesh.tets).folds == 0);
+  // within the tolerance, polish_rounds is the cap
+  o.tolerance = 0.5;
+  Points y = im.ball;
+  const VolumeMapResult c = volume_preserving_map(*host, im.mesh.vertices, im.mesh.tets, y, o);
+  CHECK(c.rounds.size() <= 2);
 }
 
 TEST_CASE("polish_volumes runs only polish rounds and never moves pinned vertices") {
@@ -578,7 +616,7 @@ TEST_CASE("volume map: a folded start that cannot be untangled is refused with N
   // bad sizes are input errors
   Points wrong = ball.topRows(5);
   CHECK_THROWS_AS(volume_preserving_map(*host, m.vertices, m.tets, wrong, o), InputError);
-  CHECK_THROWS_AS(parse_volume_map_method("fast"), InputError);
+  CHECK_THROWS_AS(parse_volume_map_peer("moser"), InputError);  // vpm's own rounds are not a peer
   CHECK_THROWS_AS(parse_map_boundary("free"), InputError);
 }
 

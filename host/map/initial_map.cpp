@@ -229,12 +229,6 @@ Json untangle_json(const InitialUntangle& u) {
   return j;
 }
 
-// The smallest tet volume ratio of `ball` against m's input positions, both normalised by their totals.
-double min_volume_ratio(const TetMesh& m, const Points& ball) {
-  const Eigen::VectorXd a = tet_volumes(m.vertices, m.tets), b = tet_volumes(ball, m.tets);
-  return (b.array() / a.array()).minCoeff() * a.sum() / b.sum();
-}
-
 // The conformal redo crowded a thin part: the equal-area attempt `area` is kept (res) and
 // untangled with the global run after the local ones (InitialMapReport::Fallback::crowded).
 void untangle_globally(Device& device, const TetMesh& m, const InitialMapOptions& opt, InitialMapResult area,
@@ -306,7 +300,7 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
     rep.untangle_slide.reset();
     InitialMapResult area = res;
     map_through_sphere(device, m, surf, conformal, note, res, rep, solver);
-    fb.conformal_min_tet_ratio = min_volume_ratio(m, res.ball);
+    fb.conformal_min_tet_ratio = map_metrics(device, m.vertices, res.ball, m.tets).tet_volume_ratio.min;
     fb.crowded = rep.boundary.flipped_triangles == 0 && fb.conformal_min_tet_ratio < InitialMapReport::kCrowdedRatio;
     if (fb.crowded) untangle_globally(device, m, opt, std::move(area), res);
     rep.fallback = fb;

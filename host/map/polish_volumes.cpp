@@ -63,7 +63,6 @@ VolumeMapResult polish_volumes(Device& device, const Points& reference, const Te
       options.topology ? *options.topology : (built = tet_topology(static_cast<int>(reference.rows()), tets));
   check_constraints(reference, topology, options);
   VolumeMapOptions vo;
-  vo.method = VolumeMapMethod::moser;
   vo.boundary = options.boundary == MapBoundary::automatic ? MapBoundary::slide : options.boundary;
   vo.polish_rounds = options.rounds;
   vo.polish_min_gain = options.min_gain;

@@ -14,17 +14,11 @@
 
 namespace vpm {
 
-VolumeMapMethod parse_volume_map_method(const std::string& s) {
-  if (s == "moser") return VolumeMapMethod::moser;
-  if (s == "paper") return VolumeMapMethod::paper;
-  if (s == "vsem") return VolumeMapMethod::vsem;
-  throw InputError("volume map method '" + s + "' is not one of moser, paper, vsem");
-}
-const char* to_string(VolumeMapMethod m) {
-  switch (m) {
-    case VolumeMapMethod::moser: return "moser";
-    case VolumeMapMethod::paper: return "paper";
-    case VolumeMapMethod::vsem: return "vsem";
+const char* detail::to_string(detail::Rounds r) {
+  switch (r) {
+    case detail::Rounds::moser: return "moser";
+    case detail::Rounds::paper: return "paper";
+    case detail::Rounds::vsem: return "vsem";
   }
   return "?";
 }
@@ -71,7 +65,7 @@ Json to_json(const VolumeMapRound& r) {
 
 Json to_json(const VolumeMapResult& res) {
   Json j = Json::object();
-  j["method"] = to_string(res.method);
+  j["method"] = res.method;
   j["boundary"] = res.slide ? "slide" : "fixed";
   j["solver"] = res.solver;
   j["preconditioner"] = res.preconditioner;
@@ -123,8 +117,8 @@ void set_up(detail::MapContext& c) {
   c.m = static_cast<int>(tets.rows());
   const MapBoundary bm = opt.boundary != MapBoundary::automatic
                              ? opt.boundary
-                             : (opt.method == VolumeMapMethod::moser ? MapBoundary::slide : MapBoundary::fixed);
-  c.slide = bm == MapBoundary::slide && opt.method != VolumeMapMethod::vsem;  // vsem: boundary frozen
+                             : (c.rounds == detail::Rounds::moser ? MapBoundary::slide : MapBoundary::fixed);
+  c.slide = bm == MapBoundary::slide && c.rounds != detail::Rounds::vsem;  // vsem: boundary frozen
   if (c.pc.topology) {
     c.nbr = c.pc.topology->neighbours;
     c.bfaces = c.pc.topology->boundary;
@@ -152,7 +146,7 @@ void set_up(detail::MapContext& c) {
                                                    opt.preconditioner, opt.poisson);
   // where the parts run (VolumeMapOptions::advection, ::polish; the rules: vpm/placement.hpp)
   // (a polish on its own never advects: no advector, no advection placed)
-  if (!c.pc.only && opt.method == VolumeMapMethod::moser) {
+  if (!c.pc.only && c.rounds == detail::Rounds::moser) {
     if (c.placement.decide(c.dev, PlacedWork::advection, opt.advection)) {
       c.advector = std::make_unique<detail::DeviceAdvector>(c.dev, tets, c.nbr, c.boundary);
       c.gradients_on_device = c.placement.decide(c.dev, PlacedWork::gradients, opt.advection);
@@ -173,13 +167,16 @@ VolumeMapResult volume_preserving_map(Device& dev, const Points& reference, cons
 }
 
 VolumeMapResult detail::map_volumes(Device& dev, const Points& reference, const Tets& tets, Points& ball,
-                                    const VolumeMapOptions& opt, const PolishConstraints& pc) {
+                                    const VolumeMapOptions& opt, const PolishConstraints& pc, Rounds rounds,
+                                    int paper_steps) {
   const auto t_start = Clock::now();
   check_inputs(reference, tets, ball, opt);
   detail::MapContext c(dev, reference, tets, opt, pc);
+  c.rounds = rounds;
+  c.paper_steps = paper_steps;
   set_up(c);
   VolumeMapResult res;
-  res.method = opt.method;
+  res.method = to_string(rounds);
   res.slide = c.slide;
   res.solver = to_string(opt.solver);
   res.preconditioner = to_string(c.solver->preconditioner());

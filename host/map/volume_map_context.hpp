@@ -30,12 +30,19 @@ struct PolishConstraints {
   const TetTopology* topology = nullptr;  ///< of the tets, when the caller built it (else set_up does)
 };
 
+/// Which rounds a map runs: vpm's (Moser rounds, then the polish) or a peer's
+/// (vpm/volume_map_peers.hpp).
+enum class Rounds { moser, paper, vsem };
+const char* to_string(Rounds r);
+
 struct MapContext {
   Device& dev;
   const Points& ref;
   const Tets& tets;
   const VolumeMapOptions& opt;
   const PolishConstraints& pc;
+  Rounds rounds = Rounds::moser;
+  int paper_steps = 50;  ///< the paper's loop: its explicit steps (VolumeMapPeerOptions::paper_steps)
   int n = 0, m = 0;
   bool slide = true;
   std::vector<char> boundary;
@@ -64,9 +71,11 @@ struct MapContext {
   DeviceAdvector& device_advector() const;
 };
 
-/// volume_preserving_map with the polish constraints `pc` (polish_volumes: pc.only).
+/// volume_preserving_map with the polish constraints `pc` (polish_volumes: pc.only) and the
+/// rounds `rounds` (a peer's: volume_map_peer, with `paper_steps`).
 VolumeMapResult map_volumes(Device& device, const Points& reference, const Tets& tets, Points& ball,
-                            const VolumeMapOptions& options, const PolishConstraints& pc);
+                            const VolumeMapOptions& options, const PolishConstraints& pc,
+                            Rounds rounds = Rounds::moser, int paper_steps = 50);
 
 /// Tets of `x` with signed volume <= 0 (volumes on the context's device).
 int count_folds(MapContext& c, const Points& x);
@@ -93,7 +102,7 @@ void project_boundary(const MapContext& c, Points& x);
 /// `res`, `d` in: the distortion of x, out: after the last accepted round.
 void run_rounds(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& d);
 
-/// The polish rounds after them (method moser).
+/// The polish rounds after them (vpm's rounds only).
 void run_polish(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& d);
 
 }  // namespace vpm::detail

@@ -13,12 +13,13 @@ namespace vpm::detail {
 
 namespace {
 
-int round_cap(const VolumeMapOptions& opt, bool polish_only) {
-  if (polish_only) return 0;
+int round_cap(const MapContext& c) {
+  const VolumeMapOptions& opt = c.opt;
+  if (c.pc.only) return 0;
   if (opt.rounds >= 0) return opt.rounds;
   if (opt.max_rounds > 0) return opt.max_rounds;
-  if (opt.method == VolumeMapMethod::moser) return 8;
-  if (opt.method == VolumeMapMethod::paper) return opt.paper_steps;
+  if (c.rounds == Rounds::moser) return 8;
+  if (c.rounds == Rounds::paper) return c.paper_steps;
   return 15;
 }
 
@@ -79,9 +80,9 @@ int fold_free_round(MapContext& c, Points& x, const Points& saved, double t_end,
                     VolumeMapRound& r) {
   return fold_free(c, x, saved, t_end, c.opt.max_step_halvings, true, r, [&](int attempt, double step) {
     if (attempt > 0) x = saved;
-    if (c.opt.method == VolumeMapMethod::moser) {
+    if (c.rounds == Rounds::moser) {
       moser_round(c, x, step, r);
-    } else if (c.opt.method == VolumeMapMethod::paper) {
+    } else if (c.rounds == Rounds::paper) {
       paper_step(c, x, step, r);
     } else {
       x = saved + step * (vsem_goal - saved);
@@ -98,7 +99,7 @@ void add_times(VolumeMapTimings& t, const VolumeMapRound& r) {
 
 void say_round(const MapContext& c, int k, int max_rounds, const DistortionPair& d, const VolumeMapRound& r) {
   if (!c.opt.progress) return;
-  std::string line = std::string(to_string(c.opt.method)) + " round " + std::to_string(k) + "/" +
+  std::string line = std::string(to_string(c.rounds)) + " round " + std::to_string(k) + "/" +
                      std::to_string(max_rounds) +
                      strprintf(": vertex mean |r-1| %.4f, tet %.4f, %.2f s", d.vertex, d.tet, r.time_total);
   if (r.folds_before_untangle)
@@ -110,8 +111,9 @@ void say_round(const MapContext& c, int k, int max_rounds, const DistortionPair&
 // distortion is within 5x the tolerance (polish steps remove the last few percent; far from the
 // goal, as on a C-shaped caudate at 9 %, more rounds still pay), or when a round gains less
 // than a fifth.
-bool stalled(const VolumeMapOptions& opt, double vertex, double prev_vertex) {
-  return opt.rounds < 0 && opt.method == VolumeMapMethod::moser && opt.polish_rounds > 0 &&
+bool stalled(const MapContext& c, double vertex, double prev_vertex) {
+  const VolumeMapOptions& opt = c.opt;
+  return opt.rounds < 0 && c.rounds == Rounds::moser && opt.polish_rounds > 0 &&
          vertex > opt.tolerance &&
          ((vertex > 0.5 * prev_vertex && vertex <= 5 * opt.tolerance) || vertex > 0.8 * prev_vertex);
 }
@@ -120,9 +122,9 @@ bool stalled(const VolumeMapOptions& opt, double vertex, double prev_vertex) {
 
 void run_rounds(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& d) {
   const VolumeMapOptions& opt = c.opt;
-  const int max_rounds = round_cap(opt, c.pc.only);
+  const int max_rounds = round_cap(c);
   res.stop_reason = c.pc.only ? "polish_only" : "rounds";
-  double paper_dt = 1.0 / std::max(1, opt.paper_steps);
+  double paper_dt = 1.0 / std::max(1, c.paper_steps);
   Eigen::VectorXd vsem_w = Eigen::VectorXd::Ones(c.m);
   double prev_vertex = d.vertex;
   for (int k = 1; k <= max_rounds; ++k) {
@@ -137,18 +139,18 @@ void run_rounds(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& 
     const auto t_round = Clock::now();
     VolumeMapRound r;
     r.round = k;
-    r.kind = to_string(opt.method);
+    r.kind = to_string(c.rounds);
     const Points saved = x;
     Points vsem_goal;
-    if (opt.method == VolumeMapMethod::vsem) vsem_goal = vsem_target(c, x, vsem_w, r);
-    const double t_end = opt.method == VolumeMapMethod::paper ? paper_dt : 1.0;
+    if (c.rounds == Rounds::vsem) vsem_goal = vsem_target(c, x, vsem_w, r);
+    const double t_end = c.rounds == Rounds::paper ? paper_dt : 1.0;
     const int folds = fold_free_round(c, x, saved, t_end, vsem_goal, r);
     r.folds = 0;
     if (folds > 0) {  // not repairable: undo the round
       x = saved;
       r.discarded = true;
     }
-    if (opt.method == VolumeMapMethod::paper && !r.discarded) paper_dt = r.t_end;
+    if (c.rounds == Rounds::paper && !r.discarded) paper_dt = r.t_end;
     d = volume_distortion(c.ref, x, c.tets);
     r.vertex_mean_abs_dev = d.vertex;
     r.tet_mean_abs_dev = d.tet;
@@ -160,7 +162,7 @@ void run_rounds(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& 
       res.stop_reason = "fold";
       break;
     }
-    if (stalled(opt, d.vertex, prev_vertex)) {
+    if (stalled(c, d.vertex, prev_vertex)) {
       res.stop_reason = "stalled";
       break;
     }
@@ -185,21 +187,29 @@ int fold_free_polish(MapContext& c, Points& x, const Points& saved, const Points
 // Once the map meets its tolerance, a polish round must bring the tet mean |r-1| 3 % lower for
 // another to follow (before: VolumeMapOptions::polish_min_gain, 1 % by default).
 constexpr double kPolishKeepConverged = 0.97;
+// Short of the tolerance, the polish goes on past VolumeMapOptions::polish_rounds while each round
+// still lowers the tet mean |r-1| by a tenth, up to this many times polish_rounds: long thin
+// parts, which the Moser rounds leave far from it, gain 20-40 % a round through the first 8 (a
+// long bone's shaft; bench/results/LEDGER.md).
+constexpr int kPolishExtension = 4;
+constexpr double kPolishKeepFar = 0.9;
 
 void run_polish(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& d) {
   const VolumeMapOptions& opt = c.opt;
-  const int n_polish = opt.method == VolumeMapMethod::moser && opt.rounds != 0 ? opt.polish_rounds : 0;
+  const int n_polish = c.rounds == Rounds::moser && opt.rounds != 0 ? opt.polish_rounds : 0;
   // when the Moser rounds stalled far from the tolerance (long thin parts such as fingers), a
   // longer CGLS: early-stopped, it only reaches the smooth part of the correction, and on a finer
   // mesh the same correction spans more elements (cube root of the tet count past 30,000)
   const int far = polish_iterations_for(opt.polish_iterations_far, c.m);
   const int iterations = !c.pc.only && d.vertex > 5 * opt.tolerance ? std::max(opt.polish_iterations, far)
                                                                              : opt.polish_iterations;
-  for (int k = 1; k <= n_polish; ++k) {
+  int cap = n_polish;
+  for (int k = 1; k <= cap; ++k) {
     if (opt.deadline.passed()) {
       res.stop_reason = "time_budget";
       break;
     }
+    const double tet_before = d.tet;
     const auto t_round = Clock::now();
     VolumeMapRound r;
     r.round = static_cast<int>(res.rounds.size()) + 1;
@@ -228,10 +238,11 @@ void run_polish(MapContext& c, Points& x, VolumeMapResult& res, DistortionPair& 
     res.timings.untangle += r.time_untangle;
     res.rounds.push_back(r);
     if (opt.progress)
-      opt.progress("polish " + std::to_string(k) + "/" + std::to_string(n_polish) +
+      opt.progress("polish " + std::to_string(k) + "/" + std::to_string(cap) +
                    strprintf(": vertex mean |r-1| %.4f, tet %.4f, %.2f s", d.vertex, d.tet, r.time_total) +
                    (r.discarded ? " (discarded)" : ""));
     if (r.discarded || no_gain) break;
+    if (k == cap && !converged && cap < kPolishExtension * n_polish && d.tet < kPolishKeepFar * tet_before) ++cap;
   }
 }
 

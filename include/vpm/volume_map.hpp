@@ -4,31 +4,26 @@
 // vertices until every vertex's dual volume is its input dual volume (both normalised to the
 // total volume).
 //
-// Methods:
-//  * moser (default): Moser rounds on a fixed field. Per round, on the current ball mesh
-//    ("background"): dual volumes V_i, targets m_i = input dual volumes rescaled to the current
-//    total volume, rho0 = m / V; one Neumann solve  -K psi = V - m  (K: the cotangent stiffness
-//    of vpm/laplacian.hpp, negative semi-definite, so this is  K psi = m - V); per-tet gradients
-//    of psi (paper eq. 12), volume-weighted vertex averages (eq. 13), normal component removed
-//    at boundary vertices. The field v(y, t) = grad psi(y) / ((1 - t) rho0(y) + t) (grad psi and
-//    rho0 interpolated barycentrically at y in the background mesh) carries density rho0 to the
-//    uniform one (continuity equation d rho/dt + div(rho v) = 0). Every vertex follows its
-//    pathline from t = 0 to 1 with RK4; boundary vertices slide on the sphere (their velocity's
-//    normal part is removed and they are renormalised to radius 1 after each stage) or stay
-//    fixed. Point location + interpolation run as OpenCL kernels (kernels/moser.cl: walk through
-//    tet faces from the previous containing tet, uniform-grid fallback, clamping to the nearest
-//    boundary tet for points just outside the inscribed polyhedron) or as the same code on the
-//    host. Then polish rounds (VolumeMapOptions::polish_rounds): Gauss-Newton steps on the
-//    per-tet volumes (CGLS, minimum-norm), which remove the per-tet distortion that the
-//    vertex-based rounds leave (docs/volume_map.md).
-//  * paper: the paper's discrete loop (4.3): at each of `paper_steps` steps recompute
-//    rho = m / V from the current geometry, re-solve, step x += dt grad psi / rho (dt = 1/K).
-//    A step that folds is retried with dt halved. Kept for comparison (it stalls, docs/design.md 4.2).
-//  * vsem: each tet's stiffness (on the input geometry) multiplied by its accumulated volume
-//    ratio, boundary frozen, harmonic (Dirichlet) re-solve per iteration (Yueh et al. 2019 style
-//    fixed point). For comparison.
+// Moser rounds on a fixed field. Per round, on the current ball mesh
+// ("background"): dual volumes V_i, targets m_i = input dual volumes rescaled to the current
+// total volume, rho0 = m / V; one Neumann solve  -K psi = V - m  (K: the cotangent stiffness
+// of vpm/laplacian.hpp, negative semi-definite, so this is  K psi = m - V); per-tet gradients
+// of psi (paper eq. 12), volume-weighted vertex averages (eq. 13), normal component removed
+// at boundary vertices. The field v(y, t) = grad psi(y) / ((1 - t) rho0(y) + t) (grad psi and
+// rho0 interpolated barycentrically at y in the background mesh) carries density rho0 to the
+// uniform one (continuity equation d rho/dt + div(rho v) = 0). Every vertex follows its
+// pathline from t = 0 to 1 with RK4; boundary vertices slide on the sphere (their velocity's
+// normal part is removed and they are renormalised to radius 1 after each stage) or stay
+// fixed. Point location + interpolation run as OpenCL kernels (kernels/moser.cl: walk through
+// tet faces from the previous containing tet, uniform-grid fallback, clamping to the nearest
+// boundary tet for points just outside the inscribed polyhedron) or as the same code on the
+// host. Then polish rounds (VolumeMapOptions::polish_rounds): Gauss-Newton steps on the
+// per-tet volumes (CGLS, minimum-norm), which remove the per-tet distortion that the
+// vertex-based rounds leave (docs/volume_map.md).
+// The paper's own loop and vsem, its peers, run through volume_map_peer
+// (vpm/volume_map_peers.hpp) for comparison.
 //
-// Fold safety (every method): after each round the tets with signed volume <= 0 are counted;
+// Fold safety (every round): after each round the tets with signed volume <= 0 are counted;
 // if any, they are untangled locally (vpm::untangle_local, theta = 0.5, two rings, boundary
 // fixed); if that fails the round is redone on a shorter time interval (t_end halved, up to
 // `max_step_halvings` times); if it still folds the round is discarded, the previous fold-free
@@ -52,14 +47,8 @@ namespace vpm {
 class Device;
 class PoissonSolver;
 
-enum class VolumeMapMethod { moser, paper, vsem };
-/// "moser", "paper", "vsem"; InputError otherwise (message: "volume map method 'NAME' is not
-/// one of moser, paper, vsem").
-VolumeMapMethod parse_volume_map_method(const std::string& name);
-const char* to_string(VolumeMapMethod m);
-
 enum class MapBoundary {
-  automatic,  ///< slide for moser, fixed for paper and vsem (their published behaviour)
+  automatic,  ///< slide (fixed for the peers, their published behaviour; vpm/volume_map_peers.hpp)
   slide,      ///< boundary vertices move tangentially on the unit sphere
   fixed,      ///< boundary vertices do not move
 };
@@ -69,19 +58,16 @@ const char* to_string(MapBoundary m);
 
 
 struct VolumeMapOptions {
-  VolumeMapMethod method = VolumeMapMethod::moser;
-  /// Rounds to run (Moser rounds; paper: explicit steps; vsem: fixed-point iterations).
+  /// Rounds to run (Moser rounds; a peer's: paper: explicit steps; vsem: fixed-point iterations).
   /// -1: until the vertex mean |r - 1| <= tolerance or max_rounds is reached.
   int rounds = -1;
-  /// Cap used when rounds == -1: 8 for moser; paper_steps for paper; 15 for vsem when <= 0.
+  /// Cap used when rounds == -1: 8 for the Moser rounds (the paper's loop: its steps; vsem 15) when <= 0.
   int max_rounds = 0;
   /// Stop when the vertex mean |r - 1| (normalised dual volumes) is at or below this.
   double tolerance = 0.01;
   /// RK4 steps per Moser round (t from 0 to 1): 10 give the same maps as 40 to 3-4 digits on
   /// brains and on the shapes benchmark at a quarter of the advection's time (docs/volume_map.md).
   int rk_steps = 10;
-  /// Explicit steps K of the paper's loop (dt = 1/K).
-  int paper_steps = 50;
   MapBoundary boundary = MapBoundary::automatic;
   /// Linear solver: cg (preconditioned CG) or paper (BiCGSTAB on the normal equations);
   /// bicgstab is refused (InputError).
@@ -96,7 +82,7 @@ struct VolumeMapOptions {
   bool local_untangle = true;
   /// Times a folding round is redone with t_end halved before it is discarded.
   int max_step_halvings = 3;
-  /// Polish rounds after the Moser rounds (method moser only): Gauss-Newton steps on the
+  /// Polish rounds after the Moser rounds (not for the peers): Gauss-Newton steps on the
   /// per-tet volumes, min over dx of sum_t (1 - V_t(x + dx) / m_t)^2 linearised, solved by
   /// `polish_iterations` CGLS iterations from dx = 0 (minimum-norm, early-stopped), boundary
   /// vertices moving tangentially (slide) or not at all (fixed); x += dx, halved while it folds.
@@ -107,7 +93,9 @@ struct VolumeMapOptions {
   /// for seconds, docs/volume_map.md). With
   /// rounds == -1 the Moser rounds hand over to the polish once a round gains less than half on
   /// the vertex mean |r-1| with it within 5 x tolerance, or gains less than a fifth. A polish
-  /// step that folds is untangled locally like a round, then halved.
+  /// step that folds is untangled locally like a round, then halved. Short of the tolerance,
+  /// the polish goes on past this count while each round still lowers the tet mean |r-1| by a
+  /// tenth, up to 4 x this count (long thin parts gain that much a round well past the eighth).
   int polish_rounds = 8;
   int polish_iterations = 60;
   /// The fraction by which a polish round must lower the tet mean |r-1| for another to follow.
@@ -181,7 +169,7 @@ struct VolumeMapResult {
   /// when VolumeMapOptions::deadline stopped the Moser or polish rounds
   std::string stop_reason;
   // What ran:
-  VolumeMapMethod method = VolumeMapMethod::moser;
+  std::string method = "moser";  ///< the rounds that ran: "moser", or a peer's ("paper", "vsem")
   bool slide = true;          ///< boundary vertices slid on the sphere (else fixed)
   std::string solver = "cg";  ///< VolumeMapOptions::solver
   std::string preconditioner = "jacobi";  ///< what VolumeMapOptions::preconditioner resolved to

@@ -81,9 +81,9 @@ void bind_reports(py::module_& m) {
 void bind_map_to_ball(py::module_& m) {
   m.def(
       "_map_to_ball",
-      [](const py::object& vertices, const py::object& tets, int rounds, double tolerance, const std::string& method,
-         const std::string& sphere, const std::string& sphere_start, const std::string& sphere_solve,
-         const std::string& boundary, const std::string& solver, const std::string& preconditioner, int rk_steps,
+      [](const py::object& vertices, const py::object& tets, int rounds, double tolerance, const std::string& sphere,
+         const std::string& sphere_start, const std::string& sphere_solve, const std::string& boundary,
+         const std::string& preconditioner, int rk_steps,
          double max_seconds, const std::string& source, std::optional<std::string> device, py::object progress) {
         auto mesh = mesh_argument(vertices, tets);
         BallMapOptions bo;
@@ -91,11 +91,8 @@ void bind_map_to_ball(py::module_& m) {
         if (rounds < -1) throw InputError("rounds: must be >= 0 (or -1: until the tolerance)");
         if (!(tolerance >= 0)) throw InputError("tolerance: must be >= 0");
         if (rk_steps < 1) throw InputError("rk_steps: must be >= 1");
-        if (solver != "cg" && solver != "paper") throw InputError("solver: '" + solver + "' is not one of cg, paper");
         bo.volume.tolerance = tolerance;
-        bo.volume.method = parse_volume_map_method(method);
         bo.volume.boundary = parse_map_boundary(boundary);
-        bo.volume.solver = parse_solver_method(solver);
         bo.initial = initial_options(sphere, sphere_start, sphere_solve, "if-folded", preconditioner, true);
         bo.volume.preconditioner = bo.initial.preconditioner;
         bo.volume.rk_steps = rk_steps;
@@ -121,9 +118,9 @@ void bind_map_to_ball(py::module_& m) {
         return py::make_tuple(ball, std::move(report));
       },
       py::arg("vertices"), py::arg("tets") = py::none(), py::kw_only(), py::arg("rounds") = -1,
-      py::arg("tolerance") = 0.01, py::arg("method") = "moser", py::arg("sphere") = "area",
+      py::arg("tolerance") = 0.01, py::arg("sphere") = "area",
       py::arg("sphere_start") = "auto", py::arg("sphere_solve") = "auto", py::arg("boundary") = "auto",
-      py::arg("solver") = "cg", py::arg("preconditioner") = "auto", py::arg("rk_steps") = VolumeMapOptions{}.rk_steps,
+      py::arg("preconditioner") = "auto", py::arg("rk_steps") = VolumeMapOptions{}.rk_steps,
       py::arg("max_seconds") = 0.0, py::arg("source") = "mesh", py::arg("device") = py::none(), py::arg("progress") = py::none());
 }
 

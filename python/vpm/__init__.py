@@ -106,8 +106,8 @@ def map_to_ball(vertices, tets=None, *, progress=None, **options):
     """Maps a tet mesh to the unit ball preserving local volumes: the whole `vpm map`.
 
     `vertices`: a vpm.Mesh (then no `tets`) or an (n, 3) array with `tets` (m, 4). Options (as
-    `vpm map`'s): rounds (-1: until tolerance), tolerance (0.01), method ('moser'|'paper'|'vsem'),
-    sphere, sphere_start, sphere_solve, boundary, solver, preconditioner, rk_steps, max_seconds
+    `vpm map`'s): rounds (-1: until tolerance), tolerance (0.01), sphere, sphere_start,
+    sphere_solve, boundary, preconditioner, rk_steps, max_seconds
     (a time budget: the map reached so far, report.converged False), source (the name used in
     messages), device. `progress`: a callable given each round's line, or True for
     a tqdm bar (lines on stderr without tqdm).

@@ -40,8 +40,8 @@ def test_numerical_error(vpm, small_mesh):
 
 
 def test_bad_options_name_themselves(vpm, small_mesh):
-    with pytest.raises(ValueError, match="volume map method 'nope'"):
-        vpm.map_to_ball(small_mesh.copy(), method="nope")
+    with pytest.raises(ValueError, match="sphere density 'nope'"):
+        vpm.map_to_ball(small_mesh.copy(), sphere="nope")
     with pytest.raises(ValueError, match="tolerance"):
         vpm.map_to_ball(small_mesh.copy(), tolerance=-1)
     with pytest.raises(ValueError, match="landmarks"):
