@@ -145,10 +145,10 @@ def initial_map(vertices: Union[Mesh, ArrayLike], tets: Optional[ArrayLike] = ..
                 untangle: Literal["never", "if-folded", "always"] = ..., split: bool = ..., source: str = ...,
                 device: Optional[str] = ...) -> tuple[Mesh, InitialMapReport]: ...
 def map_to_ball(vertices: Union[Mesh, ArrayLike], tets: Optional[ArrayLike] = ..., *, progress: Progress = ...,
-                rounds: int = ..., tolerance: float = ..., method: Literal["moser", "paper", "vsem"] = ...,
+                rounds: int = ..., tolerance: float = ...,
                 sphere: Literal["area", "conformal"] = ..., sphere_start: Literal["auto", "progressive"] = ...,
                 sphere_solve: Literal["auto", "host", "device"] = ...,
-                boundary: Literal["auto", "slide", "fixed"] = ..., solver: Literal["cg", "paper"] = ...,
+                boundary: Literal["auto", "slide", "fixed"] = ...,
                 preconditioner: Literal["auto", "jacobi", "amg"] = ..., rk_steps: int = ..., max_seconds: float = ...,
                 source: str = ...,
                 device: Optional[str] = ...) -> tuple[Mesh, MapReport]: ...
