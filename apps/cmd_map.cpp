@@ -2,7 +2,10 @@
 #include <chrono>
 #include <cstdio>
 
+#include <optional>
+
 #include "cli.hpp"
+#include "vpm/volume_map_peers.hpp"
 #include "vpm/format.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
@@ -30,6 +33,14 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   if (vo.rounds < -1) throw vpm::InputError("option --rounds: must be >= 0");
   vo.tolerance = args.get_double("--tolerance", 0.01);
   if (!(vo.tolerance >= 0)) throw vpm::InputError("option --tolerance: must be >= 0");
+  const std::string method = args.get("--method", "moser");  // moser, or a peer (shared/DESIGN.md's contract)
+  std::optional<vpm::VolumeMapPeerOptions> peer;
+  if (method != "moser")
+    peer = vpm::VolumeMapPeerOptions{vpm::cli::parse_option("--method", [&] { return vpm::parse_volume_map_peer(method); })};
+  const std::string solver = args.get("--solver", "cg");
+  if (solver != "cg" && solver != "paper")
+    throw vpm::InputError("option --solver: '" + solver + "' is not one of cg, paper");
+  vo.solver = vpm::parse_solver_method(solver);
   vo.boundary = vpm::cli::parse_option("--boundary", [&] { return vpm::parse_map_boundary(args.get("--boundary", "auto")); });
   vo.preconditioner = vpm::cli::parse_option(
       "--preconditioner", [&] { return vpm::parse_preconditioner_choice(args.get("--preconditioner", "auto")); });
@@ -55,6 +66,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
                  in.c_str(), vr.sliver_tets, vpm::kSliverDihedralDeg, vr.min_dihedral_deg, vr.min_dihedral_tet, in.c_str());
   vpm::BallMapOptions bo;
   bo.volume = vo;
+  bo.peer = peer;
   bo.deadline = vpm::cli::time_budget(args, t_start);
   bo.initial.preconditioner = vo.preconditioner;
   bo.initial.sphere_density = vpm::cli::parse_option(
@@ -87,15 +99,18 @@ vpm::cli::Registrar reg(vpm::cli::with_expert({"map", "MESH -o OUT", "map a tet 
                          {{"--rounds", "R", "Moser rounds (default: until --tolerance, at most 8; 0: the initial map only)"},
                           {"--tolerance", "T", "stop at this vertex mean |r-1| (default 0.01); missing it warns, by over 2x exits 4"},
                           {"--allow-partial", "", "exit 0 even when the map misses --tolerance by over 2x (the warning stays)"},
+                          {"--method", "moser|paper|vsem", "moser (default) or a peer method for comparison"},
                           {"--sphere", "area|conformal", "boundary map to the sphere: equal-area (default) or conformal only"},
                           {"--sphere-start", "auto|progressive", "start of the sphere map: conformal, progressive where it flips (auto, default), or progressive"},
                           {"--sphere-solve", "auto|host|device", "the sphere map's equal-area solves: host Cholesky, device AMG-CG, or auto (default: a GPU from 50,000 boundary vertices)"},
                           {"--boundary", "slide|fixed", "boundary vertices slide on the sphere (moser default) or stay"},
+                          {"--solver", "cg|paper", "Jacobi CG (default) or the paper's BiCGSTAB on the normal equations"},
                           {"--preconditioner", "auto|jacobi|amg", "of CG: Jacobi, smoothed-aggregation AMG, or auto (default: AMG on CPUs from 2M tets)"},
                           {"--rk-steps", "N", "RK4 steps per Moser round (default " + std::to_string(vpm::VolumeMapOptions{}.rk_steps) + ")"},
                           {"--max-seconds", "S", "time budget: the rounds stop when it is spent and the map reached is written (exit 4)"},
                           {"--report", "REPORT.json", "write the report (metrics, rounds, timings)"}},
                          run},
-    // the solvers' knobs and the sphere map's starts and solves: for experiments and benchmarks
-    {"--preconditioner", "--rk-steps", "--sphere-start", "--sphere-solve"}));
+    // the peers (shared/DESIGN.md's contract), the solvers' knobs and the sphere map's starts and
+    // solves: for experiments and benchmarks
+    {"--method", "--solver", "--preconditioner", "--rk-steps", "--sphere-start", "--sphere-solve"}));
 }  // namespace

@@ -64,7 +64,8 @@ BallMap map_to_ball(Device& device, const TetMesh& input, const ValidationReport
       VolumeMapOptions vo = options.volume;
       if (options.deadline.set()) vo.deadline = options.deadline;
       vo.poisson = std::move(im.poisson);  // the harmonic step's solver: its pattern is built
-      out.volume_map = volume_preserving_map(device, im.mesh.vertices, im.mesh.tets, ball, vo);
+      out.volume_map = options.peer ? volume_map_peer(device, im.mesh.vertices, im.mesh.tets, ball, vo, *options.peer)
+                                : volume_preserving_map(device, im.mesh.vertices, im.mesh.tets, ball, vo);
     } catch (const NumericalError& e) {
       throw NumericalError(source + ": " + e.what() + quality(validation) + "; nothing written");
     }

@@ -11,6 +11,7 @@
 #include "vpm/metrics.hpp"
 #include "vpm/validate.hpp"
 #include "vpm/volume_map.hpp"
+#include "vpm/volume_map_peers.hpp"
 
 namespace vpm {
 
@@ -20,6 +21,8 @@ struct BallMapOptions {
   InitialMapOptions initial{};
   /// volume.rounds == 0 stops after the initial map.
   VolumeMapOptions volume{};
+  /// A peer's rounds instead of vpm's (vpm/volume_map_peers.hpp; `vpm map --method`, for comparison).
+  std::optional<VolumeMapPeerOptions> peer;
   /// Time budget of the whole map, handed to both stages (their own deadlines when not set).
   /// When it stops the rounds, the map reached so far is returned with convergence.converged
   /// false and reason "time_budget"; when it passes before the initial map is fold-free,
