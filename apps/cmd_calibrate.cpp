@@ -11,7 +11,7 @@ namespace {
 
 int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   vpm::cli::Args args(argv, self);
-  args.expect_positional(0, "usage: " + vpm::cli::synopsis(self));
+  args.expect_positional(0, vpm::cli::synopsis(self));
   const auto out = args.get("-o");
   if (!out || !args.has("--normals") || !args.has("--feature"))
     throw vpm::InputError("needs -o, --normals and --feature; usage: " + vpm::cli::synopsis(self));

@@ -57,7 +57,7 @@ void map_back(const vpm::cli::Args& args, const std::string& out, const vpm::Can
 
 int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   vpm::cli::Args args(argv, self);
-  args.expect_positional(0, "usage: " + vpm::cli::synopsis(self));
+  args.expect_positional(0, vpm::cli::synopsis(self));
   const auto out = args.get("-o");
   const auto patient_path = args.get("--patient");
   if (!out || (!args.has("--normals") && !args.has("--reference")) || !patient_path || !args.has("--feature"))

@@ -42,7 +42,7 @@ constexpr vpm::DenseForce kDenseForce = vpm::DenseForce::both;
 
 Settings parse_settings(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   vpm::cli::Args args(argv, self);
-  args.expect_positional(0, "usage: " + vpm::cli::synopsis(self));
+  args.expect_positional(0, vpm::cli::synopsis(self));
   Settings s;
   s.out = args.get("--out", "out/demo");
   s.data = args.get("--data", "/usr/share/mricron/templates");

@@ -8,7 +8,7 @@ namespace {
 
 int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   vpm::cli::Args args(argv, self);
-  args.expect_positional(0, "usage: " + vpm::cli::synopsis(self));
+  args.expect_positional(0, vpm::cli::synopsis(self));
   const auto out = args.get("-o");
   if (!out) throw vpm::InputError("missing -o ELEMENTS.tsv; usage: " + vpm::cli::synopsis(self));
   const vpm::ElementDefinition d = vpm::cli::element_definition(args);

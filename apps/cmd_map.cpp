@@ -1,10 +1,12 @@
-// vpm map MESH -o OUT: initial map to the unit ball, then the volume-preserving map.
+// vpm map MESH -o OUT: initial map to the unit ball, then the volume-preserving map; a closed
+// triangle surface instead goes to the unit sphere with its areas kept (map_surface.cpp).
 #include <chrono>
 #include <cstdio>
 
 #include <optional>
 
 #include "cli.hpp"
+#include "map_surface.hpp"
 #include "vpm/volume_map_peers.hpp"
 #include "vpm/format.hpp"
 #include "vpm/device.hpp"
@@ -25,6 +27,13 @@ using vpm::seconds_since;
 int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   const auto t_start = Clock::now();
   vpm::cli::Args args(argv, self);
+  // a triangle surface goes to the sphere (apps/map_surface.cpp)
+  if (args.positional().size() == 1 && !vpm::is_mesh_path(args.positional()[0]) &&
+      vpm::is_surface_path(args.positional()[0])) {
+    const auto out = args.get("-o");
+    if (!out) throw vpm::InputError("missing -o OUT; usage: " + vpm::cli::synopsis(self));
+    return vpm::cli::map_surface(args, args.positional()[0], *out, t_start);
+  }
   const vpm::cli::MeshInOut io = vpm::cli::mesh_in_out(args, self);
   const std::string& in = io.in;
 
@@ -95,9 +104,9 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   return vpm::cli::convergence_status("map", bm.convergence, args.has("--allow-partial"));
 }
 
-vpm::cli::Registrar reg(vpm::cli::with_expert({"map", "MESH -o OUT", "map a tet mesh to the unit ball, preserving local volumes",
-                         {{"--rounds", "R", "Moser rounds (default: until --tolerance, at most 8; 0: the initial map only)"},
-                          {"--tolerance", "T", "stop at this vertex mean |r-1| (default 0.01); missing it warns, by over 2x exits 4"},
+vpm::cli::Registrar reg(vpm::cli::with_expert({"map", "MESH|SURFACE -o OUT", "map a tet mesh to the unit ball preserving local volumes, or a closed surface to the unit sphere preserving local areas",
+                         {{"--rounds", "R", "Moser rounds (default: until --tolerance, at most 8; 0: the initial map only); surfaces: polish steps (default 100)"},
+                          {"--tolerance", "T", "stop at this vertex mean |r-1| (default 0.01; surfaces: face area mean |r-1|, default 0.005); missing it warns, by over 2x exits 4"},
                           {"--allow-partial", "", "exit 0 even when the map misses --tolerance by over 2x (the warning stays)"},
                           {"--method", "moser|paper|vsem", "moser (default) or a peer method for comparison"},
                           {"--sphere", "area|conformal", "boundary map to the sphere: equal-area (default) or conformal only"},

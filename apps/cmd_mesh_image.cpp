@@ -28,7 +28,7 @@ std::string cli_message(const vpm::MeshImageError& e) {
 int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   const std::string kUsage = vpm::cli::synopsis(self);
   vpm::cli::Args args(argv, self);
-  args.expect_positional(1, std::string("usage: ") + kUsage);
+  args.expect_positional(1, kUsage);
   const auto out = args.get("-o");
   if (!out) throw vpm::InputError(std::string("missing -o OUT; usage: ") + kUsage);
   if (args.has("--target-vertices") && args.has("--max-volume"))

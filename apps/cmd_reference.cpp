@@ -31,7 +31,7 @@ vpm::ReferenceSums merged(const std::string& list) {
 
 int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   vpm::cli::Args args(argv, self);
-  args.expect_positional(0, "usage: " + vpm::cli::synopsis(self));
+  args.expect_positional(0, vpm::cli::synopsis(self));
   const auto out = args.get("-o");
   if (!out) throw vpm::InputError("missing -o SUMS.h5; usage: " + vpm::cli::synopsis(self));
   if (args.has("--merge") == args.has("--normals"))

@@ -32,7 +32,7 @@ std::vector<std::pair<std::string, std::string>> named_images(const std::string&
 
 int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   vpm::cli::Args args(argv, self);
-  args.expect_positional(1, "usage: " + vpm::cli::synopsis(self));
+  args.expect_positional(1, vpm::cli::synopsis(self));
   const std::string mesh_path = args.positional()[0];
   const auto out = args.get("-o");
   if (!out) throw vpm::InputError("missing -o TABLE.h5; usage: " + vpm::cli::synopsis(self));

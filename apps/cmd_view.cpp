@@ -10,7 +10,7 @@ namespace {
 
 int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   vpm::cli::Args args(argv, self);
-  args.expect_positional(1, "usage: " + vpm::cli::synopsis(self));
+  args.expect_positional(1, vpm::cli::synopsis(self));
   const auto out = args.get("-o");
   if (!out) throw vpm::InputError("missing -o PAGE.html; usage: " + vpm::cli::synopsis(self));
   if (!vpm::view_page_available())

@@ -18,6 +18,9 @@ void write_vtu(const std::string& path, const TetMesh& mesh);         // ASCII (
 /// Writes the XML declaration and the opening VTKFile (with `vtkfile_attributes` after its
 /// type), UnstructuredGrid and Piece tags of a .vtu for n points and m cells (vtu_write.cpp).
 void open_vtu_piece(TextOut& o, std::string_view vtkfile_attributes, long long n, long long m);
+/// The <PointData> or <CellData> section (`section`) of a VTK XML piece with `fields` as ASCII
+/// DataArrays (Int32 for integer fields, Float64 otherwise; vtu_write.cpp).
+void write_ascii_fields(TextOut& o, const char* section, const std::vector<Field>& fields);
 void write_vtu_binary(const std::string& path, const TetMesh& mesh);  // appended raw (vtu_write_binary.cpp)
 TetMesh read_gmsh(const std::string& path);
 void write_gmsh(const std::string& path, const TetMesh& mesh);
@@ -28,6 +31,12 @@ TriSurface read_obj(const std::string& path);
 void write_obj(const std::string& path, const TriSurface& surface);
 TriSurface read_stl(const std::string& path);
 void write_stl(const std::string& path, const TriSurface& surface, bool binary);
+/// FreeSurfer's binary triangle surface (freesurfer.cpp); `head` = the file's first bytes.
+bool is_freesurfer_surface(const std::string& head);
+TriSurface read_freesurfer(const std::string& path);
+void write_freesurfer(const std::string& path, const TriSurface& surface);
+/// VTK XML PolyData, ASCII, with the surface's point and cell fields (vtp.cpp; written only).
+void write_vtp(const std::string& path, const TriSurface& surface);
 
 /// Checks that the mesh's fields have the right number of rows (InputError naming `path`).
 void check_fields(const std::string& path, const TetMesh& mesh);

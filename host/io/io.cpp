@@ -1,5 +1,9 @@
-// File-format dispatch by extension; the formats live in host/io_<format>.cpp.
+// File-format dispatch by extension; the formats live in host/io/<format>.cpp.
 #include "vpm/io.hpp"
+
+#include <algorithm>
+#include <array>
+#include <fstream>
 
 #include "io/formats.hpp"
 #include "io/text.hpp"
@@ -9,7 +13,26 @@ namespace vpm {
 
 namespace {
 const char* kMeshExts = ".node/.ele (TetGen), .mesh (Medit), .vtu (VTK), .msh (Gmsh 4.1)";
-const char* kSurfExts = ".off, .obj, .stl";
+const char* kSurfExts =
+    ".off, .obj, .stl, or a FreeSurfer surface (lh.white, lh.pial, lh.sphere, ...: recognised by its first bytes)";
+const char* kSurfOutExts = ".off, .obj, .stl, .vtp (VTK PolyData with the fields), or a FreeSurfer name (.white, "
+                           ".pial, .orig, .smoothwm, .inflated, .sphere, .reg, .midthickness, .surf)";
+// FreeSurfer names its surfaces hemisphere.kind: these kinds are written in its binary format
+constexpr std::array<const char*, 9> kFreeSurferKinds = {".white",   ".pial",   ".orig", ".smoothwm",    ".inflated",
+                                                         ".sphere", ".reg", ".midthickness", ".surf"};
+
+bool is_freesurfer_name(const std::string& e) {
+  return std::any_of(kFreeSurferKinds.begin(), kFreeSurferKinds.end(), [&](const char* k) { return e == k; });
+}
+
+// The first bytes of `path` (fewer when it is shorter; none when it cannot be read).
+std::string head_of(const std::string& path, size_t n) {
+  std::ifstream in(path, std::ios::binary);
+  std::string h(n, '\0');
+  in.read(h.data(), static_cast<std::streamsize>(n));
+  h.resize(static_cast<size_t>(std::max<std::streamsize>(0, in.gcount())));
+  return h;
+}
 }  // namespace
 
 bool is_mesh_path(const std::string& path) {
@@ -19,7 +42,8 @@ bool is_mesh_path(const std::string& path) {
 
 bool is_surface_path(const std::string& path) {
   const std::string e = detail::extension_of(path);
-  return e == ".off" || e == ".obj" || e == ".stl";
+  return e == ".off" || e == ".obj" || e == ".stl" || is_freesurfer_name(e) ||
+         detail::is_freesurfer_surface(head_of(path, 3));
 }
 
 TetMesh read_mesh(const std::string& path) {
@@ -46,11 +70,17 @@ void write_mesh(const std::string& path, const TetMesh& mesh, VtuEncoding encodi
   return detail::write_gmsh(path, mesh);
 }
 
+bool is_surface_output_path(const std::string& path) {
+  const std::string e = detail::extension_of(path);
+  return e == ".off" || e == ".obj" || e == ".stl" || e == ".vtp" || is_freesurfer_name(e);
+}
+
 TriSurface read_surface(const std::string& path) {
   const std::string e = detail::extension_of(path);
   if (e == ".off") return detail::read_off(path);
   if (e == ".obj") return detail::read_obj(path);
   if (e == ".stl") return detail::read_stl(path);
+  if (is_freesurfer_name(e) || detail::is_freesurfer_surface(head_of(path, 3))) return detail::read_freesurfer(path);
   throw InputError(path + ": unknown surface file extension '" + e + "' (expected " + kSurfExts +
                    ")");
 }
@@ -60,8 +90,9 @@ void write_surface(const std::string& path, const TriSurface& surface) {
   if (e == ".off") return detail::write_off(path, surface);
   if (e == ".obj") return detail::write_obj(path, surface);
   if (e == ".stl") return detail::write_stl(path, surface, false);
-  throw InputError(path + ": unknown surface file extension '" + e + "' (expected " + kSurfExts +
-                   ")");
+  if (e == ".vtp") return detail::write_vtp(path, surface);
+  if (is_freesurfer_name(e)) return detail::write_freesurfer(path, surface);
+  throw InputError(path + ": unknown surface file extension '" + e + "' (expected " + kSurfOutExts + ")");
 }
 
 void write_surface_stl_binary(const std::string& path, const TriSurface& surface) {

@@ -16,33 +16,34 @@ void open_vtu_piece(TextOut& o, std::string_view vtkfile_attributes, long long n
   o.integer(m) << "\">\n";
 }
 
+void write_ascii_fields(TextOut& o, const char* section, const std::vector<Field>& fs) {
+  o << "      <" << section << ">\n";
+  for (const Field& f : fs) {
+    o << "        <DataArray type=\"" << (f.integer ? "Int32" : "Float64") << "\" Name=\""
+      << xml_escape(f.name) << "\" NumberOfComponents=\"";
+    o.integer(f.values.cols()) << "\" format=\"ascii\">\n";
+    for (Eigen::Index i = 0; i < f.values.rows(); ++i) {
+      for (Eigen::Index k = 0; k < f.values.cols(); ++k) {
+        if (k) o << ' ';
+        if (f.integer)
+          o.integer(static_cast<long long>(std::llround(f.values(i, k))));
+        else
+          o.real(f.values(i, k));
+      }
+      o << '\n';
+    }
+    o << "        </DataArray>\n";
+  }
+  o << "      </" << section << ">\n";
+}
+
 void write_vtu(const std::string& path, const TetMesh& mesh) {
   AtomicFile file(path);
   TextOut o(file.stream());
   const long long n = mesh.num_vertices(), m = mesh.num_tets();
   open_vtu_piece(o, "version=\"0.1\" byte_order=\"LittleEndian\"", n, m);
-  auto fields = [&](const char* section, const std::vector<Field>& fs) {
-    o << "      <" << section << ">\n";
-    for (const Field& f : fs) {
-      o << "        <DataArray type=\"" << (f.integer ? "Int32" : "Float64") << "\" Name=\""
-        << xml_escape(f.name) << "\" NumberOfComponents=\"";
-      o.integer(f.values.cols()) << "\" format=\"ascii\">\n";
-      for (Eigen::Index i = 0; i < f.values.rows(); ++i) {
-        for (Eigen::Index k = 0; k < f.values.cols(); ++k) {
-          if (k) o << ' ';
-          if (f.integer)
-            o.integer(static_cast<long long>(std::llround(f.values(i, k))));
-          else
-            o.real(f.values(i, k));
-        }
-        o << '\n';
-      }
-      o << "        </DataArray>\n";
-    }
-    o << "      </" << section << ">\n";
-  };
-  fields("PointData", mesh.point_data);
-  fields("CellData", mesh.cell_data);
+  write_ascii_fields(o, "PointData", mesh.point_data);
+  write_ascii_fields(o, "CellData", mesh.cell_data);
   o << "      <Points>\n"
        "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"ascii\">\n";
   for (long long i = 0; i < n; ++i) {

@@ -31,19 +31,26 @@ void write_mesh(const std::string& path, const TetMesh& mesh);
 /// The same, with the encoding of a .vtu file chosen (ignored for other formats).
 void write_mesh(const std::string& path, const TetMesh& mesh, VtuEncoding encoding);
 
-/// Reads a triangle surface.
+/// Reads a triangle surface: .off, .obj, .stl by extension, FreeSurfer's binary triangle
+/// surfaces (lh.white, lh.pial, ...) by their first bytes (FF FF FE) or FreeSurfer's names
+/// (.white, .pial, .orig, .smoothwm, .inflated, .sphere, .reg, .midthickness, .surf).
 TriSurface read_surface(const std::string& path);
 
-/// Writes a triangle surface (.off, .obj, .stl). STL is written as ASCII with exact decimal
-/// coordinates; use write_surface_stl_binary() for the compact (float) form.
+/// Writes a triangle surface: .off, .obj, .stl, .vtp (VTK XML PolyData with the surface's
+/// point and cell fields), FreeSurfer's binary format under FreeSurfer's names (float32
+/// coordinates). STL is written as ASCII with exact decimal coordinates; use
+/// write_surface_stl_binary() for the compact (float) form.
 void write_surface(const std::string& path, const TriSurface& surface);
 
 /// Writes binary STL (coordinates rounded to float, normals from the triangles).
 void write_surface_stl_binary(const std::string& path, const TriSurface& surface);
 
+/// True if write_surface() writes `path` (by its extension).
+bool is_surface_output_path(const std::string& path);
 /// True if `path` has an extension read_mesh() understands.
 bool is_mesh_path(const std::string& path);
-/// True if `path` has an extension read_surface() understands.
+/// True if read_surface() reads `path`: by its extension, or a FreeSurfer surface by its first
+/// bytes.
 bool is_surface_path(const std::string& path);
 
 }  // namespace vpm

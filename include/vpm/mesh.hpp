@@ -45,10 +45,13 @@ struct TetMesh {
 /// "`what`: no point field original_position (3 components): ..." when it is missing.
 Points native_positions(const TetMesh& mapped, const std::string& what);
 
-/// A triangle surface (input to meshing, or a mesh boundary).
+/// A triangle surface (input to meshing, a mesh boundary, or a surface mapped to the sphere).
 struct TriSurface {
   Points vertices;
   Triangles triangles;  ///< oriented with outward normals for closed surfaces
+  /// Fields, written where the format carries them (.vtp): point data one row a vertex, cell
+  /// data one row a triangle (e.g. "original_position", "face_area_ratio").
+  std::vector<Field> point_data, cell_data;
 };
 
 }  // namespace vpm

@@ -1,0 +1,68 @@
+// `vpm map SURFACE -o OUT` (map_surface.hpp).
+#include "map_surface.hpp"
+
+#include "vpm/device.hpp"
+#include "vpm/error.hpp"
+#include "vpm/format.hpp"
+#include "vpm/initial_map.hpp"
+#include "vpm/io.hpp"
+#include "vpm/json.hpp"
+#include "vpm/surface_map.hpp"
+
+namespace vpm::cli {
+
+int map_surface(const Args& args, const std::string& in, const std::string& out, Clock::time_point t_start) {
+  for (const char* flag : {"--method", "--solver", "--boundary", "--preconditioner", "--rk-steps"})
+    if (args.has(flag))
+      throw InputError(std::string("option ") + flag + ": applies to tet meshes only; " + in +
+                       " is a surface, mapped to the sphere");
+  if (!is_surface_output_path(out))
+    throw InputError(out + ": unknown output extension for a surface (expected .vtp, .off, .obj, .stl or a FreeSurfer name)");
+  SurfaceMapOptions so;
+  so.tolerance = args.get_double("--tolerance", so.tolerance);
+  if (!(so.tolerance >= 0)) throw InputError("option --tolerance: must be >= 0");
+  so.polish_rounds = args.get_int("--rounds", so.polish_rounds);
+  if (so.polish_rounds < 0) throw InputError("option --rounds: must be >= 0");
+  so.sphere.sphere_density = parse_option("--sphere", [&] { return parse_sphere_density(args.get("--sphere", "area")); });
+  so.sphere.sphere_start = parse_option("--sphere-start", [&] { return parse_sphere_start(args.get("--sphere-start", "auto")); });
+  so.sphere.density_solve = parse_option("--sphere-solve", [&] { return parse_density_solve(args.get("--sphere-solve", "auto")); });
+  so.deadline = time_budget(args, t_start);
+  so.progress = [](const std::string& line) { progress(line); };
+  const auto report_path = args.get("--report");
+
+  auto t0 = Clock::now();
+  const TriSurface surface = read_surface(in);
+  const double t_read = seconds_since(t0);
+  progress("read " + in + ": " + std::to_string(surface.vertices.rows()) + " vertices, " +
+           std::to_string(surface.triangles.rows()) + " triangles");
+  validate_closed_surface(surface, in);  // its messages name the file
+  Device& dev = Device::current();
+  const SurfaceMapResult r = map_to_sphere(surface, so, &dev);
+  const SurfaceMapReport& rep = r.report;
+
+  TriSurface mapped;
+  mapped.vertices = r.sphere;
+  mapped.triangles = surface.triangles;
+  mapped.point_data.push_back({"original_position", surface.vertices, false});
+  mapped.point_data.push_back({"vertex_area_ratio", rep.final.vertex_ratio, false});
+  mapped.cell_data.push_back({"face_area_ratio", rep.final.face_ratio, false});
+  t0 = Clock::now();
+  write_surface(out, mapped);
+  Json report = to_json(rep);
+  report["device"] = dev.name();
+  report["timings_s"]["read"] = t_read;
+  report["timings_s"]["write"] = seconds_since(t0);
+  report["timings_s"]["total"] = seconds_since(t_start);
+  info("wrote " + out + ": " + std::to_string(mapped.vertices.rows()) + " vertices on the unit sphere, " +
+       std::to_string(mapped.triangles.rows()) + " triangles; face area mean |r-1| " +
+       pct(rep.initial.face_area_ratio.mean_abs_dev) + " (sphere map) -> " + pct(rep.final.face_area_ratio.mean_abs_dev) +
+       ", 0 flipped faces");
+  if (report_path) write_json_file(*report_path, report);
+  if (rep.stop_reason == "time_budget" && !rep.converged)
+    return time_budget_status("map", "face area mean |r-1| " + pct(rep.final.face_area_ratio.mean_abs_dev),
+                              args.has("--allow-partial"));
+  return convergence_status("map", "face area mean |r-1|", rep.final.face_area_ratio.mean_abs_dev, so.tolerance,
+                            rep.stop_reason, args.has("--allow-partial"), pct);
+}
+
+}  // namespace vpm::cli

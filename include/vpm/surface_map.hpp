@@ -1,0 +1,116 @@
+#pragma once
+// The area-preserving map of a closed genus-0 triangle surface to the unit sphere: the paper's
+// method one dimension down (docs/surfaces.md).
+//
+//  1. sphere map (vpm::sphere_map, the initial map's step 2 for a tet mesh's boundary): the
+//     spherical conformal map, Moebius balancing, then the compressible flow on the sphere that
+//     equalises each vertex's share of the area (a log-density Moser flow, map/sphere_density);
+//     flip-free by construction, a progressive embedding where the conformal map of long tubes
+//     underflows.
+//  2. polish of the face areas: Gauss-Newton steps on the chord triangles' areas against the
+//     input's, min over tangent moves dx of sum_f (1 - A_f(x + dx) / t_f)^2 linearised and solved
+//     by early-stopped CGLS from dx = 0 (the same iteration as the tet polish, map/polish_cgls),
+//     each step put back on the sphere, halved while it flips a face, kept only while it lowers
+//     the face distortion.
+//
+// The face area ratio of face f is (A_f / sum A) / (A0_f / sum A0), with A the chord (flat)
+// triangle areas on the sphere and A0 the input's; a face is flipped when its chord triangle
+// faces the centre (det(a, b, c) <= 0). The map never returns a flipped face.
+#include <Eigen/Core>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "vpm/initial_map.hpp"
+#include "vpm/json.hpp"
+#include "vpm/mesh.hpp"
+#include "vpm/metrics.hpp"
+#include "vpm/timing.hpp"
+
+namespace vpm {
+
+class Device;
+
+struct SurfaceMapOptions {
+  /// Stop polishing once the face area mean |r - 1| is at most this.
+  double tolerance = 0.005;
+  /// At most this many polish steps (0: the sphere map alone).
+  int polish_rounds = 100;
+  /// CGLS iterations per polish step.
+  int polish_iterations = 60;
+  /// Steps end once one lowers the face area mean |r - 1| by less than this fraction of it.
+  double polish_min_gain = 0.002;
+  /// The sphere map's options (its `sphere_density`, `sphere_start`, `density_*`, the conformal
+  /// and balancing steps); the tet-specific fields are ignored.
+  InitialMapOptions sphere{};
+  Deadline deadline{};  ///< checked before every polish step
+  /// Called with one line per step (progress display); may be empty.
+  std::function<void(const std::string&)> progress;
+};
+
+/// One polish step (a "round" of the report, kind "polish").
+struct SurfaceMapStep {
+  double face_mean_abs_dev = 0;  ///< after the step (or before it, when discarded)
+  int solver_iterations = 0;
+  double solver_residual = 0;
+  double step = 1;               ///< the fraction of the CGLS direction taken (halved on flips)
+  int frozen_vertices = 0;       ///< vertices held still because their faces flipped in a trial
+  bool discarded = false;
+  double seconds = 0;
+};
+
+/// The map's area metrics against the input (docs/design.md 5 one dimension down; both surfaces
+/// normalised to total area 1, a vertex's dual area a third of its faces' areas).
+struct SurfaceMetrics {
+  int flipped_faces = 0;           ///< chord triangles facing the centre
+  RatioStats face_area_ratio;      ///< normalised face area ratios
+  RatioStats vertex_area_ratio;    ///< normalised dual area ratios
+  double max_radius_error = 0;     ///< max | |x| - 1 |
+  Eigen::VectorXd face_ratio;      ///< per-face ratios (length faces)
+  Eigen::VectorXd vertex_ratio;    ///< per-vertex ratios (length vertices)
+};
+/// Metrics of `mapped` (n x 3 on the unit sphere) against `reference` (the input), same faces.
+SurfaceMetrics surface_metrics(const Points& reference, const Points& mapped, const Triangles& faces);
+/// {"flipped_faces", "face_area_ratio": to_json(RatioStats), "vertex_area_ratio": ...,
+///  "max_radius_error"}
+Json to_json(const SurfaceMetrics& metrics);
+
+struct SurfaceMapReport {
+  int vertices = 0, faces = 0;
+  bool reversed = false;                    ///< the input's faces pointed inwards (mapped reversed)
+  SphereMapReport sphere;                   ///< step 1
+  SurfaceMetrics initial;                   ///< after step 1
+  std::vector<SurfaceMapStep> polish;       ///< step 2
+  /// "tolerance", "rounds", "stalled", "time_budget", or "none" (polish_rounds 0)
+  std::string stop_reason = "none";
+  bool converged = false;                   ///< face area mean |r - 1| <= tolerance
+  double tolerance = 0;
+  SurfaceMetrics final;                     ///< of the returned map
+  double seconds_sphere_map = 0, seconds_polish = 0, seconds_total = 0;
+};
+/// {"input": {"vertices","faces","reversed"}, "initial": to_json(SurfaceMetrics) (after the
+///  sphere map), "final": the same (the returned map), "rounds": [{"round","kind": "polish",
+///  "face_mean_abs_dev","solver_iterations","solver_residual","step_fraction","frozen_vertices",
+///  "discarded","seconds"}], "sphere_map": to_json(SphereMapReport), "stop_reason",
+///  "converged", "convergence": {"tolerance","reached","converged"},
+///  "timings_s": {"sphere_map","polish","total"}}
+Json to_json(const SurfaceMapReport& report);
+
+struct SurfaceMapResult {
+  Points sphere;            ///< n x 3, every row on the unit sphere, same rows as the input
+  SurfaceMapReport report;
+};
+
+/// Checks that `surface` is one closed, manifold, genus-0 surface with consistently oriented
+/// faces; throws InputError naming `what` and the first problem (an open or non-manifold edge, a
+/// non-manifold vertex, the genus, the number of components) otherwise.
+void validate_closed_surface(const TriSurface& surface, const std::string& what);
+
+/// Maps `surface` (validate_closed_surface) to the unit sphere; see above. `device` (may be
+/// null: the host) is where the sphere map's equal-area steps may be solved
+/// (InitialMapOptions::density_solve). Throws InputError for a surface that is not one closed
+/// genus-0 surface, NumericalError when the sphere map flips faces it cannot repair.
+SurfaceMapResult map_to_sphere(const TriSurface& surface, const SurfaceMapOptions& options = {},
+                               Device* device = nullptr);
+
+}  // namespace vpm
