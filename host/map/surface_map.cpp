@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "core/parallel.hpp"
+#include "map/surface_area.hpp"
 #include "map/polish_cgls.hpp"
 #include "vpm/error.hpp"
 #include "vpm/format.hpp"
@@ -17,6 +18,8 @@ namespace vpm {
 
 namespace {
 
+using detail::face_areas;
+using detail::flipped_list;
 using detail::parallel_for;
 
 // The largest log area change one polish step asks of a face.
@@ -27,28 +30,6 @@ constexpr int kFreezeTrials = 8;
 constexpr int kHalvings = 12;
 
 Eigen::Vector3d row3(const Points& x, int i) { return x.row(i).transpose(); }
-
-// Twice the signed area vector of face f: (b - a) x (c - a).
-Eigen::Vector3d face_normal(const Points& x, const Triangles& f, int t) {
-  const Eigen::Vector3d a = row3(x, f(t, 0));
-  return (row3(x, f(t, 1)) - a).cross(row3(x, f(t, 2)) - a);
-}
-
-Eigen::VectorXd face_areas(const Points& x, const Triangles& f) {
-  Eigen::VectorXd a(f.rows());
-  parallel_for(static_cast<int>(f.rows()), 16384, [&](int t0, int t1) {
-    for (int t = t0; t < t1; ++t) a(t) = 0.5 * face_normal(x, f, t).norm();
-  });
-  return a;
-}
-
-// Chord triangles facing the centre: det(a, b, c) <= 0.
-std::vector<int> flipped_list(const Points& x, const Triangles& f) {
-  std::vector<int> out;
-  for (Eigen::Index t = 0; t < f.rows(); ++t)
-    if (row3(x, f(t, 0)).dot(row3(x, f(t, 1)).cross(row3(x, f(t, 2)))) <= 0) out.push_back(static_cast<int>(t));
-  return out;
-}
 
 // Face area mean |r - 1| of `area` against `area0` (both normalised to their totals).
 double face_distortion(const Eigen::VectorXd& area0, const Eigen::VectorXd& area) {
@@ -74,7 +55,7 @@ class FaceAreaSystem {
       for (int t = t0; t < t1; ++t) {
         const Eigen::Vector3d a = row3(x_, f_(t, 0)), b = row3(x_, f_(t, 1)), c = row3(x_, f_(t, 2));
         const Eigen::Vector3d nrm = (b - a).cross(c - a);
-        const double len = nrm.norm(), area = 0.5 * len;
+        const double len = nrm.norm(), area = std::max(0.5 * len, 1e-300);
         const Eigen::Vector3d nh = len > 0 ? Eigen::Vector3d(nrm / len) : Eigen::Vector3d::Zero();
         const double s = 0.5 / area;
         g_[3 * static_cast<size_t>(t)] = s * (b - c).cross(nh);
@@ -169,88 +150,6 @@ Points on_sphere(const Points& x) {
 
 }  // namespace
 
-SurfaceMetrics surface_metrics(const Points& reference, const Points& mapped, const Triangles& faces) {
-  if (reference.rows() != mapped.rows()) throw InputError("surface_metrics: reference and mapped differ in size");
-  SurfaceMetrics m;
-  const Eigen::VectorXd a0 = face_areas(reference, faces), a = face_areas(mapped, faces);
-  const double s0 = a0.sum(), s = a.sum();
-  m.face_ratio.resize(faces.rows());
-  for (Eigen::Index t = 0; t < faces.rows(); ++t) m.face_ratio(t) = (a(t) / s) / (a0(t) / s0);
-  Eigen::VectorXd d0 = Eigen::VectorXd::Zero(mapped.rows()), d = Eigen::VectorXd::Zero(mapped.rows());
-  for (Eigen::Index t = 0; t < faces.rows(); ++t)
-    for (int k = 0; k < 3; ++k) {
-      d0(faces(t, k)) += a0(t) / 3;
-      d(faces(t, k)) += a(t) / 3;
-    }
-  m.vertex_ratio = (d / s).cwiseQuotient(d0 / s0);
-  m.face_area_ratio = ratio_stats(m.face_ratio);
-  m.vertex_area_ratio = ratio_stats(m.vertex_ratio);
-  m.flipped_faces = static_cast<int>(flipped_list(mapped, faces).size());
-  for (Eigen::Index i = 0; i < mapped.rows(); ++i)
-    m.max_radius_error = std::max(m.max_radius_error, std::abs(mapped.row(i).norm() - 1.0));
-  return m;
-}
-
-Json to_json(const SurfaceMetrics& m) {
-  Json j = Json::object();
-  j["flipped_faces"] = m.flipped_faces;
-  j["face_area_ratio"] = to_json(m.face_area_ratio);
-  j["vertex_area_ratio"] = to_json(m.vertex_area_ratio);
-  j["max_radius_error"] = m.max_radius_error;
-  return j;
-}
-
-void validate_closed_surface(const TriSurface& s, const std::string& what) {
-  const int n = static_cast<int>(s.vertices.rows());
-  const Eigen::Index m = s.triangles.rows();
-  if (m < 4) throw InputError(what + ": " + std::to_string(m) + " triangles; a closed surface needs at least 4");
-  if (!s.vertices.allFinite()) throw InputError(what + ": a vertex coordinate is not finite");
-  std::vector<char> used(static_cast<size_t>(n), 0);
-  for (Eigen::Index t = 0; t < m; ++t)
-    for (int k = 0; k < 3; ++k) {
-      const int v = s.triangles(t, k);
-      if (v < 0 || v >= n)
-        throw InputError(what + ": triangle " + std::to_string(t) + ": vertex index " + std::to_string(v) +
-                         " out of range (" + std::to_string(n) + " vertices)");
-      used[static_cast<size_t>(v)] = 1;
-    }
-  for (int v = 0; v < n; ++v)
-    if (!used[static_cast<size_t>(v)])
-      throw InputError(what + ": vertex " + std::to_string(v) + " is in no triangle; the map needs every vertex on the surface");
-  const SurfaceTopology st = surface_topology(n, s.triangles);
-  if (st.open_edges)
-    throw InputError(what + ": edge (" + std::to_string(st.first_bad_edge[0]) + ", " + std::to_string(st.first_bad_edge[1]) +
-                     ") is open: the surface has holes (" + std::to_string(st.open_edges) +
-                     " open edges); the sphere map needs a closed surface");
-  if (st.nonmanifold_edges)
-    throw InputError(what + ": edge (" + std::to_string(st.first_bad_edge[0]) + ", " + std::to_string(st.first_bad_edge[1]) +
-                     ") has three or more triangles: not a manifold (" + std::to_string(st.nonmanifold_edges) + " such edges)");
-  if (st.nonmanifold_vertices)
-    throw InputError(what + ": vertex " + std::to_string(st.first_bad_vertex) + ": the surface pinches there (" +
-                     std::to_string(st.nonmanifold_vertices) + " non-manifold vertices)");
-  if (st.components != 1)
-    throw InputError(what + ": " + std::to_string(st.components) + " separate surfaces; the sphere map needs exactly one");
-  if (st.euler != 2)
-    throw InputError(what + ": Euler characteristic " + std::to_string(st.euler) + " (genus " + std::to_string(st.genus()) +
-                     "); the sphere map needs a genus-0 surface (2)");
-  // consistent orientation: every directed edge once
-  std::vector<std::pair<long long, long long>> directed;
-  directed.reserve(3 * static_cast<size_t>(m));
-  for (Eigen::Index t = 0; t < m; ++t)
-    for (int k = 0; k < 3; ++k) directed.emplace_back(s.triangles(t, k), s.triangles(t, (k + 1) % 3));
-  std::sort(directed.begin(), directed.end());
-  for (size_t i = 1; i < directed.size(); ++i)
-    if (directed[i] == directed[i - 1])
-      throw InputError(what + ": edge (" + std::to_string(directed[i].first) + ", " + std::to_string(directed[i].second) +
-                       ") runs the same way in two triangles: the faces are not consistently oriented");
-  const Eigen::VectorXd a = face_areas(s.vertices, s.triangles);
-  double total = a.sum();
-  for (Eigen::Index t = 0; t < m; ++t)
-    if (!(a(t) > 1e-14 * total))
-      throw InputError(what + ": triangle " + std::to_string(t) + " has no area (" + strprintf("%.3g", a(t)) +
-                       "); face area ratios need every face to have one");
-}
-
 Json to_json(const SurfaceMapReport& r) {
   Json j = Json::object();
   j["input"]["vertices"] = r.vertices;
@@ -285,6 +184,80 @@ Json to_json(const SurfaceMapReport& r) {
   return j;
 }
 
+namespace {
+
+// Each vertex's (face, corner) pairs as 3 f + k, CSR: the gathers of A^T.
+struct FaceIncidence {
+  std::vector<int> ptr, items;
+};
+FaceIncidence vertex_face_incidence(int n, const Triangles& f) {
+  FaceIncidence inc;
+  inc.ptr.assign(static_cast<size_t>(n) + 1, 0);
+  inc.items.resize(3 * static_cast<size_t>(f.rows()));
+  for (Eigen::Index t = 0; t < f.rows(); ++t)
+    for (int k = 0; k < 3; ++k) ++inc.ptr[static_cast<size_t>(f(t, k)) + 1];
+  for (int v = 0; v < n; ++v) inc.ptr[static_cast<size_t>(v) + 1] += inc.ptr[static_cast<size_t>(v)];
+  std::vector<int> fill(inc.ptr.begin(), inc.ptr.end() - 1);
+  for (Eigen::Index t = 0; t < f.rows(); ++t)
+    for (int k = 0; k < 3; ++k)
+      inc.items[static_cast<size_t>(fill[static_cast<size_t>(f(t, k))]++)] = 3 * static_cast<int>(t) + k;
+  return inc;
+}
+
+// One polish step from x (kept when it lowers the face distortion d, which is then updated):
+// the CGLS direction, held still where it flips faces and tried again, then halved.
+SurfaceMapStep polish_step(const Triangles& f, const Eigen::VectorXd& area0, const FaceIncidence& inc, int iterations,
+                           Points& x, double& d) {
+  const auto t_step = Clock::now();
+  const Eigen::VectorXd area = face_areas(x, f);
+  const Eigen::VectorXd target = area0 * (area.sum() / area0.sum());
+  const FaceAreaSystem sys(x, f, target, inc.ptr, inc.items);
+  FaceAreaBackend bk(sys);
+  detail::PolishDirection dir = detail::polish_cgls(bk, iterations);
+  SurfaceMapStep st;
+  st.solver_iterations = dir.iterations;
+  st.solver_residual = dir.residual;
+  Points y;
+  bool ok = false;
+  std::vector<char> frozen(static_cast<size_t>(x.rows()), 0);
+  for (int h = 0; h < kHalvings && !ok; ++h) {
+    for (int trial = 0; trial < kFreezeTrials && !ok; ++trial) {
+      y = on_sphere(x + st.step * dir.dx);
+      const std::vector<int> bad = flipped_list(y, f);
+      ok = bad.empty();
+      for (int t : bad)
+        for (int j = 0; j < 3; ++j) {
+          dir.dx.row(f(t, j)).setZero();
+          frozen[static_cast<size_t>(f(t, j))] = 1;
+        }
+    }
+    if (!ok) st.step *= 0.5;
+  }
+  st.frozen_vertices = static_cast<int>(std::count(frozen.begin(), frozen.end(), 1));
+  const double dn = ok ? face_distortion(area0, face_areas(y, f)) : d;
+  st.discarded = !ok || dn >= d;
+  if (!st.discarded) {
+    x = std::move(y);
+    d = dn;
+  }
+  st.face_mean_abs_dev = d;
+  st.seconds = seconds_since(t_step);
+  return st;
+}
+
+// A surface with inward faces (negative enclosed volume) is mapped with its faces reversed: the
+// sphere map and the flip test want outward ones.
+bool faces_inward(const TriSurface& s) {
+  double volume6 = 0;
+  const Eigen::Vector3d c = s.vertices.colwise().mean().transpose();
+  for (Eigen::Index t = 0; t < s.triangles.rows(); ++t)
+    volume6 += (row3(s.vertices, s.triangles(t, 0)) - c)
+                   .dot((row3(s.vertices, s.triangles(t, 1)) - c).cross(row3(s.vertices, s.triangles(t, 2)) - c));
+  return volume6 < 0;
+}
+
+}  // namespace
+
 SurfaceMapResult map_to_sphere(const TriSurface& input, const SurfaceMapOptions& opt, Device* device) {
   const auto t_total = Clock::now();
   validate_closed_surface(input, "surface");
@@ -293,15 +266,10 @@ SurfaceMapResult map_to_sphere(const TriSurface& input, const SurfaceMapOptions&
   rep.vertices = static_cast<int>(input.vertices.rows());
   rep.faces = static_cast<int>(input.triangles.rows());
   rep.tolerance = opt.tolerance;
-  // the sphere map and the flip test want outward faces: a surface oriented inwards (negative
-  // enclosed volume) is mapped with its faces reversed
-  TriSurface s = input;
-  double volume6 = 0;
-  const Eigen::Vector3d c = input.vertices.colwise().mean().transpose();
-  for (Eigen::Index t = 0; t < s.triangles.rows(); ++t)
-    volume6 += (row3(s.vertices, s.triangles(t, 0)) - c)
-                   .dot((row3(s.vertices, s.triangles(t, 1)) - c).cross(row3(s.vertices, s.triangles(t, 2)) - c));
-  rep.reversed = volume6 < 0;
+  TriSurface s;
+  s.vertices = input.vertices;
+  s.triangles = input.triangles;
+  rep.reversed = faces_inward(s);
   if (rep.reversed) s.triangles.col(1).swap(s.triangles.col(2));
   const Triangles& f = s.triangles;
 
@@ -315,72 +283,19 @@ SurfaceMapResult map_to_sphere(const TriSurface& input, const SurfaceMapOptions&
     throw NumericalError("map_to_sphere: the sphere map left " + std::to_string(rep.initial.flipped_faces) +
                          " flipped faces");
   const Eigen::VectorXd area0 = face_areas(s.vertices, f);
-  double d = face_distortion(area0, face_areas(x, f));
+  double d = rep.initial.face_area_ratio.mean_abs_dev;
   if (opt.progress) opt.progress(strprintf("sphere map: face area mean |r-1| %.4f, %.2f s", d, rep.seconds_sphere_map));
 
-  // vertex -> (face, corner) incidence for the gathers of A^T
-  const int n = static_cast<int>(x.rows()), m = static_cast<int>(f.rows());
-  std::vector<int> ptr(static_cast<size_t>(n) + 1, 0), inc(3 * static_cast<size_t>(m));
-  for (int t = 0; t < m; ++t)
-    for (int k = 0; k < 3; ++k) ++ptr[static_cast<size_t>(f(t, k)) + 1];
-  for (int v = 0; v < n; ++v) ptr[static_cast<size_t>(v) + 1] += ptr[static_cast<size_t>(v)];
-  {
-    std::vector<int> fill(ptr.begin(), ptr.end() - 1);
-    for (int t = 0; t < m; ++t)
-      for (int k = 0; k < 3; ++k) inc[static_cast<size_t>(fill[static_cast<size_t>(f(t, k))]++)] = 3 * t + k;
-  }
-
   t0 = Clock::now();
+  const FaceIncidence inc = vertex_face_incidence(static_cast<int>(x.rows()), f);
   rep.stop_reason = opt.polish_rounds > 0 ? "rounds" : "none";
   for (int k = 0; k < opt.polish_rounds; ++k) {
-    if (d <= opt.tolerance) {
-      rep.stop_reason = "tolerance";
+    if (d <= opt.tolerance || opt.deadline.passed()) {
+      rep.stop_reason = d <= opt.tolerance ? "tolerance" : "time_budget";
       break;
     }
-    if (opt.deadline.passed()) {
-      rep.stop_reason = "time_budget";
-      break;
-    }
-    const auto t_step = Clock::now();
-    const Eigen::VectorXd area = face_areas(x, f);
-    const Eigen::VectorXd target = area0 * (area.sum() / area0.sum());
-    const FaceAreaSystem sys(x, f, target, ptr, inc);
-    FaceAreaBackend bk(sys);
-    detail::PolishDirection dir = detail::polish_cgls(bk, opt.polish_iterations);
-    SurfaceMapStep st;
-    st.solver_iterations = dir.iterations;
-    st.solver_residual = dir.residual;
-    // the step: where it flips faces their vertices are held still and it is tried again, then
-    // halved
-    Points y;
-    bool ok = false;
-    std::vector<char> frozen(static_cast<size_t>(n), 0);
-    for (int h = 0; h < kHalvings && !ok; ++h, st.step *= 0.5) {
-      for (int trial = 0; trial < kFreezeTrials; ++trial) {
-        y = on_sphere(x + st.step * dir.dx);
-        const std::vector<int> bad = flipped_list(y, f);
-        if (bad.empty()) {
-          ok = true;
-          break;
-        }
-        for (int t : bad)
-          for (int j = 0; j < 3; ++j) {
-            dir.dx.row(f(t, j)).setZero();
-            frozen[static_cast<size_t>(f(t, j))] = 1;
-          }
-      }
-      if (ok) break;
-    }
-    st.frozen_vertices = static_cast<int>(std::count(frozen.begin(), frozen.end(), 1));
-    const double dn = ok ? face_distortion(area0, face_areas(y, f)) : d;
-    st.discarded = !ok || dn >= d;
     const double before = d;
-    if (!st.discarded) {
-      x = std::move(y);
-      d = dn;
-    }
-    st.face_mean_abs_dev = d;
-    st.seconds = seconds_since(t_step);
+    const SurfaceMapStep st = polish_step(f, area0, inc, opt.polish_iterations, x, d);
     rep.polish.push_back(st);
     if (opt.progress)
       opt.progress(strprintf("polish %d: face area mean |r-1| %.4f, step %g, %.2f s%s", k + 1, d, st.step, st.seconds,

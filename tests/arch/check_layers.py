@@ -17,7 +17,7 @@ PUBLIC = {
     "io": ["io", "landmarks"],
     "linalg": ["sparse", "laplacian", "solver", "amg"],
     "image": ["image", "mesh_image", "mesh_image_report", "voxelize"],
-    "map": ["initial_map", "untangle", "volume_map", "volume_map_peers", "polish", "ball_map"],
+    "map": ["initial_map", "untangle", "volume_map", "volume_map_peers", "polish", "ball_map", "surface_map"],
     "register": ["rbf", "registration", "dense_registration", "registration_preset", "transfer"],
     "collective": ["collective", "elements", "element_sampler", "sampling", "covariates", "statistics", "reference_sums", "calibration", "map_back", "cohort_view", "view_page", "label_names", "template_registration"],
 }

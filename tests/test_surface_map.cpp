@@ -1,0 +1,220 @@
+// The area-preserving map of closed surfaces to the sphere (vpm/surface_map.hpp), its input
+// checks, FreeSurfer surfaces (host/io/freesurfer.cpp), and `vpm map SURFACE`.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdint>
+#include <fstream>
+#include <string>
+
+#include "support/process.hpp"
+#include "support/scratch.hpp"
+#include "vpm/error.hpp"
+#include "vpm/icosphere.hpp"
+#include "vpm/io.hpp"
+#include "vpm/json.hpp"
+#include "vpm/surface_map.hpp"
+
+using namespace vpm;
+using vpm::test::run_status;
+using vpm::test::slurp;
+
+namespace {
+
+const std::string kVpm = VPM_BINARY;
+
+// An ellipsoid 1.8 : 1 : 0.6 with a bump of 40 % on one side (non-uniform areas that the
+// conformal map does not keep), from the icosphere of `level`.
+TriSurface bumpy_ellipsoid(int level) {
+  TriSurface s = icosphere(level);
+  const Eigen::RowVector3d bump(0.6, 0.0, 0.8);
+  for (Eigen::Index i = 0; i < s.vertices.rows(); ++i) {
+    const Eigen::RowVector3d p = s.vertices.row(i);
+    const double g = 1.0 + 0.4 * std::exp(-(p - bump).squaredNorm() / 0.15);
+    s.vertices.row(i) = Eigen::RowVector3d(1.8 * p(0), p(1), 0.6 * p(2)) * g;
+  }
+  return s;
+}
+
+void check_on_sphere_without_flips(const SurfaceMapResult& r, const TriSurface& s) {
+  REQUIRE(r.sphere.rows() == s.vertices.rows());
+  for (Eigen::Index i = 0; i < r.sphere.rows(); ++i) REQUIRE(std::abs(r.sphere.row(i).norm() - 1.0) < 1e-12);
+  const SurfaceMetrics m = surface_metrics(s.vertices, r.sphere, s.triangles);
+  CHECK(m.flipped_faces == 0);
+  CHECK(r.report.final.flipped_faces == 0);
+  CHECK(m.face_area_ratio.mean_abs_dev == Approx(r.report.final.face_area_ratio.mean_abs_dev).epsilon(1e-12));
+}
+
+}  // namespace
+
+TEST_CASE("surface map: an ellipsoid with a bump reaches face areas within 0.5 %, every face outwards") {
+  const TriSurface s = bumpy_ellipsoid(4);
+  const SurfaceMapResult r = map_to_sphere(s);
+  check_on_sphere_without_flips(r, s);
+  const SurfaceMapReport& rep = r.report;
+  INFO("sphere map " << rep.initial.face_area_ratio.mean_abs_dev << " final " << rep.final.face_area_ratio.mean_abs_dev);
+  // the polish does the work the sphere map leaves
+  CHECK(rep.initial.face_area_ratio.mean_abs_dev > 0.01);
+  CHECK(rep.final.face_area_ratio.mean_abs_dev <= 0.005);
+  CHECK(rep.converged);
+  CHECK(rep.stop_reason == "tolerance");
+  CHECK(!rep.polish.empty());
+  CHECK(rep.final.vertex_area_ratio.mean_abs_dev < rep.initial.vertex_area_ratio.mean_abs_dev);
+  // without the polish the map is the sphere map's
+  SurfaceMapOptions none;
+  none.polish_rounds = 0;
+  const SurfaceMapResult r0 = map_to_sphere(s, none);
+  CHECK(r0.report.stop_reason == "none");
+  CHECK(r0.report.final.face_area_ratio.mean_abs_dev == Approx(rep.initial.face_area_ratio.mean_abs_dev).epsilon(1e-9));
+  // a tighter tolerance is reached by more steps
+  SurfaceMapOptions tight;
+  tight.tolerance = 0.002;
+  const SurfaceMapResult r2 = map_to_sphere(s, tight);
+  CHECK(r2.report.final.face_area_ratio.mean_abs_dev <= 0.002);
+  CHECK(r2.report.polish.size() > rep.polish.size());
+  // the report's keys (docs/surfaces.md)
+  Json j = to_json(rep);
+  for (const char* k : {"input", "initial", "final", "rounds", "sphere_map", "stop_reason", "converged", "convergence", "timings_s"})
+    CHECK(j.find(k) != nullptr);
+  CHECK(j["final"]["face_area_ratio"]["mean_abs_dev"].number() <= 0.005);
+  CHECK(j["rounds"].at(0).find("kind")->string() == "polish");
+}
+
+TEST_CASE("surface map: a surface with inward faces is mapped with them reversed, as well") {
+  TriSurface s = bumpy_ellipsoid(3);
+  s.triangles.col(1).swap(s.triangles.col(2));
+  const SurfaceMapResult r = map_to_sphere(s);
+  CHECK(r.report.reversed);
+  CHECK(r.report.final.face_area_ratio.mean_abs_dev <= 0.005);
+  CHECK(r.report.final.flipped_faces == 0);  // counted with the faces turned outwards
+}
+
+TEST_CASE("surface map: surfaces that are not one closed genus-0 surface are refused with the reason") {
+  const TriSurface ok = icosphere(2);
+  auto refused = [](const TriSurface& s, const std::string& words) {
+    INFO(words);
+    try {
+      validate_closed_surface(s, "in.off");
+      FAIL("accepted");
+    } catch (const InputError& e) {
+      CHECK_THAT(e.what(), Catch::StartsWith("in.off: ") && Catch::Contains(words));
+    }
+    CHECK_THROWS_AS(map_to_sphere(s), InputError);
+  };
+  validate_closed_surface(ok, "in.off");
+  TriSurface hole = ok;
+  hole.triangles.conservativeResize(ok.triangles.rows() - 1, 3);
+  refused(hole, "holes");
+  TriSurface two = ok;
+  two.vertices.conservativeResize(2 * ok.vertices.rows(), 3);
+  two.vertices.bottomRows(ok.vertices.rows()) = ok.vertices.array() + 3.0;
+  two.triangles.conservativeResize(2 * ok.triangles.rows(), 3);
+  two.triangles.bottomRows(ok.triangles.rows()) = ok.triangles.array() + static_cast<int>(ok.vertices.rows());
+  refused(two, "2 separate surfaces");
+  TriSurface flipped = ok;
+  std::swap(flipped.triangles(0, 1), flipped.triangles(0, 2));
+  refused(flipped, "not consistently oriented");
+  TriSurface unused = ok;
+  unused.vertices.conservativeResize(ok.vertices.rows() + 1, 3);
+  unused.vertices.bottomRows(1) << 5, 5, 5;
+  refused(unused, "in no triangle");
+  TriSurface flat = ok;  // a face with no area: two corners at one point
+  flat.vertices.row(flat.triangles(0, 1)) = flat.vertices.row(flat.triangles(0, 0));
+  refused(flat, "no area");
+  TriSurface bad_index = ok;
+  bad_index.triangles(3, 2) = 100000;
+  refused(bad_index, "out of range");
+  // a torus (genus 1): 8 x 6 quads
+  TriSurface torus;
+  const int nu = 8, nv = 6;
+  torus.vertices.resize(nu * nv, 3);
+  torus.triangles.resize(2 * nu * nv, 3);
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const double u = 2 * M_PI * i / nu, v = 2 * M_PI * j / nv;
+      torus.vertices.row(i * nv + j) << (2 + std::cos(v)) * std::cos(u), (2 + std::cos(v)) * std::sin(u), std::sin(v);
+      const int a = i * nv + j, b = ((i + 1) % nu) * nv + j, c = ((i + 1) % nu) * nv + (j + 1) % nv, d = i * nv + (j + 1) % nv;
+      torus.triangles.row(2 * a) << a, b, c;
+      torus.triangles.row(2 * a + 1) << a, c, d;
+    }
+  refused(torus, "genus 1");
+}
+
+TEST_CASE("FreeSurfer surfaces: written and read back exactly at float precision; corrupt files name the byte") {
+  const std::string dir = vpm::test::fresh_dir("freesurfer");
+  TriSurface s = bumpy_ellipsoid(2);
+  for (Eigen::Index i = 0; i < s.vertices.rows(); ++i)
+    for (int k = 0; k < 3; ++k) s.vertices(i, k) = static_cast<float>(s.vertices(i, k));
+  write_surface(dir + "/lh.white", s);
+  REQUIRE(is_surface_path(dir + "/lh.white"));
+  const TriSurface back = read_surface(dir + "/lh.white");
+  CHECK(back.vertices == s.vertices);
+  CHECK(back.triangles == s.triangles);
+  // recognised by its first bytes whatever its name
+  std::filesystem::copy_file(dir + "/lh.white", dir + "/subject_surface");
+  CHECK(is_surface_path(dir + "/subject_surface"));
+  CHECK(read_surface(dir + "/subject_surface").triangles == s.triangles);
+
+  const std::string bytes = slurp(dir + "/lh.white");
+  auto corrupt = [&](std::string data, const std::string& words) {
+    INFO(words);
+    const std::string p = dir + "/bad.pial";
+    std::ofstream(p, std::ios::binary).write(data.data(), static_cast<std::streamsize>(data.size()));
+    try {
+      read_surface(p);
+      FAIL("read");
+    } catch (const InputError& e) {
+      CHECK_THAT(e.what(), Catch::StartsWith(p + ":byte ") && Catch::Contains(words));
+    }
+  };
+  const size_t counts = bytes.find("\n\n") + 2;
+  corrupt(bytes.substr(0, bytes.size() - 5), "truncated");
+  std::string quad = bytes;
+  quad[2] = static_cast<char>(0xFF);
+  corrupt(quad, "quadrangle");
+  std::string huge = bytes;
+  huge[counts] = 0x7F;  // 2 billion vertices
+  corrupt(huge, "vertex count");
+  std::string index = bytes;
+  index[bytes.size() - 4] = 0x7F;  // the last face's last index, high byte
+  corrupt(index, "out of range");
+  std::string nan = bytes;
+  nan[counts + 8] = 0x7F;
+  nan[counts + 9] = static_cast<char>(0xC0);  // the first coordinate a NaN
+  corrupt(nan, "not a finite number");
+  corrupt(bytes.substr(0, 3) + std::string(5000, 'x'), "two newlines");
+}
+
+TEST_CASE("vpm map SURFACE: to the sphere as .vtp with fields, or FreeSurfer; tet-only options and bad surfaces exit 2") {
+  const std::string dir = vpm::test::fresh_dir("map_surface");
+  write_surface(dir + "/in.off", bumpy_ellipsoid(3));
+  REQUIRE(run_status(kVpm + " map " + dir + "/in.off -o " + dir + "/out.vtp --report " + dir + "/r.json --quiet") == 0);
+  Json r = Json::parse(slurp(dir + "/r.json"));
+  CHECK(r["converged"].boolean());
+  CHECK(r["final"]["flipped_faces"].number() == 0);
+  CHECK(r["final"]["face_area_ratio"]["mean_abs_dev"].number() <= 0.005);
+  CHECK(r.find("device") != nullptr);
+  const std::string vtp = slurp(dir + "/out.vtp");
+  for (const char* name : {"type=\"PolyData\"", "Name=\"original_position\" NumberOfComponents=\"3\"",
+                           "Name=\"vertex_area_ratio\"", "Name=\"face_area_ratio\"", "<Polys>"})
+    CHECK_THAT(vtp, Catch::Contains(name));
+  // FreeSurfer out, and in again
+  REQUIRE(run_status(kVpm + " map " + dir + "/in.off -o " + dir + "/lh.sphere --quiet") == 0);
+  const TriSurface sphere = read_surface(dir + "/lh.sphere");
+  for (Eigen::Index i = 0; i < sphere.vertices.rows(); ++i) REQUIRE(std::abs(sphere.vertices.row(i).norm() - 1.0) < 1e-6);
+  REQUIRE(run_status(kVpm + " map " + dir + "/lh.sphere -o " + dir + "/again.off --quiet") == 0);
+  // usage
+  CHECK(run_status(kVpm + " map " + dir + "/in.off -o " + dir + "/out.vtp --boundary fixed 2>" + dir + "/e1") == 2);
+  CHECK_THAT(slurp(dir + "/e1"), Catch::Contains("tet meshes only"));
+  CHECK(run_status(kVpm + " map " + dir + "/in.off -o " + dir + "/out.vtu 2>" + dir + "/e2") == 2);
+  CHECK_THAT(slurp(dir + "/e2"), Catch::Contains("output extension"));
+  TriSurface hole = icosphere(2);
+  hole.triangles.conservativeResize(hole.triangles.rows() - 1, 3);
+  write_surface(dir + "/hole.off", hole);
+  CHECK(run_status(kVpm + " map " + dir + "/hole.off -o " + dir + "/h.vtp 2>" + dir + "/e3") == 2);
+  CHECK_THAT(slurp(dir + "/e3"), Catch::Contains(dir + "/hole.off: edge") && Catch::Contains("holes"));
+  CHECK(!std::filesystem::exists(dir + "/h.vtp"));
+  // a surface that misses the tolerance by over 2x: written, exit 4 (--allow-partial 0)
+  CHECK(run_status(kVpm + " map " + dir + "/in.off -o " + dir + "/p.vtp --rounds 0 --quiet 2>/dev/null") == 4);
+  CHECK(std::filesystem::exists(dir + "/p.vtp"));
+  CHECK(run_status(kVpm + " map " + dir + "/in.off -o " + dir + "/p.vtp --rounds 0 --allow-partial --quiet 2>/dev/null") == 0);
+}
