@@ -1,8 +1,10 @@
 // Fuzz target for one tet-mesh or surface reader, chosen at build time: FUZZ_EXT is the file
 // extension read_mesh()/read_surface() dispatches on (".mesh", ".vtu", ".msh" with FUZZ_MESH;
-// ".off", ".obj", ".stl" without). A mesh that reads is validated as `vpm map` does next.
+// ".off", ".obj", ".stl", ".white" (FreeSurfer) without). What reads is validated as `vpm map`
+// does next (a surface as one closed genus-0 surface for the sphere map).
 #include "fuzz_target.hpp"
 #include "vpm/io.hpp"
+#include "vpm/surface_map.hpp"
 #include "vpm/validate.hpp"
 
 #ifndef FUZZ_EXT
@@ -18,7 +20,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     fuzz::require_well_formed(mesh);
     validate_mesh(mesh, path);
 #else
-    fuzz::require_well_formed(read_surface(path));
+    const TriSurface surface = read_surface(path);
+    fuzz::require_well_formed(surface);
+    validate_closed_surface(surface, path);
 #endif
   });
   return 0;

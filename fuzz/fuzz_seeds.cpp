@@ -71,6 +71,8 @@ void mesh_seeds(const fs::path& out, const fs::path& tmp) {
   }
   write_surface_stl_binary((tmp / "octahedron_binary.stl").string(), s);
   take(out, "stl", tmp / "octahedron_binary.stl");
+  write_surface((tmp / "lh.white").string(), s);
+  take(out, "freesurfer", tmp / "lh.white");
 }
 
 // tests/data/bad and tests/data/vtk, each file to the target of its extension; a TetGen .node
