@@ -28,6 +28,10 @@ constexpr double kMaxLogStep = 0.5;
 // tried again this many times before it is halved (up to kHalvings times).
 constexpr int kFreezeTrials = 8;
 constexpr int kHalvings = 12;
+// The polish stops once the last kGainWindow steps together gained less than kGainWindow x
+// SurfaceMapOptions::polish_min_gain: one step's gain varies from step to step (faces held
+// still in one step move in the next), and a rule on one step stopped early by chance.
+constexpr size_t kGainWindow = 5;
 
 Eigen::Vector3d row3(const Points& x, int i) { return x.row(i).transpose(); }
 
@@ -39,10 +43,13 @@ double face_distortion(const Eigen::VectorXd& area0, const Eigen::VectorXd& area
   return acc / static_cast<double>(std::max<Eigen::Index>(1, area.size()));
 }
 
-// min |A d - b|^2 over moves d tangent to the sphere at each vertex: A's rows the faces'
+// min |W (A d - b)|^2 over moves d tangent to the sphere at each vertex: A's rows the faces'
 // linearised relative area changes, A_(f, v) = grad_v A_f / A_f, b_f = log(t_f / A_f) clamped to
 // +-kMaxLogStep (a face 1e-6 too small asks for e^0.5 a step, not for a million-fold growth whose
 // linearisation would flip its neighbours; near the target it is 1 - A_f / t_f to first order).
+// W_f = sqrt(min(1, A_f / t_f)): a crushed face's row, whose gradient grows like 1 / its size,
+// would otherwise take the early-stopped CGLS's iterations from the bulk of the faces (chosen on
+// the development surfaces of docs/surfaces.md: the AAL surface 1.04 % -> 0.49 %).
 // A^T is applied by gathering over each vertex's faces (no scatter, no races).
 class FaceAreaSystem {
  public:
@@ -57,11 +64,12 @@ class FaceAreaSystem {
         const Eigen::Vector3d nrm = (b - a).cross(c - a);
         const double len = nrm.norm(), area = std::max(0.5 * len, 1e-300);
         const Eigen::Vector3d nh = len > 0 ? Eigen::Vector3d(nrm / len) : Eigen::Vector3d::Zero();
-        const double s = 0.5 / area;
+        const double w = std::sqrt(std::min(1.0, area / target(t)));
+        const double s = 0.5 / area * w;
         g_[3 * static_cast<size_t>(t)] = s * (b - c).cross(nh);
         g_[3 * static_cast<size_t>(t) + 1] = s * (c - a).cross(nh);
         g_[3 * static_cast<size_t>(t) + 2] = s * (a - b).cross(nh);
-        b_(t) = std::clamp(std::log(target(t) / area), -kMaxLogStep, kMaxLogStep);
+        b_(t) = w * std::clamp(std::log(target(t) / area), -kMaxLogStep, kMaxLogStep);
       }
     });
   }
@@ -205,7 +213,8 @@ FaceIncidence vertex_face_incidence(int n, const Triangles& f) {
 }
 
 // One polish step from x (kept when it lowers the face distortion d, which is then updated):
-// the CGLS direction, held still where it flips faces and tried again, then halved.
+// the CGLS direction, held still where it flips faces and tried again, halved while it flips
+// or does not lower d.
 SurfaceMapStep polish_step(const Triangles& f, const Eigen::VectorXd& area0, const FaceIncidence& inc, int iterations,
                            Points& x, double& d) {
   const auto t_step = Clock::now();
@@ -217,10 +226,13 @@ SurfaceMapStep polish_step(const Triangles& f, const Eigen::VectorXd& area0, con
   SurfaceMapStep st;
   st.solver_iterations = dir.iterations;
   st.solver_residual = dir.residual;
-  Points y;
-  bool ok = false;
+  // the step: where it flips faces their vertices are held still and it is tried again; halved
+  // while it still flips or does not lower the distortion
   std::vector<char> frozen(static_cast<size_t>(x.rows()), 0);
-  for (int h = 0; h < kHalvings && !ok; ++h) {
+  st.discarded = true;
+  for (int h = 0; h < kHalvings && st.discarded; ++h, st.step *= 0.5) {
+    bool ok = false;
+    Points y;
     for (int trial = 0; trial < kFreezeTrials && !ok; ++trial) {
       y = on_sphere(x + st.step * dir.dx);
       const std::vector<int> bad = flipped_list(y, f);
@@ -231,15 +243,16 @@ SurfaceMapStep polish_step(const Triangles& f, const Eigen::VectorXd& area0, con
           frozen[static_cast<size_t>(f(t, j))] = 1;
         }
     }
-    if (!ok) st.step *= 0.5;
+    if (!ok) continue;
+    const double dn = face_distortion(area0, face_areas(y, f));
+    if (dn < d) {
+      x = std::move(y);
+      d = dn;
+      st.discarded = false;
+      break;
+    }
   }
   st.frozen_vertices = static_cast<int>(std::count(frozen.begin(), frozen.end(), 1));
-  const double dn = ok ? face_distortion(area0, face_areas(y, f)) : d;
-  st.discarded = !ok || dn >= d;
-  if (!st.discarded) {
-    x = std::move(y);
-    d = dn;
-  }
   st.face_mean_abs_dev = d;
   st.seconds = seconds_since(t_step);
   return st;
@@ -289,18 +302,20 @@ SurfaceMapResult map_to_sphere(const TriSurface& input, const SurfaceMapOptions&
   t0 = Clock::now();
   const FaceIncidence inc = vertex_face_incidence(static_cast<int>(x.rows()), f);
   rep.stop_reason = opt.polish_rounds > 0 ? "rounds" : "none";
+  std::vector<double> history;  // the distortion before each step
   for (int k = 0; k < opt.polish_rounds; ++k) {
     if (d <= opt.tolerance || opt.deadline.passed()) {
       rep.stop_reason = d <= opt.tolerance ? "tolerance" : "time_budget";
       break;
     }
-    const double before = d;
+    history.push_back(d);
     const SurfaceMapStep st = polish_step(f, area0, inc, opt.polish_iterations, x, d);
     rep.polish.push_back(st);
     if (opt.progress)
       opt.progress(strprintf("polish %d: face area mean |r-1| %.4f, step %g, %.2f s%s", k + 1, d, st.step, st.seconds,
                              st.discarded ? " (discarded)" : ""));
-    if (st.discarded || d > (1.0 - opt.polish_min_gain) * before) {
+    const size_t h = history.size();
+    if (st.discarded || (h >= kGainWindow && d > (1.0 - kGainWindow * opt.polish_min_gain) * history[h - kGainWindow])) {
       rep.stop_reason = d <= opt.tolerance ? "tolerance" : "stalled";
       break;
     }

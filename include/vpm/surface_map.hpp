@@ -35,10 +35,11 @@ struct SurfaceMapOptions {
   /// Stop polishing once the face area mean |r - 1| is at most this.
   double tolerance = 0.005;
   /// At most this many polish steps (0: the sphere map alone).
-  int polish_rounds = 100;
+  int polish_rounds = 200;
   /// CGLS iterations per polish step.
   int polish_iterations = 60;
-  /// Steps end once one lowers the face area mean |r - 1| by less than this fraction of it.
+  /// Steps end once the last five lowered the face area mean |r - 1| by less than five times
+  /// this fraction of it, or one step gained nothing (discarded).
   double polish_min_gain = 0.002;
   /// The sphere map's options (its `sphere_density`, `sphere_start`, `density_*`, the conformal
   /// and balancing steps); the tet-specific fields are ignored.

@@ -88,5 +88,6 @@ void bind_image(py::module_& m);
 void bind_map(py::module_& m);
 void bind_register(py::module_& m);
 void bind_collective(py::module_& m);
+void bind_surface(py::module_& m);
 
 }  // namespace vpm::python

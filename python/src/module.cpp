@@ -24,6 +24,7 @@ PYBIND11_MODULE(_vpm, m) {
   vpm::python::bind_mesh(m);
   vpm::python::bind_image(m);
   vpm::python::bind_map(m);
+  vpm::python::bind_surface(m);
   vpm::python::bind_register(m);
   vpm::python::bind_collective(m);
   m.attr("__version__") = VPM_VERSION;

@@ -21,13 +21,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._vpm import (Elements, ElementTable, Image, InitialMapReport, MapMetrics, MapReport, Mesh,  # noqa: F401
-                   NumericalError, RatioStats, RegistrationReport, Report, __version__, device_name, devices,
+                   NumericalError, RatioStats, RegistrationReport, Report, SurfaceMapReport, SurfaceMetrics,
+                   __version__, device_name, devices,
                    read_image, read_label_names, read_mesh, read_table, select_device, to_image, to_native,
                    validate, write_mesh, write_nifti)
 from . import _vpm
 
 __all__ = ["Mesh", "Image", "Elements", "ElementTable", "Comparison", "NumericalError", "MapReport",
-           "InitialMapReport", "RegistrationReport", "MapMetrics", "RatioStats", "Report",
+           "InitialMapReport", "RegistrationReport", "MapMetrics", "RatioStats", "Report", "SurfaceMapReport",
+           "SurfaceMetrics", "read_surface", "write_surface", "map_to_sphere",
            "read_mesh", "write_mesh", "validate", "read_image", "write_nifti", "image", "mesh_image",
            "initial_map", "map_to_ball", "register", "elements", "sample", "compare", "read_table",
            "to_native", "to_image", "read_label_names", "devices", "select_device", "device_name"]
@@ -118,6 +120,30 @@ def map_to_ball(vertices, tets=None, *, progress=None, **options):
     Raises ValueError for an input that is not a valid solid ball, vpm.NumericalError when no
     fold-free map could be made."""
     return _call(_vpm._map_to_ball, progress, "map", vertices, tets, **options)
+
+
+def read_surface(path):
+    """A triangle surface: (vertices (n, 3) float, faces (k, 3) int32). .off, .obj, .stl, and
+    FreeSurfer's surfaces (lh.white, lh.pial, ...)."""
+    return _vpm._read_surface(os.fspath(path))
+
+
+def write_surface(path, vertices, faces):
+    """Writes a triangle surface: .off, .obj, .stl, .vtp, or FreeSurfer's format under its names
+    (.white, .pial, .sphere, ...)."""
+    _vpm._write_surface(os.fspath(path), vertices, faces)
+
+
+def map_to_sphere(vertices, faces, *, progress=None, **options):
+    """Maps a closed genus-0 triangle surface to the unit sphere preserving local areas: `vpm map
+    SURFACE`. `vertices` (n, 3), `faces` (k, 3). Options (as `vpm map`'s): rounds (polish steps,
+    200), tolerance (face area mean |r-1|, 0.005), sphere ('area'|'conformal'), sphere_start,
+    max_seconds, source (the name used in messages). `progress` as map_to_ball's.
+
+    Returns (sphere, report): `sphere` an (n, 3) array of unit vectors (the input's rows), `report`
+    a vpm.SurfaceMapReport (report.final.face_area_ratio.mean_abs_dev, ..., report.to_dict()).
+    Raises ValueError for a surface that is not one closed, manifold, genus-0 surface."""
+    return _call(_vpm._map_to_sphere, progress, "map", vertices, faces, **options)
 
 
 def register(mesh, *, landmarks=None, targets=None, template=None, image=None, template_image=None, progress=None,

@@ -74,6 +74,19 @@ class MapReport(Report):
     input_tets: int
     seconds: float
 
+class SurfaceMetrics:
+    flipped_faces: int
+    face_area_ratio: RatioStats
+    vertex_area_ratio: RatioStats
+    max_radius_error: float
+    def to_dict(self) -> dict[str, Any]: ...
+
+class SurfaceMapReport(Report):
+    initial: SurfaceMetrics
+    final: SurfaceMetrics
+    converged: bool
+    seconds: float
+
 class InitialMapReport(Report):
     device: str
     folds_before_untangle: int
@@ -152,6 +165,12 @@ def map_to_ball(vertices: Union[Mesh, ArrayLike], tets: Optional[ArrayLike] = ..
                 preconditioner: Literal["auto", "jacobi", "amg"] = ..., rk_steps: int = ..., max_seconds: float = ...,
                 source: str = ...,
                 device: Optional[str] = ...) -> tuple[Mesh, MapReport]: ...
+def read_surface(path: PathLike) -> tuple[np.ndarray, np.ndarray]: ...
+def write_surface(path: PathLike, vertices: ArrayLike, faces: ArrayLike) -> None: ...
+def map_to_sphere(vertices: ArrayLike, faces: ArrayLike, *, progress: Progress = ..., rounds: int = ...,
+                  tolerance: float = ..., sphere: Literal["area", "conformal"] = ...,
+                  sphere_start: Literal["auto", "progressive"] = ..., max_seconds: float = ...,
+                  source: str = ...) -> tuple[np.ndarray, SurfaceMapReport]: ...
 def register(mesh: Mesh, *, landmarks: Optional[ArrayLike] = ..., targets: Optional[ArrayLike] = ...,
              template: Optional[Mesh] = ..., image: Optional[ImageLike] = ..., template_image: Optional[ImageLike] = ...,
              template_landmarks: Literal["regions", "moments"] = ..., exclude_labels: Sequence[int] = ...,

@@ -1,0 +1,102 @@
+// vpm.map_to_sphere and vpm.read_surface / vpm.write_surface: closed surfaces to the sphere
+// (vpm/surface_map.hpp), with the report as a typed object.
+#include "common.hpp"
+#include "report.hpp"
+#include "vpm/error.hpp"
+#include "vpm/initial_map.hpp"
+#include "vpm/io.hpp"
+#include "vpm/surface_map.hpp"
+#include "vpm/timing.hpp"
+
+namespace vpm::python {
+namespace {
+
+struct SurfaceReport : Report {
+  SurfaceMetrics initial, final;
+  bool converged = true;
+  double seconds = 0;
+};
+
+// (k, 3) integer array-like -> Triangles (indices checked against `vertices`).
+Triangles to_triangles(const py::handle& values, Eigen::Index vertices) {
+  const auto a = py::array_t<long long, py::array::c_style | py::array::forcecast>::ensure(values);
+  if (!a || a.ndim() != 2 || a.shape(1) != 3) throw InputError("faces: expected a (k, 3) array of vertex indices");
+  Triangles t(a.shape(0), 3);
+  const long long* d = a.data();
+  for (py::ssize_t i = 0; i < a.size(); ++i) {
+    if (d[i] < 0 || d[i] >= vertices)
+      throw InputError("faces: face " + std::to_string(i / 3) + ": vertex index " + std::to_string(d[i]) +
+                       " out of range (" + std::to_string(vertices) + " vertices)");
+    t.data()[i] = static_cast<int>(d[i]);
+  }
+  return t;
+}
+
+}  // namespace
+
+void bind_surface(py::module_& m) {
+  py::class_<SurfaceMetrics>(m, "SurfaceMetrics", "Area distortion of a sphere map against its surface.")
+      .def_readonly("flipped_faces", &SurfaceMetrics::flipped_faces)
+      .def_readonly("face_area_ratio", &SurfaceMetrics::face_area_ratio)
+      .def_readonly("vertex_area_ratio", &SurfaceMetrics::vertex_area_ratio)
+      .def_readonly("max_radius_error", &SurfaceMetrics::max_radius_error)
+      .def("to_dict", [](const SurfaceMetrics& s) { return json_to_python(to_json(s)); });
+  py::class_<SurfaceReport, Report>(m, "SurfaceMapReport",
+                                    "What map_to_sphere did; to_dict() is `vpm map SURFACE --report`'s JSON.")
+      .def_readonly("initial", &SurfaceReport::initial, "metrics after the sphere map")
+      .def_readonly("final", &SurfaceReport::final, "metrics of the returned map")
+      .def_readonly("converged", &SurfaceReport::converged, "face area mean |r-1| within the tolerance")
+      .def_readonly("seconds", &SurfaceReport::seconds, "the library call's wall time");
+  m.def(
+      "_map_to_sphere",
+      [](const py::object& vertices, const py::object& faces, int rounds, double tolerance, const std::string& sphere,
+         const std::string& sphere_start, double max_seconds, const std::string& source, py::object progress) {
+        TriSurface s;
+        s.vertices = to_points(vertices, "vertices");
+        s.triangles = to_triangles(faces, s.vertices.rows());
+        SurfaceMapOptions o;
+        if (rounds < 0) throw InputError("rounds: must be >= 0");
+        if (!(tolerance >= 0)) throw InputError("tolerance: must be >= 0");
+        o.polish_rounds = rounds;
+        o.tolerance = tolerance;
+        o.sphere.sphere_density = parse_sphere_density(sphere);
+        o.sphere.sphere_start = parse_sphere_start(sphere_start);
+        o.deadline = Deadline::in_seconds(max_seconds);  // 0: none
+        Progress p(std::move(progress));
+        o.progress = p.function();
+        auto report = std::make_unique<SurfaceReport>();
+        Points sphere_points = without_gil(&p, [&] {
+          const Stopwatch clock;
+          validate_closed_surface(s, source);
+          SurfaceMapResult r = map_to_sphere(s, o);
+          report->seconds = clock.seconds();
+          report->json = to_json(r.report).dump(-1);
+          report->initial = std::move(r.report.initial);
+          report->final = std::move(r.report.final);
+          report->converged = r.report.converged;
+          return std::move(r.sphere);
+        });
+        return py::make_tuple(owned_array(std::move(sphere_points)), std::move(report));
+      },
+      py::arg("vertices"), py::arg("faces"), py::kw_only(), py::arg("rounds") = SurfaceMapOptions{}.polish_rounds,
+      py::arg("tolerance") = SurfaceMapOptions{}.tolerance, py::arg("sphere") = "area", py::arg("sphere_start") = "auto",
+      py::arg("max_seconds") = 0.0, py::arg("source") = "surface", py::arg("progress") = py::none());
+  m.def(
+      "_read_surface",
+      [](const std::string& path) {
+        TriSurface s = read_surface(path);
+        return py::make_tuple(owned_array(std::move(s.vertices)), owned_array(std::move(s.triangles)));
+      },
+      py::arg("path"));
+  m.def(
+      "_write_surface",
+      [](const std::string& path, const py::object& vertices, const py::object& faces) {
+        TriSurface s;
+        s.vertices = to_points(vertices, "vertices");
+        s.triangles = to_triangles(faces, s.vertices.rows());
+        write_surface(path, s);
+      },
+      py::arg("path"), py::arg("vertices"), py::arg("faces"));
+}
+
+}  // namespace vpm::python

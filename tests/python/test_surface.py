@@ -1,0 +1,55 @@
+"""Closed surfaces to the sphere from Python (vpm.map_to_sphere, vpm.read_surface,
+vpm.write_surface), against the same checks as `vpm map SURFACE`."""
+import numpy as np
+import pytest
+
+
+def bumpy_ellipsoid(vpm, tmp_path):
+    """An ellipsoid 1.8 : 1 : 0.6 with a bump, from a unit sphere triangulated by vpm's mesher's
+    boundary: the vertices of a FreeSurfer-format round trip."""
+    t = np.linspace(0, np.pi, 24)[1:-1]
+    p = np.linspace(0, 2 * np.pi, 48, endpoint=False)
+    tt, pp = np.meshgrid(t, p, indexing="ij")
+    pts = np.stack([np.sin(tt) * np.cos(pp), np.sin(tt) * np.sin(pp), np.cos(tt)], -1).reshape(-1, 3)
+    pts = np.vstack([[0, 0, 1], pts, [0, 0, -1]])
+    faces = []
+    rings, per = len(t), len(p)
+    idx = lambda r, k: 1 + r * per + k % per  # noqa: E731
+    for k in range(per):
+        faces.append([0, idx(0, k), idx(0, k + 1)])
+        faces.append([len(pts) - 1, idx(rings - 1, k + 1), idx(rings - 1, k)])
+        for r in range(rings - 1):
+            faces.append([idx(r, k), idx(r + 1, k), idx(r + 1, k + 1)])
+            faces.append([idx(r, k), idx(r + 1, k + 1), idx(r, k + 1)])
+    g = 1 + 0.4 * np.exp(-np.sum((pts - [0.6, 0, 0.8]) ** 2, axis=1) / 0.15)
+    v = pts * [1.8, 1.0, 0.6] * g[:, None]
+    return v, np.array(faces)
+
+
+def test_map_to_sphere_keeps_face_areas(vpm, tmp_path):
+    v, f = bumpy_ellipsoid(vpm, tmp_path)
+    vpm.write_surface(tmp_path / "lh.white", v, f)
+    v32, f2 = vpm.read_surface(tmp_path / "lh.white")  # FreeSurfer: float32 coordinates
+    assert np.array_equal(f2, f) and np.allclose(v32, v, atol=1e-5)
+    sphere, report = vpm.map_to_sphere(v, f)
+    assert isinstance(report, vpm.SurfaceMapReport)
+    assert sphere.shape == v.shape
+    assert np.abs(np.linalg.norm(sphere, axis=1) - 1).max() < 1e-12
+    assert report.final.flipped_faces == 0
+    assert report.final.face_area_ratio.mean_abs_dev <= 0.005 < report.initial.face_area_ratio.mean_abs_dev
+    assert report.converged
+    d = report.to_dict()
+    assert d["final"]["face_area_ratio"]["mean_abs_dev"] == pytest.approx(report.final.face_area_ratio.mean_abs_dev)
+    # the areas measured here agree: chord triangles against the input's, normalised
+    def areas(x):
+        a = 0.5 * np.linalg.norm(np.cross(x[f[:, 1]] - x[f[:, 0]], x[f[:, 2]] - x[f[:, 0]]), axis=1)
+        return a / a.sum()
+    assert np.mean(np.abs(areas(sphere) / areas(v) - 1)) == pytest.approx(report.final.face_area_ratio.mean_abs_dev)
+
+
+def test_map_to_sphere_refuses_open_surfaces(vpm, tmp_path):
+    v, f = bumpy_ellipsoid(vpm, tmp_path)
+    with pytest.raises(ValueError, match="holes"):
+        vpm.map_to_sphere(v, f[1:])
+    with pytest.raises(ValueError, match="out of range"):
+        vpm.map_to_sphere(v, np.vstack([f, [[0, 1, len(v)]]]))
