@@ -94,7 +94,7 @@ TEST_CASE("cli: bad usage exits 2 with one line naming the problem") {
   CHECK_THAT(slurp(err), Catch::Contains("option --boundary: volume map boundary 'fast' is not one of auto, slide, fixed"));
   CHECK(run_status(kVpm + " no-such-command 2> " + err) == 2);
   CHECK(run_status(kVpm + " > " + tmp("usage.txt") + " 2>&1") == 2);  // no command: usage, exit 2
-  CHECK_THAT(slurp(tmp("usage.txt")), Catch::Contains("vpm map MESH -o OUT"));
+  CHECK_THAT(slurp(tmp("usage.txt")), Catch::Contains("vpm map MESH|SURFACE -o OUT"));
   const std::string ver = tmp("version.txt");
   CHECK(run_status(kVpm + " --version > " + ver) == 0);
   CHECK(slurp(ver) == std::string("vpm ") + VPM_VERSION + "\n");
