@@ -17,7 +17,7 @@ int map_surface(const Args& args, const std::string& in, const std::string& out,
       throw InputError(std::string("option ") + flag + ": applies to tet meshes only; " + in +
                        " is a surface, mapped to the sphere");
   if (!is_surface_output_path(out))
-    throw InputError(out + ": unknown output extension for a surface (expected .vtp, .off, .obj, .stl or a FreeSurfer name)");
+    throw InputError(out + ": unknown output extension for a surface (expected .vtp, .gii, .off, .obj, .stl or a FreeSurfer name)");
   SurfaceMapOptions so;
   so.tolerance = args.get_double("--tolerance", so.tolerance);
   if (!(so.tolerance >= 0)) throw InputError("option --tolerance: must be >= 0");

@@ -1,6 +1,6 @@
 // Fuzz target for one tet-mesh or surface reader, chosen at build time: FUZZ_EXT is the file
 // extension read_mesh()/read_surface() dispatches on (".mesh", ".vtu", ".msh" with FUZZ_MESH;
-// ".off", ".obj", ".stl", ".white" (FreeSurfer) without). What reads is validated as `vpm map`
+// ".off", ".obj", ".stl", ".white" (FreeSurfer), ".gii" (GIfTI) without). What reads is validated as `vpm map`
 // does next (a surface as one closed genus-0 surface for the sphere map).
 #include "fuzz_target.hpp"
 #include "vpm/io.hpp"

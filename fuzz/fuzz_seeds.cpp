@@ -12,6 +12,7 @@
 #include "fuzz_target.hpp"
 #include "vpm/elements.hpp"
 #include "vpm/image.hpp"
+#include "vpm/config.hpp"
 #include "vpm/io.hpp"
 #include "vpm/landmarks.hpp"
 #include "vpm/map_back.hpp"
@@ -73,6 +74,10 @@ void mesh_seeds(const fs::path& out, const fs::path& tmp) {
   take(out, "stl", tmp / "octahedron_binary.stl");
   write_surface((tmp / "lh.white").string(), s);
   take(out, "freesurfer", tmp / "lh.white");
+  if (VPM_HAVE_GIFTI) {
+    write_surface((tmp / "lh.surf.gii").string(), s);
+    take(out, "gifti", tmp / "lh.surf.gii");
+  }
 }
 
 // tests/data/bad and tests/data/vtk, each file to the target of its extension; a TetGen .node

@@ -8,6 +8,7 @@
 
 #include "support/process.hpp"
 #include "support/scratch.hpp"
+#include "vpm/config.hpp"
 #include "vpm/error.hpp"
 #include "vpm/icosphere.hpp"
 #include "vpm/io.hpp"
@@ -217,4 +218,55 @@ TEST_CASE("vpm map SURFACE: to the sphere as .vtp with fields, or FreeSurfer; te
   CHECK(run_status(kVpm + " map " + dir + "/in.off -o " + dir + "/p.vtp --rounds 0 --quiet 2>/dev/null") == 4);
   CHECK(std::filesystem::exists(dir + "/p.vtp"));
   CHECK(run_status(kVpm + " map " + dir + "/in.off -o " + dir + "/p.vtp --rounds 0 --allow-partial --quiet 2>/dev/null") == 0);
+}
+
+TEST_CASE("GIfTI surfaces: written and read back at float precision; bad files exit with one line") {
+  if (!VPM_HAVE_GIFTI) {
+    CHECK_THROWS_WITH(read_surface("x.gii"), Catch::Contains("without libgiftiio"));
+    return;
+  }
+  const std::string dir = vpm::test::fresh_dir("gifti");
+  TriSurface s = bumpy_ellipsoid(2);
+  for (Eigen::Index i = 0; i < s.vertices.rows(); ++i)
+    for (int k = 0; k < 3; ++k) s.vertices(i, k) = static_cast<float>(s.vertices(i, k));
+  write_surface(dir + "/lh.white.surf.gii", s);
+  const TriSurface back = read_surface(dir + "/lh.white.surf.gii");
+  CHECK(back.vertices == s.vertices);
+  CHECK(back.triangles == s.triangles);
+  // no file is left under another name
+  int files = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir)) ++files;
+  CHECK(files == 1);
+  auto refused = [&](const std::string& name, const std::string& text, const std::string& words) {
+    INFO(words);
+    std::ofstream(dir + "/" + name) << text;
+    const int status = run_status(kVpm + " convert " + dir + "/" + name + " " + dir + "/out.off 2>" + dir + "/err.txt");
+    CHECK(status == 2);
+    const std::string err = slurp(dir + "/err.txt");
+    CHECK_THAT(err, Catch::Contains(dir + "/" + name + ": ") && Catch::Contains(words));
+    CHECK(std::count(err.begin(), err.end(), '\n') == 1);
+  };
+  refused("garbage.gii", "not xml at all", "not a readable GIfTI file (libgiftiio: syntax error");
+  const std::string head = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<GIFTI Version=\"1.0\" NumberOfDataArrays=\"1\">";
+  const std::string points =
+      "<DataArray Intent=\"NIFTI_INTENT_POINTSET\" DataType=\"NIFTI_TYPE_FLOAT32\" ArrayIndexingOrder=\"RowMajorOrder\" "
+      "Dimensionality=\"2\" Dim0=\"3\" Dim1=\"3\" Encoding=\"ASCII\" Endian=\"LittleEndian\" ExternalFileName=\"\" "
+      "ExternalFileOffset=\"0\"><Data>0 0 0 1 0 0 0 1 0</Data></DataArray>";
+  refused("values.func.gii", head + points + "</GIFTI>", "no DataArray of intent NIFTI_INTENT_TRIANGLE");
+  std::string external = points;
+  external.replace(external.find("Encoding=\"ASCII\""), 16, "Encoding=\"ExternalFileBinary\"");
+  external.replace(external.find("ExternalFileName=\"\""), 19, "ExternalFileName=\"/etc/passwd\"");
+  const std::string tri =
+      "<DataArray Intent=\"NIFTI_INTENT_TRIANGLE\" DataType=\"NIFTI_TYPE_INT32\" ArrayIndexingOrder=\"RowMajorOrder\" "
+      "Dimensionality=\"2\" Dim0=\"1\" Dim1=\"3\" Encoding=\"ASCII\" Endian=\"LittleEndian\" ExternalFileName=\"\" "
+      "ExternalFileOffset=\"0\"><Data>0 1 2</Data></DataArray>";
+  std::string two = head;
+  two.replace(two.find("NumberOfDataArrays=\"1\""), 22, "NumberOfDataArrays=\"2\"");
+  refused("external.gii", two + external + tri + "</GIFTI>", "external file");
+  std::string huge = tri;
+  huge.replace(huge.find("Dim0=\"1\""), 8, "Dim0=\"2000000000\"");
+  refused("huge.gii", two + points + huge + "</GIFTI>", "more than vpm reads");
+  std::string index = tri;
+  index.replace(index.find("0 1 2"), 5, "0 1 7");
+  refused("index.gii", two + points + index + "</GIFTI>", "vertex index 7 out of range");
 }

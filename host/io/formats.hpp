@@ -35,6 +35,9 @@ void write_stl(const std::string& path, const TriSurface& surface, bool binary);
 bool is_freesurfer_surface(const std::string& head);
 TriSurface read_freesurfer(const std::string& path);
 void write_freesurfer(const std::string& path, const TriSurface& surface);
+/// GIfTI surfaces (.gii; host/with_gifti/gifti.cpp through libgiftiio, or io/gifti_missing.cpp).
+TriSurface read_gifti(const std::string& path);
+void write_gifti(const std::string& path, const TriSurface& surface);
 /// VTK XML PolyData, ASCII, with the surface's point and cell fields (vtp.cpp; written only).
 void write_vtp(const std::string& path, const TriSurface& surface);
 

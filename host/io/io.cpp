@@ -14,8 +14,8 @@ namespace vpm {
 namespace {
 const char* kMeshExts = ".node/.ele (TetGen), .mesh (Medit), .vtu (VTK), .msh (Gmsh 4.1)";
 const char* kSurfExts =
-    ".off, .obj, .stl, or a FreeSurfer surface (lh.white, lh.pial, lh.sphere, ...: recognised by its first bytes)";
-const char* kSurfOutExts = ".off, .obj, .stl, .vtp (VTK PolyData with the fields), or a FreeSurfer name (.white, "
+    ".off, .obj, .stl, .gii (GIfTI), or a FreeSurfer surface (lh.white, lh.pial, lh.sphere, ...: recognised by its first bytes)";
+const char* kSurfOutExts = ".off, .obj, .stl, .gii (GIfTI), .vtp (VTK PolyData with the fields), or a FreeSurfer name (.white, "
                            ".pial, .orig, .smoothwm, .inflated, .sphere, .reg, .midthickness, .surf)";
 // FreeSurfer names its surfaces hemisphere.kind: these kinds are written in its binary format
 constexpr std::array<const char*, 9> kFreeSurferKinds = {".white",   ".pial",   ".orig", ".smoothwm",    ".inflated",
@@ -42,7 +42,7 @@ bool is_mesh_path(const std::string& path) {
 
 bool is_surface_path(const std::string& path) {
   const std::string e = detail::extension_of(path);
-  return e == ".off" || e == ".obj" || e == ".stl" || is_freesurfer_name(e) ||
+  return e == ".off" || e == ".obj" || e == ".stl" || e == ".gii" || is_freesurfer_name(e) ||
          detail::is_freesurfer_surface(head_of(path, 3));
 }
 
@@ -72,7 +72,7 @@ void write_mesh(const std::string& path, const TetMesh& mesh, VtuEncoding encodi
 
 bool is_surface_output_path(const std::string& path) {
   const std::string e = detail::extension_of(path);
-  return e == ".off" || e == ".obj" || e == ".stl" || e == ".vtp" || is_freesurfer_name(e);
+  return e == ".off" || e == ".obj" || e == ".stl" || e == ".vtp" || e == ".gii" || is_freesurfer_name(e);
 }
 
 TriSurface read_surface(const std::string& path) {
@@ -80,6 +80,7 @@ TriSurface read_surface(const std::string& path) {
   if (e == ".off") return detail::read_off(path);
   if (e == ".obj") return detail::read_obj(path);
   if (e == ".stl") return detail::read_stl(path);
+  if (e == ".gii") return detail::read_gifti(path);
   if (is_freesurfer_name(e) || detail::is_freesurfer_surface(head_of(path, 3))) return detail::read_freesurfer(path);
   throw InputError(path + ": unknown surface file extension '" + e + "' (expected " + kSurfExts +
                    ")");
@@ -91,6 +92,7 @@ void write_surface(const std::string& path, const TriSurface& surface) {
   if (e == ".obj") return detail::write_obj(path, surface);
   if (e == ".stl") return detail::write_stl(path, surface, false);
   if (e == ".vtp") return detail::write_vtp(path, surface);
+  if (e == ".gii") return detail::write_gifti(path, surface);
   if (is_freesurfer_name(e)) return detail::write_freesurfer(path, surface);
   throw InputError(path + ": unknown surface file extension '" + e + "' (expected " + kSurfOutExts + ")");
 }

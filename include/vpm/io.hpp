@@ -31,13 +31,13 @@ void write_mesh(const std::string& path, const TetMesh& mesh);
 /// The same, with the encoding of a .vtu file chosen (ignored for other formats).
 void write_mesh(const std::string& path, const TetMesh& mesh, VtuEncoding encoding);
 
-/// Reads a triangle surface: .off, .obj, .stl by extension, FreeSurfer's binary triangle
+/// Reads a triangle surface: .off, .obj, .stl, .gii (GIfTI) by extension, FreeSurfer's binary triangle
 /// surfaces (lh.white, lh.pial, ...) by their first bytes (FF FF FE) or FreeSurfer's names
 /// (.white, .pial, .orig, .smoothwm, .inflated, .sphere, .reg, .midthickness, .surf).
 TriSurface read_surface(const std::string& path);
 
-/// Writes a triangle surface: .off, .obj, .stl, .vtp (VTK XML PolyData with the surface's
-/// point and cell fields), FreeSurfer's binary format under FreeSurfer's names (float32
+/// Writes a triangle surface: .off, .obj, .stl, .gii (GIfTI: float32, base64 of gzip), .vtp
+/// (VTK XML PolyData with the surface's point and cell fields), FreeSurfer's binary format under FreeSurfer's names (float32
 /// coordinates). STL is written as ASCII with exact decimal coordinates; use
 /// write_surface_stl_binary() for the compact (float) form.
 void write_surface(const std::string& path, const TriSurface& surface);

@@ -123,13 +123,13 @@ def map_to_ball(vertices, tets=None, *, progress=None, **options):
 
 
 def read_surface(path):
-    """A triangle surface: (vertices (n, 3) float, faces (k, 3) int32). .off, .obj, .stl, and
-    FreeSurfer's surfaces (lh.white, lh.pial, ...)."""
+    """A triangle surface: (vertices (n, 3) float, faces (k, 3) int32). .off, .obj, .stl, .gii
+    (GIfTI), and FreeSurfer's surfaces (lh.white, lh.pial, ...)."""
     return _vpm._read_surface(os.fspath(path))
 
 
 def write_surface(path, vertices, faces):
-    """Writes a triangle surface: .off, .obj, .stl, .vtp, or FreeSurfer's format under its names
+    """Writes a triangle surface: .off, .obj, .stl, .gii, .vtp, or FreeSurfer's format under its names
     (.white, .pial, .sphere, ...)."""
     _vpm._write_surface(os.fspath(path), vertices, faces)
 

@@ -21,7 +21,7 @@ PUBLIC = {
     "register": ["rbf", "registration", "dense_registration", "registration_preset", "transfer"],
     "collective": ["collective", "elements", "element_sampler", "sampling", "covariates", "statistics", "reference_sums", "calibration", "map_back", "cohort_view", "view_page", "label_names", "template_registration"],
 }
-WITH = {"with_tetgen": "image", "with_cgal": "image", "with_nifti": "image", "with_cholmod": "linalg"}
+WITH = {"with_tetgen": "image", "with_cgal": "image", "with_nifti": "image", "with_cholmod": "linalg", "with_gifti": "io"}
 
 
 def layer_of_include(inc):

@@ -53,3 +53,25 @@ def test_map_to_sphere_refuses_open_surfaces(vpm, tmp_path):
         vpm.map_to_sphere(v, f[1:])
     with pytest.raises(ValueError, match="out of range"):
         vpm.map_to_sphere(v, np.vstack([f, [[0, 1, len(v)]]]))
+
+
+def test_gifti_against_nibabel(vpm, tmp_path):
+    """GIfTI surfaces written by nibabel (each encoding) read by vpm, and vpm's read by nibabel."""
+    nib = pytest.importorskip("nibabel")
+    from nibabel.gifti import GiftiDataArray, GiftiImage
+    v, f = bumpy_ellipsoid(vpm, tmp_path)
+    v = v.astype(np.float32)
+    for enc in ("ASCII", "GIFTI_ENCODING_B64BIN", "GIFTI_ENCODING_B64GZ"):
+        img = GiftiImage(darrays=[GiftiDataArray(v, intent="NIFTI_INTENT_POINTSET", encoding=enc),
+                                  GiftiDataArray(f.astype(np.int32), intent="NIFTI_INTENT_TRIANGLE", encoding=enc)])
+        nib.save(img, tmp_path / f"{enc}.surf.gii")
+        v2, f2 = vpm.read_surface(tmp_path / f"{enc}.surf.gii")
+        assert np.array_equal(f2, f), enc
+        if enc == "ASCII":  # nibabel writes ASCII values with 6 decimals
+            assert np.abs(v2 - v).max() <= 1e-6
+        else:
+            assert np.array_equal(v2, v.astype(np.float64)), enc
+    vpm.write_surface(tmp_path / "vpm.surf.gii", v, f)
+    g = nib.load(tmp_path / "vpm.surf.gii")
+    assert np.array_equal(g.agg_data("NIFTI_INTENT_POINTSET"), v)
+    assert np.array_equal(g.agg_data("NIFTI_INTENT_TRIANGLE"), f)
