@@ -140,7 +140,7 @@ TEST_CASE("surface map: surfaces that are not one closed genus-0 surface are ref
   refused(torus, "genus 1");
 }
 
-TEST_CASE("FreeSurfer surfaces: written and read back exactly at float precision; corrupt files name the byte") {
+TEST_CASE("FreeSurfer surfaces: written and read back exactly at float precision, corrupt files name the byte") {
   const std::string dir = vpm::test::fresh_dir("freesurfer");
   TriSurface s = bumpy_ellipsoid(2);
   for (Eigen::Index i = 0; i < s.vertices.rows(); ++i)
@@ -185,7 +185,7 @@ TEST_CASE("FreeSurfer surfaces: written and read back exactly at float precision
   corrupt(bytes.substr(0, 3) + std::string(5000, 'x'), "two newlines");
 }
 
-TEST_CASE("vpm map SURFACE: to the sphere as .vtp with fields, or FreeSurfer; tet-only options and bad surfaces exit 2") {
+TEST_CASE("vpm map SURFACE: to the sphere as .vtp with fields, or FreeSurfer, tet-only options and bad surfaces exit 2") {
   const std::string dir = vpm::test::fresh_dir("map_surface");
   write_surface(dir + "/in.off", bumpy_ellipsoid(3));
   REQUIRE(run_status(kVpm + " map " + dir + "/in.off -o " + dir + "/out.vtp --report " + dir + "/r.json --quiet") == 0);
@@ -220,7 +220,7 @@ TEST_CASE("vpm map SURFACE: to the sphere as .vtp with fields, or FreeSurfer; te
   CHECK(run_status(kVpm + " map " + dir + "/in.off -o " + dir + "/p.vtp --rounds 0 --allow-partial --quiet 2>/dev/null") == 0);
 }
 
-TEST_CASE("GIfTI surfaces: written and read back at float precision; bad files exit with one line") {
+TEST_CASE("GIfTI surfaces: written and read back at float precision, bad files exit with one line") {
   if (!VPM_HAVE_GIFTI) {
     CHECK_THROWS_WITH(read_surface("x.gii"), Catch::Contains("without libgiftiio"));
     return;
