@@ -104,7 +104,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   return vpm::cli::convergence_status("map", bm.convergence, args.has("--allow-partial"));
 }
 
-vpm::cli::Registrar reg(vpm::cli::with_expert({"map", "MESH|SURFACE -o OUT", "map a tet mesh to the unit ball preserving local volumes, or a closed surface to the unit sphere preserving local areas",
+vpm::cli::Registrar reg(vpm::cli::with_expert({"map", "MESH|SURFACE -o OUT", "map a tet mesh to the unit ball preserving local volumes, or a surface to the unit sphere (closed) or disk (one boundary loop) preserving local areas",
                          {{"--rounds", "R", "Moser rounds (default: until --tolerance, at most 8; 0: the initial map only); surfaces: polish steps (default 200)"},
                           {"--tolerance", "T", "stop at this vertex mean |r-1| (default 0.01; surfaces: face area mean |r-1|, default 0.005); missing it warns, by over 2x exits 4"},
                           {"--allow-partial", "", "exit 0 even when the map misses --tolerance by over 2x (the warning stays)"},

@@ -1,4 +1,5 @@
-// `vpm map SURFACE -o OUT` (map_surface.hpp).
+// `vpm map SURFACE -o OUT` (map_surface.hpp): closed surfaces to the sphere, disk-like ones to the
+// disk.
 #include "map_surface.hpp"
 
 #include "vpm/device.hpp"
@@ -35,9 +36,17 @@ int map_surface(const Args& args, const std::string& in, const std::string& out,
   const double t_read = seconds_since(t0);
   progress("read " + in + ": " + std::to_string(surface.vertices.rows()) + " vertices, " +
            std::to_string(surface.triangles.rows()) + " triangles");
-  validate_closed_surface(surface, in);  // its messages name the file
+  // closed: to the sphere; one boundary loop: to the disk (the checks' messages name the file)
+  const SurfaceDomain domain = surface_domain(surface);
   Device& dev = Device::current();
-  const SurfaceMapResult r = map_to_sphere(surface, so, &dev);
+  SurfaceMapResult r;
+  if (domain == SurfaceDomain::sphere) {
+    validate_closed_surface(surface, in);
+    r = map_to_sphere(surface, so, &dev);
+  } else {
+    validate_disk_surface(surface, in);
+    r = map_to_disk(surface, so);
+  }
   const SurfaceMapReport& rep = r.report;
 
   TriSurface mapped;
@@ -53,9 +62,11 @@ int map_surface(const Args& args, const std::string& in, const std::string& out,
   report["timings_s"]["read"] = t_read;
   report["timings_s"]["write"] = seconds_since(t0);
   report["timings_s"]["total"] = seconds_since(t_start);
-  info("wrote " + out + ": " + std::to_string(mapped.vertices.rows()) + " vertices on the unit sphere, " +
-       std::to_string(mapped.triangles.rows()) + " triangles; face area mean |r-1| " +
-       pct(rep.initial.face_area_ratio.mean_abs_dev) + " (sphere map) -> " + pct(rep.final.face_area_ratio.mean_abs_dev) +
+  const bool sphere = domain == SurfaceDomain::sphere;
+  info("wrote " + out + ": " + std::to_string(mapped.vertices.rows()) + " vertices " +
+       (sphere ? "on the unit sphere, " : "in the unit disk, ") + std::to_string(mapped.triangles.rows()) +
+       " triangles; face area mean |r-1| " + pct(rep.initial.face_area_ratio.mean_abs_dev) +
+       (sphere ? " (sphere map) -> " : " (disk embedding) -> ") + pct(rep.final.face_area_ratio.mean_abs_dev) +
        ", 0 flipped faces");
   if (report_path) write_json_file(*report_path, report);
   if (rep.stop_reason == "time_budget" && !rep.converged)

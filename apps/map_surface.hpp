@@ -1,6 +1,7 @@
 #pragma once
-// `vpm map SURFACE -o OUT`: a closed genus-0 triangle surface mapped to the unit sphere with its
-// face areas kept (vpm/surface_map.hpp). cmd_map.cpp hands it every input that is a surface.
+// `vpm map SURFACE -o OUT`: a closed genus-0 triangle surface mapped to the unit sphere, a
+// disk-like one (one boundary loop) to the unit disk, with its face areas kept
+// (vpm/surface_map.hpp). cmd_map.cpp hands it every input that is a surface.
 #include <string>
 
 #include "cli.hpp"

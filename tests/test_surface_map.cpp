@@ -1,6 +1,7 @@
 // The area-preserving map of closed surfaces to the sphere (vpm/surface_map.hpp), its input
 // checks, FreeSurfer surfaces (host/io/freesurfer.cpp), and `vpm map SURFACE`.
 #include <catch2/catch.hpp>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <fstream>
@@ -45,7 +46,65 @@ void check_on_sphere_without_flips(const SurfaceMapResult& r, const TriSurface& 
   CHECK(m.face_area_ratio.mean_abs_dev == Approx(r.report.final.face_area_ratio.mean_abs_dev).epsilon(1e-12));
 }
 
+// A disk with a bump (a polar grid of `rings` x `sectors`, no face with three boundary corners).
+TriSurface bumpy_disk(int rings, int sectors) {
+  TriSurface s;
+  s.vertices.resize(1 + rings * sectors, 3);
+  s.vertices.row(0) << 0, 0, 0;
+  auto idx = [&](int i, int j) { return 1 + (i - 1) * sectors + (j % sectors); };
+  for (int i = 1; i <= rings; ++i)
+    for (int j = 0; j < sectors; ++j) {
+      const double a = 2 * M_PI * (j + 0.5 * (i % 2)) / sectors, r = static_cast<double>(i) / rings;
+      const double x = r * std::cos(a), y = r * std::sin(a);
+      s.vertices.row(idx(i, j)) << x, y, 0.5 * std::exp(-((x - 0.3) * (x - 0.3) + y * y) / 0.08);
+    }
+  std::vector<std::array<int, 3>> f;
+  for (int j = 0; j < sectors; ++j) f.push_back({0, idx(1, j), idx(1, j + 1)});
+  for (int i = 1; i < rings; ++i)
+    for (int j = 0; j < sectors; ++j) {
+      const int a = idx(i, j), b = idx(i, j + 1);
+      if (i % 2) {
+        f.push_back({a, idx(i + 1, j + 1), b});
+        f.push_back({b, idx(i + 1, j + 1), idx(i + 1, j + 2)});
+      } else {
+        f.push_back({a, idx(i + 1, j), idx(i + 1, j + 1)});
+        f.push_back({a, idx(i + 1, j + 1), b});
+      }
+    }
+  s.triangles.resize(static_cast<Eigen::Index>(f.size()), 3);
+  for (size_t t = 0; t < f.size(); ++t) s.triangles.row(static_cast<Eigen::Index>(t)) << f[t][0], f[t][1], f[t][2];
+  return s;
+}
+
 }  // namespace
+
+TEST_CASE("disk map: a disk with a bump reaches face areas within 0.5 %, boundary on the circle, none flipped") {
+  const TriSurface s = bumpy_disk(12, 48);
+  REQUIRE(surface_domain(s) == SurfaceDomain::disk);
+  validate_disk_surface(s, "disk");
+  const SurfaceMapResult r = map_to_disk(s);
+  const SurfaceMapReport& rep = r.report;
+  CHECK(rep.domain == SurfaceDomain::disk);
+  CHECK(rep.boundary_vertices == 48);
+  CHECK(rep.ears == 0);
+  CHECK(rep.initial.face_area_ratio.mean_abs_dev > 0.05);
+  CHECK(rep.final.face_area_ratio.mean_abs_dev <= 0.005);
+  CHECK(rep.final.flipped_faces == 0);
+  CHECK(rep.final.max_radius_error < 1e-12);
+  CHECK(r.sphere.col(2).cwiseAbs().maxCoeff() == 0.0);
+  for (Eigen::Index i = 0; i < r.sphere.rows(); ++i) REQUIRE(r.sphere.row(i).norm() <= 1 + 1e-12);
+  const SurfaceMetrics m = surface_metrics(s.vertices, r.sphere, s.triangles, SurfaceDomain::disk);
+  CHECK(m.face_area_ratio.mean_abs_dev == Approx(rep.final.face_area_ratio.mean_abs_dev).epsilon(1e-12));
+  // the same disk mirrored (faces turning the other way) maps as well
+  TriSurface mirrored = s;
+  mirrored.vertices.col(0) *= -1;
+  CHECK(map_to_disk(mirrored).report.final.face_area_ratio.mean_abs_dev <= 0.005);
+  // refused: a closed surface
+  CHECK_THROWS_WITH(validate_disk_surface(icosphere(2), "s.off"), Catch::Contains("closed"));
+  Json j = to_json(rep);
+  CHECK(j["domain"].string() == "disk");
+  CHECK(j["disk_map"]["boundary_vertices"].number() == 48);
+}
 
 TEST_CASE("surface map: an ellipsoid with a bump reaches face areas within 0.5 %, every face outwards") {
   const TriSurface s = bumpy_ellipsoid(4);
@@ -208,12 +267,38 @@ TEST_CASE("vpm map SURFACE: to the sphere as .vtp with fields, or FreeSurfer, te
   CHECK_THAT(slurp(dir + "/e1"), Catch::Contains("tet meshes only"));
   CHECK(run_status(kVpm + " map " + dir + "/in.off -o " + dir + "/out.vtu 2>" + dir + "/e2") == 2);
   CHECK_THAT(slurp(dir + "/e2"), Catch::Contains("output extension"));
-  TriSurface hole = icosphere(2);
+  // one hole: a disk, mapped to the unit disk; two holes: refused
+  TriSurface hole = icosphere(3);
   hole.triangles.conservativeResize(hole.triangles.rows() - 1, 3);
   write_surface(dir + "/hole.off", hole);
-  CHECK(run_status(kVpm + " map " + dir + "/hole.off -o " + dir + "/h.vtp 2>" + dir + "/e3") == 2);
-  CHECK_THAT(slurp(dir + "/e3"), Catch::Contains(dir + "/hole.off: edge") && Catch::Contains("holes"));
-  CHECK(!std::filesystem::exists(dir + "/h.vtp"));
+  REQUIRE(run_status(kVpm + " map " + dir + "/hole.off -o " + dir + "/h.vtp --report " + dir + "/h.json --quiet 2>/dev/null") != 2);
+  Json h = Json::parse(slurp(dir + "/h.json"));
+  CHECK(h["domain"].string() == "disk");
+  CHECK(h["final"]["flipped_faces"].number() == 0);
+  const TriSurface ico = icosphere(2);
+  auto touches = [&](int t) {  // face t shares a vertex with one of face 0's neighbours' vertices
+    for (int u = 0; u < ico.triangles.rows(); ++u) {
+      bool near0 = false;
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) near0 = near0 || ico.triangles(0, a) == ico.triangles(u, b);
+      if (!near0) continue;
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b)
+          if (ico.triangles(u, a) == ico.triangles(t, b)) return true;
+    }
+    return false;
+  };
+  int far = 1;
+  while (touches(far)) ++far;
+  TriSurface holes;
+  holes.vertices = ico.vertices;
+  holes.triangles.resize(ico.triangles.rows() - 2, 3);
+  for (int t = 0, k = 0; t < ico.triangles.rows(); ++t)
+    if (t != 0 && t != far) holes.triangles.row(k++) = ico.triangles.row(t);
+  write_surface(dir + "/holes.off", holes);
+  CHECK(run_status(kVpm + " map " + dir + "/holes.off -o " + dir + "/hh.vtp 2>" + dir + "/e3") == 2);
+  CHECK_THAT(slurp(dir + "/e3"), Catch::Contains(dir + "/holes.off: ") && Catch::Contains("more than one boundary loop"));
+  CHECK(!std::filesystem::exists(dir + "/hh.vtp"));
   // a surface that misses the tolerance by over 2x: written, exit 4 (--allow-partial 0)
   CHECK(run_status(kVpm + " map " + dir + "/in.off -o " + dir + "/p.vtp --rounds 0 --quiet 2>/dev/null") == 4);
   CHECK(std::filesystem::exists(dir + "/p.vtp"));

@@ -13,6 +13,9 @@ Surfaces, all from data Debian ships:
   aal-19k  the boundary of the union of AAL's regions (mricron-data's aal), a folded surface
   cgal-NAME  the closed genus-0 models of libcgal-demo (bench/shapes/run.py's MODELS), as they
       come (irregular triangles)
+  colin27-patch-ears, colin27-patch  disk-like: the faces of colin27-22k whose centroid lies in
+      the top 35 % of its height, as cut (with "ears": faces whose three corners are on the
+      cut), and with the ears removed; mapped to the unit disk
 The split (docs/surfaces.md): defaults of the surface map were chosen on the DEVELOPMENT set
 (aal-19k, cgal-cow, cgal-homer) and are reported on the others.
 """
@@ -34,7 +37,43 @@ BRAINS = {"colin27-22k": ("ch2bet.nii.gz", ["--target-vertices", "50000"]),
           "colin27-128k": ("ch2bet.nii.gz", ["--max-volume", "1.2"]),
           "aal-19k": ("aal.nii.gz", ["--target-vertices", "30000"])}
 DEVELOPMENT = {"aal-19k", "cgal-cow", "cgal-homer"}
-DEFAULT = ",".join(list(BRAINS) + ["cgal-" + m for m in MODELS])
+PATCHES = ["colin27-patch-ears", "colin27-patch"]
+DEFAULT = ",".join(list(BRAINS) + ["cgal-" + m for m in MODELS] + PATCHES)
+
+
+def read_off(path):
+    lines = [l for l in open(path).read().split("\n") if l.strip() and not l.startswith("#")]
+    n, m = (int(x) for x in lines[1].split()[:2])
+    v = [lines[2 + i].split()[:3] for i in range(n)]
+    f = [[int(x) for x in lines[2 + n + i].split()[1:4]] for i in range(m)]
+    return v, f
+
+
+def write_off(path, v, f):
+    used = sorted({i for t in f for i in t})
+    new = {old: k for k, old in enumerate(used)}
+    with open(path, "w") as o:
+        o.write(f"OFF\n{len(used)} {len(f)} 0\n")
+        o.writelines(" ".join(v[i]) + "\n" for i in used)
+        o.writelines(f"3 {new[a]} {new[b]} {new[c]}\n" for a, b, c in f)
+
+
+def patch(source, path, strip_ears):
+    """The faces of `source` whose centroid is in the top 35 % of its height; without the faces
+    whose three corners are on the cut when `strip_ears` (once)."""
+    v, f = read_off(source)
+    z = [float(p[2]) for p in v]
+    cut = max(z) - 0.35 * (max(z) - min(z))
+    f = [t for t in f if sum(z[i] for i in t) / 3 > cut]
+    if strip_ears:
+        edges = {}
+        for t in f:
+            for k in range(3):
+                e = tuple(sorted((t[k], t[(k + 1) % 3])))
+                edges[e] = edges.get(e, 0) + 1
+        border = {i for e, c in edges.items() if c == 1 for i in e}
+        f = [t for t in f if not all(i in border for i in t)]
+    write_off(path, v, f)
 
 
 def run(cmd, timeout):
@@ -53,6 +92,9 @@ def prepare(vpm, out, name, timeout):
         return path
     if name.startswith("cgal-"):
         extract_models(out, [name[5:]])
+        return path
+    if name in PATCHES:
+        patch(prepare(vpm, out, "colin27-22k", timeout), path, strip_ears=name == "colin27-patch")
         return path
     image, density = BRAINS[name]
     mesh = os.path.join(out, name + ".vtu")
@@ -84,13 +126,14 @@ def one(vpm, out, name, runs, timeout):
                sphere_map=r["initial"]["face_area_ratio"]["mean_abs_dev"],
                face=r["final"]["face_area_ratio"]["mean_abs_dev"],
                vertex=r["final"]["vertex_area_ratio"]["mean_abs_dev"],
-               flipped=r["final"]["flipped_faces"], steps=len(r["rounds"]), stop=r["stop_reason"],
-               converged=r["converged"], sphere_map_s=r["timings_s"]["sphere_map"], polish_s=r["timings_s"]["polish"])
+               flipped=r["final"]["flipped_faces"], steps=len(r["rounds"]), stop=r["stop_reason"], domain=r["domain"],
+               ears=r.get("disk_map", {}).get("ears"),
+               converged=r["converged"], polish_s=r["timings_s"]["polish"])
     return row
 
 
 def table(rows, runs):
-    lines = [f"| surface | set | vertices / faces | exit | face area \\|r-1\\|: sphere map -> polished | vertex \\|r-1\\| "
+    lines = [f"| surface | set | vertices / faces | exit | face area \\|r-1\\|: sphere map (disk embedding) -> polished | vertex \\|r-1\\| "
              f"| flipped | steps (stop) | s (median of {runs}) |", "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         if "face" not in r:

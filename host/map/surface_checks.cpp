@@ -37,19 +37,59 @@ Eigen::VectorXd face_areas(const Points& x, const Triangles& f) {
   return a;
 }
 
-std::vector<int> flipped_list(const Points& x, const Triangles& f) {
+std::vector<int> flipped_faces_in(SurfaceDomain domain, const Points& x, const Triangles& f) {
   std::vector<int> out;
-  for (Eigen::Index t = 0; t < f.rows(); ++t)
-    if (row3(x, f(t, 0)).dot(row3(x, f(t, 1)).cross(row3(x, f(t, 2)))) <= 0) out.push_back(static_cast<int>(t));
+  for (Eigen::Index t = 0; t < f.rows(); ++t) {
+    const Eigen::Vector3d a = row3(x, f(t, 0)), b = row3(x, f(t, 1)), c = row3(x, f(t, 2));
+    const double s = domain == SurfaceDomain::sphere ? a.dot(b.cross(c)) : (b - a).cross(c - a)(2);
+    if (s <= 0) out.push_back(static_cast<int>(t));
+  }
   return out;
+}
+
+std::vector<int> boundary_loop(int n, const Triangles& f, const std::string& what) {
+  // directed edges a -> b of the faces; an open edge is one whose reverse b -> a is in no face.
+  // Walking the open edges in the faces' direction traces the loop with the faces on its left.
+  std::vector<std::pair<int, int>> directed;
+  directed.reserve(3 * static_cast<size_t>(f.rows()));
+  for (Eigen::Index t = 0; t < f.rows(); ++t)
+    for (int k = 0; k < 3; ++k) directed.emplace_back(f(t, k), f(t, (k + 1) % 3));
+  std::sort(directed.begin(), directed.end());
+  std::vector<int> next(static_cast<size_t>(n), -1);
+  int open = 0, start = -1;
+  for (const auto& [a, b] : directed)
+    if (!std::binary_search(directed.begin(), directed.end(), std::make_pair(b, a))) {
+      if (next[static_cast<size_t>(a)] >= 0)
+        throw InputError(what + ": vertex " + std::to_string(a) + " is on the boundary twice: the surface pinches there");
+      next[static_cast<size_t>(a)] = b;
+      ++open;
+      start = a;
+    }
+  std::vector<int> loop;
+  if (open == 0) return loop;
+  for (int v = start; loop.size() <= static_cast<size_t>(open);) {
+    loop.push_back(v);
+    v = next[static_cast<size_t>(v)];
+    if (v < 0) throw InputError(what + ": the boundary is not a closed loop");
+    if (v == start) break;
+  }
+  if (static_cast<int>(loop.size()) != open)
+    throw InputError(what + ": " + std::to_string(open) + " open edges in more than one boundary loop; the disk map needs one");
+  return loop;
+}
+
+std::vector<char> loop_mask(int n, const Triangles& f) {
+  std::vector<char> mask(static_cast<size_t>(n), 0);
+  for (int v : boundary_loop(n, f, "surface")) mask[static_cast<size_t>(v)] = 1;
+  return mask;
 }
 
 }  // namespace detail
 
 using detail::face_areas;
-using detail::flipped_list;
 
-SurfaceMetrics surface_metrics(const Points& reference, const Points& mapped, const Triangles& faces) {
+SurfaceMetrics surface_metrics(const Points& reference, const Points& mapped, const Triangles& faces,
+                               SurfaceDomain domain) {
   if (reference.rows() != mapped.rows()) throw InputError("surface_metrics: reference and mapped differ in size");
   SurfaceMetrics m;
   const Eigen::VectorXd a0 = face_areas(reference, faces), a = face_areas(mapped, faces);
@@ -65,9 +105,13 @@ SurfaceMetrics surface_metrics(const Points& reference, const Points& mapped, co
   m.vertex_ratio = (d / s).cwiseQuotient(d0 / s0);
   m.face_area_ratio = ratio_stats(m.face_ratio);
   m.vertex_area_ratio = ratio_stats(m.vertex_ratio);
-  m.flipped_faces = static_cast<int>(flipped_list(mapped, faces).size());
+  m.flipped_faces = static_cast<int>(detail::flipped_faces_in(domain, mapped, faces).size());
+  // the points that must be on the unit sphere or circle: all, or the disk's boundary
+  const std::vector<char> on = domain == SurfaceDomain::sphere
+                                   ? std::vector<char>(static_cast<size_t>(mapped.rows()), 1)
+                                   : detail::loop_mask(static_cast<int>(mapped.rows()), faces);
   for (Eigen::Index i = 0; i < mapped.rows(); ++i)
-    m.max_radius_error = std::max(m.max_radius_error, std::abs(mapped.row(i).norm() - 1.0));
+    if (on[static_cast<size_t>(i)]) m.max_radius_error = std::max(m.max_radius_error, std::abs(mapped.row(i).norm() - 1.0));
   return m;
 }
 
@@ -80,10 +124,16 @@ Json to_json(const SurfaceMetrics& m) {
   return j;
 }
 
-void validate_closed_surface(const TriSurface& s, const std::string& what) {
+namespace {
+
+// The checks both domains share: indices, finite points, every vertex used, manifold edges and
+// vertices (open edges refused when `closed`), one component, consistent orientation, no face
+// without area. Returns the topology.
+SurfaceTopology check_surface(const TriSurface& s, const std::string& what, bool closed) {
   const int n = static_cast<int>(s.vertices.rows());
   const Eigen::Index m = s.triangles.rows();
-  if (m < 4) throw InputError(what + ": " + std::to_string(m) + " triangles; a closed surface needs at least 4");
+  if (m < (closed ? 4 : 1))
+    throw InputError(what + ": " + std::to_string(m) + " triangles; the map needs at least " + (closed ? "4" : "1"));
   if (!s.vertices.allFinite()) throw InputError(what + ": a vertex coordinate is not finite");
   std::vector<char> used(static_cast<size_t>(n), 0);
   for (Eigen::Index t = 0; t < m; ++t)
@@ -98,22 +148,18 @@ void validate_closed_surface(const TriSurface& s, const std::string& what) {
     if (!used[static_cast<size_t>(v)])
       throw InputError(what + ": vertex " + std::to_string(v) + " is in no triangle; the map needs every vertex on the surface");
   const SurfaceTopology st = surface_topology(n, s.triangles);
-  if (st.open_edges)
-    throw InputError(what + ": edge (" + std::to_string(st.first_bad_edge[0]) + ", " + std::to_string(st.first_bad_edge[1]) +
-                     ") is open: the surface has holes (" + std::to_string(st.open_edges) +
+  const std::string edge = "edge (" + std::to_string(st.first_bad_edge[0]) + ", " + std::to_string(st.first_bad_edge[1]) + ")";
+  if (closed && st.open_edges)
+    throw InputError(what + ": " + edge + " is open: the surface has holes (" + std::to_string(st.open_edges) +
                      " open edges); the sphere map needs a closed surface");
   if (st.nonmanifold_edges)
-    throw InputError(what + ": edge (" + std::to_string(st.first_bad_edge[0]) + ", " + std::to_string(st.first_bad_edge[1]) +
-                     ") has three or more triangles: not a manifold (" + std::to_string(st.nonmanifold_edges) + " such edges)");
+    throw InputError(what + ": " + edge + " has three or more triangles: not a manifold (" +
+                     std::to_string(st.nonmanifold_edges) + " such edges)");
   if (st.nonmanifold_vertices)
     throw InputError(what + ": vertex " + std::to_string(st.first_bad_vertex) + ": the surface pinches there (" +
                      std::to_string(st.nonmanifold_vertices) + " non-manifold vertices)");
   if (st.components != 1)
-    throw InputError(what + ": " + std::to_string(st.components) + " separate surfaces; the sphere map needs exactly one");
-  if (st.euler != 2)
-    throw InputError(what + ": Euler characteristic " + std::to_string(st.euler) + " (genus " + std::to_string(st.genus()) +
-                     "); the sphere map needs a genus-0 surface (2)");
-  // consistent orientation: every directed edge once
+    throw InputError(what + ": " + std::to_string(st.components) + " separate surfaces; the map needs exactly one");
   std::vector<std::pair<long long, long long>> directed;
   directed.reserve(3 * static_cast<size_t>(m));
   for (Eigen::Index t = 0; t < m; ++t)
@@ -124,11 +170,38 @@ void validate_closed_surface(const TriSurface& s, const std::string& what) {
       throw InputError(what + ": edge (" + std::to_string(directed[i].first) + ", " + std::to_string(directed[i].second) +
                        ") runs the same way in two triangles: the faces are not consistently oriented");
   const Eigen::VectorXd a = face_areas(s.vertices, s.triangles);
-  double total = a.sum();
+  const double total = a.sum();
   for (Eigen::Index t = 0; t < m; ++t)
     if (!(a(t) > 1e-14 * total))
       throw InputError(what + ": triangle " + std::to_string(t) + " has no area (" + strprintf("%.3g", a(t)) +
                        "); face area ratios need every face to have one");
+  return st;
+}
+
+}  // namespace
+
+const char* to_string(SurfaceDomain d) { return d == SurfaceDomain::sphere ? "sphere" : "disk"; }
+
+void validate_closed_surface(const TriSurface& s, const std::string& what) {
+  const SurfaceTopology st = check_surface(s, what, true);
+  if (st.euler != 2)
+    throw InputError(what + ": Euler characteristic " + std::to_string(st.euler) + " (genus " + std::to_string(st.genus()) +
+                     "); the sphere map needs a genus-0 surface (2)");
+}
+
+void validate_disk_surface(const TriSurface& s, const std::string& what) {
+  const SurfaceTopology st = check_surface(s, what, false);
+  if (st.open_edges == 0)
+    throw InputError(what + ": the surface is closed; the disk map needs one boundary loop (map it to the sphere)");
+  detail::boundary_loop(static_cast<int>(s.vertices.rows()), s.triangles, what);  // one loop, no pinch
+  if (st.euler != 1)
+    throw InputError(what + ": Euler characteristic " + std::to_string(st.euler) +
+                     " with one boundary loop; the disk map needs a disk (1: no handles)");
+}
+
+SurfaceDomain surface_domain(const TriSurface& s) {
+  const SurfaceTopology st = surface_topology(static_cast<int>(s.vertices.rows()), s.triangles);
+  return st.open_edges == 0 ? SurfaceDomain::sphere : SurfaceDomain::disk;
 }
 
 }  // namespace vpm

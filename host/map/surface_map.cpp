@@ -1,165 +1,23 @@
 // The area-preserving map of a closed genus-0 surface to the unit sphere (vpm/surface_map.hpp):
-// the sphere map of the initial map's step 2, then Gauss-Newton steps on the face areas whose
-// direction is the tet polish's CGLS (map/polish_cgls.hpp) over a backend of triangle rows.
+// the sphere map of the initial map's step 2, then the polish of the face areas
+// (map/surface_polish.hpp); and the surface map's report.
 #include "vpm/surface_map.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 
-#include "core/parallel.hpp"
 #include "map/surface_area.hpp"
-#include "map/polish_cgls.hpp"
+#include "map/surface_polish.hpp"
 #include "vpm/error.hpp"
 #include "vpm/format.hpp"
 #include "vpm/topology.hpp"
 
 namespace vpm {
 
-namespace {
-
-using detail::face_areas;
-using detail::flipped_list;
-using detail::parallel_for;
-
-// The largest log area change one polish step asks of a face.
-constexpr double kMaxLogStep = 0.5;
-// Trials of a step that flips faces: the flipped faces' vertices are held still and the step
-// tried again this many times before it is halved (up to kHalvings times).
-constexpr int kFreezeTrials = 8;
-constexpr int kHalvings = 12;
-// The polish stops once the last kGainWindow steps together gained less than kGainWindow x
-// SurfaceMapOptions::polish_min_gain: one step's gain varies from step to step (faces held
-// still in one step move in the next), and a rule on one step stopped early by chance.
-constexpr size_t kGainWindow = 5;
-
-Eigen::Vector3d row3(const Points& x, int i) { return x.row(i).transpose(); }
-
-// Face area mean |r - 1| of `area` against `area0` (both normalised to their totals).
-double face_distortion(const Eigen::VectorXd& area0, const Eigen::VectorXd& area) {
-  const double s0 = area0.sum(), s = area.sum();
-  double acc = 0;
-  for (Eigen::Index t = 0; t < area.size(); ++t) acc += std::abs((area(t) / s) / (area0(t) / s0) - 1.0);
-  return acc / static_cast<double>(std::max<Eigen::Index>(1, area.size()));
-}
-
-// min |W (A d - b)|^2 over moves d tangent to the sphere at each vertex: A's rows the faces'
-// linearised relative area changes, A_(f, v) = grad_v A_f / A_f, b_f = log(t_f / A_f) clamped to
-// +-kMaxLogStep (a face 1e-6 too small asks for e^0.5 a step, not for a million-fold growth whose
-// linearisation would flip its neighbours; near the target it is 1 - A_f / t_f to first order).
-// W_f = sqrt(min(1, A_f / t_f)): a crushed face's row, whose gradient grows like 1 / its size,
-// would otherwise take the early-stopped CGLS's iterations from the bulk of the faces (chosen on
-// the development surfaces of docs/surfaces.md: the AAL surface 1.04 % -> 0.49 %).
-// A^T is applied by gathering over each vertex's faces (no scatter, no races).
-class FaceAreaSystem {
- public:
-  FaceAreaSystem(const Points& x, const Triangles& faces, const Eigen::VectorXd& target,
-                 const std::vector<int>& inc_ptr, const std::vector<int>& inc)
-      : x_(x), f_(faces), ptr_(inc_ptr), inc_(inc), n_(static_cast<int>(x.rows())), m_(static_cast<int>(faces.rows())) {
-    g_.resize(3 * static_cast<size_t>(m_));
-    b_.resize(m_);
-    parallel_for(m_, 16384, [&](int t0, int t1) {
-      for (int t = t0; t < t1; ++t) {
-        const Eigen::Vector3d a = row3(x_, f_(t, 0)), b = row3(x_, f_(t, 1)), c = row3(x_, f_(t, 2));
-        const Eigen::Vector3d nrm = (b - a).cross(c - a);
-        const double len = nrm.norm(), area = std::max(0.5 * len, 1e-300);
-        const Eigen::Vector3d nh = len > 0 ? Eigen::Vector3d(nrm / len) : Eigen::Vector3d::Zero();
-        const double w = std::sqrt(std::min(1.0, area / target(t)));
-        const double s = 0.5 / area * w;
-        g_[3 * static_cast<size_t>(t)] = s * (b - c).cross(nh);
-        g_[3 * static_cast<size_t>(t) + 1] = s * (c - a).cross(nh);
-        g_[3 * static_cast<size_t>(t) + 2] = s * (a - b).cross(nh);
-        b_(t) = w * std::clamp(std::log(target(t) / area), -kMaxLogStep, kMaxLogStep);
-      }
-    });
-  }
-  int vertices() const { return n_; }
-  int rows() const { return m_; }
-  const Eigen::VectorXd& rhs() const { return b_; }
-
-  void apply(const Points& d, Eigen::VectorXd& out) const {
-    parallel_for(m_, 16384, [&](int t0, int t1) {
-      for (int t = t0; t < t1; ++t) {
-        double s = 0;
-        for (int k = 0; k < 3; ++k) s += g_[3 * static_cast<size_t>(t) + k].dot(d.row(f_(t, k)).transpose());
-        out(t) = s;
-      }
-    });
-  }
-  void apply_t(const Eigen::VectorXd& y, Points& out) const {
-    parallel_for(n_, 8192, [&](int v0, int v1) {
-      for (int v = v0; v < v1; ++v) {
-        Eigen::Vector3d acc = Eigen::Vector3d::Zero();
-        for (int j = ptr_[static_cast<size_t>(v)]; j < ptr_[static_cast<size_t>(v) + 1]; ++j)
-          acc += y(inc_[static_cast<size_t>(j)] / 3) * g_[static_cast<size_t>(inc_[static_cast<size_t>(j)])];
-        double u[3] = {acc(0), acc(1), acc(2)};
-        detail::pl_tangent(x_(v, 0), x_(v, 1), x_(v, 2), u);
-        out.row(v) = Eigen::RowVector3d(u[0], u[1], u[2]);
-      }
-    });
-  }
-
- private:
-  const Points& x_;
-  const Triangles& f_;
-  const std::vector<int>& ptr_;
-  const std::vector<int>& inc_;  // 3 f + k for face f's corner k at the vertex
-  const int n_, m_;
-  std::vector<Eigen::Vector3d> g_;
-  Eigen::VectorXd b_;
-};
-
-// polish_cgls's backend over FaceAreaSystem (the tet polish's host backend without holds).
-class FaceAreaBackend {
- public:
-  explicit FaceAreaBackend(const FaceAreaSystem& sys)
-      : sys_(sys), dx_(Points::Zero(sys.vertices(), 3)), s_(sys.vertices(), 3), p_(sys.vertices(), 3), r_(sys.rhs()),
-        q_(sys.rows()) {}
-  void apply_t() {
-    sys_.apply_t(r_, s_);
-    sum_ = s_.squaredNorm();
-  }
-  void apply() {
-    sys_.apply(p_, q_);
-    sum_ = q_.squaredNorm();
-  }
-  void scalars(int op) { detail::pl_scalars(op, sum_, op == P_OP_INIT ? sys_.rhs().squaredNorm() : 0.0, S_); }
-  void update() {
-    dx_ += S_[P_ALPHA] * p_;
-    r_ -= S_[P_ALPHA] * q_;
-  }
-  void update_p() {
-    if (S_[P_BETA] == 0) p_ = s_;
-    else p_ = s_ + S_[P_BETA] * p_;
-  }
-  bool stopped() const { return S_[P_STOP] != 0; }
-  detail::PolishDirection result() {
-    detail::PolishDirection res;
-    res.dx = std::move(dx_);
-    res.iterations = static_cast<int>(S_[P_ITER]);
-    const double bn = sys_.rhs().norm();
-    res.residual = bn > 0 ? r_.norm() / bn : 0;
-    return res;
-  }
-
- private:
-  const FaceAreaSystem& sys_;
-  Points dx_, s_, p_;
-  Eigen::VectorXd r_, q_;
-  double sum_ = 0;
-  double S_[P_SLOTS] = {};
-};
-
-Points on_sphere(const Points& x) {
-  Points y = x;
-  for (Eigen::Index i = 0; i < y.rows(); ++i) y.row(i) /= y.row(i).norm();
-  return y;
-}
-
-}  // namespace
-
 Json to_json(const SurfaceMapReport& r) {
   Json j = Json::object();
+  j["domain"] = to_string(r.domain);
   j["input"]["vertices"] = r.vertices;
   j["input"]["faces"] = r.faces;
   j["input"]["reversed"] = r.reversed;
@@ -180,13 +38,19 @@ Json to_json(const SurfaceMapReport& r) {
     o["seconds"] = s.seconds;
     rounds.push_back(o);
   }
-  j["sphere_map"] = to_json(r.sphere);
+  if (r.domain == SurfaceDomain::sphere) {
+    j["sphere_map"] = to_json(r.sphere);
+  } else {
+    j["disk_map"]["boundary_vertices"] = r.boundary_vertices;
+    j["disk_map"]["ears"] = r.ears;
+    j["disk_map"]["weights"] = "mean value";
+  }
   j["stop_reason"] = r.stop_reason;
   j["converged"] = r.converged;
   j["convergence"]["tolerance"] = r.tolerance;
   j["convergence"]["reached"] = r.final.face_area_ratio.mean_abs_dev;
   j["convergence"]["converged"] = r.converged;
-  j["timings_s"]["sphere_map"] = r.seconds_sphere_map;
+  j["timings_s"][r.domain == SurfaceDomain::sphere ? "sphere_map" : "disk_map"] = r.seconds_sphere_map;
   j["timings_s"]["polish"] = r.seconds_polish;
   j["timings_s"]["total"] = r.seconds_total;
   return j;
@@ -194,69 +58,7 @@ Json to_json(const SurfaceMapReport& r) {
 
 namespace {
 
-// Each vertex's (face, corner) pairs as 3 f + k, CSR: the gathers of A^T.
-struct FaceIncidence {
-  std::vector<int> ptr, items;
-};
-FaceIncidence vertex_face_incidence(int n, const Triangles& f) {
-  FaceIncidence inc;
-  inc.ptr.assign(static_cast<size_t>(n) + 1, 0);
-  inc.items.resize(3 * static_cast<size_t>(f.rows()));
-  for (Eigen::Index t = 0; t < f.rows(); ++t)
-    for (int k = 0; k < 3; ++k) ++inc.ptr[static_cast<size_t>(f(t, k)) + 1];
-  for (int v = 0; v < n; ++v) inc.ptr[static_cast<size_t>(v) + 1] += inc.ptr[static_cast<size_t>(v)];
-  std::vector<int> fill(inc.ptr.begin(), inc.ptr.end() - 1);
-  for (Eigen::Index t = 0; t < f.rows(); ++t)
-    for (int k = 0; k < 3; ++k)
-      inc.items[static_cast<size_t>(fill[static_cast<size_t>(f(t, k))]++)] = 3 * static_cast<int>(t) + k;
-  return inc;
-}
-
-// One polish step from x (kept when it lowers the face distortion d, which is then updated):
-// the CGLS direction, held still where it flips faces and tried again, halved while it flips
-// or does not lower d.
-SurfaceMapStep polish_step(const Triangles& f, const Eigen::VectorXd& area0, const FaceIncidence& inc, int iterations,
-                           Points& x, double& d) {
-  const auto t_step = Clock::now();
-  const Eigen::VectorXd area = face_areas(x, f);
-  const Eigen::VectorXd target = area0 * (area.sum() / area0.sum());
-  const FaceAreaSystem sys(x, f, target, inc.ptr, inc.items);
-  FaceAreaBackend bk(sys);
-  detail::PolishDirection dir = detail::polish_cgls(bk, iterations);
-  SurfaceMapStep st;
-  st.solver_iterations = dir.iterations;
-  st.solver_residual = dir.residual;
-  // the step: where it flips faces their vertices are held still and it is tried again; halved
-  // while it still flips or does not lower the distortion
-  std::vector<char> frozen(static_cast<size_t>(x.rows()), 0);
-  st.discarded = true;
-  for (int h = 0; h < kHalvings && st.discarded; ++h, st.step *= 0.5) {
-    bool ok = false;
-    Points y;
-    for (int trial = 0; trial < kFreezeTrials && !ok; ++trial) {
-      y = on_sphere(x + st.step * dir.dx);
-      const std::vector<int> bad = flipped_list(y, f);
-      ok = bad.empty();
-      for (int t : bad)
-        for (int j = 0; j < 3; ++j) {
-          dir.dx.row(f(t, j)).setZero();
-          frozen[static_cast<size_t>(f(t, j))] = 1;
-        }
-    }
-    if (!ok) continue;
-    const double dn = face_distortion(area0, face_areas(y, f));
-    if (dn < d) {
-      x = std::move(y);
-      d = dn;
-      st.discarded = false;
-      break;
-    }
-  }
-  st.frozen_vertices = static_cast<int>(std::count(frozen.begin(), frozen.end(), 1));
-  st.face_mean_abs_dev = d;
-  st.seconds = seconds_since(t_step);
-  return st;
-}
+Eigen::Vector3d row3v(const Points& x, int i) { return x.row(i).transpose(); }
 
 // A surface with inward faces (negative enclosed volume) is mapped with its faces reversed: the
 // sphere map and the flip test want outward ones.
@@ -264,8 +66,8 @@ bool faces_inward(const TriSurface& s) {
   double volume6 = 0;
   const Eigen::Vector3d c = s.vertices.colwise().mean().transpose();
   for (Eigen::Index t = 0; t < s.triangles.rows(); ++t)
-    volume6 += (row3(s.vertices, s.triangles(t, 0)) - c)
-                   .dot((row3(s.vertices, s.triangles(t, 1)) - c).cross(row3(s.vertices, s.triangles(t, 2)) - c));
+    volume6 += (row3v(s.vertices, s.triangles(t, 0)) - c)
+                   .dot((row3v(s.vertices, s.triangles(t, 1)) - c).cross(row3v(s.vertices, s.triangles(t, 2)) - c));
   return volume6 < 0;
 }
 
@@ -290,38 +92,17 @@ SurfaceMapResult map_to_sphere(const TriSurface& input, const SurfaceMapOptions&
   SphereMapResult sm = sphere_map(s, opt.sphere, device);
   rep.sphere = sm.report;
   rep.seconds_sphere_map = seconds_since(t0);
-  Points x = on_sphere(sm.sphere);
+  const detail::SurfaceDomainMoves domain{SurfaceDomain::sphere, {}};
+  Points x = domain.place(sm.sphere);
   rep.initial = surface_metrics(s.vertices, x, f);
   if (rep.initial.flipped_faces > 0)
     throw NumericalError("map_to_sphere: the sphere map left " + std::to_string(rep.initial.flipped_faces) +
                          " flipped faces");
-  const Eigen::VectorXd area0 = face_areas(s.vertices, f);
+  const Eigen::VectorXd area0 = detail::face_areas(s.vertices, f);
   double d = rep.initial.face_area_ratio.mean_abs_dev;
   if (opt.progress) opt.progress(strprintf("sphere map: face area mean |r-1| %.4f, %.2f s", d, rep.seconds_sphere_map));
 
-  t0 = Clock::now();
-  const FaceIncidence inc = vertex_face_incidence(static_cast<int>(x.rows()), f);
-  rep.stop_reason = opt.polish_rounds > 0 ? "rounds" : "none";
-  std::vector<double> history;  // the distortion before each step
-  for (int k = 0; k < opt.polish_rounds; ++k) {
-    if (d <= opt.tolerance || opt.deadline.passed()) {
-      rep.stop_reason = d <= opt.tolerance ? "tolerance" : "time_budget";
-      break;
-    }
-    history.push_back(d);
-    const SurfaceMapStep st = polish_step(f, area0, inc, opt.polish_iterations, x, d);
-    rep.polish.push_back(st);
-    if (opt.progress)
-      opt.progress(strprintf("polish %d: face area mean |r-1| %.4f, step %g, %.2f s%s", k + 1, d, st.step, st.seconds,
-                             st.discarded ? " (discarded)" : ""));
-    const size_t h = history.size();
-    if (st.discarded || (h >= kGainWindow && d > (1.0 - kGainWindow * opt.polish_min_gain) * history[h - kGainWindow])) {
-      rep.stop_reason = d <= opt.tolerance ? "tolerance" : "stalled";
-      break;
-    }
-  }
-  if (rep.stop_reason == "rounds" && d <= opt.tolerance) rep.stop_reason = "tolerance";
-  rep.seconds_polish = seconds_since(t0);
+  detail::polish_surface(domain, f, area0, opt, x, rep);
   res.sphere = std::move(x);
   rep.final = surface_metrics(s.vertices, res.sphere, f);
   rep.converged = rep.final.face_area_ratio.mean_abs_dev <= opt.tolerance;

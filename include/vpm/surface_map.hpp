@@ -1,7 +1,9 @@
 #pragma once
-// The area-preserving map of a closed genus-0 triangle surface to the unit sphere: the paper's
-// method one dimension down (docs/surfaces.md).
+// The area-preserving map of a closed genus-0 triangle surface to the unit sphere, and of a
+// disk-like one (one boundary loop) to the unit disk: the paper's method one dimension down
+// (docs/surfaces.md).
 //
+// To the sphere:
 //  1. sphere map (vpm::sphere_map, the initial map's step 2 for a tet mesh's boundary): the
 //     spherical conformal map, Moebius balancing, then the compressible flow on the sphere that
 //     equalises each vertex's share of the area (a log-density Moser flow, map/sphere_density);
@@ -13,9 +15,15 @@
 //     each step put back on the sphere, halved while it flips a face, kept only while it lowers
 //     the face distortion.
 //
+// To the disk: the boundary loop on the unit circle at angles proportional to its arc length,
+// the interior by Floater's mean value coordinates (a convex combination of its neighbours,
+// fold-free by Tutte's theorem), then the same polish, interior vertices moving in the plane
+// and boundary vertices along the circle.
+//
 // The face area ratio of face f is (A_f / sum A) / (A0_f / sum A0), with A the chord (flat)
-// triangle areas on the sphere and A0 the input's; a face is flipped when its chord triangle
-// faces the centre (det(a, b, c) <= 0). The map never returns a flipped face.
+// triangle areas on the sphere (or the triangles' in the disk) and A0 the input's; a face is
+// flipped when its chord triangle faces the centre (det(a, b, c) <= 0), in the disk when it
+// turns clockwise. The maps never return a flipped face.
 #include <Eigen/Core>
 #include <functional>
 #include <string>
@@ -30,6 +38,11 @@
 namespace vpm {
 
 class Device;
+
+/// Where a surface is mapped: closed genus-0 surfaces to the unit sphere, surfaces with one
+/// boundary loop (a disk topologically) to the unit disk in the plane z = 0.
+enum class SurfaceDomain { sphere, disk };
+const char* to_string(SurfaceDomain domain);
 
 struct SurfaceMapOptions {
   /// Stop polishing once the face area mean |r - 1| is at most this.
@@ -70,16 +83,24 @@ struct SurfaceMetrics {
   Eigen::VectorXd face_ratio;      ///< per-face ratios (length faces)
   Eigen::VectorXd vertex_ratio;    ///< per-vertex ratios (length vertices)
 };
-/// Metrics of `mapped` (n x 3 on the unit sphere) against `reference` (the input), same faces.
-SurfaceMetrics surface_metrics(const Points& reference, const Points& mapped, const Triangles& faces);
+/// Metrics of `mapped` (n x 3 on the unit sphere, or in the unit disk) against `reference` (the
+/// input), same faces; max_radius_error over all points (sphere) or the boundary loop's (disk).
+SurfaceMetrics surface_metrics(const Points& reference, const Points& mapped, const Triangles& faces,
+                               SurfaceDomain domain = SurfaceDomain::sphere);
 /// {"flipped_faces", "face_area_ratio": to_json(RatioStats), "vertex_area_ratio": ...,
 ///  "max_radius_error"}
 Json to_json(const SurfaceMetrics& metrics);
 
 struct SurfaceMapReport {
+  SurfaceDomain domain = SurfaceDomain::sphere;
   int vertices = 0, faces = 0;
+  int boundary_vertices = 0;                ///< disk: the boundary loop's
+  /// disk: faces with all three corners on the boundary loop. On the circle such a face's area
+  /// is about the cube of its corners' spacing, far below its share: these maps miss the
+  /// tolerance (docs/surfaces.md).
+  int ears = 0;
   bool reversed = false;                    ///< the input's faces pointed inwards (mapped reversed)
-  SphereMapReport sphere;                   ///< step 1
+  SphereMapReport sphere;                   ///< step 1 (sphere)
   SurfaceMetrics initial;                   ///< after step 1
   std::vector<SurfaceMapStep> polish;       ///< step 2
   /// "tolerance", "rounds", "stalled", "time_budget", or "none" (polish_rounds 0)
@@ -87,18 +108,21 @@ struct SurfaceMapReport {
   bool converged = false;                   ///< face area mean |r - 1| <= tolerance
   double tolerance = 0;
   SurfaceMetrics final;                     ///< of the returned map
-  double seconds_sphere_map = 0, seconds_polish = 0, seconds_total = 0;
+  double seconds_sphere_map = 0, seconds_polish = 0, seconds_total = 0;  ///< step 1 (or the disk embedding), 2, all
 };
-/// {"input": {"vertices","faces","reversed"}, "initial": to_json(SurfaceMetrics) (after the
-///  sphere map), "final": the same (the returned map), "rounds": [{"round","kind": "polish",
+/// {"domain": "sphere"|"disk", "input": {"vertices","faces","reversed"}, "initial":
+///  to_json(SurfaceMetrics) (after the sphere map or the disk embedding), "final": the same (the returned map), "rounds": [{"round","kind": "polish",
 ///  "face_mean_abs_dev","solver_iterations","solver_residual","step_fraction","frozen_vertices",
-///  "discarded","seconds"}], "sphere_map": to_json(SphereMapReport), "stop_reason",
+///  "discarded","seconds"}], "sphere_map": to_json(SphereMapReport) (sphere) or "disk_map":
+///  {"boundary_vertices","ears","weights": "mean value"} (disk), "stop_reason",
 ///  "converged", "convergence": {"tolerance","reached","converged"},
-///  "timings_s": {"sphere_map","polish","total"}}
+///  "timings_s": {"sphere_map" (or "disk_map"),"polish","total"}}
 Json to_json(const SurfaceMapReport& report);
 
 struct SurfaceMapResult {
-  Points sphere;            ///< n x 3, every row on the unit sphere, same rows as the input
+  /// n x 3, same rows as the input: on the unit sphere, or in the unit disk (z = 0, the
+  /// boundary loop on the unit circle)
+  Points sphere;
   SurfaceMapReport report;
 };
 
@@ -106,6 +130,19 @@ struct SurfaceMapResult {
 /// faces; throws InputError naming `what` and the first problem (an open or non-manifold edge, a
 /// non-manifold vertex, the genus, the number of components) otherwise.
 void validate_closed_surface(const TriSurface& surface, const std::string& what);
+
+/// Checks that `surface` is one manifold, consistently oriented surface with exactly one boundary
+/// loop and Euler characteristic 1 (a disk topologically), every vertex in a face, every face
+/// with an area; InputError naming `what` and the first problem otherwise.
+void validate_disk_surface(const TriSurface& surface, const std::string& what);
+
+/// sphere for a surface without open edges, disk otherwise (the matching validate_* then says
+/// whether it is one).
+SurfaceDomain surface_domain(const TriSurface& surface);
+
+/// Maps `surface` (validate_disk_surface) to the unit disk; see above. Throws InputError for a
+/// surface that is not a disk topologically.
+SurfaceMapResult map_to_disk(const TriSurface& surface, const SurfaceMapOptions& options = {});
 
 /// Maps `surface` (validate_closed_surface) to the unit sphere; see above. `device` (may be
 /// null: the host) is where the sphere map's equal-area steps may be solved

@@ -1,4 +1,5 @@
-// vpm.map_to_sphere and vpm.read_surface / vpm.write_surface: closed surfaces to the sphere
+// vpm.map_to_sphere, vpm.map_to_disk and vpm.read_surface / vpm.write_surface: closed surfaces to
+// the sphere, disk-like ones to the disk
 // (vpm/surface_map.hpp), with the report as a typed object.
 #include "common.hpp"
 #include "report.hpp"
@@ -50,7 +51,7 @@ void bind_surface(py::module_& m) {
   m.def(
       "_map_to_sphere",
       [](const py::object& vertices, const py::object& faces, int rounds, double tolerance, const std::string& sphere,
-         const std::string& sphere_start, double max_seconds, const std::string& source, py::object progress) {
+         const std::string& sphere_start, double max_seconds, const std::string& source, bool disk, py::object progress) {
         TriSurface s;
         s.vertices = to_points(vertices, "vertices");
         s.triangles = to_triangles(faces, s.vertices.rows());
@@ -67,8 +68,9 @@ void bind_surface(py::module_& m) {
         auto report = std::make_unique<SurfaceReport>();
         Points sphere_points = without_gil(&p, [&] {
           const Stopwatch clock;
-          validate_closed_surface(s, source);
-          SurfaceMapResult r = map_to_sphere(s, o);
+          if (disk) validate_disk_surface(s, source);
+          else validate_closed_surface(s, source);
+          SurfaceMapResult r = disk ? map_to_disk(s, o) : map_to_sphere(s, o);
           report->seconds = clock.seconds();
           report->json = to_json(r.report).dump(-1);
           report->initial = std::move(r.report.initial);
@@ -80,7 +82,8 @@ void bind_surface(py::module_& m) {
       },
       py::arg("vertices"), py::arg("faces"), py::kw_only(), py::arg("rounds") = SurfaceMapOptions{}.polish_rounds,
       py::arg("tolerance") = SurfaceMapOptions{}.tolerance, py::arg("sphere") = "area", py::arg("sphere_start") = "auto",
-      py::arg("max_seconds") = 0.0, py::arg("source") = "surface", py::arg("progress") = py::none());
+      py::arg("max_seconds") = 0.0, py::arg("source") = "surface", py::arg("disk") = false,
+      py::arg("progress") = py::none());
   m.def(
       "_read_surface",
       [](const std::string& path) {

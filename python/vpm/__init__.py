@@ -29,7 +29,7 @@ from . import _vpm
 
 __all__ = ["Mesh", "Image", "Elements", "ElementTable", "Comparison", "NumericalError", "MapReport",
            "InitialMapReport", "RegistrationReport", "MapMetrics", "RatioStats", "Report", "SurfaceMapReport",
-           "SurfaceMetrics", "read_surface", "write_surface", "map_to_sphere",
+           "SurfaceMetrics", "read_surface", "write_surface", "map_to_sphere", "map_to_disk",
            "read_mesh", "write_mesh", "validate", "read_image", "write_nifti", "image", "mesh_image",
            "initial_map", "map_to_ball", "register", "elements", "sample", "compare", "read_table",
            "to_native", "to_image", "read_label_names", "devices", "select_device", "device_name"]
@@ -144,6 +144,14 @@ def map_to_sphere(vertices, faces, *, progress=None, **options):
     a vpm.SurfaceMapReport (report.final.face_area_ratio.mean_abs_dev, ..., report.to_dict()).
     Raises ValueError for a surface that is not one closed, manifold, genus-0 surface."""
     return _call(_vpm._map_to_sphere, progress, "map", vertices, faces, **options)
+
+
+def map_to_disk(vertices, faces, *, progress=None, **options):
+    """Maps a disk-like triangle surface (one boundary loop, no handles) to the unit disk in the
+    plane z = 0 preserving local areas: `vpm map` of such a surface. Options as map_to_sphere's
+    (rounds, tolerance, max_seconds, source). Returns (points (n, 3) with z = 0, the boundary
+    loop on the unit circle; vpm.SurfaceMapReport)."""
+    return _call(_vpm._map_to_sphere, progress, "map", vertices, faces, disk=True, **options)
 
 
 def register(mesh, *, landmarks=None, targets=None, template=None, image=None, template_image=None, progress=None,

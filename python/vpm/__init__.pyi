@@ -171,6 +171,9 @@ def map_to_sphere(vertices: ArrayLike, faces: ArrayLike, *, progress: Progress =
                   tolerance: float = ..., sphere: Literal["area", "conformal"] = ...,
                   sphere_start: Literal["auto", "progressive"] = ..., max_seconds: float = ...,
                   source: str = ...) -> tuple[np.ndarray, SurfaceMapReport]: ...
+def map_to_disk(vertices: ArrayLike, faces: ArrayLike, *, progress: Progress = ..., rounds: int = ...,
+                tolerance: float = ..., max_seconds: float = ...,
+                source: str = ...) -> tuple[np.ndarray, SurfaceMapReport]: ...
 def register(mesh: Mesh, *, landmarks: Optional[ArrayLike] = ..., targets: Optional[ArrayLike] = ...,
              template: Optional[Mesh] = ..., image: Optional[ImageLike] = ..., template_image: Optional[ImageLike] = ...,
              template_landmarks: Literal["regions", "moments"] = ..., exclude_labels: Sequence[int] = ...,

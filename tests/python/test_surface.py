@@ -75,3 +75,34 @@ def test_gifti_against_nibabel(vpm, tmp_path):
     g = nib.load(tmp_path / "vpm.surf.gii")
     assert np.array_equal(g.agg_data("NIFTI_INTENT_POINTSET"), v)
     assert np.array_equal(g.agg_data("NIFTI_INTENT_TRIANGLE"), f)
+
+
+def test_map_to_disk(vpm):
+    """A bumpy disk (polar grid) to the unit disk: areas kept, boundary on the circle, z = 0."""
+    rings, sectors = 12, 48
+    pts = [[0.0, 0.0]]
+    for i in range(1, rings + 1):
+        for j in range(sectors):
+            a = 2 * np.pi * (j + 0.5 * (i % 2)) / sectors
+            pts.append([i / rings * np.cos(a), i / rings * np.sin(a)])
+    pts = np.array(pts)
+    idx = lambda i, j: 1 + (i - 1) * sectors + j % sectors  # noqa: E731
+    faces = [[0, idx(1, j), idx(1, j + 1)] for j in range(sectors)]
+    for i in range(1, rings):
+        for j in range(sectors):
+            a, b = idx(i, j), idx(i, j + 1)
+            if i % 2:
+                c, d = idx(i + 1, j + 1), idx(i + 1, j + 2)
+                faces += [[a, c, b], [b, c, d]]
+            else:
+                c, d = idx(i + 1, j), idx(i + 1, j + 1)
+                faces += [[a, c, d], [a, d, b]]
+    z = 0.5 * np.exp(-((pts[:, 0] - 0.3) ** 2 + pts[:, 1] ** 2) / 0.08)
+    v = np.column_stack([pts, z])
+    disk, report = vpm.map_to_disk(v, np.array(faces))
+    assert report.to_dict()["domain"] == "disk"
+    assert report.final.flipped_faces == 0
+    assert report.final.face_area_ratio.mean_abs_dev <= 0.005 < report.initial.face_area_ratio.mean_abs_dev
+    assert np.all(disk[:, 2] == 0) and np.linalg.norm(disk[:, :2], axis=1).max() <= 1 + 1e-12
+    with pytest.raises(ValueError, match="closed"):
+        vpm.map_to_disk(*bumpy_ellipsoid(vpm, None))
