@@ -23,13 +23,12 @@ import argparse
 import json
 import os
 import statistics
-import subprocess
 import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "shapes"))
-from run import MODELS, extract_models  # noqa: E402  (bench/shapes/run.py)
+from run import MODELS, extract_models, run  # noqa: E402  (bench/shapes/run.py)
 
 TEMPLATES = "/usr/share/mricron/templates"  # Debian package mricron-data
 BRAINS = {"colin27-22k": ("ch2bet.nii.gz", ["--target-vertices", "50000"]),
@@ -74,15 +73,6 @@ def patch(source, path, strip_ears):
         border = {i for e, c in edges.items() if c == 1 for i in e}
         f = [t for t in f if not all(i in border for i in t)]
     write_off(path, v, f)
-
-
-def run(cmd, timeout):
-    t0 = time.time()
-    try:
-        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
-        return p.returncode, time.time() - t0, (p.stderr.strip().splitlines() or [""])[-1]
-    except subprocess.TimeoutExpired:
-        return "timeout", time.time() - t0, f"killed after {timeout} s"
 
 
 def prepare(vpm, out, name, timeout):
