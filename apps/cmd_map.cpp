@@ -35,6 +35,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
     return vpm::cli::map_surface(args, args.positional()[0], *out, t_start);
   }
   const vpm::cli::MeshInOut io = vpm::cli::mesh_in_out(args, self);
+  if (args.has("--overlays")) throw vpm::InputError("option --overlays: applies to surfaces only; " + io.in + " is a tet mesh");
   const std::string& in = io.in;
 
   vpm::VolumeMapOptions vo;
@@ -116,6 +117,7 @@ vpm::cli::Registrar reg(vpm::cli::with_expert({"map", "MESH|SURFACE -o OUT", "ma
                           {"--solver", "cg|paper", "Jacobi CG (default) or the paper's BiCGSTAB on the normal equations"},
                           {"--preconditioner", "auto|jacobi|amg", "of CG: Jacobi, smoothed-aggregation AMG, or auto (default: AMG on CPUs from 2M tets)"},
                           {"--rk-steps", "N", "RK4 steps per Moser round (default " + std::to_string(vpm::VolumeMapOptions{}.rk_steps) + ")"},
+                          {"--overlays", "A,B", "surfaces: per-vertex files (FreeSurfer lh.curv, lh.thickness; GIfTI .shape.gii) carried to the output's point fields"},
                           {"--max-seconds", "S", "time budget: the rounds stop when it is spent and the map reached is written (exit 4)"},
                           {"--report", "REPORT.json", "write the report (metrics, rounds, timings)"}},
                          run},

@@ -2,6 +2,9 @@
 // disk.
 #include "map_surface.hpp"
 
+#include <algorithm>
+#include <vector>
+
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/format.hpp"
@@ -11,6 +14,42 @@
 #include "vpm/surface_map.hpp"
 
 namespace vpm::cli {
+
+namespace {
+
+// The point field an overlay file becomes: its name without the folder, FreeSurfer's hemisphere
+// prefix (lh., rh.) and GIfTI's suffixes (lh.thickness.shape.gii -> thickness, lh.curv -> curv).
+std::string overlay_name(const std::string& path) {
+  std::string n = path.substr(path.find_last_of('/') + 1);
+  for (const char* prefix : {"lh.", "rh."})
+    if (n.rfind(prefix, 0) == 0) n = n.substr(3);
+  for (const char* suffix : {".shape.gii", ".func.gii", ".gii"})
+    if (n.size() > std::string(suffix).size() && n.compare(n.size() - std::string(suffix).size(), std::string::npos, suffix) == 0) {
+      n.resize(n.size() - std::string(suffix).size());
+      break;
+    }
+  return n.empty() ? "overlay" : n;
+}
+
+// --overlays A,B: each file's values, one a vertex of `surface` (InputError naming the file).
+std::vector<Field> read_overlays(const std::string& list, const TriSurface& surface) {
+  std::vector<Field> fields;
+  size_t start = 0;
+  while (start <= list.size()) {
+    const size_t comma = std::min(list.find(',', start), list.size());
+    const std::string path = list.substr(start, comma - start);
+    start = comma + 1;
+    if (path.empty()) continue;
+    const Eigen::VectorXd v = read_overlay(path);
+    if (v.size() != surface.vertices.rows())
+      throw InputError(path + ": " + std::to_string(v.size()) + " values for a surface of " +
+                       std::to_string(surface.vertices.rows()) + " vertices (another subject's or hemisphere's?)");
+    fields.push_back({overlay_name(path), v, false});
+  }
+  return fields;
+}
+
+}  // namespace
 
 int map_surface(const Args& args, const std::string& in, const std::string& out, Clock::time_point t_start) {
   for (const char* flag : {"--method", "--solver", "--boundary", "--preconditioner", "--rk-steps"})
@@ -33,6 +72,7 @@ int map_surface(const Args& args, const std::string& in, const std::string& out,
 
   auto t0 = Clock::now();
   const TriSurface surface = read_surface(in);
+  const std::vector<Field> overlays = read_overlays(args.get("--overlays", ""), surface);
   const double t_read = seconds_since(t0);
   progress("read " + in + ": " + std::to_string(surface.vertices.rows()) + " vertices, " +
            std::to_string(surface.triangles.rows()) + " triangles");
@@ -55,6 +95,7 @@ int map_surface(const Args& args, const std::string& in, const std::string& out,
   mapped.point_data.push_back({"original_position", surface.vertices, false});
   mapped.point_data.push_back({"vertex_area_ratio", rep.final.vertex_ratio, false});
   mapped.cell_data.push_back({"face_area_ratio", rep.final.face_ratio, false});
+  for (const Field& f : overlays) mapped.point_data.push_back(f);
   t0 = Clock::now();
   write_surface(out, mapped);
   Json report = to_json(rep);

@@ -1,6 +1,7 @@
 // Fuzz target for one tet-mesh or surface reader, chosen at build time: FUZZ_EXT is the file
 // extension read_mesh()/read_surface() dispatches on (".mesh", ".vtu", ".msh" with FUZZ_MESH;
-// ".off", ".obj", ".stl", ".white" (FreeSurfer), ".gii" (GIfTI) without). What reads is validated as `vpm map`
+// ".off", ".obj", ".stl", ".white" (FreeSurfer), ".gii" (GIfTI) without; ".curv", a FreeSurfer
+// per-vertex file, with FUZZ_OVERLAY: read_overlay, whose values must be finite). What reads is validated as `vpm map`
 // does next (a surface as one closed genus-0 surface for the sphere map).
 #include "fuzz_target.hpp"
 #include "vpm/io.hpp"
@@ -15,7 +16,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   using namespace vpm;
   const std::string path = fuzz::write_scratch("input" FUZZ_EXT, fuzz::bytes(data, size));
   fuzz::expect_input_error_only([&] {
-#ifdef FUZZ_MESH
+#if defined(FUZZ_OVERLAY)
+    fuzz::require(read_overlay(path).allFinite(), "read_overlay returns finite values");
+#elif defined(FUZZ_MESH)
     TetMesh mesh = read_mesh(path);
     fuzz::require_well_formed(mesh);
     validate_mesh(mesh, path);

@@ -74,6 +74,12 @@ void mesh_seeds(const fs::path& out, const fs::path& tmp) {
   take(out, "stl", tmp / "octahedron_binary.stl");
   write_surface((tmp / "lh.white").string(), s);
   take(out, "freesurfer", tmp / "lh.white");
+  {  // a FreeSurfer per-vertex file of 6 values (magic FF FF FF, counts, big-endian float32)
+    std::string b("\xFF\xFF\xFF", 3);
+    for (const std::uint32_t v : {6u, 8u, 1u, 0x3F800000u, 0xBF800000u, 0u, 0x40000000u, 0x3F000000u, 0x41200000u})
+      for (int k = 24; k >= 0; k -= 8) b.push_back(static_cast<char>(v >> k));
+    put(out, "curv", "lh.curv", b);
+  }
   if (VPM_HAVE_GIFTI) {
     write_surface((tmp / "lh.surf.gii").string(), s);
     take(out, "gifti", tmp / "lh.surf.gii");

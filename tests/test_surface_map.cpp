@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <fstream>
 #include <string>
 
@@ -354,4 +355,36 @@ TEST_CASE("GIfTI surfaces: written and read back at float precision, bad files e
   std::string index = tri;
   index.replace(index.find("0 1 2"), 5, "0 1 7");
   refused("index.gii", two + points + index + "</GIFTI>", "vertex index 7 out of range");
+}
+
+TEST_CASE("overlays: FreeSurfer per-vertex files read, carried by vpm map SURFACE --overlays to point fields") {
+  const std::string dir = vpm::test::fresh_dir("overlays");
+  const TriSurface s = bumpy_ellipsoid(2);
+  const long long n = s.vertices.rows();
+  std::string bytes("\xFF\xFF\xFF", 3);
+  auto be32 = [&bytes](std::uint32_t v) { for (int k = 24; k >= 0; k -= 8) bytes.push_back(static_cast<char>(v >> k)); };
+  be32(static_cast<std::uint32_t>(n));
+  be32(static_cast<std::uint32_t>(s.triangles.rows()));
+  be32(1);
+  for (long long i = 0; i < n; ++i) {
+    const float x = static_cast<float>(i) / 8.0f;
+    std::uint32_t u;
+    std::memcpy(&u, &x, 4);
+    be32(u);
+  }
+  std::ofstream(dir + "/lh.curv", std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  const Eigen::VectorXd v = read_overlay(dir + "/lh.curv");
+  REQUIRE(v.size() == n);
+  for (long long i = 0; i < n; ++i) REQUIRE(v(i) == static_cast<double>(static_cast<float>(i) / 8.0f));
+  std::ofstream(dir + "/short.curv", std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size() - 4));
+  CHECK_THROWS_WITH(read_overlay(dir + "/short.curv"), Catch::Contains(":byte ") && Catch::Contains("truncated"));
+  write_surface(dir + "/lh.white", s);
+  REQUIRE(run_status(kVpm + " map " + dir + "/lh.white -o " + dir + "/out.vtp --overlays " + dir + "/lh.curv --quiet") == 0);
+  const std::string vtp = slurp(dir + "/out.vtp");
+  CHECK_THAT(vtp, Catch::Contains("Name=\"curv\""));
+  CHECK_THAT(vtp, Catch::Contains("\n0.125\n"));  // vertex 1's value, in the field's rows
+  // another surface's file, and a tet mesh: exit 2
+  write_surface(dir + "/other.off", icosphere(1));
+  CHECK(run_status(kVpm + " map " + dir + "/other.off -o " + dir + "/o.vtp --overlays " + dir + "/lh.curv 2>" + dir + "/e") == 2);
+  CHECK_THAT(slurp(dir + "/e"), Catch::Contains(dir + "/lh.curv: " + std::to_string(n) + " values for a surface of 42 vertices"));
 }

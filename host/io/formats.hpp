@@ -35,9 +35,13 @@ void write_stl(const std::string& path, const TriSurface& surface, bool binary);
 bool is_freesurfer_surface(const std::string& head);
 TriSurface read_freesurfer(const std::string& path);
 void write_freesurfer(const std::string& path, const TriSurface& surface);
+/// FreeSurfer's per-vertex file (.curv, .thickness, .sulc; freesurfer.cpp).
+Eigen::VectorXd read_freesurfer_curv(const std::string& path);
 /// GIfTI surfaces (.gii; host/with_gifti/gifti.cpp through libgiftiio, or io/gifti_missing.cpp).
 TriSurface read_gifti(const std::string& path);
 void write_gifti(const std::string& path, const TriSurface& surface);
+/// A GIfTI per-vertex file (.shape.gii, .func.gii): its first DataArray of one value a vertex.
+Eigen::VectorXd read_gifti_values(const std::string& path);
 /// VTK XML PolyData, ASCII, with the surface's point and cell fields (vtp.cpp; written only).
 void write_vtp(const std::string& path, const TriSurface& surface);
 

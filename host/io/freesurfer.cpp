@@ -3,7 +3,9 @@
 // big-endian int32 vertex and face counts, the vertices as big-endian float32 x y z, the faces as
 // big-endian int32 index triples; anything after them (FreeSurfer's volume geometry tags) is
 // ignored. Quadrangle surfaces (magic FF FF FF or FF FF FD) are refused with the conversion to
-// use. Errors give the byte offset ("PATH:byte N: ...").
+// use. Per-vertex files (.curv, .thickness, .sulc: magic FF FF FF, big-endian int32 vertex,
+// face and values-a-vertex counts, float32 values) are read as overlays. Errors give the byte
+// offset ("PATH:byte N: ...").
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -87,6 +89,27 @@ TriSurface read_freesurfer(const std::string& path) {
       s.triangles(t, k) = static_cast<int>(v);
     }
   return s;
+}
+
+Eigen::VectorXd read_freesurfer_curv(const std::string& path) {
+  const std::string d = read_whole_file(path);
+  if (d.size() < 15 || static_cast<unsigned char>(d[0]) != 0xFF || static_cast<unsigned char>(d[1]) != 0xFF ||
+      static_cast<unsigned char>(d[2]) != 0xFF)
+    fail_byte(path, 0, "not a FreeSurfer per-vertex file (.curv, .thickness, .sulc, ...: its first bytes are not FF FF FF)");
+  const long long nv = static_cast<int32_t>(be32(d, 3)), per = static_cast<int32_t>(be32(d, 11));
+  if (nv < 1 || nv > kMaxCount) fail_byte(path, 3, "vertex count " + std::to_string(nv) + " out of range");
+  if (per != 1) fail_byte(path, 11, std::to_string(per) + " values a vertex; vpm reads files of one");
+  if (d.size() < 15 + 4ULL * static_cast<unsigned long long>(nv))
+    fail_byte(path, d.size(), "truncated: " + std::to_string(nv) + " values need " + std::to_string(15 + 4 * nv) +
+                                  " bytes, the file has " + std::to_string(d.size()));
+  Eigen::VectorXd v(nv);
+  for (long long i = 0; i < nv; ++i) {
+    const size_t off = 15 + 4 * static_cast<size_t>(i);
+    const float x = std::bit_cast<float>(be32(d, off));
+    if (!std::isfinite(x)) fail_byte(path, off, "vertex " + std::to_string(i) + ": value is not a finite number");
+    v(i) = x;
+  }
+  return v;
 }
 
 void write_freesurfer(const std::string& path, const TriSurface& s) {

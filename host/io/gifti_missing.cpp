@@ -8,6 +8,9 @@ namespace vpm::detail {
 TriSurface read_gifti(const std::string& path) {
   throw InputError(path + ": this vpm was built without libgiftiio: GIfTI input is unavailable");
 }
+Eigen::VectorXd read_gifti_values(const std::string& path) {
+  throw InputError(path + ": this vpm was built without libgiftiio: GIfTI input is unavailable");
+}
 void write_gifti(const std::string& path, const TriSurface&) {
   throw InputError(path + ": this vpm was built without libgiftiio: GIfTI output is unavailable");
 }

@@ -70,6 +70,12 @@ void write_mesh(const std::string& path, const TetMesh& mesh, VtuEncoding encodi
   return detail::write_gmsh(path, mesh);
 }
 
+Eigen::VectorXd read_overlay(const std::string& path) {
+  const std::string e = detail::extension_of(path);
+  if (e == ".gii") return detail::read_gifti_values(path);
+  return detail::read_freesurfer_curv(path);
+}
+
 bool is_surface_output_path(const std::string& path) {
   const std::string e = detail::extension_of(path);
   return e == ".off" || e == ".obj" || e == ".stl" || e == ".vtp" || e == ".gii" || is_freesurfer_name(e);

@@ -140,6 +140,45 @@ TriSurface read_gifti(const std::string& path) {
   return s;
 }
 
+Eigen::VectorXd read_gifti_values(const std::string& path) {
+  if (!std::filesystem::is_regular_file(path)) throw InputError(path + ": no such file");
+  std::string said;
+  Gifti head = read_quietly(path, 0, &said);
+  if (!head)
+    throw InputError(path + ": not a readable GIfTI file (libgiftiio: " + (said.empty() ? "cannot parse it" : said) + ")");
+  int pick = -1;
+  for (int i = 0; i < head->numDA && pick < 0; ++i) {
+    const giiDataArray* a = head->darray[i];
+    if (a && a->intent != NIFTI_INTENT_POINTSET && a->intent != NIFTI_INTENT_TRIANGLE &&
+        (a->num_dim == 1 || (a->num_dim == 2 && a->dims[1] == 1)))
+      pick = i;
+  }
+  if (pick < 0) throw InputError(path + ": no DataArray of one value a vertex (a .shape.gii or .func.gii holds one)");
+  const giiDataArray& h = *head->darray[pick];
+  if (h.encoding == GIFTI_ENCODING_EXTBIN)
+    throw InputError(path + ": DataArray " + std::to_string(pick) + ": its data is in an external file, which vpm does not read");
+  if (h.dims[0] < 1 || h.dims[0] > kMaxValues)
+    throw InputError(path + ": DataArray " + std::to_string(pick) + ": " + std::to_string(h.dims[0]) + " values out of range");
+  if (h.datatype != NIFTI_TYPE_FLOAT32 && h.datatype != NIFTI_TYPE_FLOAT64 && h.datatype != NIFTI_TYPE_INT32)
+    throw InputError(path + ": DataArray " + std::to_string(pick) + ": data type " + std::to_string(h.datatype) +
+                     "; expected FLOAT32, FLOAT64 or INT32");
+  head.reset();
+  said.clear();
+  Gifti g = read_quietly(path, 1, &said);
+  if (!g || g->numDA <= pick || !g->darray[pick]->data)
+    throw InputError(path + ": the GIfTI data could not be decoded (libgiftiio: " +
+                     (said.empty() ? "bad base64, gzip or ASCII data" : said) + ")");
+  const giiDataArray& a = *g->darray[pick];
+  Eigen::VectorXd v(a.dims[0]);
+  for (int i = 0; i < a.dims[0]; ++i) {
+    v(i) = a.datatype == NIFTI_TYPE_FLOAT32   ? static_cast<const float*>(a.data)[i]
+           : a.datatype == NIFTI_TYPE_FLOAT64 ? static_cast<const double*>(a.data)[i]
+                                              : static_cast<const int*>(a.data)[i];
+    if (!std::isfinite(v(i))) throw InputError(path + ": vertex " + std::to_string(i) + ": value is not a finite number");
+  }
+  return v;
+}
+
 void write_gifti(const std::string& path, const TriSurface& s) {
   const long long n = s.vertices.rows(), m = s.triangles.rows();
   for (long long i = 0; i < m; ++i)

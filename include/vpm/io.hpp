@@ -45,6 +45,10 @@ void write_surface(const std::string& path, const TriSurface& surface);
 /// Writes binary STL (coordinates rounded to float, normals from the triangles).
 void write_surface_stl_binary(const std::string& path, const TriSurface& surface);
 
+/// Per-vertex values of a surface (an overlay): GIfTI's .shape.gii / .func.gii (its first DataArray
+/// of one value a vertex), else FreeSurfer's per-vertex files (lh.curv, lh.thickness, lh.sulc).
+Eigen::VectorXd read_overlay(const std::string& path);
+
 /// True if write_surface() writes `path` (by its extension).
 bool is_surface_output_path(const std::string& path);
 /// True if `path` has an extension read_mesh() understands.

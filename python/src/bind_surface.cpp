@@ -92,6 +92,8 @@ void bind_surface(py::module_& m) {
       },
       py::arg("path"));
   m.def(
+      "_read_overlay", [](const std::string& path) { return owned_array(read_overlay(path)); }, py::arg("path"));
+  m.def(
       "_write_surface",
       [](const std::string& path, const py::object& vertices, const py::object& faces) {
         TriSurface s;

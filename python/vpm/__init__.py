@@ -29,7 +29,7 @@ from . import _vpm
 
 __all__ = ["Mesh", "Image", "Elements", "ElementTable", "Comparison", "NumericalError", "MapReport",
            "InitialMapReport", "RegistrationReport", "MapMetrics", "RatioStats", "Report", "SurfaceMapReport",
-           "SurfaceMetrics", "read_surface", "write_surface", "map_to_sphere", "map_to_disk",
+           "SurfaceMetrics", "read_surface", "read_overlay", "write_surface", "map_to_sphere", "map_to_disk",
            "read_mesh", "write_mesh", "validate", "read_image", "write_nifti", "image", "mesh_image",
            "initial_map", "map_to_ball", "register", "elements", "sample", "compare", "read_table",
            "to_native", "to_image", "read_label_names", "devices", "select_device", "device_name"]
@@ -126,6 +126,12 @@ def read_surface(path):
     """A triangle surface: (vertices (n, 3) float, faces (k, 3) int32). .off, .obj, .stl, .gii
     (GIfTI), and FreeSurfer's surfaces (lh.white, lh.pial, ...)."""
     return _vpm._read_surface(os.fspath(path))
+
+
+def read_overlay(path):
+    """Per-vertex values of a surface, an (n,) float array: FreeSurfer's lh.curv, lh.thickness,
+    lh.sulc, or GIfTI's .shape.gii / .func.gii."""
+    return _vpm._read_overlay(os.fspath(path))
 
 
 def write_surface(path, vertices, faces):

@@ -106,3 +106,19 @@ def test_map_to_disk(vpm):
     assert np.all(disk[:, 2] == 0) and np.linalg.norm(disk[:, :2], axis=1).max() <= 1 + 1e-12
     with pytest.raises(ValueError, match="closed"):
         vpm.map_to_disk(*bumpy_ellipsoid(vpm, None))
+
+
+def test_overlays_against_nibabel(vpm, tmp_path):
+    """FreeSurfer per-vertex files and GIfTI shape files written by nibabel, read by vpm."""
+    nib = pytest.importorskip("nibabel")
+    from nibabel.freesurfer import write_morph_data
+    from nibabel.gifti import GiftiDataArray, GiftiImage
+    vals = np.sin(np.arange(500) / 7.0).astype(np.float32)
+    write_morph_data(str(tmp_path / "lh.curv"), vals)
+    assert np.array_equal(vpm.read_overlay(tmp_path / "lh.curv"), vals.astype(np.float64))
+    img = GiftiImage(darrays=[GiftiDataArray(vals, intent="NIFTI_INTENT_SHAPE", encoding="GIFTI_ENCODING_B64GZ")])
+    nib.save(img, tmp_path / "lh.thickness.shape.gii")
+    assert np.array_equal(vpm.read_overlay(tmp_path / "lh.thickness.shape.gii"), vals.astype(np.float64))
+    with pytest.raises(ValueError, match="not a FreeSurfer per-vertex file"):
+        (tmp_path / "bad.curv").write_bytes(b"\x00" * 40)
+        vpm.read_overlay(tmp_path / "bad.curv")
