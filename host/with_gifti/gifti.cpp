@@ -25,8 +25,9 @@ namespace vpm::detail {
 namespace {
 
 // Limits on what a header may ask the library to allocate (a gzip-compressed array can
-// expand a thousandfold): 2^27 values an array.
-constexpr long long kMaxValues = 1LL << 27;
+// expand a thousandfold, and a fuzzer runs in 2 GB): 2^25 values an array (11 million vertices
+// or triangles; a cortical surface has 150,000).
+constexpr long long kMaxValues = 1LL << 25;
 
 struct GiftiFree {
   void operator()(gifti_image* g) const { gifti_free_image(g); }
