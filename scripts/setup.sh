@@ -7,7 +7,7 @@ PKGS=(
   pocl-opencl-icd ocl-icd-opencl-dev opencl-headers opencl-clhpp-headers clinfo
   libeigen3-dev libboost-dev catch2
   libtet1.5-dev tetgen libnifti2-dev zlib1g-dev mricron-data
-  libgiftiio-dev  # GIfTI surfaces (.gii)
+  libexpat1-dev  # GIfTI surfaces (.gii) are XML, read with expat
   libcgal-dev libgmp-dev libmpfr-dev
   libhdf5-dev python3-h5py  # element tables and reference sums (HDF5); h5py reads them in Python without vpm
   libsuitesparse-dev libopenblas0-pthread  # CHOLMOD's supernodal Cholesky for the sphere map, on OpenBLAS

@@ -60,6 +60,5 @@ class ChunkPack {
   int count_ = 0;
 };
 
-std::string base64(const std::string& in);
 
 }  // namespace vpm::detail

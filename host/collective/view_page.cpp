@@ -12,6 +12,7 @@
 
 #include "collective/view_manifest.hpp"
 #include "core/atomic_file.hpp"
+#include "io/vtk_binary.hpp"
 #include "vpm/error.hpp"
 #include "vpm/json.hpp"
 
@@ -73,7 +74,7 @@ std::string fill(const std::string& page, const std::map<std::string, std::strin
 class EmbeddedSink : public detail::ChunkSink {
  public:
   void put(const std::string& name, const std::string& bytes, const std::string&) override {
-    text += "<script type=\"application/octet-stream\" id=\"vpm-chunk-" + name + "\">" + detail::base64(bytes) + "</script>\n";
+    text += "<script type=\"application/octet-stream\" id=\"vpm-chunk-" + name + "\">" + detail::encode_base64(bytes) + "</script>\n";
   }
   std::string text;
 };
@@ -86,7 +87,7 @@ class FolderSink : public detail::ChunkSink {
   void put(const std::string& name, const std::string& bytes, const std::string& hash) override {
     const fs::path path = dir_ / (name + ".js");
     std::ofstream out(path, std::ios::binary);
-    out << "vpmChunk(\"" << hash << "\",\"" << name << "\",\"" << detail::base64(bytes) << "\");\n";
+    out << "vpmChunk(\"" << hash << "\",\"" << name << "\",\"" << detail::encode_base64(bytes) << "\");\n";
     out.close();
     if (!out) throw InputError(path.string() + ": cannot be written");
     bytes_ += static_cast<long long>(fs::file_size(path));

@@ -37,7 +37,7 @@ TriSurface read_freesurfer(const std::string& path);
 void write_freesurfer(const std::string& path, const TriSurface& surface);
 /// FreeSurfer's per-vertex file (.curv, .thickness, .sulc; freesurfer.cpp).
 Eigen::VectorXd read_freesurfer_curv(const std::string& path);
-/// GIfTI surfaces (.gii; host/with_gifti/gifti.cpp through libgiftiio, or io/gifti_missing.cpp).
+/// GIfTI surfaces (.gii; host/with_gifti/ through expat, or io/gifti_missing.cpp).
 TriSurface read_gifti(const std::string& path);
 void write_gifti(const std::string& path, const TriSurface& surface);
 /// A GIfTI per-vertex file (.shape.gii, .func.gii): its first DataArray of one value a vertex.

@@ -67,6 +67,22 @@ std::vector<unsigned char> inflate_blocks(const unsigned char* h, const unsigned
 
 }  // namespace
 
+std::string encode_base64(std::string_view in) {
+  static const char* A = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((in.size() + 2) / 3 * 4);
+  for (size_t i = 0; i < in.size(); i += 3) {
+    const unsigned n = (static_cast<unsigned char>(in[i]) << 16) |
+                       (i + 1 < in.size() ? static_cast<unsigned char>(in[i + 1]) << 8 : 0) |
+                       (i + 2 < in.size() ? static_cast<unsigned char>(in[i + 2]) : 0);
+    out += A[(n >> 18) & 63];
+    out += A[(n >> 12) & 63];
+    out += i + 1 < in.size() ? A[(n >> 6) & 63] : '=';
+    out += i + 2 < in.size() ? A[n & 63] : '=';
+  }
+  return out;
+}
+
 std::vector<unsigned char> decode_base64(std::string_view text, const VtkBinaryFail& fail) {
   std::vector<unsigned char> out;
   out.reserve(text.size() / 4 * 3);

@@ -22,6 +22,9 @@ struct VtkBinaryLayout {
 /// Called with a message when the data are malformed; does not return (throws).
 using VtkBinaryFail = std::function<void(const std::string&)>;
 
+/// Base64 text of `bytes` (RFC 4648, padded, one line).
+std::string encode_base64(std::string_view bytes);
+
 /// Bytes of base64 text (whitespace skipped); fails on other characters or a bad length.
 std::vector<unsigned char> decode_base64(std::string_view text, const VtkBinaryFail& fail);
 

@@ -71,6 +71,15 @@ def test_gifti_against_nibabel(vpm, tmp_path):
             assert np.abs(v2 - v).max() <= 1e-6
         else:
             assert np.array_equal(v2, v.astype(np.float64)), enc
+    # column-major float64 points and uint16 triangles, as other writers may store them
+    img = GiftiImage(darrays=[
+        GiftiDataArray(v.astype(np.float64), intent="NIFTI_INTENT_POINTSET", encoding="GIFTI_ENCODING_B64GZ",
+                       ordering="ColumnMajorOrder"),
+        GiftiDataArray(f.astype(np.uint16), intent="NIFTI_INTENT_TRIANGLE", encoding="GIFTI_ENCODING_B64BIN",
+                       ordering="ColumnMajorOrder")])
+    nib.save(img, tmp_path / "column.surf.gii")
+    v2, f2 = vpm.read_surface(tmp_path / "column.surf.gii")
+    assert np.array_equal(v2, v.astype(np.float64)) and np.array_equal(f2, f)
     vpm.write_surface(tmp_path / "vpm.surf.gii", v, f)
     g = nib.load(tmp_path / "vpm.surf.gii")
     assert np.array_equal(g.agg_data("NIFTI_INTENT_POINTSET"), v)
