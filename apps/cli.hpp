@@ -22,6 +22,12 @@ class Args {
   Args(std::vector<std::string> argv, const Command& command);
   const std::vector<std::string>& positional() const { return positional_; }
   bool has(const std::string& opt) const { return values_.count(opt) > 0; }
+  /// The options and flags given, by name.
+  std::vector<std::string> given() const {
+    std::vector<std::string> names;
+    for (const auto& kv : values_) names.push_back(kv.first);
+    return names;
+  }
   std::optional<std::string> get(const std::string& opt) const;
   std::string get(const std::string& opt, const std::string& fallback) const;
   double get_double(const std::string& opt, double fallback) const;  ///< InputError if not a number

@@ -5,6 +5,7 @@
 
 #include "cli.hpp"
 #include "dense_options.hpp"
+#include "register_surface.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/format.hpp"
@@ -220,6 +221,12 @@ Json report_json(const std::string& device, const Inputs& io, const Registration
 int run(const cli::Command& self, const std::vector<std::string>& argv) {
   const auto t_start = Clock::now();
   const cli::Args args(argv, self);
+  // a triangle surface on the sphere is registered there (apps/register_surface.cpp)
+  if (args.positional().size() == 1 && !is_mesh_path(args.positional()[0]) && is_surface_path(args.positional()[0])) {
+    const auto out = args.get("-o");
+    if (!out) throw InputError("missing -o OUT; usage: " + cli::synopsis(self));
+    return cli::register_surface(args, args.positional()[0], *out, t_start);
+  }
   Inputs io = read_inputs(args, self);
   io.by_template.dense.deadline = cli::time_budget(args, t_start);
   io.by_template.dense.progress = [](const std::string& line) { cli::progress("register: " + line); };
@@ -271,7 +278,7 @@ int run(const cli::Command& self, const std::vector<std::string>& argv) {
 }
 
 vpm::cli::Registrar reg(cli::with_expert(cli::with_dense_options(
-    {"register", "MAPPED -o OUT (--landmarks SRC.csv --targets DST.csv | --template TEMPLATE.vtu)", "register a mapped mesh: move landmarks to targets by a divergence-free flow",
+    {"register", "MAPPED -o OUT (--landmarks SRC.csv --targets DST.csv | --template TEMPLATE.vtu)", "register a mapped mesh (or a surface mapped to the sphere): move landmarks to targets by a divergence-free flow",
      {{"--landmarks", "SRC.csv", "landmarks in MAPPED's ball (x,y,z or vertex_id a line)", false, 0, true},
       {"--targets", "DST.csv", "their targets, paired line by line", false, 0, true},
       {"--template", "TEMPLATE.vtu", "instead of the two files: the centroids of the atlas regions (cell field label) MAPPED shares with this mapped template", false, 0, true},
@@ -280,18 +287,18 @@ vpm::cli::Registrar reg(cli::with_expert(cli::with_dense_options(
       {"--preset", "landmarks|standard|accurate", "with --template: the dense settings by name: landmarks (none; the default), standard (12 iterations), accurate (32 iterations to width 0.1, 2 restore cycles); --dense-* flags override it"},
       {"--image", "SUBJECT.nii.gz", "with --template: MAPPED's image in its native space (for --dense-force image|both)"},
       {"--template-image", "TEMPLATE.nii.gz", "the template's image in its native space (with --image)"},
-      {"--steps", "K", "pathline samples and RK4 steps of the landmarks' flow (default 50)"},
+      {"--steps", "K", "pathline samples and RK4 steps of the landmarks' flow (default 50; surfaces 32)"},
       {"--report", "R.json", "write the report (landmark errors, metrics, timings)"},
       {"--width", "W", "Gaussian width of the RBF kernel in ball units", false, 1},
       {"--lambda", "L", "kernel exponent lambda = 1 / width^2", false, 1},
-      {"--width-factor", "F", "width = F x the mean nearest-neighbour spacing of the landmarks (default 0.5)", false, 1},
+      {"--width-factor", "F", "width = F x the mean nearest-neighbour spacing of the landmarks (default 0.5; surfaces: chosen by leave-one-out)", false, 1},
       {"--width-loo", "", "choose the width factor by leave-one-out", false, 1},
       {"--flow-boundary", "tangent|samples|none", "how the flow keeps the sphere: a sphere-tangent kernel (default), eq. 29 samples, or not at all"},
       {"--flow-boundary-samples", "N", "sphere samples for --flow-boundary samples (default 200)", false, 0, true},
       {"--field", "per-step|steady", "a field per RK4 stage (default) or the paper's steady field"},
       {"--no-rigid", "", "skip the rotation step"},
       {"--no-untangle", "", "skip local untangling (folded results exit 3)"},
-      {"--no-restore", "", "skip the volume restoration after the flow"},
+      {"--no-restore", "", "skip the volume (surfaces: face area) restoration after the flow"},
       {"--restore-iterations", "N", "CGLS iterations per restoration step (default 10; more: lower volume distortion, the regions drift more)"},
       {"--restore-rounds", "N", "restoration steps at most (default 12)", false, 0, true},
       {"--restore-min-gain", "G", "restoration steps end once one gains less than this fraction (default 0.01)", false,

@@ -92,7 +92,7 @@ SurfaceMapResult map_to_sphere(const TriSurface& input, const SurfaceMapOptions&
   SphereMapResult sm = sphere_map(s, opt.sphere, device);
   rep.sphere = sm.report;
   rep.seconds_sphere_map = seconds_since(t0);
-  const detail::SurfaceDomainMoves domain{SurfaceDomain::sphere, {}};
+  const detail::SurfaceDomainMoves domain{SurfaceDomain::sphere, {}, {}};
   Points x = domain.place(sm.sphere);
   rep.initial = surface_metrics(s.vertices, x, f);
   if (rep.initial.flipped_faces > 0)

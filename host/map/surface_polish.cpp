@@ -16,6 +16,7 @@
 namespace vpm::detail {
 
 Eigen::Vector3d SurfaceDomainMoves::project(const Points& x, int v, const Eigen::Vector3d& u) const {
+  if (!fixed.empty() && fixed[static_cast<size_t>(v)]) return Eigen::Vector3d::Zero();
   if (domain == SurfaceDomain::sphere) {
     double w[3] = {u(0), u(1), u(2)};
     pl_tangent(x(v, 0), x(v, 1), x(v, 2), w);

@@ -16,6 +16,7 @@ namespace vpm::detail {
 struct SurfaceDomainMoves {
   SurfaceDomain domain = SurfaceDomain::sphere;
   std::vector<char> boundary;  ///< disk: 1 on the boundary loop's vertices (n entries)
+  std::vector<char> fixed;     ///< 1 on vertices held still (n entries, or empty: none)
   /// u projected on the moves allowed at vertex v (at x).
   Eigen::Vector3d project(const Points& x, int v, const Eigen::Vector3d& u) const;
   /// x put back on the domain.

@@ -29,7 +29,7 @@ from . import _vpm
 
 __all__ = ["Mesh", "Image", "Elements", "ElementTable", "Comparison", "NumericalError", "MapReport",
            "InitialMapReport", "RegistrationReport", "MapMetrics", "RatioStats", "Report", "SurfaceMapReport",
-           "SurfaceMetrics", "read_surface", "read_overlay", "write_surface", "map_to_sphere", "map_to_disk",
+           "SurfaceMetrics", "read_surface", "read_overlay", "write_surface", "map_to_sphere", "map_to_disk", "register_on_sphere",
            "read_mesh", "write_mesh", "validate", "read_image", "write_nifti", "image", "mesh_image",
            "initial_map", "map_to_ball", "register", "elements", "sample", "compare", "read_table",
            "to_native", "to_image", "read_label_names", "devices", "select_device", "device_name"]
@@ -158,6 +158,18 @@ def map_to_disk(vertices, faces, *, progress=None, **options):
     (rounds, tolerance, max_seconds, source). Returns (points (n, 3) with z = 0, the boundary
     loop on the unit circle; vpm.SurfaceMapReport)."""
     return _call(_vpm._map_to_sphere, progress, "map", vertices, faces, disk=True, **options)
+
+
+def register_on_sphere(vertices, faces, landmarks, targets, **options):
+    """Registers a surface mapped to the unit sphere (map_to_sphere's points) by moving
+    `landmarks` onto `targets` ((L, 3) points on the sphere) with a surface-divergence-free flow,
+    the face areas then restored: `vpm register SPHERE`. Options: steps (RK4 steps, 32),
+    width_factor (1), rigid (True: the best rotation first), restore (True).
+
+    Returns (points, report): (n, 3) unit vectors (the input's rows) and a vpm.SurfaceMapReport
+    whose `initial` holds the metrics after the flow and `final` after the restoration (against
+    the input sphere); report.to_dict() holds landmark_rms_error and landmark_max_error."""
+    return _vpm._register_on_sphere(vertices, faces, landmarks, targets, **options)
 
 
 def register(mesh, *, landmarks=None, targets=None, template=None, image=None, template_image=None, progress=None,

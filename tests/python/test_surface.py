@@ -131,3 +131,26 @@ def test_overlays_against_nibabel(vpm, tmp_path):
     with pytest.raises(ValueError, match="not a FreeSurfer per-vertex file"):
         (tmp_path / "bad.curv").write_bytes(b"\x00" * 40)
         vpm.read_overlay(tmp_path / "bad.curv")
+
+
+def test_register_on_sphere(vpm, tmp_path):
+    """Landmarks on the sphere moved onto targets: exact, areas kept, the identity on itself."""
+    v, f = bumpy_ellipsoid(vpm, tmp_path)
+    sphere, _ = vpm.map_to_sphere(v, f)
+    rng = np.random.default_rng(3)
+    ids = rng.choice(len(sphere), 10, replace=False)
+    src = sphere[ids]
+    step = rng.normal(size=(10, 3))
+    step -= (step * src).sum(1)[:, None] * src
+    tgt = src + 0.05 * step / np.linalg.norm(step, axis=1)[:, None]
+    tgt /= np.linalg.norm(tgt, axis=1)[:, None]
+    reg, report = vpm.register_on_sphere(sphere, f, src, tgt)
+    assert np.allclose(np.linalg.norm(reg, axis=1), 1, atol=1e-12)
+    d = report.to_dict()
+    assert d["landmark_max_error"] <= 1e-10
+    assert report.final.flipped_faces == 0
+    assert report.final.face_area_ratio.mean_abs_dev <= report.initial.face_area_ratio.mean_abs_dev
+    same, _ = vpm.register_on_sphere(sphere, f, src, src)
+    assert np.abs(same - sphere).max() <= 1e-12
+    with pytest.raises(ValueError, match="not on the unit sphere"):
+        vpm.register_on_sphere(2 * sphere, f, src, tgt)

@@ -1,0 +1,108 @@
+// `vpm register SPHERE -o OUT` (register_surface.hpp): landmarks on the sphere moved onto their
+// targets by a surface-divergence-free flow, the face areas restored.
+#include "register_surface.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <iterator>
+
+#include "vpm/error.hpp"
+#include "vpm/format.hpp"
+#include "vpm/io.hpp"
+#include "vpm/json.hpp"
+#include "vpm/landmarks.hpp"
+#include "vpm/surface_registration.hpp"
+
+namespace vpm::cli {
+
+namespace {
+
+// Landmark error above which the registration warns (as for the ball).
+constexpr double kLandmarkTolerance = 5e-4;
+
+// The options of `vpm register` that apply to surfaces.
+constexpr const char* kSurfaceOptions[] = {"-o", "--landmarks", "--targets", "--steps", "--width-factor", "--no-rigid",
+                                           "--no-restore", "--report", "--allow-partial", "--quiet", "--verbose"};
+
+}  // namespace
+
+int register_surface(const Args& args, const std::string& in, const std::string& out, Clock::time_point t_start) {
+  for (const std::string& flag : args.given())
+    if (std::find(std::begin(kSurfaceOptions), std::end(kSurfaceOptions), flag) == std::end(kSurfaceOptions))
+      throw InputError("option " + flag + ": applies to tet meshes only; " + in + " is a surface, registered on the sphere");
+  if (!is_surface_output_path(out))
+    throw InputError(out + ": unknown output extension for a surface (expected .vtp, .gii, .off, .obj, .stl or a FreeSurfer name)");
+  const auto src = args.get("--landmarks");
+  const auto dst = args.get("--targets");
+  if (!src || !dst) throw InputError(std::string("missing ") + (!src ? "--landmarks SRC.csv" : "--targets DST.csv"));
+  SurfaceRegistrationOptions opt;
+  opt.steps = args.get_int("--steps", 32);
+  if (opt.steps < 1 || opt.steps > 100000) throw InputError("--steps: expected 1 to 100000");
+  if (args.has("--width-factor")) {  // otherwise chosen by leave-one-out
+    opt.width_factor = args.get_double("--width-factor", 0);
+    if (!(opt.width_factor > 0)) throw InputError("--width-factor: must be positive");
+  }
+  opt.rigid = !args.has("--no-rigid");
+  if (args.has("--no-restore")) opt.restore_rounds = 0;
+
+  auto t0 = Clock::now();
+  TriSurface surface = read_surface(in);
+  for (Eigen::Index i = 0; i < surface.vertices.rows(); ++i) {
+    const double r = surface.vertices.row(i).norm();
+    if (!(std::abs(r - 1) <= 1e-4))
+      throw InputError(in + ": vertex " + std::to_string(i) + " is not on the unit sphere (|x| = " + std::to_string(r) +
+                       "); map the surface first: vpm map SURFACE -o SPHERE.gii");
+    surface.vertices.row(i) /= r;  // float files: vertex_id landmarks then lie on the sphere too
+  }
+  const LandmarkFile from = read_landmarks_csv(*src, surface.vertices);
+  const LandmarkFile to = read_landmarks_csv(*dst, surface.vertices);
+  if (from.points.rows() != to.points.rows())
+    throw InputError(*src + ", " + *dst + ": " + std::to_string(from.points.rows()) + " landmarks but " +
+                     std::to_string(to.points.rows()) + " targets");
+  const double t_read = seconds_since(t0);
+  SurfaceRegistrationResult r;
+  try {
+    r = register_on_sphere(surface.vertices, surface.triangles, from.points, to.points, opt);
+  } catch (const InputError& e) {
+    throw InputError(*src + ", " + *dst + ": " + e.what());
+  }
+  if (r.metrics.flipped_faces > 0)
+    throw NumericalError(in + ": the registration flipped " + std::to_string(r.metrics.flipped_faces) +
+                         " faces (landmarks too close together for their targets?)");
+  TriSurface registered;
+  registered.vertices = r.points;
+  registered.triangles = surface.triangles;
+  registered.point_data.push_back({"original_position", surface.vertices, false});
+  registered.point_data.push_back({"vertex_area_ratio", r.metrics.vertex_ratio, false});
+  registered.cell_data.push_back({"face_area_ratio", r.metrics.face_ratio, false});
+  t0 = Clock::now();
+  write_surface(out, registered);
+  info("registered on the sphere: landmark rms error " + strprintf("%.2e", r.landmark_rms_error) + " (max " +
+       strprintf("%.2e", r.landmark_max_error) + "), face area mean |r-1| " +
+       strprintf("%.3f %%", 100 * r.metrics.face_area_ratio.mean_abs_dev) + " (flow " +
+       strprintf("%.3f %%", 100 * r.flow_metrics.face_area_ratio.mean_abs_dev) + "), " +
+       std::to_string(r.metrics.flipped_faces) + " flipped faces; wrote " + out);
+  if (const auto report_path = args.get("--report")) {
+    Json report = Json::object();
+    report["domain"] = "sphere";
+    report["input"] = Json::object();
+    report["input"]["surface"] = in;
+    report["input"]["vertices"] = static_cast<long>(surface.vertices.rows());
+    report["input"]["faces"] = static_cast<long>(surface.triangles.rows());
+    report["input"]["landmarks"] = static_cast<long>(from.points.rows());
+    report["landmark_rms_error"] = r.landmark_rms_error;
+    report["landmark_max_error"] = r.landmark_max_error;
+    report["converged"] = r.landmark_max_error <= kLandmarkTolerance && r.metrics.flipped_faces == 0;
+    report["registration"] = to_json(r, opt);
+    report["timings_s"] = Json::object();
+    report["timings_s"]["read"] = t_read;
+    report["timings_s"]["register"] = r.seconds;
+    report["timings_s"]["write"] = seconds_since(t0);
+    report["timings_s"]["total"] = seconds_since(t_start);
+    write_json_file(*report_path, report);
+  }
+  return convergence_status("register", "landmark max error", r.landmark_max_error, kLandmarkTolerance,
+                            "after the flow", args.has("--allow-partial"), [](double v) { return strprintf("%.2e", v); });
+}
+
+}  // namespace vpm::cli

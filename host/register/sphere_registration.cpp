@@ -1,0 +1,361 @@
+// Area-preserving landmark registration on the unit sphere (vpm/surface_registration.hpp): the
+// great-circle pathlines, the surface-divergence-free Gaussian field fitted to them at each RK4
+// stage time, the advection of every vertex and the last step onto the targets.
+#include "vpm/surface_registration.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "core/parallel.hpp"
+#include "map/surface_area.hpp"
+#include "map/surface_polish.hpp"
+#include "vpm/error.hpp"
+#include "vpm/registration.hpp"
+#include "vpm/timing.hpp"
+
+namespace vpm {
+
+namespace {
+
+using Eigen::Vector3d;
+
+// The width factors leave-one-out chooses among (SurfaceRegistrationOptions::width_factor 0).
+constexpr double kWidthFactors[] = {0.5, 1, 1.5, 2, 3, 4};
+
+// Terms with lambda |x - y|^2 beyond this are below 1e-17 of the peak and skipped.
+constexpr double kCutoff = 40;
+
+// A surface-divergence-free field on the sphere: v(x) = x × sum_j H(x, y_j) u_j with
+// H = grad_x grad_y^T exp(-lambda |x - y|^2) = e (2 lambda I - 4 lambda^2 r r^T), r = x - y.
+struct SphereField {
+  double lambda = 1;
+  std::vector<Vector3d> centres, weights;  // y_j, u_j (tangent at y_j)
+
+  Vector3d operator()(const Vector3d& x) const {
+    Vector3d w = Vector3d::Zero();
+    for (size_t j = 0; j < centres.size(); ++j) {
+      const Vector3d r = x - centres[j];
+      const double s = lambda * r.squaredNorm();
+      if (s > kCutoff) continue;
+      const double e = std::exp(-s);
+      w += e * (2 * lambda * weights[j] - 4 * lambda * lambda * r * r.dot(weights[j]));
+    }
+    return x.cross(w);
+  }
+};
+
+// An orthonormal basis of the plane tangent to the unit sphere at x (3 x 2).
+Eigen::Matrix<double, 3, 2> tangent_basis(const Vector3d& x) {
+  const Vector3d a = std::abs(x.x()) < 0.9 ? Vector3d::UnitX() : Vector3d::UnitY();
+  const Vector3d e1 = (a - x * x.dot(a)).normalized();
+  Eigen::Matrix<double, 3, 2> b;
+  b << e1, x.cross(e1);
+  return b;
+}
+
+// The field whose values at `at` (unit vectors) are the tangent vectors `velocity`: with
+// P_i = [x_i]×^T B_i the Gram matrix G_ij = P_i^T H_ij P_j is symmetric positive definite, and
+// u_j = P_j a_j.
+struct Gram {
+  std::vector<Eigen::Matrix<double, 3, 2>> P, B;
+  Eigen::MatrixXd G;
+  Eigen::VectorXd rhs;
+};
+
+Gram gram(const std::vector<Vector3d>& at, const std::vector<Vector3d>& velocity, double lambda) {
+  const int L = static_cast<int>(at.size());
+  Gram g;
+  std::vector<Eigen::Matrix<double, 3, 2>>& P = g.P;
+  std::vector<Eigen::Matrix<double, 3, 2>>& B = g.B;
+  P.resize(L);
+  B.resize(L);
+  for (int i = 0; i < L; ++i) {
+    B[i] = tangent_basis(at[i]);
+    for (int k = 0; k < 2; ++k) P[i].col(k) = -at[i].cross(B[i].col(k));
+  }
+  Eigen::MatrixXd& G = g.G;
+  Eigen::VectorXd& rhs = g.rhs;
+  G.resize(2 * L, 2 * L);
+  rhs.resize(2 * L);
+  for (int i = 0; i < L; ++i) {
+    rhs.segment<2>(2 * i) = B[i].transpose() * velocity[i];
+    for (int j = 0; j < L; ++j) {
+      const Vector3d r = at[i] - at[j];
+      const double e = std::exp(-lambda * r.squaredNorm());
+      const Eigen::Matrix3d H = e * (2 * lambda * Eigen::Matrix3d::Identity() - 4 * lambda * lambda * r * r.transpose());
+      G.block<2, 2>(2 * i, 2 * j) = P[i].transpose() * H * P[j];
+    }
+  }
+  G.diagonal().array() += 1e-13 * G.diagonal().maxCoeff();
+  return g;
+}
+
+Eigen::LLT<Eigen::MatrixXd> factor(const Eigen::MatrixXd& G) {
+  Eigen::LLT<Eigen::MatrixXd> llt(G);
+  if (llt.info() != Eigen::Success)
+    throw NumericalError("sphere registration: the landmark field's Gram matrix is not positive definite (landmarks closer than round-off?)");
+  return llt;
+}
+
+SphereField fit(const std::vector<Vector3d>& at, const std::vector<Vector3d>& velocity, double lambda) {
+  const int L = static_cast<int>(at.size());
+  const Gram g = gram(at, velocity, lambda);
+  const std::vector<Eigen::Matrix<double, 3, 2>>& P = g.P;
+  const Eigen::VectorXd a = factor(g.G).solve(g.rhs);
+  SphereField f;
+  f.lambda = lambda;
+  f.centres = at;
+  f.weights.resize(L);
+  for (int j = 0; j < L; ++j) f.weights[j] = P[j] * a.segment<2>(2 * j);
+  return f;
+}
+
+// Leave-one-out error of the field fitted to the landmarks' first motion (each landmark's step
+// toward its target predicted from the others'): the root mean square over landmarks of the
+// block residuals [(G^-1)_ii]^-1 (G^-1 b)_i (Rippa's formula, 2 x 2 blocks).
+double loo_error(const std::vector<Vector3d>& at, const std::vector<Vector3d>& velocity, double lambda) {
+  const int L = static_cast<int>(at.size());
+  const Gram g = gram(at, velocity, lambda);
+  const Eigen::LLT<Eigen::MatrixXd> llt = factor(g.G);
+  const Eigen::MatrixXd inv = llt.solve(Eigen::MatrixXd::Identity(2 * L, 2 * L));
+  const Eigen::VectorXd a = inv * g.rhs;
+  double sum = 0;
+  for (int i = 0; i < L; ++i) sum += inv.block<2, 2>(2 * i, 2 * i).inverse().operator*(a.segment<2>(2 * i)).squaredNorm();
+  return std::sqrt(sum / L);
+}
+
+// slerp(p, q, t) and its derivative (constant angular speed theta).
+Vector3d great_circle(const Vector3d& p, const Vector3d& q, double t, Vector3d* velocity) {
+  const double theta = std::atan2(p.cross(q).norm(), p.dot(q));
+  if (theta < 1e-12) {
+    if (velocity) *velocity = Vector3d::Zero();
+    return p;
+  }
+  const double s = std::sin(theta);
+  if (velocity) *velocity = theta * (-std::cos((1 - t) * theta) * p + std::cos(t * theta) * q) / s;
+  return (std::sin((1 - t) * theta) * p + std::sin(t * theta) * q) / s;
+}
+
+SphereField field_at(const std::vector<Vector3d>& p, const std::vector<Vector3d>& q, double t, double lambda) {
+  std::vector<Vector3d> at(p.size()), vel(p.size());
+  for (size_t i = 0; i < p.size(); ++i) at[i] = great_circle(p[i], q[i], t, &vel[i]);
+  return fit(at, vel, lambda);
+}
+
+// exp_x(v): the point at angular distance |v| from x in direction v (v tangent at x).
+Vector3d exp_map(const Vector3d& x, const Vector3d& v) {
+  const double a = v.norm();
+  return a < 1e-300 ? x : Vector3d(std::cos(a) * x + std::sin(a) * v / a);
+}
+
+// log_x(q): the tangent vector at x toward q of length the angle between them.
+Vector3d log_map(const Vector3d& x, const Vector3d& q) {
+  const Vector3d t = q - x * x.dot(q);
+  const double n = t.norm();
+  return n < 1e-300 ? Vector3d::Zero() : Vector3d(std::atan2(n, x.dot(q)) * t / n);
+}
+
+std::vector<Vector3d> unit_rows(const Points& m, const char* what) {
+  std::vector<Vector3d> v(m.rows());
+  for (Eigen::Index i = 0; i < m.rows(); ++i) {
+    const Vector3d x = m.row(i).transpose();
+    if (!x.allFinite() || std::abs(x.norm() - 1) > 1e-4)
+      throw InputError(std::string(what) + " " + std::to_string(i) + ": not on the unit sphere (|x| = " +
+                       std::to_string(x.norm()) + "); register surfaces mapped by vpm map");
+    v[i] = x.normalized();
+  }
+  return v;
+}
+
+// 1 on the corners of every face whose chord triangle the ray through a landmark crosses: the
+// faces that carry the landmarks, held still by the restoration.
+std::vector<char> landmark_corners(const std::vector<Vector3d>& x, const Triangles& f, const std::vector<Vector3d>& p) {
+  std::vector<char> fixed(x.size(), 0);
+  for (const Vector3d& d : p)
+    for (Eigen::Index t = 0; t < f.rows(); ++t) {
+      const Vector3d &a = x[f(t, 0)], &b = x[f(t, 1)], &c = x[f(t, 2)];
+      if (d.dot(a + b + c) <= 0) continue;
+      // d inside the cone over (a, b, c): on the same side of each of its three planes
+      const double s0 = d.dot(a.cross(b)), s1 = d.dot(b.cross(c)), s2 = d.dot(c.cross(a));
+      if ((s0 >= 0 && s1 >= 0 && s2 >= 0) || (s0 <= 0 && s1 <= 0 && s2 <= 0))
+        for (int k = 0; k < 3; ++k) fixed[static_cast<size_t>(f(t, k))] = 1;
+    }
+  return fixed;
+}
+
+// Faces the flow flipped (slivers of the sphere map sheared past their width, the surface's form
+// of the ball's folded tets) repaired: each corner of a flipped face, but the held ones, moved to
+// the normalised mean of its neighbours, sweeps until none is flipped (at most kRepairSweeps).
+// Returns the number of faces it found flipped; the metrics say what is left.
+constexpr int kRepairSweeps = 50;
+int repair_flips(const detail::SurfaceDomainMoves& domain, const Triangles& f, Points& x) {
+  std::vector<int> flipped = domain.flipped(x, f);
+  const int found = static_cast<int>(flipped.size());
+  if (flipped.empty()) return 0;
+  std::vector<std::vector<int>> ring(static_cast<size_t>(x.rows()));
+  for (Eigen::Index t = 0; t < f.rows(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      ring[static_cast<size_t>(f(t, k))].push_back(f(t, (k + 1) % 3));
+      ring[static_cast<size_t>(f(t, k))].push_back(f(t, (k + 2) % 3));
+    }
+  for (int sweep = 0; sweep < kRepairSweeps && !flipped.empty(); ++sweep) {
+    for (int t : flipped)
+      for (int k = 0; k < 3; ++k) {
+        const int v = f(t, k);
+        if (!domain.fixed.empty() && domain.fixed[static_cast<size_t>(v)]) continue;
+        Vector3d m = Vector3d::Zero();
+        for (int w : ring[static_cast<size_t>(v)]) m += x.row(w).transpose();
+        x.row(v) = m.normalized().transpose();
+      }
+    flipped = domain.flipped(x, f);
+  }
+  return found;
+}
+
+// Mean angular distance of each point of `v` to its nearest other.
+double mean_spacing(const std::vector<Vector3d>& v) {
+  if (v.size() < 2) return M_PI / 2;
+  double sum = 0;
+  for (size_t i = 0; i < v.size(); ++i) {
+    double best = M_PI;
+    for (size_t j = 0; j < v.size(); ++j)
+      if (j != i) best = std::min(best, std::atan2(v[i].cross(v[j]).norm(), v[i].dot(v[j])));
+    sum += best;
+  }
+  return sum / static_cast<double>(v.size());
+}
+
+// One RK4 step of dt from t for every point of x (in place), fields at t, t + dt/2, t + dt.
+void rk4_step(std::vector<Vector3d>& x, const SphereField& f0, const SphereField& fh, const SphereField& f1, double dt) {
+  detail::parallel_for(static_cast<int>(x.size()), 256, [&](int i0, int i1) {
+    for (int i = i0; i < i1; ++i) {
+      const Vector3d k1 = f0(x[i]);
+      const Vector3d k2 = fh(x[i] + dt / 2 * k1);
+      const Vector3d k3 = fh(x[i] + dt / 2 * k2);
+      const Vector3d k4 = f1(x[i] + dt * k3);
+      x[i] = (x[i] + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)).normalized();
+    }
+  });
+}
+
+}  // namespace
+
+SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangles& faces, const Points& landmarks,
+                                             const Points& targets, const SurfaceRegistrationOptions& options) {
+  const auto t0 = Clock::now();
+  if (landmarks.rows() < 1) throw InputError("sphere registration: no landmarks");
+  if (landmarks.rows() != targets.rows())
+    throw InputError("sphere registration: " + std::to_string(landmarks.rows()) + " landmarks but " +
+                     std::to_string(targets.rows()) + " targets");
+  if (options.steps < 1) throw InputError("sphere registration: steps must be at least 1");
+  if (!(options.width_factor >= 0)) throw InputError("sphere registration: width_factor must be positive (or 0: chosen)");
+  std::vector<Vector3d> x = unit_rows(sphere, "vertex");
+  std::vector<Vector3d> p = unit_rows(landmarks, "landmark");
+  const std::vector<Vector3d> q = unit_rows(targets, "target");
+  SurfaceRegistrationResult res;
+  if (options.rigid && p.size() >= 2) {
+    Points pp(p.size(), 3), qq(q.size(), 3);
+    for (size_t i = 0; i < p.size(); ++i) pp.row(i) = p[i].transpose(), qq.row(i) = q[i].transpose();
+    res.rotation = kabsch_rotation(pp, qq);
+  }
+  for (auto& v : x) v = (res.rotation * v).normalized();
+  for (auto& v : p) v = (res.rotation * v).normalized();
+  for (size_t i = 0; i < p.size(); ++i)
+    if (p[i].dot(q[i]) < -1 + 1e-12)
+      throw InputError("sphere registration: landmark " + std::to_string(i) + " and its target are antipodal (after the rigid step)");
+  // the Gaussian's width in chord length (2 sin(angle / 2)), its factor given or chosen by
+  // leave-one-out on the landmarks' first motion
+  const double spacing = std::min(mean_spacing(p), mean_spacing(q));
+  auto chord = [&](double factor) { return 2 * std::sin(std::min(factor * spacing, M_PI) / 2); };
+  res.width_factor = options.width_factor;
+  if (res.width_factor == 0) {
+    std::vector<Vector3d> first(p.size());
+    for (size_t i = 0; i < p.size(); ++i) first[i] = log_map(p[i], q[i]);
+    double best = std::numeric_limits<double>::infinity();
+    res.width_factor = kWidthFactors[0];
+    if (p.size() >= 3)
+      for (double factor : kWidthFactors) {
+        const double w = chord(factor), e = loo_error(p, first, 1 / (w * w));
+        if (e < best) best = e, res.width_factor = factor;
+      }
+  }
+  res.width = chord(res.width_factor);
+  const double lambda = 1 / (res.width * res.width);
+  std::vector<Vector3d> moving = p;  // the landmarks, advected with the vertices to measure the flow's error
+  const double dt = 1.0 / options.steps;
+  SphereField f0 = field_at(p, q, 0, lambda);
+  for (int k = 0; k < options.steps; ++k) {
+    const SphereField fh = field_at(p, q, (k + 0.5) * dt, lambda);
+    SphereField f1 = field_at(p, q, (k + 1) * dt, lambda);
+    rk4_step(x, f0, fh, f1, dt);
+    rk4_step(moving, f0, fh, f1, dt);
+    f0 = std::move(f1);
+  }
+  // the last step: the field that carries each landmark's image onto its target, one exp step
+  std::vector<Vector3d> rest(p.size());
+  for (size_t i = 0; i < p.size(); ++i) {
+    rest[i] = log_map(moving[i], q[i]);
+    res.flow_landmark_max_error = std::max(res.flow_landmark_max_error, (moving[i] - q[i]).norm());
+  }
+  const SphereField last = fit(moving, rest, lambda);
+  detail::parallel_for(static_cast<int>(x.size()), 256, [&](int i0, int i1) {
+    for (int i = i0; i < i1; ++i) x[i] = exp_map(x[i], last(x[i])).normalized();
+  });
+  double sq = 0;
+  for (size_t i = 0; i < p.size(); ++i) {
+    const double e = (exp_map(moving[i], last(moving[i])) - q[i]).norm();
+    sq += e * e;
+    res.landmark_max_error = std::max(res.landmark_max_error, e);
+  }
+  res.landmark_rms_error = std::sqrt(sq / static_cast<double>(p.size()));
+  res.points.resize(static_cast<Eigen::Index>(x.size()), 3);
+  for (size_t i = 0; i < x.size(); ++i) res.points.row(static_cast<Eigen::Index>(i)) = x[i].transpose();
+  Points reference(sphere.rows(), 3);
+  for (Eigen::Index i = 0; i < sphere.rows(); ++i) reference.row(i) = sphere.row(i).normalized();
+  res.flow_metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::sphere);
+  std::vector<Vector3d> start(static_cast<size_t>(sphere.rows()));
+  for (Eigen::Index i = 0; i < sphere.rows(); ++i) start[static_cast<size_t>(i)] = reference.row(i).transpose();
+  const detail::SurfaceDomainMoves domain{SurfaceDomain::sphere, {}, landmark_corners(start, faces, unit_rows(landmarks, "landmark"))};
+  res.repaired_faces = repair_flips(domain, faces, res.points);
+  if (options.restore_rounds > 0 && domain.flipped(res.points, faces).empty() &&
+      surface_metrics(reference, res.points, faces, SurfaceDomain::sphere).face_area_ratio.mean_abs_dev > options.restore_tolerance) {
+    // the chord triangles' areas back to the input's, the landmarks' faces held still
+    SurfaceMapOptions polish;
+    polish.tolerance = options.restore_tolerance;
+    polish.polish_rounds = options.restore_rounds;
+    SurfaceMapReport rep;
+    detail::polish_surface(domain, faces, detail::face_areas(reference, faces), polish, res.points, rep);
+    res.restore_rounds = static_cast<int>(rep.polish.size());
+    for (char c : domain.fixed) res.held_vertices += c;
+  }
+  res.metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::sphere);
+  res.seconds = seconds_since(t0);
+  return res;
+}
+
+Json to_json(const SurfaceRegistrationResult& r, const SurfaceRegistrationOptions& options) {
+  Json j = Json::object();
+  j["steps"] = options.steps;
+  j["width"] = r.width;
+  j["width_factor"] = r.width_factor;
+  j["rotation_angle_deg"] = Eigen::AngleAxisd(r.rotation).angle() * 180 / M_PI;
+  j["landmark_rms_error"] = r.landmark_rms_error;
+  j["landmark_max_error"] = r.landmark_max_error;
+  j["flow_landmark_max_error"] = r.flow_landmark_max_error;
+  j["flow"] = to_json(r.flow_metrics);
+  j["restore"] = Json::object();
+  j["restore"]["rounds"] = r.restore_rounds;
+  j["restore"]["held_vertices"] = r.held_vertices;
+  j["restore"]["repaired_faces"] = r.repaired_faces;
+  j["final"] = to_json(r.metrics);
+  j["timings_s"] = Json::object();
+  j["timings_s"]["total"] = r.seconds;
+  return j;
+}
+
+}  // namespace vpm

@@ -1,0 +1,73 @@
+#pragma once
+// Area-preserving landmark registration on the unit sphere: the two-dimensional form of the
+// ball's registration (vpm/registration.hpp, paper section 5), for surfaces mapped to the
+// sphere by vpm::map_to_sphere.
+//
+// 1. Rigid step: the rotation that best maps the landmarks onto the targets (Kabsch,
+//    vpm::kabsch_rotation), applied to every vertex.
+// 2. Pathlines: each landmark p travels to its target q along the great circle,
+//    x(t) = slerp(p, q, t), at constant angular speed.
+// 3. Field: at each RK4 stage time t the velocity is the surface-divergence-free interpolant of
+//    the samples (x_i(t), x_i'(t)): v(x) = x × sum_j H(x, y_j) u_j, H the mixed Hessian
+//    grad_x grad_y^T of the Gaussian exp(-lambda |x - y|^2), u_j tangent at y_j. A field
+//    v(x) = x × w(x) is tangent to every sphere about the centre, and x × grad psi has zero
+//    surface divergence: the continuous motion keeps every area.
+// 4. Advection: every vertex moves with K RK4 steps (the flow keeps |x|, the result is put back
+//    on the sphere against round-off), then one step of the same field makes the landmarks
+//    land on their targets to round-off (it moves them by the RK4 truncation error).
+// 5. Repair: faces the flow flipped (slivers sheared past their width) are unflipped by moving
+//    their corners to their neighbours' mean on the sphere.
+// 6. Restoration: the flow keeps areas, the mesh's chord triangles only to first order in their
+//    size (their edges are the flow's secants); the surface map's polish brings the face areas
+//    back to the input's, the faces that carry a landmark held still (they keep the flow's
+//    exact motion).
+#include <Eigen/Core>
+
+#include "vpm/json.hpp"
+#include "vpm/mesh.hpp"
+#include "vpm/surface_map.hpp"
+
+namespace vpm {
+
+struct SurfaceRegistrationOptions {
+  int steps = 32;  ///< K: RK4 steps over t in [0, 1]
+  /// Gaussian width = width_factor x the mean angular spacing of each landmark to its nearest
+  /// (the smaller of the landmark and target sets' means). 0: chosen among 0.5, 1, 1.5, 2, 3, 4
+  /// by leave-one-out (the factor whose field best predicts each landmark's first step from the
+  /// others'): wide for a smooth deformation, narrow for landmarks that move independently.
+  double width_factor = 0;
+  bool rigid = true;  ///< the rigid step first
+  /// The restoration: at most this many Gauss-Newton steps of the surface map's polish on the
+  /// face areas against the input's (0: none), the vertices of the faces that carry a landmark
+  /// held still, until the face area mean |r - 1| is at most restore_tolerance.
+  int restore_rounds = 30;
+  double restore_tolerance = 0.001;
+};
+
+struct SurfaceRegistrationResult {
+  Points points;                                       ///< n x 3 on the unit sphere, same rows
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  ///< the rigid step
+  double width = 0;                                    ///< the Gaussian's (chord length)
+  double width_factor = 0;                             ///< the factor used (given or chosen)
+  double landmark_rms_error = 0, landmark_max_error = 0;  ///< |landmark's image - target|, after the last step
+  double flow_landmark_max_error = 0;                  ///< before it: the RK4 steps' error
+  SurfaceMetrics flow_metrics;                         ///< after the flow, before the restoration
+  int restore_rounds = 0, held_vertices = 0;           ///< the restoration's steps, vertices held still
+  int repaired_faces = 0;                              ///< faces the flow flipped, repaired before it
+  SurfaceMetrics metrics;                              ///< of `points` against the input
+  double seconds = 0;
+};
+
+/// Registers the sphere-mapped surface `sphere` (n x 3, |x| = 1 within 1e-4; normalised) with
+/// faces `faces` by moving `landmarks` (L x 3 on the sphere) onto `targets`. Throws InputError for
+/// points off the sphere, fewer than one landmark, counts that differ, or a landmark and its
+/// target antipodal (no unique great circle); NumericalError when the field cannot be fitted.
+SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangles& faces, const Points& landmarks,
+                                             const Points& targets, const SurfaceRegistrationOptions& options = {});
+
+/// {"steps", "width", "width_factor", "rotation_angle_deg", "landmark_rms_error", "landmark_max_error",
+///  "flow_landmark_max_error", "flow": to_json(SurfaceMetrics) (before the restoration),
+///  "restore": {"rounds", "held_vertices", "repaired_faces"}, "final": to_json(SurfaceMetrics), "timings_s": {"total"}}
+Json to_json(const SurfaceRegistrationResult& result, const SurfaceRegistrationOptions& options);
+
+}  // namespace vpm
