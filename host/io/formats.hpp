@@ -45,6 +45,10 @@ Eigen::VectorXd read_gifti_values(const std::string& path);
 /// VTK XML PolyData, ASCII, with the surface's point and cell fields (vtp.cpp; written only).
 void write_vtp(const std::string& path, const TriSurface& surface);
 
+/// Checks that every triangle's vertex indices are rows of the surface's vertices, before any
+/// writer writes it (write_surface, write_surface_stl_binary) (InputError naming `path` and the first bad triangle).
+void check_triangles(const std::string& path, const TriSurface& surface);
+
 /// Checks that the mesh's fields have the right number of rows (InputError naming `path`).
 void check_fields(const std::string& path, const TetMesh& mesh);
 

@@ -113,11 +113,6 @@ Eigen::VectorXd read_freesurfer_curv(const std::string& path) {
 }
 
 void write_freesurfer(const std::string& path, const TriSurface& s) {
-  for (Eigen::Index i = 0; i < s.triangles.rows(); ++i)
-    for (int k = 0; k < 3; ++k)
-      if (s.triangles(i, k) < 0 || s.triangles(i, k) >= s.vertices.rows())
-        throw InputError(path + ": cannot write: triangle " + std::to_string(i) + " has vertex index " +
-                         std::to_string(s.triangles(i, k)) + " out of range");
   std::string out;
   out.reserve(64 + 12 * static_cast<size_t>(s.vertices.rows() + s.triangles.rows()));
   out.append("\xFF\xFF\xFE", 3);

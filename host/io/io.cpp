@@ -94,6 +94,7 @@ TriSurface read_surface(const std::string& path) {
 
 void write_surface(const std::string& path, const TriSurface& surface) {
   const std::string e = detail::extension_of(path);
+  detail::check_triangles(path, surface);
   if (e == ".off") return detail::write_off(path, surface);
   if (e == ".obj") return detail::write_obj(path, surface);
   if (e == ".stl") return detail::write_stl(path, surface, false);
@@ -104,10 +105,19 @@ void write_surface(const std::string& path, const TriSurface& surface) {
 }
 
 void write_surface_stl_binary(const std::string& path, const TriSurface& surface) {
+  detail::check_triangles(path, surface);
   detail::write_stl(path, surface, true);
 }
 
 namespace detail {
+void check_triangles(const std::string& path, const TriSurface& s) {
+  for (Eigen::Index i = 0; i < s.triangles.rows(); ++i)
+    for (int k = 0; k < 3; ++k)
+      if (s.triangles(i, k) < 0 || s.triangles(i, k) >= s.vertices.rows())
+        throw InputError(path + ": cannot write: triangle " + std::to_string(i) + " has vertex index " +
+                         std::to_string(s.triangles(i, k)) + " out of range");
+}
+
 void check_fields(const std::string& path, const TetMesh& mesh) {
   for (const auto& f : mesh.point_data)
     if (f.values.rows() != mesh.vertices.rows())

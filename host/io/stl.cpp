@@ -159,11 +159,6 @@ TriSurface read_stl(const std::string& path) {
 }
 
 void write_stl(const std::string& path, const TriSurface& surf, bool binary) {
-  for (Eigen::Index i = 0; i < surf.triangles.rows(); ++i)
-    for (int k = 0; k < 3; ++k)
-      if (surf.triangles(i, k) < 0 || surf.triangles(i, k) >= surf.vertices.rows())
-        throw InputError(path + ": cannot write: triangle " + std::to_string(i) + " has vertex index " +
-                         std::to_string(surf.triangles(i, k)) + " out of range");
   AtomicFile file(path, binary);
   if (binary) {
     char header[80] = {};

@@ -9,11 +9,6 @@ namespace vpm::detail {
 
 void write_vtp(const std::string& path, const TriSurface& s) {
   const long long n = s.vertices.rows(), m = s.triangles.rows();
-  for (long long i = 0; i < m; ++i)
-    for (int k = 0; k < 3; ++k)
-      if (s.triangles(i, k) < 0 || s.triangles(i, k) >= n)
-        throw InputError(path + ": cannot write: triangle " + std::to_string(i) + " has vertex index " +
-                         std::to_string(s.triangles(i, k)) + " out of range");
   for (const Field& f : s.point_data)
     if (f.values.rows() != n)
       throw InputError(path + ": cannot write point field '" + f.name + "': " + std::to_string(f.values.rows()) +

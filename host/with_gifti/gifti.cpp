@@ -111,11 +111,6 @@ Eigen::VectorXd read_gifti_values(const std::string& path) {
 
 void write_gifti(const std::string& path, const TriSurface& s) {
   const long long n = s.vertices.rows(), m = s.triangles.rows();
-  for (long long i = 0; i < m; ++i)
-    for (int k = 0; k < 3; ++k)
-      if (s.triangles(i, k) < 0 || s.triangles(i, k) >= n)
-        throw InputError(path + ": cannot write: triangle " + std::to_string(i) + " has vertex index " +
-                         std::to_string(s.triangles(i, k)) + " out of range");
   if (3 * std::max(n, m) > kGiftiMaxValues) throw InputError(path + ": cannot write: too many points or triangles for GIfTI");
   static_assert(std::endian::native == std::endian::little, "the GIfTI writer writes the host's bytes as LittleEndian");
   std::string points, triangles;
