@@ -175,6 +175,9 @@ def map_to_sphere(vertices: ArrayLike, faces: ArrayLike, *, progress: Progress =
 def map_to_disk(vertices: ArrayLike, faces: ArrayLike, *, progress: Progress = ..., rounds: int = ...,
                 tolerance: float = ..., max_seconds: float = ...,
                 source: str = ...) -> tuple[np.ndarray, SurfaceMapReport]: ...
+def register_on_sphere(vertices: ArrayLike, faces: ArrayLike, landmarks: ArrayLike, targets: ArrayLike, *,
+                       steps: int = ..., width_factor: float = ..., rigid: bool = ...,
+                       restore: bool = ...) -> tuple[np.ndarray, SurfaceMapReport]: ...
 def register(mesh: Mesh, *, landmarks: Optional[ArrayLike] = ..., targets: Optional[ArrayLike] = ...,
              template: Optional[Mesh] = ..., image: Optional[ImageLike] = ..., template_image: Optional[ImageLike] = ...,
              template_landmarks: Literal["regions", "moments"] = ..., exclude_labels: Sequence[int] = ...,
