@@ -27,6 +27,9 @@ using Eigen::Vector3d;
 // The width factors leave-one-out chooses among (SurfaceRegistrationOptions::width_factor 0).
 constexpr double kWidthFactors[] = {0.5, 1, 1.5, 2, 3, 4};
 
+// The Gaussian's width in chord length for `factor` x the landmarks' mean angular `spacing`.
+double chord_width(double factor, double spacing) { return 2 * std::sin(std::min(factor * spacing, M_PI) / 2); }
+
 // Terms with lambda |x - y|^2 beyond this are below 1e-17 of the peak and skipped.
 constexpr double kCutoff = 40;
 
@@ -245,51 +248,29 @@ void rk4_step(std::vector<Vector3d>& x, const SphereField& f0, const SphereField
 
 }  // namespace
 
-SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangles& faces, const Points& landmarks,
-                                             const Points& targets, const SurfaceRegistrationOptions& options) {
-  const auto t0 = Clock::now();
-  if (landmarks.rows() < 1) throw InputError("sphere registration: no landmarks");
-  if (landmarks.rows() != targets.rows())
-    throw InputError("sphere registration: " + std::to_string(landmarks.rows()) + " landmarks but " +
-                     std::to_string(targets.rows()) + " targets");
-  if (options.steps < 1) throw InputError("sphere registration: steps must be at least 1");
-  if (!(options.width_factor >= 0)) throw InputError("sphere registration: width_factor must be positive (or 0: chosen)");
-  std::vector<Vector3d> x = unit_rows(sphere, "vertex");
-  std::vector<Vector3d> p = unit_rows(landmarks, "landmark");
-  const std::vector<Vector3d> q = unit_rows(targets, "target");
-  SurfaceRegistrationResult res;
-  if (options.rigid && p.size() >= 2) {
-    Points pp(p.size(), 3), qq(q.size(), 3);
-    for (size_t i = 0; i < p.size(); ++i) pp.row(i) = p[i].transpose(), qq.row(i) = q[i].transpose();
-    res.rotation = kabsch_rotation(pp, qq);
+namespace {
+
+// The landmark field's width factor chosen by leave-one-out on the landmarks' first motion.
+double loo_width_factor(const std::vector<Vector3d>& p, const std::vector<Vector3d>& q, double spacing) {
+  if (p.size() < 3) return kWidthFactors[0];
+  std::vector<Vector3d> first(p.size());
+  for (size_t i = 0; i < p.size(); ++i) first[i] = log_map(p[i], q[i]);
+  double best = std::numeric_limits<double>::infinity(), chosen = kWidthFactors[0];
+  for (double factor : kWidthFactors) {
+    const double w = chord_width(factor, spacing), e = loo_error(p, first, 1 / (w * w));
+    if (e < best) best = e, chosen = factor;
   }
-  for (auto& v : x) v = (res.rotation * v).normalized();
-  for (auto& v : p) v = (res.rotation * v).normalized();
-  for (size_t i = 0; i < p.size(); ++i)
-    if (p[i].dot(q[i]) < -1 + 1e-12)
-      throw InputError("sphere registration: landmark " + std::to_string(i) + " and its target are antipodal (after the rigid step)");
-  // the Gaussian's width in chord length (2 sin(angle / 2)), its factor given or chosen by
-  // leave-one-out on the landmarks' first motion
-  const double spacing = std::min(mean_spacing(p), mean_spacing(q));
-  auto chord = [&](double factor) { return 2 * std::sin(std::min(factor * spacing, M_PI) / 2); };
-  res.width_factor = options.width_factor;
-  if (res.width_factor == 0) {
-    std::vector<Vector3d> first(p.size());
-    for (size_t i = 0; i < p.size(); ++i) first[i] = log_map(p[i], q[i]);
-    double best = std::numeric_limits<double>::infinity();
-    res.width_factor = kWidthFactors[0];
-    if (p.size() >= 3)
-      for (double factor : kWidthFactors) {
-        const double w = chord(factor), e = loo_error(p, first, 1 / (w * w));
-        if (e < best) best = e, res.width_factor = factor;
-      }
-  }
-  res.width = chord(res.width_factor);
-  const double lambda = 1 / (res.width * res.width);
+  return chosen;
+}
+
+// Steps 3-4 from the rotated points x and landmarks p: the RK4 flow, then the last step onto the
+// targets q. Fills res.points and the landmark errors.
+void flow(std::vector<Vector3d> x, const std::vector<Vector3d>& p, const std::vector<Vector3d>& q, double lambda,
+          int steps, SurfaceRegistrationResult& res) {
   std::vector<Vector3d> moving = p;  // the landmarks, advected with the vertices to measure the flow's error
-  const double dt = 1.0 / options.steps;
+  const double dt = 1.0 / steps;
   SphereField f0 = field_at(p, q, 0, lambda);
-  for (int k = 0; k < options.steps; ++k) {
+  for (int k = 0; k < steps; ++k) {
     const SphereField fh = field_at(p, q, (k + 0.5) * dt, lambda);
     SphereField f1 = field_at(p, q, (k + 1) * dt, lambda);
     rk4_step(x, f0, fh, f1, dt);
@@ -298,6 +279,7 @@ SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangl
   }
   // the last step: the field that carries each landmark's image onto its target, one exp step
   std::vector<Vector3d> rest(p.size());
+  res.flow_landmark_max_error = res.landmark_max_error = 0;
   for (size_t i = 0; i < p.size(); ++i) {
     rest[i] = log_map(moving[i], q[i]);
     res.flow_landmark_max_error = std::max(res.flow_landmark_max_error, (moving[i] - q[i]).norm());
@@ -315,24 +297,74 @@ SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangl
   res.landmark_rms_error = std::sqrt(sq / static_cast<double>(p.size()));
   res.points.resize(static_cast<Eigen::Index>(x.size()), 3);
   for (size_t i = 0; i < x.size(); ++i) res.points.row(static_cast<Eigen::Index>(i)) = x[i].transpose();
+}
+
+// Step 6: the chord triangles' areas back to the input's (`reference`), the landmarks' faces
+// held still, when the map has no flipped face and misses the tolerance.
+void restore(const detail::SurfaceDomainMoves& domain, const Points& reference, const Triangles& faces,
+             const SurfaceRegistrationOptions& options, SurfaceRegistrationResult& res) {
+  if (options.restore_rounds <= 0 || !domain.flipped(res.points, faces).empty() ||
+      surface_metrics(reference, res.points, faces, SurfaceDomain::sphere).face_area_ratio.mean_abs_dev <= options.restore_tolerance)
+    return;
+  SurfaceMapOptions polish;
+  polish.tolerance = options.restore_tolerance;
+  polish.polish_rounds = options.restore_rounds;
+  SurfaceMapReport rep;
+  detail::polish_surface(domain, faces, detail::face_areas(reference, faces), polish, res.points, rep);
+  res.restore_rounds = static_cast<int>(rep.polish.size());
+  for (char c : domain.fixed) res.held_vertices += c;
+}
+
+void check_inputs(const Points& landmarks, const Points& targets, const SurfaceRegistrationOptions& options) {
+  if (landmarks.rows() < 1) throw InputError("sphere registration: no landmarks");
+  if (landmarks.rows() != targets.rows())
+    throw InputError("sphere registration: " + std::to_string(landmarks.rows()) + " landmarks but " +
+                     std::to_string(targets.rows()) + " targets");
+  if (options.steps < 1) throw InputError("sphere registration: steps must be at least 1");
+  if (!(options.width_factor >= 0)) throw InputError("sphere registration: width_factor must be positive (or 0: chosen)");
+}
+
+}  // namespace
+
+SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangles& faces, const Points& landmarks,
+                                             const Points& targets, const SurfaceRegistrationOptions& options) {
+  const auto t0 = Clock::now();
+  check_inputs(landmarks, targets, options);
+  std::vector<Vector3d> x = unit_rows(sphere, "vertex");
+  std::vector<Vector3d> p = unit_rows(landmarks, "landmark");
+  const std::vector<Vector3d> q = unit_rows(targets, "target");
+  SurfaceRegistrationResult res;
+  if (options.rigid && p.size() >= 2) {
+    Points pp(p.size(), 3), qq(q.size(), 3);
+    for (size_t i = 0; i < p.size(); ++i) pp.row(i) = p[i].transpose(), qq.row(i) = q[i].transpose();
+    res.rotation = kabsch_rotation(pp, qq);
+  }
+  for (auto& v : x) v = (res.rotation * v).normalized();
+  for (auto& v : p) v = (res.rotation * v).normalized();
+  for (size_t i = 0; i < p.size(); ++i)
+    if (p[i].dot(q[i]) < -1 + 1e-12)
+      throw InputError("sphere registration: landmark " + std::to_string(i) + " and its target are antipodal (after the rigid step)");
   Points reference(sphere.rows(), 3);
   for (Eigen::Index i = 0; i < sphere.rows(); ++i) reference.row(i) = sphere.row(i).normalized();
-  res.flow_metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::sphere);
   std::vector<Vector3d> start(static_cast<size_t>(sphere.rows()));
   for (Eigen::Index i = 0; i < sphere.rows(); ++i) start[static_cast<size_t>(i)] = reference.row(i).transpose();
   const detail::SurfaceDomainMoves domain{SurfaceDomain::sphere, {}, landmark_corners(start, faces, unit_rows(landmarks, "landmark"))};
-  res.repaired_faces = repair_flips(domain, faces, res.points);
-  if (options.restore_rounds > 0 && domain.flipped(res.points, faces).empty() &&
-      surface_metrics(reference, res.points, faces, SurfaceDomain::sphere).face_area_ratio.mean_abs_dev > options.restore_tolerance) {
-    // the chord triangles' areas back to the input's, the landmarks' faces held still
-    SurfaceMapOptions polish;
-    polish.tolerance = options.restore_tolerance;
-    polish.polish_rounds = options.restore_rounds;
-    SurfaceMapReport rep;
-    detail::polish_surface(domain, faces, detail::face_areas(reference, faces), polish, res.points, rep);
-    res.restore_rounds = static_cast<int>(rep.polish.size());
-    for (char c : domain.fixed) res.held_vertices += c;
+  // the width factor given, or chosen by leave-one-out and, while the repair leaves faces
+  // flipped, the next narrower one
+  const double spacing = std::min(mean_spacing(p), mean_spacing(q));
+  res.width_factor = options.width_factor > 0 ? options.width_factor : loo_width_factor(p, q, spacing);
+  while (true) {
+    res.width = chord_width(res.width_factor, spacing);
+    flow(x, p, q, 1 / (res.width * res.width), options.steps, res);
+    res.flow_metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::sphere);
+    res.repaired_faces = repair_flips(domain, faces, res.points);
+    const double* narrower = std::find(std::begin(kWidthFactors), std::end(kWidthFactors), res.width_factor);
+    if (options.width_factor > 0 || domain.flipped(res.points, faces).empty() || narrower == std::begin(kWidthFactors) ||
+        narrower == std::end(kWidthFactors))
+      break;
+    res.width_factor = *(narrower - 1);
   }
+  restore(domain, reference, faces, options, res);
   res.metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::sphere);
   res.seconds = seconds_since(t0);
   return res;

@@ -34,7 +34,8 @@ struct SurfaceRegistrationOptions {
   /// Gaussian width = width_factor x the mean angular spacing of each landmark to its nearest
   /// (the smaller of the landmark and target sets' means). 0: chosen among 0.5, 1, 1.5, 2, 3, 4
   /// by leave-one-out (the factor whose field best predicts each landmark's first step from the
-  /// others'): wide for a smooth deformation, narrow for landmarks that move independently.
+  /// others'): wide for a smooth deformation, narrow for landmarks that move independently;
+  /// when the repair leaves a face flipped, the flow is run again with the next narrower factor.
   double width_factor = 0;
   bool rigid = true;  ///< the rigid step first
   /// The restoration: at most this many Gauss-Newton steps of the surface map's polish on the
