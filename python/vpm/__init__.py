@@ -163,12 +163,23 @@ def map_to_disk(vertices, faces, *, progress=None, **options):
 def register_on_sphere(vertices, faces, landmarks, targets, **options):
     """Registers a surface mapped to the unit sphere (map_to_sphere's points) by moving
     `landmarks` onto `targets` ((L, 3) points on the sphere) with a surface-divergence-free flow,
-    the face areas then restored: `vpm register SPHERE`. Options: steps (RK4 steps, 32),
-    width_factor (1), rigid (True: the best rotation first), restore (True).
+    the face areas then restored: `vpm register SPHERE`. Either may also be (L,) vertex ids of
+    `vertices` (their positions). Options: steps (RK4 steps, 32),
+    width_factor (0: chosen by leave-one-out), rigid (True: the best rotation first), restore (True).
 
     Returns (points, report): (n, 3) unit vectors (the input's rows) and a vpm.SurfaceMapReport
     whose `initial` holds the metrics after the flow and `final` after the restoration (against
     the input sphere); report.to_dict() holds landmark_rms_error and landmark_max_error."""
+    vertices = np.asarray(vertices, dtype=np.float64)
+    landmarks, targets = (np.asarray(a) for a in (landmarks, targets))
+    for name, a in (("landmarks", landmarks), ("targets", targets)):
+        if a.ndim == 1 and a.size and np.issubdtype(a.dtype, np.integer):
+            if a.min() < 0 or a.max() >= len(vertices):
+                raise ValueError(f"{name}: vertex id out of range 0..{len(vertices) - 1}")
+    if landmarks.ndim == 1 and np.issubdtype(landmarks.dtype, np.integer):
+        landmarks = vertices[landmarks]
+    if targets.ndim == 1 and np.issubdtype(targets.dtype, np.integer):
+        targets = vertices[targets]
     return _vpm._register_on_sphere(vertices, faces, landmarks, targets, **options)
 
 

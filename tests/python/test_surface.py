@@ -150,6 +150,10 @@ def test_register_on_sphere(vpm, tmp_path):
     assert d["landmark_max_error"] <= 1e-10
     assert report.final.flipped_faces == 0
     assert report.final.face_area_ratio.mean_abs_dev <= report.initial.face_area_ratio.mean_abs_dev
+    by_id, _ = vpm.register_on_sphere(sphere, f, ids, tgt)  # landmarks as vertex ids
+    assert np.array_equal(by_id, reg)
+    with pytest.raises(ValueError, match="vertex id out of range"):
+        vpm.register_on_sphere(sphere, f, np.array([0, len(sphere)]), tgt[:2])
     same, _ = vpm.register_on_sphere(sphere, f, src, src)
     assert np.abs(same - sphere).max() <= 1e-12
     with pytest.raises(ValueError, match="not on the unit sphere"):
