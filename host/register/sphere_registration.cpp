@@ -330,8 +330,8 @@ SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangl
                                              const Points& targets, const SurfaceRegistrationOptions& options) {
   const auto t0 = Clock::now();
   check_inputs(landmarks, targets, options);
-  std::vector<Vector3d> x = unit_rows(sphere, "vertex");
-  std::vector<Vector3d> p = unit_rows(landmarks, "landmark");
+  const std::vector<Vector3d> start = unit_rows(sphere, "vertex"), input_landmarks = unit_rows(landmarks, "landmark");
+  std::vector<Vector3d> x = start, p = input_landmarks;
   const std::vector<Vector3d> q = unit_rows(targets, "target");
   SurfaceRegistrationResult res;
   if (options.rigid && p.size() >= 2) {
@@ -345,10 +345,8 @@ SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangl
     if (p[i].dot(q[i]) < -1 + 1e-12)
       throw InputError("sphere registration: landmark " + std::to_string(i) + " and its target are antipodal (after the rigid step)");
   Points reference(sphere.rows(), 3);
-  for (Eigen::Index i = 0; i < sphere.rows(); ++i) reference.row(i) = sphere.row(i).normalized();
-  std::vector<Vector3d> start(static_cast<size_t>(sphere.rows()));
-  for (Eigen::Index i = 0; i < sphere.rows(); ++i) start[static_cast<size_t>(i)] = reference.row(i).transpose();
-  const detail::SurfaceDomainMoves domain{SurfaceDomain::sphere, {}, landmark_corners(start, faces, unit_rows(landmarks, "landmark"))};
+  for (size_t i = 0; i < start.size(); ++i) reference.row(static_cast<Eigen::Index>(i)) = start[i].transpose();
+  const detail::SurfaceDomainMoves domain{SurfaceDomain::sphere, {}, landmark_corners(start, faces, input_landmarks)};
   // the width factor given, or chosen by leave-one-out and, while the repair leaves faces
   // flipped, the next narrower one
   const double spacing = std::min(mean_spacing(p), mean_spacing(q));
