@@ -19,27 +19,30 @@ DenseRegistrationOptions preset_option(const Args& args, DenseRegistrationOption
   }
 }
 
+std::vector<double> parse_widths(const Args& args, const char* flag) {
+  std::vector<double> widths;
+  std::stringstream ss(args.get(flag).value_or(""));
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size() || !(v > 0 && v <= 2))
+      throw InputError(std::string(flag) + ": expected widths in (0, 2] separated by commas, got '" + item + "'");
+    widths.push_back(v);
+  }
+  if (widths.empty()) throw InputError(std::string(flag) + ": expected at least one width");
+  return widths;
+}
+
 DenseRegistrationOptions dense_options(const Args& args, DenseRegistrationOptions o) {
   o.iterations = args.get_int("--dense-iterations", o.iterations);
   if (o.iterations < 0 || o.iterations > 1000) throw InputError("--dense-iterations: expected 0 to 1000");
-  if (const auto w = args.get("--dense-widths")) {
-    o.widths.clear();
-    std::stringstream ss(*w);
-    std::string item;
-    while (std::getline(ss, item, ',')) {
-      size_t used = 0;
-      double v = 0;
-      try {
-        v = std::stod(item, &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      if (used == 0 || used != item.size() || !(v > 0 && v <= 2))
-        throw InputError("--dense-widths: expected widths in (0, 2] separated by commas, got '" + item + "'");
-      o.widths.push_back(v);
-    }
-    if (o.widths.empty()) throw InputError("--dense-widths: expected at least one width");
-  }
+  if (args.has("--dense-widths")) o.widths = parse_widths(args, "--dense-widths");
   o.step = args.get_double("--dense-step", o.step);
   if (!(o.step > 0 && o.step <= 1)) throw InputError("--dense-step: expected a fraction in (0, 1]");
   if (const auto f = args.get("--dense-force")) {

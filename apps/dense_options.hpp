@@ -17,6 +17,9 @@ DenseRegistrationOptions preset_option(const Args& args, DenseRegistrationOption
 /// into `options` (InputError naming the flag for bad values).
 DenseRegistrationOptions dense_options(const Args& args, DenseRegistrationOptions options = {});
 
+/// The comma-separated widths of `flag` (each in (0, 2]); InputError naming the flag otherwise.
+std::vector<double> parse_widths(const Args& args, const char* flag);
+
 /// --restore-rounds N and --restore-min-gain G into `options` (after its restore_volumes is
 /// set: both are refused with --no-restore), InputError naming the flag for bad values.
 void restore_step_options(const Args& args, RegistrationOptions& options);

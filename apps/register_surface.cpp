@@ -1,11 +1,14 @@
 // `vpm register SPHERE -o OUT` (register_surface.hpp): landmarks on the sphere moved onto their
-// targets by a surface-divergence-free flow, the face areas restored.
+// targets by a surface-divergence-free flow, with a template a per-vertex scalar pulled onto the
+// template's, the face areas restored.
 #include "register_surface.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <optional>
 
+#include "dense_options.hpp"
 #include "vpm/error.hpp"
 #include "vpm/format.hpp"
 #include "vpm/io.hpp"
@@ -21,20 +24,38 @@ namespace {
 constexpr double kLandmarkTolerance = 5e-4;
 
 // The options of `vpm register` that apply to surfaces.
-constexpr const char* kSurfaceOptions[] = {"-o", "--landmarks", "--targets", "--steps", "--width-factor", "--no-rigid",
+constexpr const char* kSurfaceOptions[] = {"-o", "--landmarks", "--targets", "--template", "--overlay", "--template-overlay",
+                                           "--dense-iterations", "--dense-widths", "--steps", "--width-factor", "--no-rigid",
                                            "--no-restore", "--report", "--allow-partial", "--quiet", "--verbose"};
 
-}  // namespace
+// A surface mapped to the sphere: every vertex within 1e-4 of it (put on it exactly), else
+// InputError naming `path` and the vertex.
+TriSurface read_sphere(const std::string& path) {
+  TriSurface surface = read_surface(path);
+  for (Eigen::Index i = 0; i < surface.vertices.rows(); ++i) {
+    const double r = surface.vertices.row(i).norm();
+    if (!(std::abs(r - 1) <= 1e-4))
+      throw InputError(path + ": vertex " + std::to_string(i) + " is not on the unit sphere (|x| = " + std::to_string(r) +
+                       "); map the surface first: vpm map SURFACE -o SPHERE.gii");
+    surface.vertices.row(i) /= r;  // float files: vertex_id landmarks then lie on the sphere too
+  }
+  return surface;
+}
 
-int register_surface(const Args& args, const std::string& in, const std::string& out, Clock::time_point t_start) {
+// A per-vertex scalar of `vertices` vertices read from `path` (--overlay, --template-overlay).
+Eigen::VectorXd read_values(const std::string& path, Eigen::Index vertices, const std::string& of) {
+  Eigen::VectorXd v = read_overlay(path);
+  if (v.size() != vertices)
+    throw InputError(path + ": " + std::to_string(v.size()) + " values, but " + of + " has " + std::to_string(vertices) + " vertices");
+  for (Eigen::Index i = 0; i < v.size(); ++i)
+    if (!std::isfinite(v(i))) throw InputError(path + ": value " + std::to_string(i) + " is not finite");
+  return v;
+}
+
+SurfaceRegistrationOptions parse_options(const Args& args) {
   for (const std::string& flag : args.given())
     if (std::find(std::begin(kSurfaceOptions), std::end(kSurfaceOptions), flag) == std::end(kSurfaceOptions))
-      throw InputError("option " + flag + ": applies to tet meshes only; " + in + " is a surface, registered on the sphere");
-  if (!is_surface_output_path(out))
-    throw InputError(out + ": unknown output extension for a surface (expected .vtp, .gii, .off, .obj, .stl or a FreeSurfer name)");
-  const auto src = args.get("--landmarks");
-  const auto dst = args.get("--targets");
-  if (!src || !dst) throw InputError(std::string("missing ") + (!src ? "--landmarks SRC.csv" : "--targets DST.csv"));
+      throw InputError("option " + flag + ": applies to tet meshes only; the input is a surface, registered on the sphere");
   SurfaceRegistrationOptions opt;
   opt.steps = args.get_int("--steps", 32);
   if (opt.steps < 1 || opt.steps > 100000) throw InputError("--steps: expected 1 to 100000");
@@ -44,27 +65,72 @@ int register_surface(const Args& args, const std::string& in, const std::string&
   }
   opt.rigid = !args.has("--no-rigid");
   if (args.has("--no-restore")) opt.restore_rounds = 0;
-
-  auto t0 = Clock::now();
-  TriSurface surface = read_surface(in);
-  for (Eigen::Index i = 0; i < surface.vertices.rows(); ++i) {
-    const double r = surface.vertices.row(i).norm();
-    if (!(std::abs(r - 1) <= 1e-4))
-      throw InputError(in + ": vertex " + std::to_string(i) + " is not on the unit sphere (|x| = " + std::to_string(r) +
-                       "); map the surface first: vpm map SURFACE -o SPHERE.gii");
-    surface.vertices.row(i) /= r;  // float files: vertex_id landmarks then lie on the sphere too
+  const bool dense = args.has("--template");
+  for (const char* flag : {"--overlay", "--template-overlay", "--dense-iterations", "--dense-widths"})
+    if (!dense && args.has(flag)) throw InputError(std::string(flag) + " needs --template");
+  if (dense) {
+    if (!args.has("--overlay") || !args.has("--template-overlay"))
+      throw InputError("--template: a surface is registered onto a template by a per-vertex scalar; give --overlay and --template-overlay");
+    opt.match.iterations = args.get_int("--dense-iterations", opt.match.iterations);
+    if (opt.match.iterations < 0 || opt.match.iterations > 1000) throw InputError("--dense-iterations: expected 0 to 1000");
+    if (args.has("--dense-widths")) opt.match.widths = parse_widths(args, "--dense-widths");
   }
-  const LandmarkFile from = read_landmarks_csv(*src, surface.vertices);
-  const LandmarkFile to = read_landmarks_csv(*dst, surface.vertices);
-  if (from.points.rows() != to.points.rows())
-    throw InputError(*src + ", " + *dst + ": " + std::to_string(from.points.rows()) + " landmarks but " +
-                     std::to_string(to.points.rows()) + " targets");
+  if (args.has("--landmarks") != args.has("--targets"))
+    throw InputError(std::string("missing ") + (args.has("--landmarks") ? "--targets DST.csv" : "--landmarks SRC.csv"));
+  if (!args.has("--landmarks") && !dense) throw InputError("missing --landmarks SRC.csv --targets DST.csv (or --template)");
+  return opt;
+}
+
+Json report_json(const std::string& in, const TriSurface& surface, const std::optional<std::string>& templ, Eigen::Index landmarks,
+                 const SurfaceRegistrationResult& r, const SurfaceRegistrationOptions& opt) {
+  Json report = Json::object();
+  report["domain"] = "sphere";
+  report["input"] = Json::object();
+  report["input"]["surface"] = in;
+  report["input"]["vertices"] = static_cast<long>(surface.vertices.rows());
+  report["input"]["faces"] = static_cast<long>(surface.triangles.rows());
+  report["input"]["landmarks"] = static_cast<long>(landmarks);
+  if (templ) report["input"]["template"] = *templ;
+  report["landmark_rms_error"] = r.landmark_rms_error;
+  report["landmark_max_error"] = r.landmark_max_error;
+  report["converged"] = r.landmark_max_error <= kLandmarkTolerance && r.metrics.flipped_faces == 0;
+  report["registration"] = to_json(r, opt);
+  return report;
+}
+
+}  // namespace
+
+int register_surface(const Args& args, const std::string& in, const std::string& out, Clock::time_point t_start) {
+  const SurfaceRegistrationOptions opt = parse_options(args);
+  if (!is_surface_output_path(out))
+    throw InputError(out + ": unknown output extension for a surface (expected .vtp, .gii, .off, .obj, .stl or a FreeSurfer name)");
+  auto t0 = Clock::now();
+  const TriSurface surface = read_sphere(in);
+  LandmarkFile from, to;
+  const auto src = args.get("--landmarks"), dst = args.get("--targets"), templ = args.get("--template");
+  if (src) {
+    from = read_landmarks_csv(*src, surface.vertices);
+    to = read_landmarks_csv(*dst, surface.vertices);
+    if (from.points.rows() != to.points.rows())
+      throw InputError(*src + ", " + *dst + ": " + std::to_string(from.points.rows()) + " landmarks but " +
+                       std::to_string(to.points.rows()) + " targets");
+  } else {
+    from.points = to.points = Points(0, 3);
+  }
+  std::optional<SphereTemplate> t;
+  Eigen::VectorXd values;
+  if (templ) {
+    const TriSurface ts = read_sphere(*templ);
+    t = SphereTemplate{ts.vertices, ts.triangles, read_values(*args.get("--template-overlay"), ts.vertices.rows(), *templ)};
+    values = read_values(*args.get("--overlay"), surface.vertices.rows(), in);
+  }
   const double t_read = seconds_since(t0);
   SurfaceRegistrationResult r;
   try {
-    r = register_on_sphere(surface.vertices, surface.triangles, from.points, to.points, opt);
+    r = t ? register_on_sphere(surface.vertices, surface.triangles, values, *t, from.points, to.points, opt)
+          : register_on_sphere(surface.vertices, surface.triangles, from.points, to.points, opt);
   } catch (const InputError& e) {
-    throw InputError(*src + ", " + *dst + ": " + e.what());
+    throw InputError((src ? *src + ", " + *dst : in + ", " + *templ) + ": " + e.what());
   }
   if (r.metrics.flipped_faces > 0)
     throw NumericalError(in + ": the registration flipped " + std::to_string(r.metrics.flipped_faces) +
@@ -78,22 +144,13 @@ int register_surface(const Args& args, const std::string& in, const std::string&
   t0 = Clock::now();
   write_surface(out, registered);
   info("registered on the sphere: landmark rms error " + strprintf("%.2e", r.landmark_rms_error) + " (max " +
-       strprintf("%.2e", r.landmark_max_error) + "), face area mean |r-1| " +
-       strprintf("%.3f %%", 100 * r.metrics.face_area_ratio.mean_abs_dev) + " (flow " +
+       strprintf("%.2e", r.landmark_max_error) + ")" +
+       (t ? strprintf(", scalar correlation %.3f -> %.3f", r.match.correlation_before, r.match.correlation_after) : "") +
+       ", face area mean |r-1| " + strprintf("%.3f %%", 100 * r.metrics.face_area_ratio.mean_abs_dev) + " (flow " +
        strprintf("%.3f %%", 100 * r.flow_metrics.face_area_ratio.mean_abs_dev) + "), " +
        std::to_string(r.metrics.flipped_faces) + " flipped faces; wrote " + out);
   if (const auto report_path = args.get("--report")) {
-    Json report = Json::object();
-    report["domain"] = "sphere";
-    report["input"] = Json::object();
-    report["input"]["surface"] = in;
-    report["input"]["vertices"] = static_cast<long>(surface.vertices.rows());
-    report["input"]["faces"] = static_cast<long>(surface.triangles.rows());
-    report["input"]["landmarks"] = static_cast<long>(from.points.rows());
-    report["landmark_rms_error"] = r.landmark_rms_error;
-    report["landmark_max_error"] = r.landmark_max_error;
-    report["converged"] = r.landmark_max_error <= kLandmarkTolerance && r.metrics.flipped_faces == 0;
-    report["registration"] = to_json(r, opt);
+    Json report = report_json(in, surface, templ, from.points.rows(), r, opt);
     report["timings_s"] = Json::object();
     report["timings_s"]["read"] = t_read;
     report["timings_s"]["register"] = r.seconds;

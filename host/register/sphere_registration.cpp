@@ -14,6 +14,8 @@
 #include "core/parallel.hpp"
 #include "map/surface_area.hpp"
 #include "map/surface_polish.hpp"
+#include "register/sphere_field.hpp"
+#include "register/sphere_match.hpp"
 #include "vpm/error.hpp"
 #include "vpm/registration.hpp"
 #include "vpm/timing.hpp"
@@ -23,43 +25,18 @@ namespace vpm {
 namespace {
 
 using Eigen::Vector3d;
+using detail::exp_map;
+using detail::log_map;
+using detail::SphereField;
+using detail::tangent_basis;
+using detail::weight_basis;
+using detail::gaussian_hessian;
 
 // The width factors leave-one-out chooses among (SurfaceRegistrationOptions::width_factor 0).
 constexpr double kWidthFactors[] = {0.5, 1, 1.5, 2, 3, 4};
 
 // The Gaussian's width in chord length for `factor` x the landmarks' mean angular `spacing`.
 double chord_width(double factor, double spacing) { return 2 * std::sin(std::min(factor * spacing, M_PI) / 2); }
-
-// Terms with lambda |x - y|^2 beyond this are below 1e-17 of the peak and skipped.
-constexpr double kCutoff = 40;
-
-// A surface-divergence-free field on the sphere: v(x) = x × sum_j H(x, y_j) u_j with
-// H = grad_x grad_y^T exp(-lambda |x - y|^2) = e (2 lambda I - 4 lambda^2 r r^T), r = x - y.
-struct SphereField {
-  double lambda = 1;
-  std::vector<Vector3d> centres, weights;  // y_j, u_j (tangent at y_j)
-
-  Vector3d operator()(const Vector3d& x) const {
-    Vector3d w = Vector3d::Zero();
-    for (size_t j = 0; j < centres.size(); ++j) {
-      const Vector3d r = x - centres[j];
-      const double s = lambda * r.squaredNorm();
-      if (s > kCutoff) continue;
-      const double e = std::exp(-s);
-      w += e * (2 * lambda * weights[j] - 4 * lambda * lambda * r * r.dot(weights[j]));
-    }
-    return x.cross(w);
-  }
-};
-
-// An orthonormal basis of the plane tangent to the unit sphere at x (3 x 2).
-Eigen::Matrix<double, 3, 2> tangent_basis(const Vector3d& x) {
-  const Vector3d a = std::abs(x.x()) < 0.9 ? Vector3d::UnitX() : Vector3d::UnitY();
-  const Vector3d e1 = (a - x * x.dot(a)).normalized();
-  Eigen::Matrix<double, 3, 2> b;
-  b << e1, x.cross(e1);
-  return b;
-}
 
 // The field whose values at `at` (unit vectors) are the tangent vectors `velocity`: with
 // P_i = [x_i]×^T B_i the Gram matrix G_ij = P_i^T H_ij P_j is symmetric positive definite, and
@@ -79,7 +56,7 @@ Gram gram(const std::vector<Vector3d>& at, const std::vector<Vector3d>& velocity
   B.resize(L);
   for (int i = 0; i < L; ++i) {
     B[i] = tangent_basis(at[i]);
-    for (int k = 0; k < 2; ++k) P[i].col(k) = -at[i].cross(B[i].col(k));
+    P[i] = weight_basis(at[i]);
   }
   Eigen::MatrixXd& G = g.G;
   Eigen::VectorXd& rhs = g.rhs;
@@ -88,10 +65,7 @@ Gram gram(const std::vector<Vector3d>& at, const std::vector<Vector3d>& velocity
   for (int i = 0; i < L; ++i) {
     rhs.segment<2>(2 * i) = B[i].transpose() * velocity[i];
     for (int j = 0; j < L; ++j) {
-      const Vector3d r = at[i] - at[j];
-      const double e = std::exp(-lambda * r.squaredNorm());
-      const Eigen::Matrix3d H = e * (2 * lambda * Eigen::Matrix3d::Identity() - 4 * lambda * lambda * r * r.transpose());
-      G.block<2, 2>(2 * i, 2 * j) = P[i].transpose() * H * P[j];
+      G.block<2, 2>(2 * i, 2 * j) = P[i].transpose() * gaussian_hessian(at[i] - at[j], lambda) * P[j];
     }
   }
   G.diagonal().array() += 1e-13 * G.diagonal().maxCoeff();
@@ -148,19 +122,6 @@ SphereField field_at(const std::vector<Vector3d>& p, const std::vector<Vector3d>
   std::vector<Vector3d> at(p.size()), vel(p.size());
   for (size_t i = 0; i < p.size(); ++i) at[i] = great_circle(p[i], q[i], t, &vel[i]);
   return fit(at, vel, lambda);
-}
-
-// exp_x(v): the point at angular distance |v| from x in direction v (v tangent at x).
-Vector3d exp_map(const Vector3d& x, const Vector3d& v) {
-  const double a = v.norm();
-  return a < 1e-300 ? x : Vector3d(std::cos(a) * x + std::sin(a) * v / a);
-}
-
-// log_x(q): the tangent vector at x toward q of length the angle between them.
-Vector3d log_map(const Vector3d& x, const Vector3d& q) {
-  const Vector3d t = q - x * x.dot(q);
-  const double n = t.norm();
-  return n < 1e-300 ? Vector3d::Zero() : Vector3d(std::atan2(n, x.dot(q)) * t / n);
 }
 
 std::vector<Vector3d> unit_rows(const Points& m, const char* what) {
@@ -233,19 +194,6 @@ double mean_spacing(const std::vector<Vector3d>& v) {
   return sum / static_cast<double>(v.size());
 }
 
-// One RK4 step of dt from t for every point of x (in place), fields at t, t + dt/2, t + dt.
-void rk4_step(std::vector<Vector3d>& x, const SphereField& f0, const SphereField& fh, const SphereField& f1, double dt) {
-  detail::parallel_for(static_cast<int>(x.size()), 256, [&](int i0, int i1) {
-    for (int i = i0; i < i1; ++i) {
-      const Vector3d k1 = f0(x[i]);
-      const Vector3d k2 = fh(x[i] + dt / 2 * k1);
-      const Vector3d k3 = fh(x[i] + dt / 2 * k2);
-      const Vector3d k4 = f1(x[i] + dt * k3);
-      x[i] = (x[i] + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)).normalized();
-    }
-  });
-}
-
 }  // namespace
 
 namespace {
@@ -273,8 +221,8 @@ void flow(std::vector<Vector3d> x, const std::vector<Vector3d>& p, const std::ve
   for (int k = 0; k < steps; ++k) {
     const SphereField fh = field_at(p, q, (k + 0.5) * dt, lambda);
     SphereField f1 = field_at(p, q, (k + 1) * dt, lambda);
-    rk4_step(x, f0, fh, f1, dt);
-    rk4_step(moving, f0, fh, f1, dt);
+    detail::rk4_step(x, f0, fh, f1, dt);
+    detail::rk4_step(moving, f0, fh, f1, dt);
     f0 = std::move(f1);
   }
   // the last step: the field that carries each landmark's image onto its target, one exp step
@@ -315,8 +263,8 @@ void restore(const detail::SurfaceDomainMoves& domain, const Points& reference, 
   for (char c : domain.fixed) res.held_vertices += c;
 }
 
-void check_inputs(const Points& landmarks, const Points& targets, const SurfaceRegistrationOptions& options) {
-  if (landmarks.rows() < 1) throw InputError("sphere registration: no landmarks");
+void check_inputs(const Points& landmarks, const Points& targets, const SurfaceRegistrationOptions& options, bool dense) {
+  if (landmarks.rows() < 1 && !dense) throw InputError("sphere registration: no landmarks");
   if (landmarks.rows() != targets.rows())
     throw InputError("sphere registration: " + std::to_string(landmarks.rows()) + " landmarks but " +
                      std::to_string(targets.rows()) + " targets");
@@ -326,10 +274,40 @@ void check_inputs(const Points& landmarks, const Points& targets, const SurfaceR
 
 }  // namespace
 
-SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangles& faces, const Points& landmarks,
-                                             const Points& targets, const SurfaceRegistrationOptions& options) {
+namespace {
+
+// The landmark flow of steps 3-5 from x (rotated) carrying p onto q: the width factor given, or
+// chosen by leave-one-out and, while the repair leaves faces flipped, the next narrower one.
+void landmark_flow(const std::vector<Vector3d>& x, const std::vector<Vector3d>& p, const std::vector<Vector3d>& q,
+                   const Points& reference, const Triangles& faces, const detail::SurfaceDomainMoves& domain,
+                   const SurfaceRegistrationOptions& options, SurfaceRegistrationResult& res) {
+  const double spacing = std::min(mean_spacing(p), mean_spacing(q));
+  res.width_factor = options.width_factor > 0 ? options.width_factor : loo_width_factor(p, q, spacing);
+  while (true) {
+    res.width = chord_width(res.width_factor, spacing);
+    flow(x, p, q, 1 / (res.width * res.width), options.steps, res);
+    res.flow_metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::sphere);
+    res.repaired_faces = repair_flips(domain, faces, res.points);
+    const double* narrower = std::find(std::begin(kWidthFactors), std::end(kWidthFactors), res.width_factor);
+    if (options.width_factor > 0 || domain.flipped(res.points, faces).empty() || narrower == std::begin(kWidthFactors) ||
+        narrower == std::end(kWidthFactors))
+      break;
+    res.width_factor = *(narrower - 1);
+  }
+}
+
+std::vector<Vector3d> point_rows(const Points& m) {
+  std::vector<Vector3d> v(static_cast<size_t>(m.rows()));
+  for (Eigen::Index i = 0; i < m.rows(); ++i) v[static_cast<size_t>(i)] = m.row(i).transpose();
+  return v;
+}
+
+// Both registrations: `templ` null for landmarks alone.
+SurfaceRegistrationResult run(const Points& sphere, const Triangles& faces, const Points& landmarks, const Points& targets,
+                              const SurfaceRegistrationOptions& options, const Eigen::VectorXd* values,
+                              const SphereTemplate* templ) {
   const auto t0 = Clock::now();
-  check_inputs(landmarks, targets, options);
+  check_inputs(landmarks, targets, options, templ != nullptr);
   const std::vector<Vector3d> start = unit_rows(sphere, "vertex"), input_landmarks = unit_rows(landmarks, "landmark");
   std::vector<Vector3d> x = start, p = input_landmarks;
   const std::vector<Vector3d> q = unit_rows(targets, "target");
@@ -347,20 +325,23 @@ SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangl
   Points reference(sphere.rows(), 3);
   for (size_t i = 0; i < start.size(); ++i) reference.row(static_cast<Eigen::Index>(i)) = start[i].transpose();
   const detail::SurfaceDomainMoves domain{SurfaceDomain::sphere, {}, landmark_corners(start, faces, input_landmarks)};
-  // the width factor given, or chosen by leave-one-out and, while the repair leaves faces
-  // flipped, the next narrower one
-  const double spacing = std::min(mean_spacing(p), mean_spacing(q));
-  res.width_factor = options.width_factor > 0 ? options.width_factor : loo_width_factor(p, q, spacing);
-  while (true) {
-    res.width = chord_width(res.width_factor, spacing);
-    flow(x, p, q, 1 / (res.width * res.width), options.steps, res);
+  if (!p.empty()) {
+    landmark_flow(x, p, q, reference, faces, domain, options, res);
+  } else {
+    res.points = reference;
+    for (size_t i = 0; i < x.size(); ++i) res.points.row(static_cast<Eigen::Index>(i)) = x[i].transpose();
     res.flow_metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::sphere);
-    res.repaired_faces = repair_flips(domain, faces, res.points);
-    const double* narrower = std::find(std::begin(kWidthFactors), std::end(kWidthFactors), res.width_factor);
-    if (options.width_factor > 0 || domain.flipped(res.points, faces).empty() || narrower == std::begin(kWidthFactors) ||
-        narrower == std::end(kWidthFactors))
-      break;
-    res.width_factor = *(narrower - 1);
+  }
+  if (templ) {
+    std::vector<Vector3d> moved = point_rows(res.points), carried = q;
+    res.match = detail::match_on_sphere(moved, carried, reference, faces, *values, *templ, options.match, domain);
+    if (!p.empty()) {  // the landmarks back onto their targets from where the dense steps left them
+      flow(moved, carried, q, 1 / (res.width * res.width), options.steps, res);
+      res.repaired_faces += repair_flips(domain, faces, res.points);
+    } else {
+      for (size_t i = 0; i < moved.size(); ++i) res.points.row(static_cast<Eigen::Index>(i)) = moved[i].transpose();
+    }
+    res.flow_metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::sphere);
   }
   restore(domain, reference, faces, options, res);
   res.metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::sphere);
@@ -368,24 +349,26 @@ SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangl
   return res;
 }
 
-Json to_json(const SurfaceRegistrationResult& r, const SurfaceRegistrationOptions& options) {
-  Json j = Json::object();
-  j["steps"] = options.steps;
-  j["width"] = r.width;
-  j["width_factor"] = r.width_factor;
-  j["rotation_angle_deg"] = Eigen::AngleAxisd(r.rotation).angle() * 180 / M_PI;
-  j["landmark_rms_error"] = r.landmark_rms_error;
-  j["landmark_max_error"] = r.landmark_max_error;
-  j["flow_landmark_max_error"] = r.flow_landmark_max_error;
-  j["flow"] = to_json(r.flow_metrics);
-  j["restore"] = Json::object();
-  j["restore"]["rounds"] = r.restore_rounds;
-  j["restore"]["held_vertices"] = r.held_vertices;
-  j["restore"]["repaired_faces"] = r.repaired_faces;
-  j["final"] = to_json(r.metrics);
-  j["timings_s"] = Json::object();
-  j["timings_s"]["total"] = r.seconds;
-  return j;
+}  // namespace
+
+SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangles& faces, const Points& landmarks,
+                                             const Points& targets, const SurfaceRegistrationOptions& options) {
+  return run(sphere, faces, landmarks, targets, options, nullptr, nullptr);
+}
+
+SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangles& faces, const Eigen::VectorXd& values,
+                                             const SphereTemplate& templ, const Points& landmarks, const Points& targets,
+                                             const SurfaceRegistrationOptions& options) {
+  if (values.size() != sphere.rows())
+    throw InputError("sphere registration: " + std::to_string(values.size()) + " values for " + std::to_string(sphere.rows()) + " vertices");
+  if (templ.values.size() != templ.sphere.rows())
+    throw InputError("sphere registration: the template has " + std::to_string(templ.values.size()) + " values for " +
+                     std::to_string(templ.sphere.rows()) + " vertices");
+  if (!values.allFinite() || !templ.values.allFinite()) throw InputError("sphere registration: a value is not finite");
+  const std::vector<Vector3d> ts = unit_rows(templ.sphere, "template vertex");
+  SphereTemplate t{Points(templ.sphere.rows(), 3), templ.faces, templ.values};
+  for (size_t i = 0; i < ts.size(); ++i) t.sphere.row(static_cast<Eigen::Index>(i)) = ts[i].transpose();
+  return run(sphere, faces, landmarks, targets, options, &values, &t);
 }
 
 }  // namespace vpm

@@ -21,13 +21,70 @@
 //    size (their edges are the flow's secants); the surface map's polish brings the face areas
 //    back to the input's, the faces that carry a landmark held still (they keep the flow's
 //    exact motion).
+//
+// Dense registration (a template and a per-vertex scalar of both surfaces, for example FreeSurfer's
+// curvature or sulcal depth): between steps 4 and 5, Gauss-Newton iterations that pull the
+// subject's scalar onto the template's, coarse to fine (SphereMatchOptions::widths), each by a
+// field of the same kind:
+//  a. both scalars smoothed at the level's scale (neighbour averaging on each mesh, a diffusion
+//     of about smoothing x width) and standardised (area-weighted mean 0, spread 1);
+//  b. every subject vertex x_i located on the template's sphere (vpm::SphereLocator): the
+//     template's value g(x_i) and its gradient tangent to the sphere (per-vertex gradients,
+//     interpolated), the residual e_i = g(x_i) - f_i;
+//  c. the field v(x) = x × sum_j H(x, c_j) u_j with its centres c_j on an icosphere of about the
+//     level's width: the weights minimise sum_i a_i (e_i + grad g(x_i) . v(x_i))^2 + mu u^T K u
+//     (a_i the vertex's share of the area, K the centres' Gram matrix: the field's smoothness,
+//     mu = ridge x the data term's mean diagonal over the Gram's), one dense Cholesky solve;
+//  d. every vertex (and every landmark) moved through the field (RK4), the step scaled so that no
+//     vertex moves more than max_move x width and halved until the mismatch (the area-weighted
+//     mean of e^2) decreases and no face flips; a level ends when a step gains less than 0.1 %
+//     of the mismatch, or after `iterations`.
+// The landmarks (when given) are then put back onto their targets by one more landmark flow
+// from where the dense steps left them, and steps 5-6 follow.
 #include <Eigen/Core>
+#include <vector>
 
 #include "vpm/json.hpp"
 #include "vpm/mesh.hpp"
 #include "vpm/surface_map.hpp"
 
 namespace vpm {
+
+/// The dense iterations of a registration with a template (see the top of this header).
+struct SphereMatchOptions {
+  /// Gauss-Newton iterations at most per level (0: none, landmarks only).
+  int iterations = 8;
+  /// Gaussian widths of the levels (chord length), coarse first; each level's centres are the
+  /// vertices of the icosphere whose edges are at most the width (42, 162, 642 for these).
+  std::vector<double> widths = {0.56, 0.28, 0.14};
+  double smoothing = 0.5;  ///< the scalars' smoothing scale, x the level's width
+  double ridge = 0.05;     ///< the smoothness weight mu, relative to the data term
+  double max_move = 0.25;  ///< the largest vertex move of one iteration, x the level's width
+};
+
+/// The template of a dense registration: a surface mapped to the sphere and its per-vertex
+/// scalar (the subject's counterpart is registered onto it).
+struct SphereTemplate {
+  Points sphere;           ///< m x 3 on the unit sphere
+  Triangles faces;         ///< outward-oriented, fold-free on the sphere
+  Eigen::VectorXd values;  ///< length m
+};
+
+/// One level of the dense iterations.
+struct SphereMatchLevel {
+  double width = 0;
+  int centres = 0, iterations = 0;
+  double mismatch_before = 0, mismatch_after = 0;  ///< area-weighted mean squared residual of the level's standardised scalars
+};
+
+/// What the dense iterations did (empty levels: none ran).
+struct SphereMatchReport {
+  std::vector<SphereMatchLevel> levels;
+  /// Area-weighted correlation of the subject's scalar with the template's at the subject's
+  /// vertices (both unsmoothed), before and after the dense iterations.
+  double correlation_before = 0, correlation_after = 0;
+  double seconds = 0;
+};
 
 struct SurfaceRegistrationOptions {
   int steps = 32;  ///< K: RK4 steps over t in [0, 1]
@@ -43,6 +100,7 @@ struct SurfaceRegistrationOptions {
   /// held still, until the face area mean |r - 1| is at most restore_tolerance.
   int restore_rounds = 30;
   double restore_tolerance = 0.001;
+  SphereMatchOptions match{};  ///< the dense iterations (with a template)
 };
 
 struct SurfaceRegistrationResult {
@@ -56,6 +114,7 @@ struct SurfaceRegistrationResult {
   int restore_rounds = 0, held_vertices = 0;           ///< the restoration's steps, vertices held still
   int repaired_faces = 0;                              ///< faces the flow flipped, repaired before it
   SurfaceMetrics metrics;                              ///< of `points` against the input
+  SphereMatchReport match;                             ///< the dense iterations (with a template)
   double seconds = 0;
 };
 
@@ -66,9 +125,20 @@ struct SurfaceRegistrationResult {
 SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangles& faces, const Points& landmarks,
                                              const Points& targets, const SurfaceRegistrationOptions& options = {});
 
+/// Dense registration: the subject's sphere map `sphere` (n x 3) with faces `faces` and its
+/// per-vertex scalar `values` (length n) registered onto `templ`'s, the landmarks (L x 3, L >= 0:
+/// none) moved exactly onto their targets as above. InputError for counts that differ, points
+/// off the sphere, scalars that are not finite or constant.
+SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangles& faces, const Eigen::VectorXd& values,
+                                             const SphereTemplate& templ, const Points& landmarks, const Points& targets,
+                                             const SurfaceRegistrationOptions& options = {});
+
 /// {"steps", "width", "width_factor", "rotation_angle_deg", "landmark_rms_error", "landmark_max_error",
 ///  "flow_landmark_max_error", "flow": to_json(SurfaceMetrics) (before the restoration),
-///  "restore": {"rounds", "held_vertices", "repaired_faces"}, "final": to_json(SurfaceMetrics), "timings_s": {"total"}}
+///  "restore": {"rounds", "held_vertices", "repaired_faces"}, "final": to_json(SurfaceMetrics),
+///  "match": {"correlation_before", "correlation_after", "levels": [{"width", "centres",
+///  "iterations", "mismatch_before", "mismatch_after"}], "seconds"} (dense registrations only),
+///  "timings_s": {"total"}}
 Json to_json(const SurfaceRegistrationResult& result, const SurfaceRegistrationOptions& options);
 
 }  // namespace vpm

@@ -1,11 +1,14 @@
 // vpm.map_to_sphere, vpm.map_to_disk and vpm.read_surface / vpm.write_surface: closed surfaces to
 // the sphere, disk-like ones to the disk
 // (vpm/surface_map.hpp), with the report as a typed object.
+#include <pybind11/stl.h>
+
 #include "common.hpp"
 #include "report.hpp"
 #include "vpm/error.hpp"
 #include "vpm/initial_map.hpp"
 #include "vpm/io.hpp"
+#include "vpm/locate.hpp"
 #include "vpm/surface_map.hpp"
 #include "vpm/surface_registration.hpp"
 #include "vpm/timing.hpp"
@@ -36,11 +39,20 @@ Triangles to_triangles(const py::handle& values, Eigen::Index vertices) {
 
 // vpm._register_on_sphere (vpm/surface_registration.hpp), its report a SurfaceMapReport whose
 // `initial` holds the metrics after the flow.
+// A (k,) float array-like of `n` values.
+Eigen::VectorXd to_values(const py::handle& values, Eigen::Index n, const char* what) {
+  const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(values);
+  if (!a || a.ndim() != 1 || a.shape(0) != n)
+    throw py::value_error(std::string(what) + ": expected " + std::to_string(n) + " values (one per vertex)");
+  return Eigen::Map<const Eigen::VectorXd>(a.data(), n);
+}
+
 void bind_sphere_registration(py::module_& m) {
   m.def(
       "_register_on_sphere",
       [](const py::object& vertices, const py::object& faces, const py::object& landmarks, const py::object& targets,
-         int steps, double width_factor, bool rigid, bool restore) {
+         int steps, double width_factor, bool rigid, bool restore, const py::object& values, const py::object& templ,
+         int iterations, const std::vector<double>& widths) {
         const Points v = to_points(vertices, "vertices");
         const Triangles f = to_triangles(faces, v.rows());
         const Points from = to_points(landmarks, "landmarks"), to = to_points(targets, "targets");
@@ -49,9 +61,24 @@ void bind_sphere_registration(py::module_& m) {
         o.width_factor = width_factor;
         o.rigid = rigid;
         if (!restore) o.restore_rounds = 0;
+        o.match.iterations = iterations;
+        if (!widths.empty()) o.match.widths = widths;
+        const bool dense = !templ.is_none();
+        if (dense != !values.is_none()) throw py::value_error("values and template: give both (a dense registration) or neither");
+        SphereTemplate t;
+        Eigen::VectorXd subject_values;
+        if (dense) {
+          const auto parts = templ.cast<py::tuple>();
+          if (parts.size() != 3) throw py::value_error("template: expected (vertices, faces, values)");
+          t.sphere = to_points(parts[0], "template vertices");
+          t.faces = to_triangles(parts[1], t.sphere.rows());
+          t.values = to_values(parts[2], t.sphere.rows(), "template values");
+          subject_values = to_values(values, v.rows(), "values");
+        }
         auto report = std::make_unique<SurfaceReport>();
         Points out = without_gil(nullptr, [&] {
-          SurfaceRegistrationResult r = register_on_sphere(v, f, from, to, o);
+          SurfaceRegistrationResult r = dense ? register_on_sphere(v, f, subject_values, t, from, to, o)
+                                              : register_on_sphere(v, f, from, to, o);
           report->seconds = r.seconds;
           report->json = to_json(r, o).dump(-1);
           report->initial = std::move(r.flow_metrics);
@@ -63,7 +90,24 @@ void bind_sphere_registration(py::module_& m) {
       },
       py::arg("vertices"), py::arg("faces"), py::arg("landmarks"), py::arg("targets"), py::kw_only(),
       py::arg("steps") = SurfaceRegistrationOptions{}.steps, py::arg("width_factor") = SurfaceRegistrationOptions{}.width_factor,
-      py::arg("rigid") = true, py::arg("restore") = true);
+      py::arg("rigid") = true, py::arg("restore") = true, py::arg("values") = py::none(), py::arg("template") = py::none(),
+      py::arg("iterations") = SphereMatchOptions{}.iterations, py::arg("widths") = std::vector<double>{});
+  m.def(
+      "_locate_on_sphere",
+      [](const py::object& vertices, const py::object& faces, const py::object& points) {
+        const Points v = to_points(vertices, "vertices");
+        const Triangles f = to_triangles(faces, v.rows());
+        const Points p = to_points(points, "points");
+        std::vector<SphereLocation> loc = without_gil(nullptr, [&] { return SphereLocator(v, f).locate_all(p); });
+        Eigen::Matrix<int, Eigen::Dynamic, 1> face(p.rows());
+        Points bary(p.rows(), 3);
+        for (Eigen::Index i = 0; i < p.rows(); ++i) {
+          face(i) = loc[static_cast<size_t>(i)].face;
+          for (int k = 0; k < 3; ++k) bary(i, k) = loc[static_cast<size_t>(i)].bary[k];
+        }
+        return py::make_tuple(owned_array(std::move(face)), owned_array(std::move(bary)));
+      },
+      py::arg("vertices"), py::arg("faces"), py::arg("points"));
 }
 
 }  // namespace

@@ -29,7 +29,7 @@ from . import _vpm
 
 __all__ = ["Mesh", "Image", "Elements", "ElementTable", "Comparison", "NumericalError", "MapReport",
            "InitialMapReport", "RegistrationReport", "MapMetrics", "RatioStats", "Report", "SurfaceMapReport",
-           "SurfaceMetrics", "read_surface", "read_overlay", "write_surface", "map_to_sphere", "map_to_disk", "register_on_sphere",
+           "SurfaceMetrics", "read_surface", "read_overlay", "write_surface", "map_to_sphere", "map_to_disk", "register_on_sphere", "locate_on_sphere",
            "read_mesh", "write_mesh", "validate", "read_image", "write_nifti", "image", "mesh_image",
            "initial_map", "map_to_ball", "register", "elements", "sample", "compare", "read_table",
            "to_native", "to_image", "read_label_names", "devices", "select_device", "device_name"]
@@ -160,17 +160,23 @@ def map_to_disk(vertices, faces, *, progress=None, **options):
     return _call(_vpm._map_to_sphere, progress, "map", vertices, faces, disk=True, **options)
 
 
-def register_on_sphere(vertices, faces, landmarks, targets, **options):
+def register_on_sphere(vertices, faces, landmarks=None, targets=None, *, values=None, template=None, **options):
     """Registers a surface mapped to the unit sphere (map_to_sphere's points) by moving
     `landmarks` onto `targets` ((L, 3) points on the sphere) with a surface-divergence-free flow,
     the face areas then restored: `vpm register SPHERE`. Either may also be (L,) vertex ids of
-    `vertices` (their positions). Options: steps (RK4 steps, 32),
-    width_factor (0: chosen by leave-one-out), rigid (True: the best rotation first), restore (True).
+    `vertices` (their positions). With `values` (the subject's per-vertex scalar, for example
+    curvature) and `template` ((vertices, faces, values) of a template mapped to the sphere), dense
+    iterations pull the subject's scalar onto the template's (landmarks then optional).
+    Options: steps (RK4 steps, 32), width_factor (0: chosen by leave-one-out), rigid (True: the
+    best rotation first), restore (True), iterations (dense Gauss-Newton steps per level, 8),
+    widths (the dense levels' Gaussian widths, coarse first).
 
     Returns (points, report): (n, 3) unit vectors (the input's rows) and a vpm.SurfaceMapReport
     whose `initial` holds the metrics after the flow and `final` after the restoration (against
     the input sphere); report.to_dict() holds landmark_rms_error and landmark_max_error."""
     vertices = np.asarray(vertices, dtype=np.float64)
+    if landmarks is None and targets is None:
+        landmarks = targets = np.zeros((0, 3))
     landmarks, targets = (np.asarray(a) for a in (landmarks, targets))
     for name, a in (("landmarks", landmarks), ("targets", targets)):
         if a.ndim == 1 and a.size and np.issubdtype(a.dtype, np.integer):
@@ -180,7 +186,15 @@ def register_on_sphere(vertices, faces, landmarks, targets, **options):
         landmarks = vertices[landmarks]
     if targets.ndim == 1 and np.issubdtype(targets.dtype, np.integer):
         targets = vertices[targets]
-    return _vpm._register_on_sphere(vertices, faces, landmarks, targets, **options)
+    return _vpm._register_on_sphere(vertices, faces, landmarks, targets, values=values, template=template, **options)
+
+
+def locate_on_sphere(vertices, faces, points):
+    """Where directions lie on a triangulation of the unit sphere (a sphere map): for each of
+    `points` ((k, 3)) the face whose cone from the centre holds it and its barycentric
+    coordinates there. Returns (faces (k,), bary (k, 3)); for resampling per-vertex values of one
+    sphere map at another's vertices: (values[faces_array[face]] * bary).sum(1)."""
+    return _vpm._locate_on_sphere(vertices, faces, points)
 
 
 def register(mesh, *, landmarks=None, targets=None, template=None, image=None, template_image=None, progress=None,
