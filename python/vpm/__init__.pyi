@@ -175,9 +175,13 @@ def map_to_sphere(vertices: ArrayLike, faces: ArrayLike, *, progress: Progress =
 def map_to_disk(vertices: ArrayLike, faces: ArrayLike, *, progress: Progress = ..., rounds: int = ...,
                 tolerance: float = ..., max_seconds: float = ...,
                 source: str = ...) -> tuple[np.ndarray, SurfaceMapReport]: ...
-def register_on_sphere(vertices: ArrayLike, faces: ArrayLike, landmarks: ArrayLike, targets: ArrayLike, *,
+def register_on_sphere(vertices: ArrayLike, faces: ArrayLike, landmarks: Optional[ArrayLike] = ...,
+                       targets: Optional[ArrayLike] = ..., *, values: Optional[ArrayLike] = ...,
+                       template: Optional[tuple[ArrayLike, ArrayLike, ArrayLike]] = ...,
                        steps: int = ..., width_factor: float = ..., rigid: bool = ...,
-                       restore: bool = ...) -> tuple[np.ndarray, SurfaceMapReport]: ...
+                       restore: bool = ..., iterations: int = ...,
+                       widths: Sequence[float] = ...) -> tuple[np.ndarray, SurfaceMapReport]: ...
+def locate_on_sphere(vertices: ArrayLike, faces: ArrayLike, points: ArrayLike) -> tuple[np.ndarray, np.ndarray]: ...
 def register(mesh: Mesh, *, landmarks: Optional[ArrayLike] = ..., targets: Optional[ArrayLike] = ...,
              template: Optional[Mesh] = ..., image: Optional[ImageLike] = ..., template_image: Optional[ImageLike] = ...,
              template_landmarks: Literal["regions", "moments"] = ..., exclude_labels: Sequence[int] = ...,

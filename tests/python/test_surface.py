@@ -158,3 +158,28 @@ def test_register_on_sphere(vpm, tmp_path):
     assert np.abs(same - sphere).max() <= 1e-12
     with pytest.raises(ValueError, match="not on the unit sphere"):
         vpm.register_on_sphere(2 * sphere, f, src, tgt)
+
+
+def test_dense_register_on_sphere(vpm, tmp_path):
+    """A scalar's rotation recovered by the dense registration onto a template (the same surface
+    rotated on the sphere, its scalar carried along); locate_on_sphere against the vertices."""
+    v, f = bumpy_ellipsoid(vpm, tmp_path)
+    sphere, _ = vpm.map_to_sphere(v, f)
+    faces_at, bary = vpm.locate_on_sphere(sphere, f, sphere[:50] * 3.0)  # any length: a direction
+    rebuilt = (sphere[f[faces_at]] * bary[:, :, None]).sum(1)
+    assert np.allclose(rebuilt, sphere[:50], atol=1e-12)
+    c, s = np.cos(0.2), np.sin(0.2)
+    rot = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+    waves = np.array([[3, 0, 1, 0.2], [0, 4, -2, 1.1], [-2, 1, 5, 2.3], [5, -4, 0, 0.4], [1, 6, 3, 1.7]])
+    values = np.sin(sphere @ waves[:, :3].T + waves[:, 3]).sum(1)  # plane waves crossing everywhere
+    truth = sphere @ rot.T
+    reg, report = vpm.register_on_sphere(sphere, f, values=values, template=(truth, f, values))
+    d = report.to_dict()
+    assert d["match"]["correlation_after"] > 0.99 > d["match"]["correlation_before"]
+    angle = lambda a, b: np.arccos(np.clip((a * b).sum(1), -1, 1)).mean()  # noqa: E731
+    assert angle(reg, truth) < 0.35 * angle(sphere, truth)
+    assert report.final.flipped_faces == 0
+    with pytest.raises(ValueError, match="give both"):
+        vpm.register_on_sphere(sphere, f, values=values)
+    with pytest.raises(ValueError, match="one per vertex"):
+        vpm.register_on_sphere(sphere, f, values=values[:5], template=(truth, f, values))
