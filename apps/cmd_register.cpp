@@ -278,7 +278,7 @@ int run(const cli::Command& self, const std::vector<std::string>& argv) {
 }
 
 vpm::cli::Registrar reg(cli::with_expert(cli::with_dense_options(
-    {"register", "MAPPED -o OUT (--landmarks SRC.csv --targets DST.csv | --template TEMPLATE.vtu)", "register a mapped mesh (or a surface mapped to the sphere): move landmarks to targets by a divergence-free flow",
+    {"register", "MAPPED -o OUT (--landmarks SRC.csv --targets DST.csv | --template TEMPLATE.vtu)", "register a mapped mesh (or a surface mapped to the sphere or the disk): move landmarks to targets by a divergence-free flow",
      {{"--landmarks", "SRC.csv", "landmarks in MAPPED's ball (x,y,z or vertex_id a line)", false, 0, true},
       {"--targets", "DST.csv", "their targets, paired line by line", false, 0, true},
       {"--template", "TEMPLATE.vtu", "instead of the two files: the centroids of the atlas regions (cell field label) MAPPED shares with this mapped template (surfaces: a surface mapped to the sphere, with --overlay and --template-overlay; the landmarks then optional)", false, 0, true},

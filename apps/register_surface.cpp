@@ -14,6 +14,7 @@
 #include "vpm/io.hpp"
 #include "vpm/json.hpp"
 #include "vpm/landmarks.hpp"
+#include "vpm/surface_map.hpp"
 #include "vpm/surface_registration.hpp"
 
 namespace vpm::cli {
@@ -30,14 +31,29 @@ constexpr const char* kSurfaceOptions[] = {"-o", "--landmarks", "--targets", "--
 
 // A surface mapped to the sphere: every vertex within 1e-4 of it (put on it exactly), else
 // InputError naming `path` and the vertex.
-TriSurface read_sphere(const std::string& path) {
-  TriSurface surface = read_surface(path);
+TriSurface read_sphere(const std::string& path, TriSurface surface) {
   for (Eigen::Index i = 0; i < surface.vertices.rows(); ++i) {
     const double r = surface.vertices.row(i).norm();
     if (!(std::abs(r - 1) <= 1e-4))
       throw InputError(path + ": vertex " + std::to_string(i) + " is not on the unit sphere (|x| = " + std::to_string(r) +
                        "); map the surface first: vpm map SURFACE -o SPHERE.gii");
     surface.vertices.row(i) /= r;  // float files: vertex_id landmarks then lie on the sphere too
+  }
+  return surface;
+}
+TriSurface read_sphere(const std::string& path) { return read_sphere(path, read_surface(path)); }
+
+// A surface mapped to the disk (one boundary loop): z = 0 and |x| <= 1 within 1e-4 (put there
+// exactly), else InputError naming `path` and the vertex.
+TriSurface read_disk(const std::string& path, TriSurface surface) {
+  for (Eigen::Index i = 0; i < surface.vertices.rows(); ++i) {
+    const double r = surface.vertices.row(i).head<2>().norm(), z = surface.vertices(i, 2);
+    if (!(std::abs(z) <= 1e-4 && r <= 1 + 1e-4))
+      throw InputError(path + ": vertex " + std::to_string(i) + " is not in the unit disk (x, y, z = " +
+                       std::to_string(surface.vertices(i, 0)) + ", " + std::to_string(surface.vertices(i, 1)) + ", " +
+                       std::to_string(z) + "); map the surface first: vpm map SURFACE -o DISK.gii");
+    surface.vertices(i, 2) = 0;
+    if (r > 1) surface.vertices.row(i).head<2>() /= r;
   }
   return surface;
 }
@@ -105,7 +121,11 @@ int register_surface(const Args& args, const std::string& in, const std::string&
   if (!is_surface_output_path(out))
     throw InputError(out + ": unknown output extension for a surface (expected .vtp, .gii, .off, .obj, .stl or a FreeSurfer name)");
   auto t0 = Clock::now();
-  const TriSurface surface = read_sphere(in);
+  TriSurface input = read_surface(in);
+  const SurfaceDomain domain = surface_domain(input);
+  if (domain == SurfaceDomain::disk && args.has("--template"))
+    throw InputError("--template: the dense registration is on the sphere only; " + in + " is mapped to the disk (it has a boundary loop)");
+  const TriSurface surface = domain == SurfaceDomain::disk ? read_disk(in, std::move(input)) : read_sphere(in, std::move(input));
   LandmarkFile from, to;
   const auto src = args.get("--landmarks"), dst = args.get("--targets"), templ = args.get("--template");
   if (src) {
@@ -128,7 +148,8 @@ int register_surface(const Args& args, const std::string& in, const std::string&
   SurfaceRegistrationResult r;
   try {
     r = t ? register_on_sphere(surface.vertices, surface.triangles, values, *t, from.points, to.points, opt)
-          : register_on_sphere(surface.vertices, surface.triangles, from.points, to.points, opt);
+          : domain == SurfaceDomain::disk ? register_in_disk(surface.vertices, surface.triangles, from.points, to.points, opt)
+                                          : register_on_sphere(surface.vertices, surface.triangles, from.points, to.points, opt);
   } catch (const InputError& e) {
     throw InputError((src ? *src + ", " + *dst : in + ", " + *templ) + ": " + e.what());
   }
@@ -143,7 +164,7 @@ int register_surface(const Args& args, const std::string& in, const std::string&
   registered.cell_data.push_back({"face_area_ratio", r.metrics.face_ratio, false});
   t0 = Clock::now();
   write_surface(out, registered);
-  info("registered on the sphere: landmark rms error " + strprintf("%.2e", r.landmark_rms_error) + " (max " +
+  info(std::string("registered ") + (domain == SurfaceDomain::disk ? "in the disk" : "on the sphere") + ": landmark rms error " + strprintf("%.2e", r.landmark_rms_error) + " (max " +
        strprintf("%.2e", r.landmark_max_error) + ")" +
        (t ? strprintf(", scalar correlation %.3f -> %.3f", r.match.correlation_before, r.match.correlation_after) : "") +
        ", face area mean |r-1| " + strprintf("%.3f %%", 100 * r.metrics.face_area_ratio.mean_abs_dev) + " (flow " +
@@ -151,6 +172,7 @@ int register_surface(const Args& args, const std::string& in, const std::string&
        std::to_string(r.metrics.flipped_faces) + " flipped faces; wrote " + out);
   if (const auto report_path = args.get("--report")) {
     Json report = report_json(in, surface, templ, from.points.rows(), r, opt);
+    report["domain"] = to_string(domain);
     report["timings_s"] = Json::object();
     report["timings_s"]["read"] = t_read;
     report["timings_s"]["register"] = r.seconds;

@@ -1,7 +1,9 @@
 #pragma once
 // `vpm register SPHERE -o OUT --landmarks SRC.csv --targets DST.csv`: a surface mapped to the
-// unit sphere (by `vpm map SURFACE`) registered by landmarks with its face areas kept
-// (vpm/surface_registration.hpp). cmd_register.cpp hands it every input that is a surface.
+// unit sphere or the unit disk (by `vpm map SURFACE`) registered by landmarks with its face areas
+// kept, on the sphere also onto a template by a per-vertex scalar (`--template --overlay
+// --template-overlay`; vpm/surface_registration.hpp). cmd_register.cpp hands it every input that
+// is a surface.
 #include <string>
 
 #include "cli.hpp"

@@ -12,6 +12,7 @@
 #include "vpm/icosphere.hpp"
 #include "vpm/io.hpp"
 #include "vpm/json.hpp"
+#include "vpm/surface_map.hpp"
 #include "vpm/surface_registration.hpp"
 
 using namespace vpm;
@@ -155,4 +156,92 @@ TEST_CASE("vpm register SPHERE: landmarks by vertex id onto targets, report, tet
   CHECK_THAT(slurp(dir + "/err.txt"), Catch::Contains("is not on the unit sphere") && Catch::Contains("vpm map SURFACE"));
   CHECK(run_status(vpm_bin + " register " + dir + "/sphere.off -o " + dir + "/x.vtu" + args + " 2>" + dir + "/err.txt") == 2);
   CHECK(!std::filesystem::exists(dir + "/x.vtp"));
+}
+
+namespace {
+
+// The part of an icosphere below z = 0.3 stretched (a disk topologically), mapped to the unit disk.
+TriSurface disk_map_of_cap(int level) {
+  const TriSurface s = icosphere(level);
+  std::vector<int> index(static_cast<size_t>(s.vertices.rows()), -1);
+  std::vector<Eigen::RowVector3i> kept;
+  TriSurface cap;
+  for (Eigen::Index t = 0; t < s.triangles.rows(); ++t) {
+    bool in = true;
+    for (int k = 0; k < 3; ++k) in = in && s.vertices(s.triangles(t, k), 2) < 0.3;
+    if (in) kept.push_back(s.triangles.row(t));
+  }
+  std::vector<Eigen::RowVector3d> points;
+  for (auto& t : kept)
+    for (int k = 0; k < 3; ++k) {
+      int& id = index[static_cast<size_t>(t(k))];
+      if (id < 0) id = static_cast<int>(points.size()), points.push_back(s.vertices.row(t(k)).cwiseProduct(Eigen::RowVector3d(1.4, 1, 0.7)));
+      t(k) = id;
+    }
+  cap.vertices.resize(static_cast<Eigen::Index>(points.size()), 3);
+  for (size_t i = 0; i < points.size(); ++i) cap.vertices.row(static_cast<Eigen::Index>(i)) = points[i];
+  cap.triangles.resize(static_cast<Eigen::Index>(kept.size()), 3);
+  for (size_t t = 0; t < kept.size(); ++t) cap.triangles.row(static_cast<Eigen::Index>(t)) = kept[t];
+  cap.vertices = map_to_disk(cap).sphere;
+  return cap;
+}
+
+// An area-preserving swirl of the disk: each circle of radius r turned by 0.3 sin(pi r).
+Eigen::Vector3d swirl(const Eigen::Vector3d& x) {
+  const double r = x.head<2>().norm();
+  return Eigen::AngleAxisd(0.3 * std::sin(M_PI * r), Eigen::Vector3d::UnitZ()) * x;
+}
+
+}  // namespace
+
+TEST_CASE("disk registration: landmarks exact, a swirl recovered, areas kept, the circle kept, edge landmarks refused") {
+  const TriSurface d = disk_map_of_cap(4);
+  Points from(12, 3), to(12, 3);
+  int found = 0;
+  for (Eigen::Index i = 0; i < d.vertices.rows() && found < 12; i += 97)
+    if (d.vertices.row(i).norm() < 0.9) {
+      from.row(found) = d.vertices.row(i);
+      to.row(found++) = swirl(d.vertices.row(i).transpose()).transpose();
+    }
+  REQUIRE(found == 12);
+  const SurfaceRegistrationResult r = register_in_disk(d.vertices, d.triangles, from, to);
+  CHECK(r.landmark_max_error <= 1e-10);
+  CHECK(r.metrics.flipped_faces == 0);
+  CHECK(r.metrics.face_area_ratio.mean_abs_dev <= 0.005);
+  CHECK(r.metrics.max_radius_error <= 1e-12);  // the boundary loop on the circle
+  double moved = 0, error = 0;
+  for (Eigen::Index i = 0; i < d.vertices.rows(); ++i) {
+    const Eigen::Vector3d truth = swirl(d.vertices.row(i).transpose());
+    moved += (truth - d.vertices.row(i).transpose()).norm();
+    error += (truth - r.points.row(i).transpose()).norm();
+    REQUIRE(r.points.row(i).head<2>().norm() <= 1 + 1e-12);
+    REQUIRE(r.points(i, 2) == 0);
+  }
+  CHECK(error < 0.3 * moved);
+  const SurfaceRegistrationResult self = register_in_disk(d.vertices, d.triangles, from, from);
+  CHECK((self.points - d.vertices).cwiseAbs().maxCoeff() <= 1e-12);
+  Points edge = to;
+  edge.row(0) = Eigen::RowVector3d(1, 0, 0);
+  CHECK_THROWS_WITH(register_in_disk(d.vertices, d.triangles, from, edge), Catch::Contains("strictly inside the unit disk"));
+  CHECK_THROWS_AS(register_in_disk(2 * d.vertices, d.triangles, from, to), InputError);
+
+  const std::string dir = vpm::test::fresh_dir("register_disk");
+  write_surface(dir + "/disk.gii", d);
+  {
+    std::ofstream src(dir + "/src.csv"), dst(dir + "/dst.csv");
+    src.precision(17);
+    dst.precision(17);
+    for (int i = 0; i < 12; ++i) {
+      src << from(i, 0) << "," << from(i, 1) << ",0\n";
+      dst << to(i, 0) << "," << to(i, 1) << ",0\n";
+    }
+  }
+  const std::string cmd = std::string(VPM_BINARY) + " register " + dir + "/disk.gii -o " + dir + "/reg.vtp --landmarks " + dir +
+                          "/src.csv --targets " + dir + "/dst.csv";
+  REQUIRE(run_status(cmd + " --report " + dir + "/r.json 2>" + dir + "/err.txt") == 0);
+  Json rep = Json::parse(slurp(dir + "/r.json"));
+  CHECK(rep["domain"].string() == "disk");
+  CHECK(rep["landmark_max_error"].number() <= 1e-6);  // the .gii holds the disk in float32
+  CHECK(run_status(cmd + " --template " + dir + "/disk.gii --overlay x --template-overlay y 2>" + dir + "/err.txt") == 2);
+  CHECK_THAT(slurp(dir + "/err.txt"), Catch::Contains("on the sphere only"));
 }

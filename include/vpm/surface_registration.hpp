@@ -125,6 +125,17 @@ struct SurfaceRegistrationResult {
 SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangles& faces, const Points& landmarks,
                                              const Points& targets, const SurfaceRegistrationOptions& options = {});
 
+/// Registers a surface mapped to the unit disk (vpm::map_to_disk's points: z = 0, the boundary
+/// loop on the circle) by moving `landmarks` onto `targets` (L x 3, z = 0, both strictly inside
+/// the disk, |x| <= 0.999): the steps above in the plane. The rigid step is the rotation about the
+/// centre; the pathlines are straight; the field is v = J grad psi (J the quarter turn) with the
+/// stream function psi(x) = (1 - |x|^2) sum_j b_j . grad_y [(1 - |y|^2) exp(-lambda |x - y|^2)]
+/// at y = y_j, zero on the circle: divergence-free and tangent to the circle, so boundary vertices
+/// slide along it and interior ones stay inside (the boundary loop is put back on the circle
+/// against round-off). InputError for points outside the disk or landmarks on its edge.
+SurfaceRegistrationResult register_in_disk(const Points& disk, const Triangles& faces, const Points& landmarks,
+                                           const Points& targets, const SurfaceRegistrationOptions& options = {});
+
 /// Dense registration: the subject's sphere map `sphere` (n x 3) with faces `faces` and its
 /// per-vertex scalar `values` (length n) registered onto `templ`'s, the landmarks (L x 3, L >= 0:
 /// none) moved exactly onto their targets as above. InputError for counts that differ, points

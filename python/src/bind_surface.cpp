@@ -92,6 +92,39 @@ void bind_sphere_registration(py::module_& m) {
       py::arg("steps") = SurfaceRegistrationOptions{}.steps, py::arg("width_factor") = SurfaceRegistrationOptions{}.width_factor,
       py::arg("rigid") = true, py::arg("restore") = true, py::arg("values") = py::none(), py::arg("template") = py::none(),
       py::arg("iterations") = SphereMatchOptions{}.iterations, py::arg("widths") = std::vector<double>{});
+}
+
+void bind_disk_registration(py::module_& m) {
+  m.def(
+      "_register_in_disk",
+      [](const py::object& vertices, const py::object& faces, const py::object& landmarks, const py::object& targets,
+         int steps, double width_factor, bool rigid, bool restore) {
+        const Points v = to_points(vertices, "vertices");
+        const Triangles f = to_triangles(faces, v.rows());
+        const Points from = to_points(landmarks, "landmarks"), to = to_points(targets, "targets");
+        SurfaceRegistrationOptions o;
+        o.steps = steps;
+        o.width_factor = width_factor;
+        o.rigid = rigid;
+        if (!restore) o.restore_rounds = 0;
+        auto report = std::make_unique<SurfaceReport>();
+        Points out = without_gil(nullptr, [&] {
+          SurfaceRegistrationResult r = register_in_disk(v, f, from, to, o);
+          report->seconds = r.seconds;
+          report->json = to_json(r, o).dump(-1);
+          report->initial = std::move(r.flow_metrics);
+          report->final = std::move(r.metrics);
+          report->converged = r.landmark_max_error <= 5e-4 && report->final.flipped_faces == 0;
+          return std::move(r.points);
+        });
+        return py::make_tuple(owned_array(std::move(out)), std::move(report));
+      },
+      py::arg("vertices"), py::arg("faces"), py::arg("landmarks"), py::arg("targets"), py::kw_only(),
+      py::arg("steps") = SurfaceRegistrationOptions{}.steps, py::arg("width_factor") = SurfaceRegistrationOptions{}.width_factor,
+      py::arg("rigid") = true, py::arg("restore") = true);
+}
+
+void bind_sphere_locator(py::module_& m) {
   m.def(
       "_locate_on_sphere",
       [](const py::object& vertices, const py::object& faces, const py::object& points) {
@@ -162,6 +195,8 @@ void bind_surface(py::module_& m) {
       py::arg("max_seconds") = 0.0, py::arg("source") = "surface", py::arg("disk") = false,
       py::arg("progress") = py::none());
   bind_sphere_registration(m);
+  bind_disk_registration(m);
+  bind_sphere_locator(m);
   m.def(
       "_read_surface",
       [](const std::string& path) {

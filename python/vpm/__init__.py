@@ -29,7 +29,7 @@ from . import _vpm
 
 __all__ = ["Mesh", "Image", "Elements", "ElementTable", "Comparison", "NumericalError", "MapReport",
            "InitialMapReport", "RegistrationReport", "MapMetrics", "RatioStats", "Report", "SurfaceMapReport",
-           "SurfaceMetrics", "read_surface", "read_overlay", "write_surface", "map_to_sphere", "map_to_disk", "register_on_sphere", "locate_on_sphere",
+           "SurfaceMetrics", "read_surface", "read_overlay", "write_surface", "map_to_sphere", "map_to_disk", "register_on_sphere", "register_in_disk", "locate_on_sphere",
            "read_mesh", "write_mesh", "validate", "read_image", "write_nifti", "image", "mesh_image",
            "initial_map", "map_to_ball", "register", "elements", "sample", "compare", "read_table",
            "to_native", "to_image", "read_label_names", "devices", "select_device", "device_name"]
@@ -177,16 +177,29 @@ def register_on_sphere(vertices, faces, landmarks=None, targets=None, *, values=
     vertices = np.asarray(vertices, dtype=np.float64)
     if landmarks is None and targets is None:
         landmarks = targets = np.zeros((0, 3))
-    landmarks, targets = (np.asarray(a) for a in (landmarks, targets))
-    for name, a in (("landmarks", landmarks), ("targets", targets)):
-        if a.ndim == 1 and a.size and np.issubdtype(a.dtype, np.integer):
-            if a.min() < 0 or a.max() >= len(vertices):
-                raise ValueError(f"{name}: vertex id out of range 0..{len(vertices) - 1}")
-    if landmarks.ndim == 1 and np.issubdtype(landmarks.dtype, np.integer):
-        landmarks = vertices[landmarks]
-    if targets.ndim == 1 and np.issubdtype(targets.dtype, np.integer):
-        targets = vertices[targets]
+    landmarks, targets = (_vertex_rows(vertices, a, name) for a, name in ((landmarks, "landmarks"), (targets, "targets")))
     return _vpm._register_on_sphere(vertices, faces, landmarks, targets, values=values, template=template, **options)
+
+
+def register_in_disk(vertices, faces, landmarks, targets, **options):
+    """Registers a surface mapped to the unit disk (map_to_disk's points) by moving `landmarks`
+    onto `targets` ((L, 3) points with z = 0 strictly inside the disk, or (L,) vertex ids) with a
+    divergence-free flow tangent to the circle, the face areas then restored: `vpm register DISK`.
+    Options as register_on_sphere's landmark ones (steps, width_factor, rigid, restore). Returns
+    (points, report) as register_on_sphere."""
+    vertices = np.asarray(vertices, dtype=np.float64)
+    landmarks, targets = (_vertex_rows(vertices, a, name) for a, name in ((landmarks, "landmarks"), (targets, "targets")))
+    return _vpm._register_in_disk(vertices, faces, landmarks, targets, **options)
+
+
+def _vertex_rows(vertices, a, name):
+    """(L,) integer vertex ids -> their rows of `vertices`; points as they are."""
+    a = np.asarray(a)
+    if a.ndim == 1 and np.issubdtype(a.dtype, np.integer):
+        if a.size and (a.min() < 0 or a.max() >= len(vertices)):
+            raise ValueError(f"{name}: vertex id out of range 0..{len(vertices) - 1}")
+        return vertices[a]
+    return a
 
 
 def locate_on_sphere(vertices, faces, points):

@@ -181,6 +181,9 @@ def register_on_sphere(vertices: ArrayLike, faces: ArrayLike, landmarks: Optiona
                        steps: int = ..., width_factor: float = ..., rigid: bool = ...,
                        restore: bool = ..., iterations: int = ...,
                        widths: Sequence[float] = ...) -> tuple[np.ndarray, SurfaceMapReport]: ...
+def register_in_disk(vertices: ArrayLike, faces: ArrayLike, landmarks: ArrayLike, targets: ArrayLike, *,
+                     steps: int = ..., width_factor: float = ..., rigid: bool = ...,
+                     restore: bool = ...) -> tuple[np.ndarray, SurfaceMapReport]: ...
 def locate_on_sphere(vertices: ArrayLike, faces: ArrayLike, points: ArrayLike) -> tuple[np.ndarray, np.ndarray]: ...
 def register(mesh: Mesh, *, landmarks: Optional[ArrayLike] = ..., targets: Optional[ArrayLike] = ...,
              template: Optional[Mesh] = ..., image: Optional[ImageLike] = ..., template_image: Optional[ImageLike] = ...,

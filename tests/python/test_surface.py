@@ -115,6 +115,18 @@ def test_map_to_disk(vpm):
     assert np.all(disk[:, 2] == 0) and np.linalg.norm(disk[:, :2], axis=1).max() <= 1 + 1e-12
     with pytest.raises(ValueError, match="closed"):
         vpm.map_to_disk(*bumpy_ellipsoid(vpm, None))
+    # registered in the disk: landmarks (vertex ids) onto targets turned about the centre by up
+    # to 0.15 rad, exact, no face flipped, the boundary on the circle
+    inner = np.where(np.linalg.norm(disk[:, :2], axis=1) < 0.8)[0][::25]
+    turn = 0.15 * np.sin(np.pi * np.linalg.norm(disk[inner, :2], axis=1))
+    c, s = np.cos(turn), np.sin(turn)
+    targets = np.column_stack([c * disk[inner, 0] - s * disk[inner, 1], s * disk[inner, 0] + c * disk[inner, 1], 0 * c])
+    reg, rep = vpm.register_in_disk(disk, np.array(faces), inner, targets)
+    assert rep.to_dict()["landmark_max_error"] <= 1e-10
+    assert rep.final.flipped_faces == 0
+    assert np.linalg.norm(reg[:, :2], axis=1).max() <= 1 + 1e-12
+    with pytest.raises(ValueError, match="strictly inside"):
+        vpm.register_in_disk(disk, np.array(faces), inner[:2], np.array([[1.0, 0, 0], [0, 0.5, 0]]))
 
 
 def test_overlays_against_nibabel(vpm, tmp_path):

@@ -1,0 +1,288 @@
+// Area-preserving landmark registration in the unit disk (vpm/surface_registration.hpp,
+// register_in_disk): straight pathlines, the divergence-free field tangent to the circle fitted
+// to them at each RK4 stage, the last step onto the targets, the repair and the restoration.
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "core/parallel.hpp"
+#include "map/surface_area.hpp"
+#include "map/surface_polish.hpp"
+#include "vpm/error.hpp"
+#include "vpm/surface_registration.hpp"
+#include "vpm/timing.hpp"
+
+namespace vpm {
+
+namespace {
+
+using Eigen::Matrix2d;
+using Eigen::Vector2d;
+
+constexpr double kWidthFactors[] = {0.5, 1, 1.5, 2, 3, 4};
+constexpr double kCutoff = 40;        // lambda |x - y|^2 beyond this: below 1e-17 of the peak
+constexpr double kMaxRadius = 0.999;  // landmarks and targets strictly inside the disk
+const Matrix2d kJ = (Matrix2d() << 0, 1, -1, 0).finished();  // v = J grad psi
+
+// M(x, y) = grad_x grad_y^T of the stream-function kernel s(x) s(y) exp(-lambda |x - y|^2),
+// s(x) = 1 - |x|^2: zero on the circle, so every field J sum_j M(x, y_j) b_j is divergence-free
+// and tangent to the circle (the stream function is constant there).
+Matrix2d stream_hessian(const Vector2d& x, const Vector2d& y, double lambda) {
+  const Vector2d r = x - y;
+  const double k = std::exp(-lambda * r.squaredNorm()), sx = 1 - x.squaredNorm(), sy = 1 - y.squaredNorm();
+  return k * (4 * x * y.transpose() - 4 * lambda * sy * x * r.transpose() + 4 * lambda * sx * r * y.transpose() +
+              sx * sy * (2 * lambda * Matrix2d::Identity() - 4 * lambda * lambda * r * r.transpose()));
+}
+
+struct DiskField {
+  double lambda = 1;
+  std::vector<Vector2d> centres, weights;  // y_j, b_j
+  Vector2d operator()(const Vector2d& x) const {
+    Vector2d w = Vector2d::Zero();
+    for (size_t j = 0; j < centres.size(); ++j)
+      if (lambda * (x - centres[j]).squaredNorm() <= kCutoff) w += stream_hessian(x, centres[j], lambda) * weights[j];
+    return kJ * w;
+  }
+};
+
+// G_ij = J M(y_i, y_j) J^T: symmetric positive definite (the kernel of a derivative of a
+// positive definite kernel), so c = G^-1 u and b_j = J^T c_j interpolate.
+Eigen::MatrixXd gram(const std::vector<Vector2d>& at, double lambda) {
+  const int L = static_cast<int>(at.size());
+  Eigen::MatrixXd G(2 * L, 2 * L);
+  for (int i = 0; i < L; ++i)
+    for (int j = 0; j < L; ++j) G.block<2, 2>(2 * i, 2 * j) = kJ * stream_hessian(at[i], at[j], lambda) * kJ.transpose();
+  G.diagonal().array() += 1e-13 * G.diagonal().maxCoeff();
+  return G;
+}
+
+Eigen::LLT<Eigen::MatrixXd> factor(const Eigen::MatrixXd& G) {
+  Eigen::LLT<Eigen::MatrixXd> llt(G);
+  if (llt.info() != Eigen::Success)
+    throw NumericalError("disk registration: the landmark field's Gram matrix is not positive definite (landmarks closer than round-off?)");
+  return llt;
+}
+
+Eigen::VectorXd stacked(const std::vector<Vector2d>& u) {
+  Eigen::VectorXd b(2 * static_cast<Eigen::Index>(u.size()));
+  for (size_t i = 0; i < u.size(); ++i) b.segment<2>(2 * static_cast<Eigen::Index>(i)) = u[i];
+  return b;
+}
+
+DiskField fit(const std::vector<Vector2d>& at, const std::vector<Vector2d>& velocity, double lambda) {
+  const Eigen::VectorXd c = factor(gram(at, lambda)).solve(stacked(velocity));
+  DiskField f;
+  f.lambda = lambda;
+  f.centres = at;
+  for (size_t j = 0; j < at.size(); ++j) f.weights.push_back(kJ.transpose() * c.segment<2>(2 * static_cast<Eigen::Index>(j)));
+  return f;
+}
+
+// Rippa's leave-one-out error with 2 x 2 blocks (as on the sphere).
+double loo_error(const std::vector<Vector2d>& at, const std::vector<Vector2d>& velocity, double lambda) {
+  const int L = static_cast<int>(at.size());
+  const Eigen::MatrixXd inv = factor(gram(at, lambda)).solve(Eigen::MatrixXd::Identity(2 * L, 2 * L));
+  const Eigen::VectorXd a = inv * stacked(velocity);
+  double sum = 0;
+  for (int i = 0; i < L; ++i) sum += (inv.block<2, 2>(2 * i, 2 * i).inverse() * a.segment<2>(2 * i)).squaredNorm();
+  return std::sqrt(sum / L);
+}
+
+double mean_spacing(const std::vector<Vector2d>& v) {
+  if (v.size() < 2) return 1;
+  double sum = 0;
+  for (size_t i = 0; i < v.size(); ++i) {
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t j = 0; j < v.size(); ++j)
+      if (j != i) best = std::min(best, (v[i] - v[j]).norm());
+    sum += best;
+  }
+  return sum / static_cast<double>(v.size());
+}
+
+double loo_width_factor(const std::vector<Vector2d>& p, const std::vector<Vector2d>& q, double spacing) {
+  if (p.size() < 3) return kWidthFactors[0];
+  std::vector<Vector2d> first(p.size());
+  for (size_t i = 0; i < p.size(); ++i) first[i] = q[i] - p[i];
+  double best = std::numeric_limits<double>::infinity(), chosen = kWidthFactors[0];
+  for (double factor : kWidthFactors) {
+    const double w = factor * spacing, e = loo_error(p, first, 1 / (w * w));
+    if (e < best) best = e, chosen = factor;
+  }
+  return chosen;
+}
+
+DiskField field_at(const std::vector<Vector2d>& p, const std::vector<Vector2d>& q, double t, double lambda) {
+  std::vector<Vector2d> at(p.size()), vel(p.size());
+  for (size_t i = 0; i < p.size(); ++i) at[i] = (1 - t) * p[i] + t * q[i], vel[i] = q[i] - p[i];
+  return fit(at, vel, lambda);
+}
+
+// x on the domain: the boundary loop's vertices on the circle, every point within it.
+void place(std::vector<Vector2d>& x, const std::vector<char>& boundary) {
+  for (size_t i = 0; i < x.size(); ++i) {
+    const double r = x[i].norm();
+    if ((i < boundary.size() && boundary[i]) || r > 1) x[i] /= r;
+  }
+}
+
+void rk4_step(std::vector<Vector2d>& x, const std::vector<char>& boundary, const DiskField& f0, const DiskField& fh,
+              const DiskField& f1, double dt) {
+  detail::parallel_for(static_cast<int>(x.size()), 256, [&](int i0, int i1) {
+    for (int i = i0; i < i1; ++i) {
+      const Vector2d k1 = f0(x[i]), k2 = fh(x[i] + dt / 2 * k1), k3 = fh(x[i] + dt / 2 * k2), k4 = f1(x[i] + dt * k3);
+      x[i] += dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+    }
+  });
+  place(x, boundary);
+}
+
+Points to_points(const std::vector<Vector2d>& x) {
+  Points m(static_cast<Eigen::Index>(x.size()), 3);
+  for (size_t i = 0; i < x.size(); ++i) m.row(static_cast<Eigen::Index>(i)) << x[i].x(), x[i].y(), 0.0;
+  return m;
+}
+
+// The RK4 flow of every vertex along the landmarks' straight pathlines, then one step of the
+// field that carries the landmarks' images exactly onto their targets. Fills res.points and the
+// landmark errors.
+void flow(std::vector<Vector2d> x, const std::vector<char>& boundary, const std::vector<Vector2d>& p,
+          const std::vector<Vector2d>& q, double lambda, int steps, SurfaceRegistrationResult& res) {
+  std::vector<Vector2d> moving = p;
+  const double dt = 1.0 / steps;
+  DiskField f0 = field_at(p, q, 0, lambda);
+  for (int k = 0; k < steps; ++k) {
+    const DiskField fh = field_at(p, q, (k + 0.5) * dt, lambda);
+    DiskField f1 = field_at(p, q, (k + 1) * dt, lambda);
+    rk4_step(x, boundary, f0, fh, f1, dt);
+    rk4_step(moving, {}, f0, fh, f1, dt);
+    f0 = std::move(f1);
+  }
+  std::vector<Vector2d> rest(p.size());
+  res.flow_landmark_max_error = 0;
+  for (size_t i = 0; i < p.size(); ++i) {
+    rest[i] = q[i] - moving[i];
+    res.flow_landmark_max_error = std::max(res.flow_landmark_max_error, rest[i].norm());
+  }
+  const DiskField last = fit(moving, rest, lambda);
+  for (Vector2d& v : x) v += last(v);
+  place(x, boundary);
+  double sq = 0;
+  res.landmark_max_error = 0;
+  for (size_t i = 0; i < p.size(); ++i) {
+    const double e = (moving[i] + last(moving[i]) - q[i]).norm();
+    sq += e * e;
+    res.landmark_max_error = std::max(res.landmark_max_error, e);
+  }
+  res.landmark_rms_error = std::sqrt(sq / static_cast<double>(p.size()));
+  res.points = to_points(x);
+}
+
+// Flipped faces unflipped by moving their interior corners (not held) to their neighbours' mean.
+int repair_flips(const detail::SurfaceDomainMoves& domain, const Triangles& f, Points& x) {
+  std::vector<int> flipped = domain.flipped(x, f);
+  const int found = static_cast<int>(flipped.size());
+  std::vector<std::vector<int>> ring(static_cast<size_t>(x.rows()));
+  for (Eigen::Index t = 0; t < f.rows() && found > 0; ++t)
+    for (int k = 0; k < 3; ++k) ring[static_cast<size_t>(f(t, k))].push_back(f(t, (k + 1) % 3));
+  for (int sweep = 0; sweep < 50 && !flipped.empty(); ++sweep) {
+    for (int t : flipped)
+      for (int k = 0; k < 3; ++k) {
+        const size_t v = static_cast<size_t>(f(t, k));
+        if (domain.boundary[v] || (!domain.fixed.empty() && domain.fixed[v]) || ring[v].empty()) continue;
+        Eigen::RowVector3d m = Eigen::RowVector3d::Zero();
+        for (int w : ring[v]) m += x.row(w);
+        x.row(static_cast<Eigen::Index>(v)) = m / static_cast<double>(ring[v].size());
+      }
+    flipped = domain.flipped(x, f);
+  }
+  return found;
+}
+
+// 1 on the corners of the faces that contain a landmark (held still by the restoration).
+std::vector<char> landmark_corners(const std::vector<Vector2d>& x, const Triangles& f, const std::vector<Vector2d>& p) {
+  std::vector<char> fixed(x.size(), 0);
+  auto cross = [](const Vector2d& a, const Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); };
+  for (const Vector2d& d : p)
+    for (Eigen::Index t = 0; t < f.rows(); ++t) {
+      const Vector2d &a = x[static_cast<size_t>(f(t, 0))], &b = x[static_cast<size_t>(f(t, 1))], &c = x[static_cast<size_t>(f(t, 2))];
+      if (cross(b - a, d - a) >= 0 && cross(c - b, d - b) >= 0 && cross(a - c, d - c) >= 0)
+        for (int k = 0; k < 3; ++k) fixed[static_cast<size_t>(f(t, k))] = 1;
+    }
+  return fixed;
+}
+
+std::vector<Vector2d> disk_rows(const Points& m, const char* what, double max_radius) {
+  std::vector<Vector2d> v(static_cast<size_t>(m.rows()));
+  for (Eigen::Index i = 0; i < m.rows(); ++i) {
+    const Vector2d x(m(i, 0), m(i, 1));
+    if (!m.row(i).allFinite() || std::abs(m(i, 2)) > 1e-6 || x.norm() > max_radius)
+      throw InputError(std::string(what) + " " + std::to_string(i) + ": not " +
+                       (max_radius < 1 ? "strictly inside the unit disk" : "in the unit disk (z = 0, |x| <= 1)") +
+                       "; register surfaces mapped to the disk by vpm map");
+    v[static_cast<size_t>(i)] = x;
+  }
+  return v;
+}
+
+// The rotation about the centre that best maps p onto q (2-D Kabsch).
+double best_angle(const std::vector<Vector2d>& p, const std::vector<Vector2d>& q) {
+  double s = 0, c = 0;
+  for (size_t i = 0; i < p.size(); ++i) c += p[i].dot(q[i]), s += p[i].x() * q[i].y() - p[i].y() * q[i].x();
+  return std::atan2(s, c);
+}
+
+}  // namespace
+
+SurfaceRegistrationResult register_in_disk(const Points& disk, const Triangles& faces, const Points& landmarks,
+                                           const Points& targets, const SurfaceRegistrationOptions& options) {
+  const auto t0 = Clock::now();
+  if (landmarks.rows() < 1) throw InputError("disk registration: no landmarks");
+  if (landmarks.rows() != targets.rows())
+    throw InputError("disk registration: " + std::to_string(landmarks.rows()) + " landmarks but " + std::to_string(targets.rows()) + " targets");
+  if (options.steps < 1) throw InputError("disk registration: steps must be at least 1");
+  const std::vector<Vector2d> start = disk_rows(disk, "vertex", 1 + 1e-6), input_landmarks = disk_rows(landmarks, "landmark", kMaxRadius);
+  const std::vector<Vector2d> q = disk_rows(targets, "target", kMaxRadius);
+  const Points reference = to_points(start);
+  const detail::SurfaceDomainMoves domain{SurfaceDomain::disk, detail::loop_mask(static_cast<int>(disk.rows()), faces),
+                                          landmark_corners(start, faces, input_landmarks)};
+  SurfaceRegistrationResult res;
+  const double angle = options.rigid && input_landmarks.size() >= 2 ? best_angle(input_landmarks, q) : 0;
+  res.rotation = Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Rotation2Dd R(angle);
+  std::vector<Vector2d> x = start, p = input_landmarks;
+  for (auto& v : x) v = R * v;
+  for (auto& v : p) v = R * v;
+  const double spacing = std::min(mean_spacing(p), mean_spacing(q));
+  res.width_factor = options.width_factor > 0 ? options.width_factor : loo_width_factor(p, q, spacing);
+  while (true) {
+    res.width = res.width_factor * spacing;
+    flow(x, domain.boundary, p, q, 1 / (res.width * res.width), options.steps, res);
+    res.flow_metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::disk);
+    res.repaired_faces = repair_flips(domain, faces, res.points);
+    const double* narrower = std::find(std::begin(kWidthFactors), std::end(kWidthFactors), res.width_factor);
+    if (options.width_factor > 0 || domain.flipped(res.points, faces).empty() || narrower == std::begin(kWidthFactors) ||
+        narrower == std::end(kWidthFactors))
+      break;
+    res.width_factor = *(narrower - 1);
+  }
+  if (options.restore_rounds > 0 && domain.flipped(res.points, faces).empty() &&
+      surface_metrics(reference, res.points, faces, SurfaceDomain::disk).face_area_ratio.mean_abs_dev > options.restore_tolerance) {
+    SurfaceMapOptions polish;
+    polish.tolerance = options.restore_tolerance;
+    polish.polish_rounds = options.restore_rounds;
+    SurfaceMapReport rep;
+    detail::polish_surface(domain, faces, detail::face_areas(reference, faces), polish, res.points, rep);
+    res.restore_rounds = static_cast<int>(rep.polish.size());
+    for (char c : domain.fixed) res.held_vertices += c;
+  }
+  res.metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::disk);
+  res.seconds = seconds_since(t0);
+  return res;
+}
+
+}  // namespace vpm
