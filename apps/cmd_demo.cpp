@@ -3,7 +3,9 @@
 // standing in for a second subject) are meshed, mapped to the unit ball, and the second is
 // registered to the first by the centroids of AAL regions and dense iterations; the Dice overlap
 // of held-out regions (caudate, thalamus) is measured in the subject's image space before and
-// after registration. The benchmark of registered pairs (bench/pairs.cpp) runs the same pipeline
+// after registration. Then the same two brains' boundary surfaces: mapped to the sphere, the
+// subject's registered there by region centroids and its mean curvature, and a cortical patch
+// mapped to the disk (demo_surface.hpp). The benchmark of registered pairs (bench/pairs.cpp) runs the same pipeline
 // with seeded deformations and more measures.
 #include <filesystem>
 #include <iostream>
@@ -13,6 +15,7 @@
 #include "demo_deformation.hpp"
 #include "demo_overlap.hpp"
 #include "demo_pipeline.hpp"
+#include "demo_surface.hpp"
 #include "dense_options.hpp"
 #include "vpm/device.hpp"
 #include "vpm/error.hpp"
@@ -122,6 +125,10 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   dice.after = vpm::cli::subject_space_dice(tm, sm, reg.registered, atlas, subject.atlas, kDemoHeldOut, dice.voxels);
   timings["overlap"] = seconds_since(t0);
   vpm::cli::write_registered((st.out / "subject_registered.vtu").string(), sm, reg);
+  t0 = Clock::now();
+  const vpm::cli::SurfaceDemo surfaces = vpm::cli::surface_demo(vpm::read_mesh((st.out / "colin27.vtu").string()),
+                                                                vpm::read_mesh((st.out / "subject.vtu").string()), st.out);
+  timings["surfaces"] = seconds_since(t0);
   const double total = seconds_since(t_start);
   timings["total"] = total;
 
@@ -133,11 +140,12 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   report["subjects"]["subject"] = vpm::cli::to_json(subj);
   report["registration"] = vpm::cli::to_json(reg);
   report["overlap"] = overlap_json(dice, names);
+  report["surfaces"] = vpm::cli::to_json(surfaces, names);
   report["timings_s"] = timings;
   vpm::write_json_file((st.out / "demo.json").string(), report);
   std::cout << vpm::cli::subjects_summary("vpm demo on " + dev.name() + " (Colin27 + AAL from " + st.data.string() + ")",
                                           tmpl, subj, reg)
-            << dice_summary(dice, names) << "total " << strprintf("%.1f", total) << " s; wrote "
+            << dice_summary(dice, names) << vpm::cli::surface_summary(surfaces, names) << "total " << strprintf("%.1f", total) << " s; wrote "
             << (st.out / "demo.json").string() << " and the meshes (.vtu, open in ParaView) in " << st.out.string()
             << "\n";
   return 0;

@@ -254,6 +254,26 @@ TEST_CASE("vpm demo: meshes, maps and registers Colin27 and a deformed copy, Dic
   const TetMesh r = read_mesh(out + "/subject_registered.vtu");
   CHECK(inverted_tets(r.vertices, r.tets).empty());
   REQUIRE(r.find_point_field("registration_vertex_volume_ratio") != nullptr);
+  // the surfaces: both boundaries to the sphere without a flip, the subject's registered there (the
+  // held-out cortical regions from nothing to most of their area: measured 0.80-0.87), the patch
+  // to the disk
+  const Json& surf = *j.find("surfaces");
+  for (const char* s : {"colin27_sphere", "subject_sphere"}) {
+    CHECK(surf.find(s)->find("final")->find("flipped_faces")->number() == 0);
+    CHECK(surf.find(s)->find("final")->find("face_area_ratio")->find("mean_abs_dev")->number() <= 0.005);
+  }
+  CHECK(surf.find("registration_curvature")->find("final")->find("flipped_faces")->number() == 0);
+  CHECK(surf.find("registration_curvature")->find("landmark_max_error")->number() <= 1e-10);
+  const Json& sheld = *surf.find("held_out");
+  REQUIRE(sheld.size() == 4);
+  for (size_t i = 0; i < sheld.size(); ++i) {
+    CHECK(sheld.at(i).find("dice_sphere_before")->number() < 0.3);
+    CHECK(sheld.at(i).find("dice_sphere_landmarks")->number() > 0.7);
+    CHECK(sheld.at(i).find("dice_sphere_curvature")->number() > 0.7);
+  }
+  CHECK(surf.find("patch_disk")->find("final")->find("flipped_faces")->number() == 0);
+  for (const char* f : {"colin27_sphere.vtp", "subject_sphere_registered.vtp", "colin27_patch_disk.vtp"})
+    CHECK(fs::exists(out + "/" + f));
   // bad input: exit 2
   CHECK(run_status(std::string(VPM_BINARY) + " demo --out " + out + " --target-vertices 5 2>/dev/null") == 2);
   CHECK(run_status(std::string(VPM_BINARY) + " demo --out " + out + " --grid 48 2>/dev/null") == 2);  // a bench option

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
-"""The sphere registration benchmark (docs/surfaces.md): a brain surface mapped to the sphere by
-`vpm map`, then registered by `vpm register SPHERE` onto a known area-preserving deformation of
-itself, each run several times (medians).
+"""The sphere and disk registration benchmark (docs/surfaces.md): a brain surface mapped to the
+sphere (a cortical patch to the disk) by `vpm map`, then registered by `vpm register` onto a known
+area-preserving deformation of itself, each run several times (medians).
 
 The deformation: three twists, each a rotation about a random axis by an angle that depends on
 the height along that axis only (theta(h) = A sin(pi (h + 1) / 2 + phase)). Rotating each
@@ -11,6 +11,10 @@ the landmark error, the face area change against the input sphere (after the flo
 restoration), flipped faces, and the distance of every vertex from its true image (radians), the
 registration's error where no landmark pins it; for reference, the same distance for the rigid
 step alone (what the flow gained).
+
+In the disk (surfaces named *-patch*): a swirl, each circle about the centre turned rigidly by
+theta(r) = A sin(pi r + phase) (areas kept, the circle onto itself); landmarks drawn among the
+vertices with |x| < 0.9; distances in disk units.
 
 Usage: register.py OUT_DIR [--runs 3] [--surfaces colin27-22k,...] [--landmarks 12,24,48]
                    [--seeds 1,2,3] [--vpm build/vpm] [--timeout 600]
@@ -48,6 +52,20 @@ def twist(x, rng, amplitude):
     return x
 
 
+def swirl(x, rng, amplitude):
+    """x (n, 3) points of the unit disk through a swirl about the centre."""
+    phase = rng.uniform(0, 2 * np.pi)
+    r = np.linalg.norm(x[:, :2], axis=1)
+    theta = 2 * amplitude * np.sin(np.pi * r + phase)
+    c, s = np.cos(theta), np.sin(theta)
+    return np.column_stack([c * x[:, 0] - s * x[:, 1], s * x[:, 0] + c * x[:, 1], np.zeros(len(x))])
+
+
+def distance(a, b, disk):
+    """Per-row distance: Euclidean in the disk, the angle on the sphere."""
+    return np.linalg.norm(a - b, axis=1) if disk else np.arccos(np.clip((a * b).sum(1), -1, 1))
+
+
 def read_points(path):
     sys.path.insert(0, os.path.join(HERE, "..", "..", "build", "python"))
     import vpm as pyvpm  # noqa: E402
@@ -56,15 +74,21 @@ def read_points(path):
 
 def one(vpm, out, name, landmarks, seed, runs, timeout, amplitude):
     surface = prepare(vpm, out, name, timeout)
-    sphere = os.path.join(out, name + "_sphere.gii")
+    disk = "patch" in name
+    sphere = os.path.join(out, name + ("_disk.gii" if disk else "_sphere.gii"))
     if not os.path.exists(sphere):
         rc, _, last = run([vpm, "map", surface, "-o", sphere, "--quiet"], timeout)
         if rc not in (0, 4):
             sys.exit(f"register.py: vpm map {surface}: exit {rc}: {last}")
     v, _ = read_points(sphere)
-    v = v / np.linalg.norm(v, axis=1)[:, None]
-    truth = twist(v, np.random.default_rng(seed), amplitude)
-    ids = np.random.default_rng(1000 + seed).choice(len(v), landmarks, replace=False)
+    if disk:
+        truth = swirl(v, np.random.default_rng(seed), amplitude)
+        pool = np.where(np.linalg.norm(v[:, :2], axis=1) < 0.9)[0]
+    else:
+        v = v / np.linalg.norm(v, axis=1)[:, None]
+        truth = twist(v, np.random.default_rng(seed), amplitude)
+        pool = np.arange(len(v))
+    ids = np.random.default_rng(1000 + seed).choice(pool, landmarks, replace=False)
     src, dst = os.path.join(out, f"{name}_{seed}_{landmarks}_src.csv"), os.path.join(out, f"{name}_{seed}_{landmarks}_dst.csv")
     np.savetxt(src, ids, fmt="%d")
     np.savetxt(dst, truth[ids], delimiter=",", fmt="%.17g")
@@ -82,14 +106,15 @@ def one(vpm, out, name, landmarks, seed, runs, timeout, amplitude):
     r = json.load(open(report))
     g = r["registration"]
     got, _ = read_points(reg)
-    got = got / np.linalg.norm(got, axis=1)[:, None]
-    angle = np.arccos(np.clip((got * truth).sum(1), -1, 1))
+    if not disk:
+        got = got / np.linalg.norm(got, axis=1)[:, None]
+    angle = distance(got, truth, disk)
     row.update(faces=r["input"]["faces"], seconds=statistics.median(secs), seconds_all=[round(x, 2) for x in secs],
                landmark_max_error=r["landmark_max_error"],
                flow_face=g["flow"]["face_area_ratio"]["mean_abs_dev"], face=g["final"]["face_area_ratio"]["mean_abs_dev"],
                flipped=g["final"]["flipped_faces"], restore_rounds=g["restore"]["rounds"],
                truth_mean_rad=float(angle.mean()), truth_p95_rad=float(np.percentile(angle, 95)),
-               moved_mean_rad=float(np.arccos(np.clip((v * truth).sum(1), -1, 1)).mean()))
+               moved_mean_rad=float(distance(v, truth, disk).mean()))
     return row
 
 

@@ -30,6 +30,11 @@ constexpr double kSystemCutoff = 16;
 // gain is below kLevelGain.
 constexpr double kMinGain = 1e-4, kLevelGain = 1e-3;
 constexpr int kHalvings = 4;
+// A step whose flipped slivers were repaired is kept only if the repaired step changes the face
+// areas (mean |r - 1| against the positions before it) by at most this.
+constexpr double kRepairAreaChange = 0.001;
+// How firmly the dense steps hold the landmarks (hold_landmarks).
+constexpr double kHold = 10;
 
 std::vector<Vector3d> rows(const Points& m) {
   std::vector<Vector3d> v(static_cast<size_t>(m.rows()));
@@ -230,6 +235,26 @@ double correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const Eig
   return d > 0 ? w.dot(ca.cwiseProduct(cb)) / d : 0;
 }
 
+// The landmarks held: sum_p M_p^T M_p, M_p (2 x 2C) the field's tangent components at the
+// landmark p per weight (B_p^T [p]x H(p, c_j) P_j), scaled to kHold x the data term's trace, so
+// the step's field nearly vanishes at the landmarks and the dense steps keep what they matched.
+void hold_landmarks(const std::vector<Vector3d>& carried, const std::vector<Vector3d>& c,
+                    const std::vector<Eigen::Matrix<double, 3, 2>>& P, double lambda, Eigen::MatrixXd& N) {
+  if (carried.empty()) return;
+  const int C = static_cast<int>(c.size());
+  Eigen::MatrixXd hold = Eigen::MatrixXd::Zero(2 * C, 2 * C);
+  Eigen::MatrixXd M(2, 2 * C);
+  for (const Vector3d& p : carried) {
+    const Eigen::Matrix<double, 3, 2> B = tangent_basis(p);
+    Eigen::Matrix3d cross;
+    cross << 0, -p.z(), p.y(), p.z(), 0, -p.x(), -p.y(), p.x(), 0;
+    for (int j = 0; j < C; ++j)
+      M.block<2, 2>(0, 2 * j) = B.transpose() * cross * gaussian_hessian(p - c[static_cast<size_t>(j)], lambda) * P[static_cast<size_t>(j)];
+    hold.noalias() += M.transpose() * M;
+  }
+  if (hold.trace() > 0) N += kHold * N.trace() / hold.trace() * hold;
+}
+
 // The field of the Gauss-Newton step at one level: weights u_j = P_j a_j, a the solution of
 // (N + mu K) a = b, mu = ridge x tr(N) / tr(K).
 SphereField gauss_newton_field(Eigen::MatrixXd N, const Eigen::VectorXd& b, const Eigen::MatrixXd& K,
@@ -294,6 +319,7 @@ SphereMatchLevel match_level(std::vector<Vector3d>& x, std::vector<Vector3d>& ca
     Eigen::MatrixXd N;
     Eigen::VectorXd b;
     normal_equations(x, grad, e, area, c, P, lambda, N, b);
+    hold_landmarks(carried, c, P, lambda, N);
     const SphereField field = gauss_newton_field(std::move(N), b, K, c, P, lambda, options.ridge);
     const double speed = max_speed(x, field);
     if (!(speed > 0)) break;
@@ -302,7 +328,16 @@ SphereMatchLevel match_level(std::vector<Vector3d>& x, std::vector<Vector3d>& ca
     double gain = 0;
     for (int h = 0; h <= kHalvings && !kept; ++h, alpha /= 2) {
       std::vector<Vector3d> trial = advected(x, field, alpha);
-      if (domain.flipped(matrix(trial), faces).size() > flipped) continue;
+      Points tm = matrix(trial);
+      if (domain.flipped(tm, faces).size() > flipped) {
+        // slivers sheared past their width: repaired, when that costs no more area than a step's
+        // discretisation does
+        repair_sphere_flips(domain, faces, tm);
+        if (domain.flipped(tm, faces).size() > flipped ||
+            surface_metrics(matrix(x), tm, faces, SurfaceDomain::sphere).face_area_ratio.mean_abs_dev > kRepairAreaChange)
+          continue;
+        trial = rows(tm);
+      }
       std::vector<int> th = hint;
       Eigen::VectorXd te;
       std::vector<Vector3d> tg;

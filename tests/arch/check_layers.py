@@ -13,7 +13,7 @@ import sys
 LAYERS = ["core", "mesh", "io", "linalg", "image", "map", "register", "collective"]
 PUBLIC = {
     "core": ["device", "placement", "error", "json", "timing", "format", "memory"],
-    "mesh": ["mesh", "topology", "geometry", "validate", "metrics", "locate", "icosphere", "mesh_stats", "labels", "mesh_order"],
+    "mesh": ["mesh", "topology", "geometry", "validate", "metrics", "locate", "icosphere", "curvature", "mesh_stats", "labels", "mesh_order"],
     "io": ["io", "landmarks"],
     "linalg": ["sparse", "laplacian", "solver", "amg"],
     "image": ["image", "mesh_image", "mesh_image_report", "voxelize"],
