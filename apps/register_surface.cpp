@@ -4,6 +4,7 @@
 #include "register_surface.hpp"
 
 #include <algorithm>
+#include <filesystem>
 #include <cmath>
 #include <iterator>
 #include <optional>
@@ -58,13 +59,29 @@ TriSurface read_disk(const std::string& path, TriSurface surface) {
   return surface;
 }
 
-// A per-vertex scalar of `vertices` vertices read from `path` (--overlay, --template-overlay).
-Eigen::VectorXd read_values(const std::string& path, Eigen::Index vertices, const std::string& of) {
-  Eigen::VectorXd v = read_overlay(path);
+// A per-vertex scalar of `surface` (read from `of`): the point field named `what` (a .vtp written
+// by `vpm map SURFACE --overlays`), else the per-vertex file `what` (--overlay, --template-overlay).
+Eigen::VectorXd read_values(const std::string& what, const TriSurface& surface, const std::string& of) {
+  const Eigen::Index vertices = surface.vertices.rows();
+  Eigen::VectorXd v;
+  const auto field = std::find_if(surface.point_data.begin(), surface.point_data.end(),
+                                  [&](const Field& f) { return f.name == what && f.values.cols() == 1; });
+  if (field != surface.point_data.end()) {
+    v = field->values.col(0);
+  } else {
+    if (!std::filesystem::exists(what)) {
+      std::string names;
+      for (const Field& f : surface.point_data)
+        if (f.values.cols() == 1) names += (names.empty() ? "" : ", ") + f.name;
+      throw InputError(what + ": neither a file nor a point field of " + of +
+                       (names.empty() ? std::string(" (it has none)") : " (its point fields: " + names + ")"));
+    }
+    v = read_overlay(what);
+  }
   if (v.size() != vertices)
-    throw InputError(path + ": " + std::to_string(v.size()) + " values, but " + of + " has " + std::to_string(vertices) + " vertices");
+    throw InputError(what + ": " + std::to_string(v.size()) + " values, but " + of + " has " + std::to_string(vertices) + " vertices");
   for (Eigen::Index i = 0; i < v.size(); ++i)
-    if (!std::isfinite(v(i))) throw InputError(path + ": value " + std::to_string(i) + " is not finite");
+    if (!std::isfinite(v(i))) throw InputError(what + ": value " + std::to_string(i) + " is not finite");
   return v;
 }
 
@@ -141,8 +158,8 @@ int register_surface(const Args& args, const std::string& in, const std::string&
   Eigen::VectorXd values;
   if (templ) {
     const TriSurface ts = read_sphere(*templ);
-    t = SphereTemplate{ts.vertices, ts.triangles, read_values(*args.get("--template-overlay"), ts.vertices.rows(), *templ)};
-    values = read_values(*args.get("--overlay"), surface.vertices.rows(), in);
+    t = SphereTemplate{ts.vertices, ts.triangles, read_values(*args.get("--template-overlay"), ts, *templ)};
+    values = read_values(*args.get("--overlay"), surface, in);
   }
   const double t_read = seconds_since(t0);
   SurfaceRegistrationResult r;

@@ -66,7 +66,7 @@ void mesh_seeds(const fs::path& out, const fs::path& tmp) {
   write_mesh((tmp / "octahedron.node").string(), m);
   put(out, "tetgen", "octahedron", slurp(tmp / "octahedron.node") + std::string(fuzz::kSplit) + slurp(tmp / "octahedron.ele"));
   const TriSurface s = boundary_surface(m);
-  for (const char* f : {"off", "obj", "stl"}) {
+  for (const char* f : {"off", "obj", "stl", "vtp"}) {
     write_surface((tmp / "octahedron.").string() + f, s);
     take(out, f, tmp / (std::string("octahedron.") + f));
   }

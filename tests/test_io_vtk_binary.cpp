@@ -136,3 +136,44 @@ TEST_CASE("io: vpm writes .vtu as appended raw binary by default and ASCII on re
   spit(tmp + "cut.vtu", bin.substr(0, bin.size() / 2));
   CHECK_THROWS_WITH(read_mesh(tmp + "cut.vtu"), Catch::StartsWith(tmp + "cut.vtu"));
 }
+
+TEST_CASE("io: .vtp (VTK PolyData of triangles) reads back what write_surface wrote; other cells refused") {
+  const std::string dir = (fs::temp_directory_path() / "vpm_test_vtp").string();
+  fs::create_directories(dir);
+  TriSurface s;
+  s.vertices.resize(4, 3);
+  s.vertices << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0.1, 0.2, 1.0 / 3;
+  s.triangles.resize(4, 3);
+  s.triangles << 0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2;
+  Eigen::VectorXd sulc(4);
+  sulc << -1.5, 0.25, 1.0 / 7, 3;
+  s.point_data.push_back({"sulc", sulc, false});
+  s.point_data.push_back({"original_position", s.vertices * 2, false});
+  s.cell_data.push_back({"label", Eigen::Vector4d(1, 2, 2, 7), true});
+  write_surface(dir + "/t.vtp", s);
+  const TriSurface r = read_surface(dir + "/t.vtp");
+  CHECK(r.vertices == s.vertices);
+  CHECK(r.triangles == s.triangles);
+  REQUIRE(r.point_data.size() == 2);
+  CHECK(r.point_data[0].name == "sulc");
+  CHECK(r.point_data[0].values.col(0) == sulc);
+  CHECK(r.point_data[1].values == s.vertices * 2);
+  REQUIRE(r.cell_data.size() == 1);
+  CHECK(r.cell_data[0].integer);
+  CHECK(r.cell_data[0].values.col(0) == Eigen::Vector4d(1, 2, 2, 7));
+  // a quad among the polys, lines, a mesh file's type: exit-2 errors naming the place
+  const std::string text = slurp(dir + "/t.vtp");
+  std::string quad = text;
+  quad.replace(quad.find("3 6 9 12\n"), 8, "4 6 9 12");
+  spit(dir + "/quad.vtp", quad);
+  CHECK_THROWS_WITH(read_surface(dir + "/quad.vtp"), Catch::Contains("quad.vtp:") && Catch::Contains("does not close a triangle"));
+  std::string lines = text;
+  lines.replace(lines.find("NumberOfLines=\"0\""), 17, "NumberOfLines=\"2\"");
+  spit(dir + "/lines.vtp", lines);
+  CHECK_THROWS_WITH(read_surface(dir + "/lines.vtp"), Catch::Contains("NumberOfLines is not 0"));
+  std::string grid = text;
+  grid.replace(grid.find("type=\"PolyData\""), 15, "type=\"UnstructuredGrid\"");
+  spit(dir + "/grid.vtp", grid);
+  CHECK_THROWS_WITH(read_surface(dir + "/grid.vtp"), Catch::Contains("not a VTK PolyData file"));
+  fs::remove_all(dir);
+}

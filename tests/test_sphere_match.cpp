@@ -168,6 +168,18 @@ TEST_CASE("vpm register SPHERE --template --overlay --template-overlay: the scal
   CHECK(r["registration"]["final"]["flipped_faces"].number() == 0);
   const TriSurface out = read_surface(dir + "/reg.gii");
   CHECK(mean_angle(out.vertices, twisted(s.vertices)) < 0.35 * mean_angle(s.vertices, twisted(s.vertices)));
+  // the scalars as point fields of .vtp inputs (vpm map SURFACE -o S.vtp --overlays lh.sulc)
+  TriSurface sv = s, tv{twisted(tpl.vertices), tpl.triangles, {}, {}};
+  sv.point_data.push_back({"sulc", features(s.vertices), false});
+  tv.point_data.push_back({"sulc", features(tpl.vertices), false});
+  write_surface(dir + "/subject.vtp", sv);
+  write_surface(dir + "/template.vtp", tv);
+  const std::string vtp = vpm_bin + " register " + dir + "/subject.vtp -o " + dir + "/reg2.gii --template " + dir + "/template.vtp";
+  REQUIRE(run_status(vtp + " --overlay sulc --template-overlay sulc --report " + dir + "/r2.json 2>" + dir + "/err.txt") == 0);
+  CHECK(Json::parse(slurp(dir + "/r2.json"))["registration"]["match"]["correlation_after"].number() ==
+        Approx(r["registration"]["match"]["correlation_after"].number()).epsilon(1e-3));
+  CHECK(run_status(vtp + " --overlay curv --template-overlay sulc 2>" + dir + "/err.txt") == 2);
+  CHECK_THAT(slurp(dir + "/err.txt"), Catch::Contains("curv: neither a file nor a point field") && Catch::Contains("sulc"));
   // an overlay of the wrong length, --overlay without --template, a missing template overlay
   write_curv(dir + "/short.sulc", features(s.vertices).head(100));
   CHECK(run_status(in + " --template " + dir + "/template.gii --overlay " + dir + "/short.sulc --template-overlay " + dir +

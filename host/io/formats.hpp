@@ -14,6 +14,7 @@ void write_tetgen(const std::string& path, const TetMesh& mesh);  // .node + .el
 TetMesh read_medit(const std::string& path);
 void write_medit(const std::string& path, const TetMesh& mesh);
 TetMesh read_vtu(const std::string& path);
+TriSurface read_vtp(const std::string& path);
 void write_vtu(const std::string& path, const TetMesh& mesh);         // ASCII (vtu_write.cpp)
 /// Writes the XML declaration and the opening VTKFile (with `vtkfile_attributes` after its
 /// type), UnstructuredGrid and Piece tags of a .vtu for n points and m cells (vtu_write.cpp).

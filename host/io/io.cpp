@@ -14,7 +14,7 @@ namespace vpm {
 namespace {
 const char* kMeshExts = ".node/.ele (TetGen), .mesh (Medit), .vtu (VTK), .msh (Gmsh 4.1)";
 const char* kSurfExts =
-    ".off, .obj, .stl, .gii (GIfTI), or a FreeSurfer surface (lh.white, lh.pial, lh.sphere, ...: recognised by its first bytes)";
+    ".off, .obj, .stl, .gii (GIfTI), .vtp (VTK PolyData), or a FreeSurfer surface (lh.white, lh.pial, lh.sphere, ...: recognised by its first bytes)";
 const char* kSurfOutExts = ".off, .obj, .stl, .gii (GIfTI), .vtp (VTK PolyData with the fields), or a FreeSurfer name (.white, "
                            ".pial, .orig, .smoothwm, .inflated, .sphere, .reg, .midthickness, .surf)";
 // FreeSurfer names its surfaces hemisphere.kind: these kinds are written in its binary format
@@ -42,7 +42,7 @@ bool is_mesh_path(const std::string& path) {
 
 bool is_surface_path(const std::string& path) {
   const std::string e = detail::extension_of(path);
-  return e == ".off" || e == ".obj" || e == ".stl" || e == ".gii" || is_freesurfer_name(e) ||
+  return e == ".off" || e == ".obj" || e == ".stl" || e == ".gii" || e == ".vtp" || is_freesurfer_name(e) ||
          detail::is_freesurfer_surface(head_of(path, 3));
 }
 
@@ -87,6 +87,7 @@ TriSurface read_surface(const std::string& path) {
   if (e == ".obj") return detail::read_obj(path);
   if (e == ".stl") return detail::read_stl(path);
   if (e == ".gii") return detail::read_gifti(path);
+  if (e == ".vtp") return detail::read_vtp(path);
   if (is_freesurfer_name(e) || detail::is_freesurfer_surface(head_of(path, 3))) return detail::read_freesurfer(path);
   throw InputError(path + ": unknown surface file extension '" + e + "' (expected " + kSurfExts +
                    ")");

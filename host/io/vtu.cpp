@@ -1,7 +1,8 @@
-// Reading VTK XML UnstructuredGrid (.vtu): ASCII and the binary forms VTK and ParaView write
-// (inline base64, appended raw or base64, zlib-compressed; io/vtk_binary.hpp). Points, tets (VTK
-// type 10) and every point/cell field; non-tet cells are skipped (with their cell-data rows).
-// The writer is in vtu_write.cpp.
+// Reading VTK XML UnstructuredGrid (.vtu) and PolyData (.vtp): ASCII and the binary forms VTK and
+// ParaView write (inline base64, appended raw or base64, zlib-compressed; io/vtk_binary.hpp).
+// .vtu: points, tets (VTK type 10) and every point/cell field; non-tet cells are skipped (with
+// their cell-data rows). .vtp: points, triangles (Polys of three points; vertices, lines and
+// strips refused) and every point/cell field. The writers are in vtu_write.cpp and vtp.cpp.
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -22,10 +23,13 @@ namespace {
 // The state of one read: the tags seen so far and the arrays they hold.
 class VtuReader {
  public:
-  VtuReader(const std::string& path, const std::string& data) : path_(path), data_(data), w_(path, data) {}
+  VtuReader(const std::string& path, const std::string& data, bool poly)
+      : path_(path), data_(data), w_(path, data), poly_(poly), kind_(poly ? "PolyData" : "UnstructuredGrid"),
+        cells_(poly ? "Polys" : "Cells") {}
   void read_tags();
   void check_complete();
   TetMesh build_mesh();
+  TriSurface build_surface();
 
  private:
   void on_vtkfile(const Tag& tag);
@@ -39,6 +43,8 @@ class VtuReader {
   const std::string& path_;
   const std::string& data_;
   XmlWalker w_;
+  const bool poly_;
+  const std::string kind_, cells_;  // "UnstructuredGrid", "Cells" or "PolyData", "Polys"
   bool seen_file_ = false, seen_piece_ = false, closed_ = false;
   long long n_ = -1, m_ = -1;
   size_t piece_line_ = 1;
@@ -65,7 +71,7 @@ void VtuReader::read_tags() {
     } else if (tag.name == "Piece") {
       on_piece(tag);
     } else if (tag.name == "PointData" || tag.name == "CellData" || tag.name == "Points" ||
-               tag.name == "Cells") {
+               tag.name == cells_) {
       if (!seen_piece_) w_.fail(tag.line, "<" + tag.name + "> outside <Piece>");
       if (!tag.self_closing) section_ = tag.name;
     } else if (tag.name == "DataArray") {
@@ -77,9 +83,8 @@ void VtuReader::read_tags() {
 void VtuReader::on_vtkfile(const Tag& tag) {
   seen_file_ = true;
   auto it = tag.attrs.find("type");
-  if (it == tag.attrs.end() || it->second != "UnstructuredGrid")
-    w_.fail(tag.line, "not a VTK UnstructuredGrid file (type=\"" +
-                          (it == tag.attrs.end() ? std::string() : it->second) + "\")");
+  if (it == tag.attrs.end() || it->second != kind_)
+    w_.fail(tag.line, "not a VTK " + kind_ + " file (type=\"" + (it == tag.attrs.end() ? std::string() : it->second) + "\")");
   if (const auto c = tag.attrs.find("compressor"); c != tag.attrs.end() && !c->second.empty()) {
     if (c->second != "vtkZLibDataCompressor")
       w_.fail(tag.line, "compressor \"" + c->second + "\" is not supported (only vtkZLibDataCompressor)");
@@ -138,12 +143,16 @@ void VtuReader::read_appended(const Tag& tag) {
 }
 
 void VtuReader::on_piece(const Tag& tag) {
-  if (!seen_file_) w_.fail(tag.line, "<Piece> outside <VTKFile type=\"UnstructuredGrid\">");
-  if (seen_piece_) w_.fail(tag.line, "more than one <Piece>: only single-piece .vtu is supported");
+  if (!seen_file_) w_.fail(tag.line, "<Piece> outside <VTKFile type=\"" + kind_ + "\">");
+  if (seen_piece_) w_.fail(tag.line, "more than one <Piece>: only single-piece files are supported");
   seen_piece_ = true;
   piece_line_ = tag.line;
   n_ = attr_count(w_, tag, "NumberOfPoints", true, 0);
-  m_ = attr_count(w_, tag, "NumberOfCells", true, 0);
+  m_ = attr_count(w_, tag, poly_ ? "NumberOfPolys" : "NumberOfCells", true, 0);
+  if (poly_)
+    for (const char* other : {"NumberOfVerts", "NumberOfLines", "NumberOfStrips"})
+      if (attr_count(w_, tag, other, false, 0) != 0)
+        w_.fail(tag.line, std::string(other) + " is not 0: only triangles (Polys) make a surface");
   // A point takes >= 3 values of >= 2 bytes, a cell >= 3 values (offset, type, index): 2x margin
   // (compressed data can be smaller).
   if (!compressed_ && n_ * 3 + m_ * 3 > static_cast<long long>(data_.size()))
@@ -210,9 +219,9 @@ void VtuReader::check_complete() {
       if (a.appended_offset >= 0) w_.fail(a.line, "appended DataArray '" + a.name + "' but no <AppendedData> (truncated file?)");
   for (const VtuArray* a : {&conn_, &offsets_, &types_})
     if (!a->type.empty() && !is_integer_type(a->type))
-      w_.fail(a->line, "Cells array '" + a->name + "' has type " + a->type + ", expected an integer type");
-  if (m_ > 0 && (!have_conn_ || !have_offsets_ || !have_types_))
-    w_.fail(piece_line_, "Piece lacks a Cells array (connectivity, offsets, types)");
+      w_.fail(a->line, cells_ + " array '" + a->name + "' has type " + a->type + ", expected an integer type");
+  if (m_ > 0 && (!have_conn_ || !have_offsets_ || (!poly_ && !have_types_)))
+    w_.fail(piece_line_, "Piece lacks a " + cells_ + " array (connectivity, offsets" + (poly_ ? ")" : ", types)"));
 }
 
 // The cells that are tetrahedra (VTK type 10), after checking every cell's offsets and the
@@ -281,11 +290,50 @@ TetMesh VtuReader::build_mesh() {
   return mesh;
 }
 
+// Every poly a triangle with its points in range; the fields as read.
+TriSurface VtuReader::build_surface() {
+  TriSurface s;
+  s.vertices.resize(n_, 3);
+  std::copy(points_.values.begin(), points_.values.end(), s.vertices.data());
+  s.triangles.resize(m_, 3);
+  long long prev = 0;
+  for (long long c = 0; c < m_; ++c) {
+    const double off = offsets_.values[static_cast<size_t>(c)];
+    if (!(off == static_cast<double>(prev + 3)) || off > static_cast<double>(conn_.values.size()))
+      w_.fail(offsets_.line, "poly " + std::to_string(c) + ": offset " + std::to_string(static_cast<long long>(off)) +
+                                 (off > static_cast<double>(conn_.values.size()) ? " is beyond the connectivity" : " does not close a triangle (3 points)"));
+    for (int k = 0; k < 3; ++k) {
+      const double v = conn_.values[static_cast<size_t>(prev + k)];
+      if (!(v >= 0 && v < static_cast<double>(n_)))
+        w_.fail(conn_.line, "poly " + std::to_string(c) + ": point index " + std::to_string(static_cast<long long>(v)) +
+                                " out of range 0.." + std::to_string(n_ - 1));
+      s.triangles(c, k) = static_cast<int>(v);
+    }
+    prev += 3;
+  }
+  for (const auto* list : {&point_fields_, &cell_fields_})
+    for (const VtuArray& a : *list) {
+      if (a.name.empty()) w_.fail(a.line, "DataArray without a Name");
+      FieldValues v(list == &point_fields_ ? n_ : m_, a.comps);
+      std::copy(a.values.begin(), a.values.end(), v.data());
+      (list == &point_fields_ ? s.point_data : s.cell_data).push_back({a.name, std::move(v), is_integer_type(a.type)});
+    }
+  return s;
+}
+
 }  // namespace
+
+TriSurface read_vtp(const std::string& path) {
+  const std::string data = read_whole_file(path);
+  VtuReader reader(path, data, true);
+  reader.read_tags();
+  reader.check_complete();
+  return reader.build_surface();
+}
 
 TetMesh read_vtu(const std::string& path) {
   const std::string data = read_whole_file(path);
-  VtuReader reader(path, data);
+  VtuReader reader(path, data, false);
   reader.read_tags();
   reader.check_complete();
   return reader.build_mesh();

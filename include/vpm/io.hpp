@@ -31,7 +31,8 @@ void write_mesh(const std::string& path, const TetMesh& mesh);
 /// The same, with the encoding of a .vtu file chosen (ignored for other formats).
 void write_mesh(const std::string& path, const TetMesh& mesh, VtuEncoding encoding);
 
-/// Reads a triangle surface: .off, .obj, .stl, .gii (GIfTI) by extension, FreeSurfer's binary triangle
+/// Reads a triangle surface: .off, .obj, .stl, .gii (GIfTI), .vtp (VTK PolyData of triangles, its
+/// point and cell fields into point_data and cell_data) by extension, FreeSurfer's binary triangle
 /// surfaces (lh.white, lh.pial, ...) by their first bytes (FF FF FE) or FreeSurfer's names
 /// (.white, .pial, .orig, .smoothwm, .inflated, .sphere, .reg, .midthickness, .surf).
 TriSurface read_surface(const std::string& path);

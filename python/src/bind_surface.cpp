@@ -5,6 +5,7 @@
 
 #include "common.hpp"
 #include "report.hpp"
+#include "vpm/curvature.hpp"
 #include "vpm/error.hpp"
 #include "vpm/initial_map.hpp"
 #include "vpm/io.hpp"
@@ -125,6 +126,15 @@ void bind_disk_registration(py::module_& m) {
 }
 
 void bind_sphere_locator(py::module_& m) {
+  m.def(
+      "_mean_curvature",
+      [](const py::object& vertices, const py::object& faces) {
+        TriSurface s;
+        s.vertices = to_points(vertices, "vertices");
+        s.triangles = to_triangles(faces, s.vertices.rows());
+        return owned_array(mean_curvature(s));
+      },
+      py::arg("vertices"), py::arg("faces"));
   m.def(
       "_locate_on_sphere",
       [](const py::object& vertices, const py::object& faces, const py::object& points) {

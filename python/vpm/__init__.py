@@ -29,7 +29,7 @@ from . import _vpm
 
 __all__ = ["Mesh", "Image", "Elements", "ElementTable", "Comparison", "NumericalError", "MapReport",
            "InitialMapReport", "RegistrationReport", "MapMetrics", "RatioStats", "Report", "SurfaceMapReport",
-           "SurfaceMetrics", "read_surface", "read_overlay", "write_surface", "map_to_sphere", "map_to_disk", "register_on_sphere", "register_in_disk", "locate_on_sphere",
+           "SurfaceMetrics", "read_surface", "read_overlay", "write_surface", "map_to_sphere", "map_to_disk", "register_on_sphere", "register_in_disk", "locate_on_sphere", "mean_curvature",
            "read_mesh", "write_mesh", "validate", "read_image", "write_nifti", "image", "mesh_image",
            "initial_map", "map_to_ball", "register", "elements", "sample", "compare", "read_table",
            "to_native", "to_image", "read_label_names", "devices", "select_device", "device_name"]
@@ -200,6 +200,13 @@ def _vertex_rows(vertices, a, name):
             raise ValueError(f"{name}: vertex id out of range 0..{len(vertices) - 1}")
         return vertices[a]
     return a
+
+
+def mean_curvature(vertices, faces):
+    """Signed mean curvature at each vertex of an oriented surface ((n,), inverse length units;
+    positive where it bends away from its normals): the scalar a dense registration on the
+    sphere can match when FreeSurfer's curvature or sulcal depth is not at hand."""
+    return _vpm._mean_curvature(np.asarray(vertices, dtype=np.float64), faces)
 
 
 def locate_on_sphere(vertices, faces, points):

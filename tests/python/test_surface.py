@@ -177,6 +177,8 @@ def test_dense_register_on_sphere(vpm, tmp_path):
     rotated on the sphere, its scalar carried along); locate_on_sphere against the vertices."""
     v, f = bumpy_ellipsoid(vpm, tmp_path)
     sphere, _ = vpm.map_to_sphere(v, f)
+    h = vpm.mean_curvature(2 * sphere, f)  # the sphere map's points on a sphere of radius 2
+    assert abs(np.median(h) - 0.5) < 0.02
     faces_at, bary = vpm.locate_on_sphere(sphere, f, sphere[:50] * 3.0)  # any length: a direction
     rebuilt = (sphere[f[faces_at]] * bary[:, :, None]).sum(1)
     assert np.allclose(rebuilt, sphere[:50], atol=1e-12)
