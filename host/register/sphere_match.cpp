@@ -358,6 +358,25 @@ SphereMatchLevel match_level(std::vector<Vector3d>& x, std::vector<Vector3d>& ca
   return lv;
 }
 
+// The levels that run: with landmarks, those narrower than the landmarks' mean nearest-neighbour
+// chord (the landmark flow has set the deformation on the scales above it; a wider dense level
+// there pulls against the held landmarks), at least the finest.
+std::vector<double> dense_widths(const std::vector<double>& widths, const std::vector<Vector3d>& landmarks) {
+  if (landmarks.size() < 2 || widths.empty()) return widths;
+  double spacing = 0;
+  for (size_t i = 0; i < landmarks.size(); ++i) {
+    double best = 2;
+    for (size_t j = 0; j < landmarks.size(); ++j)
+      if (j != i) best = std::min(best, (landmarks[i] - landmarks[j]).norm());
+    spacing += best / static_cast<double>(landmarks.size());
+  }
+  std::vector<double> out;
+  for (double w : widths)
+    if (w < spacing) out.push_back(w);
+  if (out.empty()) out.push_back(*std::min_element(widths.begin(), widths.end()));
+  return out;
+}
+
 }  // namespace
 
 SphereMatchReport match_on_sphere(std::vector<Vector3d>& x, std::vector<Vector3d>& carried, const Points& reference,
@@ -374,7 +393,7 @@ SphereMatchReport match_on_sphere(std::vector<Vector3d>& x, std::vector<Vector3d
   Eigen::VectorXd e;
   sample(raw, x, f0, hint, e, nullptr);
   rep.correlation_before = correlation(f0, f0 + e, area);
-  for (double width : options.widths) {
+  for (double width : dense_widths(options.widths, carried)) {
     if (options.iterations <= 0) break;
     rep.levels.push_back(match_level(x, carried, reference, faces, values, templ, locator, area, tarea, width, options, domain, hint));
   }
