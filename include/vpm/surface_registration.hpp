@@ -37,10 +37,13 @@
 //     mu = ridge x the data term's mean diagonal over the Gram's), one dense Cholesky solve;
 //  d. every vertex (and every landmark) moved through the field (RK4), the step scaled so that no
 //     vertex moves more than max_move x width and halved until the mismatch (the area-weighted
-//     mean of e^2) decreases and no face flips; a level ends when a step gains less than 0.1 %
+//     mean of e^2) decreases and no face flips (flipped slivers repaired as in step 5 when that
+//     changes the face areas by at most 0.1 %); a level ends when a step gains less than 0.1 %
 //     of the mismatch, or after `iterations`.
-// The landmarks (when given) are then put back onto their targets by one more landmark flow
-// from where the dense steps left them, and steps 5-6 follow.
+// With landmarks, the system of step c also pulls the field's value at each landmark to zero
+// (weighted 10 times the data term), only the levels narrower than the landmarks' mean
+// nearest-neighbour chord run (the landmark flow set the coarser scales), and after the levels
+// one more landmark flow puts the landmarks back onto their targets exactly. Steps 5-6 follow.
 #include <Eigen/Core>
 #include <vector>
 
