@@ -3,7 +3,6 @@
 // surface-divergence-free Gaussian field with its centres on an icosphere, coarse to fine.
 #include "register/sphere_match.hpp"
 
-#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -13,6 +12,7 @@
 #include "map/surface_area.hpp"
 #include "register/point_bins.hpp"
 #include "register/sphere_field.hpp"
+#include "register/sphere_step.hpp"
 #include "vpm/error.hpp"
 #include "vpm/icosphere.hpp"
 #include "vpm/locate.hpp"
@@ -22,10 +22,6 @@ namespace vpm::detail {
 
 namespace {
 
-// Terms of the Gauss-Newton system with lambda |x - c|^2 beyond this are left out (below 1e-5
-// of the peak; the step's direction only: the field itself uses every centre within
-// kSphereCutoff).
-constexpr double kSystemCutoff = 16;
 // A step is kept when it lowers the mismatch by this fraction at least; a level ends when the
 // gain is below kLevelGain.
 constexpr double kMinGain = 1e-4, kLevelGain = 1e-3;
@@ -33,8 +29,6 @@ constexpr int kHalvings = 4;
 // A step whose flipped slivers were repaired is kept only if the repaired step changes the face
 // areas (mean |r - 1| against the positions before it) by at most this.
 constexpr double kRepairAreaChange = 0.001;
-// How firmly the dense steps hold the landmarks (hold_landmarks).
-constexpr double kHold = 10;
 
 std::vector<Vector3d> rows(const Points& m) {
   std::vector<Vector3d> v(static_cast<size_t>(m.rows()));
@@ -170,58 +164,6 @@ void sample(const TemplateLevel& tl, const std::vector<Vector3d>& x, const Eigen
 
 double mismatch(const Eigen::VectorXd& e, const Eigen::VectorXd& area) { return area.dot(e.cwiseProduct(e)) / area.sum(); }
 
-// The centres' Gram matrix K (2C x 2C, blocks P_j^T H_jk P_k) and bases P_j.
-Eigen::MatrixXd centre_gram(const std::vector<Vector3d>& c, const std::vector<Eigen::Matrix<double, 3, 2>>& P, double lambda) {
-  const int C = static_cast<int>(c.size());
-  Eigen::MatrixXd K(2 * C, 2 * C);
-  for (int j = 0; j < C; ++j)
-    for (int k = 0; k < C; ++k) K.block<2, 2>(2 * j, 2 * k) = P[j].transpose() * gaussian_hessian(c[j] - c[k], lambda) * P[k];
-  return K;
-}
-
-// The Gauss-Newton system sum_i a_i J_i^T J_i, -sum_i a_i J_i^T e_i with J_i's block at centre j
-// (grad_i x x_i)^T H(x_i, c_j) P_j (the change of e_i per weight a_j).
-void normal_equations(const std::vector<Vector3d>& x, const std::vector<Vector3d>& grad, const Eigen::VectorXd& e,
-                      const Eigen::VectorXd& area, const std::vector<Vector3d>& c,
-                      const std::vector<Eigen::Matrix<double, 3, 2>>& P, double lambda, Eigen::MatrixXd& N, Eigen::VectorXd& b) {
-  const int C = static_cast<int>(c.size()), n = static_cast<int>(x.size()), T = host_threads();
-  std::vector<Eigen::MatrixXd> Ns(static_cast<size_t>(T), Eigen::MatrixXd::Zero(2 * C, 2 * C));
-  std::vector<Eigen::VectorXd> bs(static_cast<size_t>(T), Eigen::VectorXd::Zero(2 * C));
-  parallel_for(T, 2, [&](int b0, int b1) {
-    for (int blk = b0; blk < b1; ++blk) {
-      Eigen::MatrixXd& Nt = Ns[static_cast<size_t>(blk)];
-      Eigen::VectorXd& bt = bs[static_cast<size_t>(blk)];
-      std::vector<int> idx;
-      Eigen::VectorXd row(2 * C);
-      for (int i = blk; i < n; i += T) {
-        const Vector3d s = grad[static_cast<size_t>(i)].cross(x[static_cast<size_t>(i)]);
-        if (s.squaredNorm() == 0) continue;
-        idx.clear();
-        int m = 0;
-        for (int j = 0; j < C; ++j) {
-          const Vector3d r = x[static_cast<size_t>(i)] - c[static_cast<size_t>(j)];
-          if (lambda * r.squaredNorm() > kSystemCutoff) continue;
-          row.segment<2>(m) = (s.transpose() * gaussian_hessian(r, lambda) * P[static_cast<size_t>(j)]).transpose();
-          idx.push_back(j);
-          m += 2;
-        }
-        const double a = area(i);
-        for (size_t p = 0; p < idx.size(); ++p) {
-          bt.segment<2>(2 * idx[p]) -= a * e(i) * row.segment<2>(2 * static_cast<int>(p));
-          for (size_t q = p; q < idx.size(); ++q)
-            Nt.block<2, 2>(2 * idx[p], 2 * idx[q]) += a * row.segment<2>(2 * static_cast<int>(p)) * row.segment<2>(2 * static_cast<int>(q)).transpose();
-        }
-      }
-    }
-  });
-  N = Eigen::MatrixXd::Zero(2 * C, 2 * C);
-  b = Eigen::VectorXd::Zero(2 * C);
-  for (int t = 0; t < T; ++t) N += Ns[static_cast<size_t>(t)], b += bs[static_cast<size_t>(t)];
-  // the blocks were added for centre pairs j <= k only (in the order the vertex met them, which is
-  // increasing j): mirror the upper triangle
-  N.triangularView<Eigen::StrictlyLower>() = N.transpose().triangularView<Eigen::StrictlyLower>();
-}
-
 }  // namespace
 
 namespace {
@@ -233,63 +175,6 @@ double correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const Eig
   const Eigen::VectorXd ca = a.array() - w.dot(a) / W, cb = b.array() - w.dot(b) / W;
   const double d = std::sqrt(w.dot(ca.cwiseProduct(ca)) * w.dot(cb.cwiseProduct(cb)));
   return d > 0 ? w.dot(ca.cwiseProduct(cb)) / d : 0;
-}
-
-// The landmarks held: sum_p M_p^T M_p, M_p (2 x 2C) the field's tangent components at the
-// landmark p per weight (B_p^T [p]x H(p, c_j) P_j), scaled to kHold x the data term's trace, so
-// the step's field nearly vanishes at the landmarks and the dense steps keep what they matched.
-void hold_landmarks(const std::vector<Vector3d>& carried, const std::vector<Vector3d>& c,
-                    const std::vector<Eigen::Matrix<double, 3, 2>>& P, double lambda, Eigen::MatrixXd& N) {
-  if (carried.empty()) return;
-  const int C = static_cast<int>(c.size());
-  Eigen::MatrixXd hold = Eigen::MatrixXd::Zero(2 * C, 2 * C);
-  Eigen::MatrixXd M(2, 2 * C);
-  for (const Vector3d& p : carried) {
-    const Eigen::Matrix<double, 3, 2> B = tangent_basis(p);
-    Eigen::Matrix3d cross;
-    cross << 0, -p.z(), p.y(), p.z(), 0, -p.x(), -p.y(), p.x(), 0;
-    for (int j = 0; j < C; ++j)
-      M.block<2, 2>(0, 2 * j) = B.transpose() * cross * gaussian_hessian(p - c[static_cast<size_t>(j)], lambda) * P[static_cast<size_t>(j)];
-    hold.noalias() += M.transpose() * M;
-  }
-  if (hold.trace() > 0) N += kHold * N.trace() / hold.trace() * hold;
-}
-
-// The field of the Gauss-Newton step at one level: weights u_j = P_j a_j, a the solution of
-// (N + mu K) a = b, mu = ridge x tr(N) / tr(K).
-SphereField gauss_newton_field(Eigen::MatrixXd N, const Eigen::VectorXd& b, const Eigen::MatrixXd& K,
-                               const std::vector<Vector3d>& c, const std::vector<Eigen::Matrix<double, 3, 2>>& P,
-                               double lambda, double ridge) {
-  const double mu = ridge * N.trace() / K.trace();
-  N += mu * K;
-  N.diagonal().array() += 1e-12 * N.diagonal().maxCoeff();
-  const Eigen::LLT<Eigen::MatrixXd> llt(N);
-  if (llt.info() != Eigen::Success) throw NumericalError("sphere registration: the dense step's system is not positive definite");
-  const Eigen::VectorXd a = llt.solve(b);
-  SphereField field;
-  field.lambda = lambda;
-  field.centres = c;
-  field.weights.resize(c.size());
-  for (size_t j = 0; j < c.size(); ++j) field.weights[j] = P[j] * a.segment<2>(2 * static_cast<Eigen::Index>(j));
-  return field;
-}
-
-// Points moved through `alpha` x the stationary field (two RK4 steps).
-std::vector<Vector3d> advected(std::vector<Vector3d> x, SphereField field, double alpha) {
-  for (Vector3d& w : field.weights) w *= alpha;
-  rk4_step(x, field, field, field, 0.5);
-  rk4_step(x, field, field, field, 0.5);
-  return x;
-}
-
-double max_speed(const std::vector<Vector3d>& x, const SphereField& field) {
-  std::vector<double> part(static_cast<size_t>(host_threads()), 0.0);
-  const int T = host_threads(), n = static_cast<int>(x.size());
-  parallel_for(T, 2, [&](int b0, int b1) {
-    for (int blk = b0; blk < b1; ++blk)
-      for (int i = blk; i < n; i += T) part[static_cast<size_t>(blk)] = std::max(part[static_cast<size_t>(blk)], field(x[static_cast<size_t>(i)]).norm());
-  });
-  return *std::max_element(part.begin(), part.end());
 }
 
 // One level: the scalars smoothed at smoothing x width, the centres on an icosphere, at most
@@ -305,22 +190,16 @@ SphereMatchLevel match_level(std::vector<Vector3d>& x, std::vector<Vector3d>& ca
   const Eigen::VectorXd f = standardise(smooth(reference, faces, values, area, sigma), area, "subject");
   TemplateLevel tl{&locator, standardise(smooth(templ.sphere, templ.faces, templ.values, tarea, sigma), tarea, "template"), {}};
   tl.grad = vertex_gradients(templ.sphere, templ.faces, tl.g);
-  const std::vector<Vector3d> c = rows(icosphere(centre_level(width)).vertices);
-  std::vector<Eigen::Matrix<double, 3, 2>> P(c.size());
-  for (size_t j = 0; j < c.size(); ++j) P[j] = weight_basis(c[j]);
-  lv.centres = static_cast<int>(c.size());
-  const Eigen::MatrixXd K = centre_gram(c, P, lambda);
+  const Centres cs(icosphere(centre_level(width)).vertices, width);
+  lv.centres = cs.size();
+  const Eigen::SparseMatrix<double> K = centre_gram(cs);
   Eigen::VectorXd e;
   std::vector<Vector3d> grad;
   sample(tl, x, f, hint, e, &grad);
   double E = lv.mismatch_before = mismatch(e, area);
   const size_t flipped = domain.flipped(matrix(x), faces).size();  // the step may not add any
   for (int it = 0; it < options.iterations; ++it) {
-    Eigen::MatrixXd N;
-    Eigen::VectorXd b;
-    normal_equations(x, grad, e, area, c, P, lambda, N, b);
-    hold_landmarks(carried, c, P, lambda, N);
-    const SphereField field = gauss_newton_field(std::move(N), b, K, c, P, lambda, options.ridge);
+    const BinnedField field = gauss_newton_field(system_rows(x, grad, carried, cs), area, e, K, cs, options.ridge);
     const double speed = max_speed(x, field);
     if (!(speed > 0)) break;
     double alpha = std::min(1.0, options.max_move * width / speed);
