@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/parallel.hpp"
+#include "vpm/mesh.hpp"
 
 namespace vpm::detail {
 
@@ -38,6 +39,18 @@ struct SphereField {
     return x.cross(w);
   }
 };
+
+// The rows of m as unit vectors, and back.
+inline std::vector<Vector3d> unit_rows(const Points& m) {
+  std::vector<Vector3d> v(static_cast<size_t>(m.rows()));
+  for (Eigen::Index i = 0; i < m.rows(); ++i) v[static_cast<size_t>(i)] = m.row(i).transpose().normalized();
+  return v;
+}
+inline Points to_matrix(const std::vector<Vector3d>& v) {
+  Points m(static_cast<Eigen::Index>(v.size()), 3);
+  for (size_t i = 0; i < v.size(); ++i) m.row(static_cast<Eigen::Index>(i)) = v[i].transpose();
+  return m;
+}
 
 // An orthonormal basis of the plane tangent to the unit sphere at x (3 x 2).
 inline Eigen::Matrix<double, 3, 2> tangent_basis(const Vector3d& x) {

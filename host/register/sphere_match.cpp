@@ -30,18 +30,6 @@ constexpr int kHalvings = 4;
 // areas (mean |r - 1| against the positions before it) by at most this.
 constexpr double kRepairAreaChange = 0.001;
 
-std::vector<Vector3d> rows(const Points& m) {
-  std::vector<Vector3d> v(static_cast<size_t>(m.rows()));
-  for (Eigen::Index i = 0; i < m.rows(); ++i) v[static_cast<size_t>(i)] = m.row(i).transpose().normalized();
-  return v;
-}
-
-Points matrix(const std::vector<Vector3d>& v) {
-  Points m(static_cast<Eigen::Index>(v.size()), 3);
-  for (size_t i = 0; i < v.size(); ++i) m.row(static_cast<Eigen::Index>(i)) = v[i].transpose();
-  return m;
-}
-
 // A third of the chord areas of each vertex's faces.
 Eigen::VectorXd vertex_areas(const Points& x, const Triangles& f) {
   const Eigen::VectorXd a = face_areas(x, f);
@@ -197,7 +185,7 @@ SphereMatchLevel match_level(std::vector<Vector3d>& x, std::vector<Vector3d>& ca
   std::vector<Vector3d> grad;
   sample(tl, x, f, hint, e, &grad);
   double E = lv.mismatch_before = mismatch(e, area);
-  const size_t flipped = domain.flipped(matrix(x), faces).size();  // the step may not add any
+  const size_t flipped = domain.flipped(to_matrix(x), faces).size();  // the step may not add any
   for (int it = 0; it < options.iterations; ++it) {
     const BinnedField field = gauss_newton_field(system_rows(x, grad, carried, cs), area, e, K, cs, options.ridge);
     const double speed = max_speed(x, field);
@@ -207,15 +195,15 @@ SphereMatchLevel match_level(std::vector<Vector3d>& x, std::vector<Vector3d>& ca
     double gain = 0;
     for (int h = 0; h <= kHalvings && !kept; ++h, alpha /= 2) {
       std::vector<Vector3d> trial = advected(x, field, alpha);
-      Points tm = matrix(trial);
+      Points tm = to_matrix(trial);
       if (domain.flipped(tm, faces).size() > flipped) {
         // slivers sheared past their width: repaired, when that costs no more area than a step's
         // discretisation does
         repair_sphere_flips(domain, faces, tm);
         if (domain.flipped(tm, faces).size() > flipped ||
-            surface_metrics(matrix(x), tm, faces, SurfaceDomain::sphere).face_area_ratio.mean_abs_dev > kRepairAreaChange)
+            surface_metrics(to_matrix(x), tm, faces, SurfaceDomain::sphere).face_area_ratio.mean_abs_dev > kRepairAreaChange)
           continue;
-        trial = rows(tm);
+        trial = unit_rows(tm);
       }
       std::vector<int> th = hint;
       Eigen::VectorXd te;

@@ -267,12 +267,6 @@ void landmark_flow(const std::vector<Vector3d>& x, const std::vector<Vector3d>& 
   }
 }
 
-std::vector<Vector3d> point_rows(const Points& m) {
-  std::vector<Vector3d> v(static_cast<size_t>(m.rows()));
-  for (Eigen::Index i = 0; i < m.rows(); ++i) v[static_cast<size_t>(i)] = m.row(i).transpose();
-  return v;
-}
-
 // Both registrations: `templ` null for landmarks alone.
 SurfaceRegistrationResult run(const Points& sphere, const Triangles& faces, const Points& landmarks, const Points& targets,
                               const SurfaceRegistrationOptions& options, const Eigen::VectorXd* values,
@@ -304,7 +298,7 @@ SurfaceRegistrationResult run(const Points& sphere, const Triangles& faces, cons
     res.flow_metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::sphere);
   }
   if (templ) {
-    std::vector<Vector3d> moved = point_rows(res.points), carried = q;
+    std::vector<Vector3d> moved = detail::unit_rows(res.points), carried = q;
     res.match = detail::match_on_sphere(moved, carried, reference, faces, *values, *templ, options.match, domain);
     if (!p.empty()) {  // the landmarks back onto their targets from where the dense steps left them
       flow(moved, carried, q, 1 / (res.width * res.width), options.steps, res);

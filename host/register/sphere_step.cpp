@@ -18,18 +18,6 @@ constexpr double kHold = 10;
 // are left out.
 constexpr double kGramCutoff = 25;
 
-std::vector<Vector3d> unit_rows(const Points& m) {
-  std::vector<Vector3d> v(static_cast<size_t>(m.rows()));
-  for (Eigen::Index i = 0; i < m.rows(); ++i) v[static_cast<size_t>(i)] = m.row(i).transpose().normalized();
-  return v;
-}
-
-Points to_matrix(const std::vector<Vector3d>& v) {
-  Points m(static_cast<Eigen::Index>(v.size()), 3);
-  for (size_t i = 0; i < v.size(); ++i) m.row(static_cast<Eigen::Index>(i)) = v[i].transpose();
-  return m;
-}
-
 }  // namespace
 
 Centres::Centres(const Points& at, double width)

@@ -38,8 +38,6 @@ Triangles to_triangles(const py::handle& values, Eigen::Index vertices) {
   return t;
 }
 
-// vpm._register_on_sphere (vpm/surface_registration.hpp), its report a SurfaceMapReport whose
-// `initial` holds the metrics after the flow.
 // A (k,) float array-like of `n` values.
 Eigen::VectorXd to_values(const py::handle& values, Eigen::Index n, const char* what) {
   const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(values);
@@ -48,6 +46,34 @@ Eigen::VectorXd to_values(const py::handle& values, Eigen::Index n, const char* 
   return Eigen::Map<const Eigen::VectorXd>(a.data(), n);
 }
 
+// The landmark registration's options of both domains.
+SurfaceRegistrationOptions landmark_options(int steps, double width_factor, bool rigid, bool restore) {
+  SurfaceRegistrationOptions o;
+  o.steps = steps;
+  o.width_factor = width_factor;
+  o.rigid = rigid;
+  if (!restore) o.restore_rounds = 0;
+  return o;
+}
+
+// (points, report) of a registration `work` run without the GIL: a SurfaceMapReport whose
+// `initial` holds the metrics after the flow.
+template <class Work>
+py::tuple registration_result(const SurfaceRegistrationOptions& o, Work&& work) {
+  auto report = std::make_unique<SurfaceReport>();
+  Points out = without_gil(nullptr, [&] {
+    SurfaceRegistrationResult r = work();
+    report->seconds = r.seconds;
+    report->json = to_json(r, o).dump(-1);
+    report->initial = std::move(r.flow_metrics);
+    report->final = std::move(r.metrics);
+    report->converged = r.landmark_max_error <= 5e-4 && report->final.flipped_faces == 0;
+    return std::move(r.points);
+  });
+  return py::make_tuple(owned_array(std::move(out)), std::move(report));
+}
+
+// vpm._register_on_sphere (vpm/surface_registration.hpp).
 void bind_sphere_registration(py::module_& m) {
   m.def(
       "_register_on_sphere",
@@ -57,11 +83,7 @@ void bind_sphere_registration(py::module_& m) {
         const Points v = to_points(vertices, "vertices");
         const Triangles f = to_triangles(faces, v.rows());
         const Points from = to_points(landmarks, "landmarks"), to = to_points(targets, "targets");
-        SurfaceRegistrationOptions o;
-        o.steps = steps;
-        o.width_factor = width_factor;
-        o.rigid = rigid;
-        if (!restore) o.restore_rounds = 0;
+        SurfaceRegistrationOptions o = landmark_options(steps, width_factor, rigid, restore);
         o.match.iterations = iterations;
         if (!widths.empty()) o.match.widths = widths;
         const bool dense = !templ.is_none();
@@ -76,18 +98,9 @@ void bind_sphere_registration(py::module_& m) {
           t.values = to_values(parts[2], t.sphere.rows(), "template values");
           subject_values = to_values(values, v.rows(), "values");
         }
-        auto report = std::make_unique<SurfaceReport>();
-        Points out = without_gil(nullptr, [&] {
-          SurfaceRegistrationResult r = dense ? register_on_sphere(v, f, subject_values, t, from, to, o)
-                                              : register_on_sphere(v, f, from, to, o);
-          report->seconds = r.seconds;
-          report->json = to_json(r, o).dump(-1);
-          report->initial = std::move(r.flow_metrics);
-          report->final = std::move(r.metrics);
-          report->converged = r.landmark_max_error <= 5e-4 && report->final.flipped_faces == 0;
-          return std::move(r.points);
+        return registration_result(o, [&] {
+          return dense ? register_on_sphere(v, f, subject_values, t, from, to, o) : register_on_sphere(v, f, from, to, o);
         });
-        return py::make_tuple(owned_array(std::move(out)), std::move(report));
       },
       py::arg("vertices"), py::arg("faces"), py::arg("landmarks"), py::arg("targets"), py::kw_only(),
       py::arg("steps") = SurfaceRegistrationOptions{}.steps, py::arg("width_factor") = SurfaceRegistrationOptions{}.width_factor,
@@ -103,22 +116,8 @@ void bind_disk_registration(py::module_& m) {
         const Points v = to_points(vertices, "vertices");
         const Triangles f = to_triangles(faces, v.rows());
         const Points from = to_points(landmarks, "landmarks"), to = to_points(targets, "targets");
-        SurfaceRegistrationOptions o;
-        o.steps = steps;
-        o.width_factor = width_factor;
-        o.rigid = rigid;
-        if (!restore) o.restore_rounds = 0;
-        auto report = std::make_unique<SurfaceReport>();
-        Points out = without_gil(nullptr, [&] {
-          SurfaceRegistrationResult r = register_in_disk(v, f, from, to, o);
-          report->seconds = r.seconds;
-          report->json = to_json(r, o).dump(-1);
-          report->initial = std::move(r.flow_metrics);
-          report->final = std::move(r.metrics);
-          report->converged = r.landmark_max_error <= 5e-4 && report->final.flipped_faces == 0;
-          return std::move(r.points);
-        });
-        return py::make_tuple(owned_array(std::move(out)), std::move(report));
+        const SurfaceRegistrationOptions o = landmark_options(steps, width_factor, rigid, restore);
+        return registration_result(o, [&] { return register_in_disk(v, f, from, to, o); });
       },
       py::arg("vertices"), py::arg("faces"), py::arg("landmarks"), py::arg("targets"), py::kw_only(),
       py::arg("steps") = SurfaceRegistrationOptions{}.steps, py::arg("width_factor") = SurfaceRegistrationOptions{}.width_factor,
