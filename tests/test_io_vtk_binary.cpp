@@ -137,7 +137,7 @@ TEST_CASE("io: vpm writes .vtu as appended raw binary by default and ASCII on re
   CHECK_THROWS_WITH(read_mesh(tmp + "cut.vtu"), Catch::StartsWith(tmp + "cut.vtu"));
 }
 
-TEST_CASE("io: .vtp (VTK PolyData of triangles) reads back what write_surface wrote; other cells refused") {
+TEST_CASE("io: .vtp (VTK PolyData of triangles) reads back what write_surface wrote, other cells refused") {
   const std::string dir = (fs::temp_directory_path() / "vpm_test_vtp").string();
   fs::create_directories(dir);
   TriSurface s;

@@ -126,7 +126,7 @@ TEST_CASE("dense sphere registration: a scalar's known area-preserving deformati
   CHECK(r.metrics.max_radius_error <= 1e-12);
 }
 
-TEST_CASE("dense sphere registration: a subject onto itself is the identity; landmarks stay exact; bad scalars refused") {
+TEST_CASE("dense sphere registration: a subject onto itself is the identity, landmarks stay exact, bad scalars refused") {
   const TriSurface s = icosphere(4);
   const Eigen::VectorXd f = features(s.vertices);
   const SurfaceRegistrationResult self = register_on_sphere(s.vertices, s.triangles, f, {s.vertices, s.triangles, f}, Points(0, 3), Points(0, 3));
