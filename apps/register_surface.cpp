@@ -10,6 +10,7 @@
 #include <optional>
 
 #include "dense_options.hpp"
+#include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/format.hpp"
 #include "vpm/io.hpp"
@@ -162,11 +163,12 @@ int register_surface(const Args& args, const std::string& in, const std::string&
     values = read_values(*args.get("--overlay"), surface, in);
   }
   const double t_read = seconds_since(t0);
+  Device& dev = Device::current();
   SurfaceRegistrationResult r;
   try {
-    r = t ? register_on_sphere(surface.vertices, surface.triangles, values, *t, from.points, to.points, opt)
+    r = t ? register_on_sphere(surface.vertices, surface.triangles, values, *t, from.points, to.points, opt, &dev)
           : domain == SurfaceDomain::disk ? register_in_disk(surface.vertices, surface.triangles, from.points, to.points, opt)
-                                          : register_on_sphere(surface.vertices, surface.triangles, from.points, to.points, opt);
+                                          : register_on_sphere(surface.vertices, surface.triangles, from.points, to.points, opt, &dev);
   } catch (const InputError& e) {
     throw InputError((src ? *src + ", " + *dst : in + ", " + *templ) + ": " + e.what());
   }
@@ -190,6 +192,8 @@ int register_surface(const Args& args, const std::string& in, const std::string&
   if (const auto report_path = args.get("--report")) {
     Json report = report_json(in, surface, templ, from.points.rows(), r, opt);
     report["domain"] = to_string(domain);
+    // where the flows' advections ran (the disk's run on the host)
+    report["device"] = domain == SurfaceDomain::disk ? Device::host()->name() : dev.name();
     report["timings_s"] = Json::object();
     report["timings_s"]["read"] = t_read;
     report["timings_s"]["register"] = r.seconds;

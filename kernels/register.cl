@@ -1,5 +1,6 @@
 // Registration kernels: evaluation of divergence-free RBF fields (include/vpm/rbf.hpp) and
-// RK4 advection of points through a sequence of such fields (include/vpm/registration.hpp).
+// RK4 advection of points through a sequence of such fields (include/vpm/registration.hpp), or
+// through the sphere registration's fields (kind 2, host/register/sphere_field.hpp).
 // Points, centres and coefficients are n x 3 row-major doubles. One work item per point,
 // looping over the centres (the dominant cost: centres x points x 4 stages x steps).
 
@@ -39,12 +40,12 @@ __kernel void rk4_advect_soa(const int nv, __global real* xs, __global real* ys,
                              __global const int* cells, const real o0, const real o1, const real o2,
                              const real side, const int g, const real reach,
                              __global const real* centres, __global const real* coefs,
-                             const real l, const real cut, const int tangent) {
+                             const real l, const real cut, const int kind) {
   const int i = get_global_id(0);
   if (i >= nv) return;
   const CentreGrid grid = {o0, o1, o2, side, g};
   vreal p0 = VLOAD(i, xs), p1 = VLOAD(i, ys), p2 = VLOAD(i, zs);
-  rk4_points(&p0, &p1, &p2, steps, dt, slot, cells, grid, reach, centres, coefs, l, cut, tangent);
+  rk4_points(&p0, &p1, &p2, steps, dt, slot, cells, grid, reach, centres, coefs, l, cut, kind);
   VSTORE(p0, i, xs);
   VSTORE(p1, i, ys);
   VSTORE(p2, i, zs);

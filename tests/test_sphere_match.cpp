@@ -9,9 +9,11 @@
 #include <random>
 #include <string>
 
+#include "support/devices.hpp"
 #include "support/process.hpp"
 #include "support/scratch.hpp"
 #include "vpm/curvature.hpp"
+#include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/icosphere.hpp"
 #include "vpm/io.hpp"
@@ -148,6 +150,47 @@ TEST_CASE("dense sphere registration: a subject onto itself is the identity, lan
   CHECK_THROWS_WITH(register_on_sphere(s.vertices, s.triangles, Eigen::VectorXd::Constant(f.size(), 2.0), t, Points(0, 3), Points(0, 3)),
                     Catch::Contains("constant"));
   CHECK_THROWS_AS(register_on_sphere(s.vertices, s.triangles, from, to.topRows(3)), InputError);
+}
+
+TEST_CASE("sphere registration on host and device: the landmark flow and the dense steps' advections agree") {
+  const TriSurface s = icosphere(3), tpl = icosphere(4);
+  const SphereTemplate t{twisted(tpl.vertices), tpl.triangles, features(tpl.vertices)};
+  Points from(5, 3), to(5, 3);
+  for (int i = 0; i < 5; ++i) {
+    from.row(i) = s.vertices.row(i * 113);
+    to.row(i) = twist(from.row(i).transpose()).transpose();
+  }
+  SurfaceRegistrationOptions o;
+  o.restore_rounds = 0;  // the flows alone (the restoration is the host's polish)
+  o.match.widths = {0.56, 0.28};
+  o.match.iterations = 3;
+  Points host_landmarks, host_dense;
+  SphereMatchReport host_match;
+  for (auto& dev : test::devices()) {
+    INFO("device " << dev->name());
+    const SurfaceRegistrationResult l = register_on_sphere(s.vertices, s.triangles, from, to, o, dev.get());
+    const SurfaceRegistrationResult d = register_on_sphere(s.vertices, s.triangles, features(s.vertices), t, from, to, o, dev.get());
+    for (const SurfaceRegistrationResult* r : {&l, &d}) {
+      CHECK(r->landmark_max_error <= 1e-10);
+      CHECK(r->metrics.flipped_faces == 0);
+      CHECK(r->metrics.max_radius_error <= 1e-12);
+    }
+    REQUIRE(d.match.levels.size() == 2);
+    CHECK(d.match.levels[1].iterations > 0);
+    if (dev->is_host()) {
+      host_landmarks = l.points, host_dense = d.points, host_match = d.match;
+      CHECK((l.points - s.vertices).cwiseAbs().maxCoeff() > 0.01);  // the flows moved the vertices
+      continue;
+    }
+    // the same code (kernels/rbf_advect.clh) on both: round-off apart (the device may keep a few
+    // centres below e^-32 that the host leaves out)
+    CHECK((l.points - host_landmarks).cwiseAbs().maxCoeff() < 1e-10);
+    CHECK((d.points - host_dense).cwiseAbs().maxCoeff() < 1e-9);
+    for (size_t k = 0; k < d.match.levels.size(); ++k) {
+      CHECK(d.match.levels[k].iterations == host_match.levels[k].iterations);
+      CHECK(d.match.levels[k].mismatch_after == Approx(host_match.levels[k].mismatch_after).epsilon(1e-9));
+    }
+  }
 }
 
 TEST_CASE("vpm register SPHERE --template --overlay --template-overlay: the scalar matched, report, refusals exit 2") {

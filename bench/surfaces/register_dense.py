@@ -29,7 +29,8 @@ computed here for identity and ideal), the scalar correlation before -> after (d
 
 Usage: register_dense.py OUT_DIR [--runs 3] [--surfaces colin27-22k,...] [--seeds 11,12,13]
                          [--landmarks 12] [--template-level 6] [--amplitude 0.15]
-                         [--vpm build/vpm] [--timeout 600]
+                         [--vpm build/vpm] [--timeout 600] [--dense-widths W,...]
+                         [--methods landmarks,curvature,landmarks+curvature]
 Defaults of the dense registration were chosen on aal-19k with seeds 1-3 (the development set);
 the report set is Colin27's brain boundary at 22k, 64k, 128k faces, seeds 11-13.
 Writes OUT_DIR/register_dense.json and OUT_DIR/register_dense.md (and prints the table).
@@ -240,9 +241,11 @@ def one_seed(vpm_cli, s, out, seed, a, names):
     template_labels = labels_on_sphere(T, s.G, s.labels_B, points)
     landmarks = ["--landmarks", src, "--targets", dst]
     dense = ["--template", tpl, "--overlay", s.curv_A, "--template-overlay", s.curv_B]
+    if a.dense_widths:
+        dense += ["--dense-widths", a.dense_widths]
     args = {"landmarks": landmarks, "curvature": dense, "landmarks+curvature": landmarks + dense}
     rows = []
-    for method in METHODS:
+    for method in [m for m in METHODS if m in a.methods.split(",") or m not in args]:
         row = {"surface": s.name, "set": "development" if s.name == "aal-19k" or seed < 10 else "report", "seed": seed,
                "method": method, "faces": len(s.F), "template_faces": len(s.G), "landmark_regions": [names[r] for r in chosen],
                "held_out_regions": len(held)}
@@ -295,6 +298,9 @@ def main():
     ap.add_argument("--amplitude", type=float, default=0.15, help="each twist's largest angle (radians)")
     ap.add_argument("--vpm", default=os.path.join(HERE, "..", "..", "build", "vpm"))
     ap.add_argument("--timeout", type=int, default=600)
+    ap.add_argument("--dense-widths", default="", help="passed to vpm register --dense-widths (default: vpm's)")
+    ap.add_argument("--methods", default="landmarks,curvature,landmarks+curvature",
+                    help="the registrations run (identity and ideal are always scored)")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     vpm_cli = os.path.abspath(a.vpm)
@@ -305,6 +311,7 @@ def main():
         for seed in a.seeds.split(","):
             rows += one_seed(vpm_cli, s, a.out, int(seed), a, names)
     json.dump({"date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()), "runs": a.runs, "landmarks": a.landmarks,
+               "dense_widths": a.dense_widths or "default",
                "template_level": a.template_level, "amplitude": a.amplitude, "points": POINTS, "rows": rows},
               open(os.path.join(a.out, "register_dense.json"), "w"), indent=1)
     md = table(rows, a.runs)

@@ -1,11 +1,12 @@
 // ---- advection: K RK4 steps through the fields, on the host or the device, written once
-// (kernels/rbf_advect.clh) ----
+// (kernels/rbf_advect.clh): the ball's RBF fields (advect) and the sphere's (advect_on_sphere) ----
 #include <algorithm>
 #include <cmath>
 
 #include <boost/compute/container/vector.hpp>
 
 #include "register/registration_steps.hpp"
+#include "register/sphere_field.hpp"
 #include "core/device_cl.hpp"
 #include "core/parallel.hpp"
 #include "vpm/device.hpp"
@@ -111,15 +112,15 @@ PackedFields pack_fields(const std::vector<DivFreeField>& f, int steps) {
 }
 
 // The host: rbf_advect.clh's rk4_points one point at a time (LANES 1) on the host threads.
-void advect_host(Points& x, const std::vector<DivFreeField>& f, int steps) {
+// `kind`: rbf_advect.clh's (0 free, 1 tangent, 2 the sphere's).
+void advect_host(Points& x, const std::vector<DivFreeField>& f, int steps, int kind) {
   const PackedFields pk = pack_fields(f, steps);
   const detail::CentreGrid grid = {pk.origin(0), pk.origin(1), pk.origin(2), pk.side, pk.g};
-  const int tangent = f[0].kernel == RbfKernel::Tangent ? 1 : 0;
   detail::parallel_for(static_cast<int>(x.rows()), 64, [&](int i0, int i1) {
     for (int i = i0; i < i1; ++i) {
       double p0 = x(i, 0), p1 = x(i, 1), p2 = x(i, 2);
       detail::rk4_points(&p0, &p1, &p2, steps, 1.0 / steps, pk.slot.data(), pk.cells.data(), grid, pk.reach,
-                         pk.centres.data(), pk.coefs.data(), f[0].lambda, kFieldCut, tangent);
+                         pk.centres.data(), pk.coefs.data(), f[0].lambda, kFieldCut, kind);
       x(i, 0) = p0;
       x(i, 1) = p1;
       x(i, 2) = p2;
@@ -127,10 +128,11 @@ void advect_host(Points& x, const std::vector<DivFreeField>& f, int steps) {
   });
 }
 
-void advect_device(Device& dev, Points& x, const std::vector<DivFreeField>& f, int steps) {
+void advect_device(Device& dev, Points& x, const std::vector<DivFreeField>& f, int steps, int kind) {
   const PackedFields pk = pack_fields(f, steps);
   // Structure-of-arrays positions in Z-order, padded to a multiple of the SIMD width (8 lanes
-  // of double on CPU devices, 1 elsewhere); padding points sit at the origin and are discarded.
+  // of double on CPU devices, 1 elsewhere); padding points sit at the origin (on the sphere: at
+  // the last point, which the sphere's normalisation keeps finite) and are discarded.
   // The Z-order puts close points in one work item, so the kernel visits only the cells of
   // centres near them (kFieldCut) whatever the caller's numbering.
   const int lanes = dev.description().kind == DeviceKind::cpu ? 8 : 1;
@@ -138,8 +140,9 @@ void advect_device(Device& dev, Points& x, const std::vector<DivFreeField>& f, i
   const size_t nv = (n + lanes - 1) / lanes, np = nv * lanes;
   const std::vector<int> order = spatial_order(x);
   std::vector<double> soa(3 * np, 0.0);
-  for (size_t i = 0; i < n; ++i)
-    for (int c = 0; c < 3; ++c) soa[c * np + i] = x(order[i], c);
+  for (size_t i = 0; i < np; ++i)
+    if (i < n || kind == 2)
+      for (int c = 0; c < 3; ++c) soa[c * np + i] = x(order[std::min(i, n - 1)], c);
   auto& q = dev.cl().queue;
   bc::vector<double> dxs(soa.begin(), soa.begin() + np, q);
   bc::vector<double> dys(soa.begin() + np, soa.begin() + 2 * np, q);
@@ -150,8 +153,7 @@ void advect_device(Device& dev, Points& x, const std::vector<DivFreeField>& f, i
   bc::vector<double> da(pk.coefs.begin(), pk.coefs.end(), q);
   auto k = dev.cl().kernel("register", "rk4_advect_soa", "-DLANES=" + std::to_string(lanes));
   k.set_args(static_cast<int>(nv), dxs, dys, dzs, steps, 1.0 / steps, dslot, dcells, pk.origin(0), pk.origin(1),
-             pk.origin(2), pk.side, pk.g, pk.reach, dc, da, f[0].lambda, kFieldCut,
-             f[0].kernel == RbfKernel::Tangent ? 1 : 0);
+             pk.origin(2), pk.side, pk.g, pk.reach, dc, da, f[0].lambda, kFieldCut, kind);
   dev.cl().launch(k, nv);
   bc::copy(dxs.begin(), dxs.end(), soa.begin(), q);
   bc::copy(dys.begin(), dys.end(), soa.begin() + np, q);
@@ -160,15 +162,31 @@ void advect_device(Device& dev, Points& x, const std::vector<DivFreeField>& f, i
     for (int c = 0; c < 3; ++c) x(order[i], c) = soa[c * np + i];
 }
 
-}  // namespace
-
-void advect(Device& dev, Points& x, const std::vector<DivFreeField>& f, int steps) {
+void check_fields(const std::vector<DivFreeField>& f, int steps) {
   if (steps < 1) throw InputError("advect: steps must be at least 1");
   if (f.size() != 1 && f.size() != static_cast<size_t>(2 * steps + 1))
     throw InputError("advect: expected 1 or 2K+1 fields");
-  if (x.rows() == 0) return;
-  if (dev.is_host()) return advect_host(x, f, steps);
-  advect_device(dev, x, f, steps);
 }
+
+void advect_kind(Device& dev, Points& x, const std::vector<DivFreeField>& f, int steps, int kind) {
+  check_fields(f, steps);
+  if (x.rows() == 0) return;
+  if (dev.is_host()) return advect_host(x, f, steps, kind);
+  advect_device(dev, x, f, steps, kind);
+}
+
+}  // namespace
+
+void advect(Device& dev, Points& x, const std::vector<DivFreeField>& f, int steps) {
+  advect_kind(dev, x, f, steps, f.empty() || f[0].kernel != RbfKernel::Tangent ? 0 : 1);
+}
+
+namespace detail {
+
+void advect_on_sphere(Device& dev, Points& x, const std::vector<DivFreeField>& f, int steps) {
+  advect_kind(dev, x, f, steps, 2);
+}
+
+}  // namespace detail
 
 }  // namespace vpm

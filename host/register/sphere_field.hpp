@@ -2,13 +2,17 @@
 // The surface-divergence-free Gaussian field on the unit sphere shared by the landmark and the
 // dense registrations (vpm/surface_registration.hpp): v(x) = x × sum_j H(x, y_j) u_j with
 // H = grad_x grad_y^T exp(-lambda |x - y|^2), its Gram matrix, the exponential map, and the RK4
-// advection of points through it.
+// advection of points through it (advect_on_sphere, host or device).
 #include <Eigen/Core>
 #include <cmath>
 #include <vector>
 
-#include "core/parallel.hpp"
 #include "vpm/mesh.hpp"
+#include "vpm/rbf.hpp"
+
+namespace vpm {
+class Device;
+}
 
 namespace vpm::detail {
 
@@ -82,18 +86,21 @@ inline Vector3d log_map(const Vector3d& x, const Vector3d& q) {
   return n < 1e-300 ? Vector3d::Zero() : Vector3d(std::atan2(n, x.dot(q)) * t / n);
 }
 
-// One RK4 step of dt from t for every point of x (in place), fields at t, t + dt/2, t + dt;
-// the points put back on the sphere against round-off.
-inline void rk4_step(std::vector<Vector3d>& x, const SphereField& f0, const SphereField& fh, const SphereField& f1, double dt) {
-  parallel_for(static_cast<int>(x.size()), 256, [&](int i0, int i1) {
-    for (int i = i0; i < i1; ++i) {
-      const Vector3d k1 = f0(x[i]);
-      const Vector3d k2 = fh(x[i] + dt / 2 * k1);
-      const Vector3d k3 = fh(x[i] + dt / 2 * k2);
-      const Vector3d k4 = f1(x[i] + dt * k3);
-      x[i] = (x[i] + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)).normalized();
-    }
-  });
+// Moves the unit rows of `x` through sphere fields: one (stationary) or 2K+1 (field s at time
+// s / (2K)), each the SphereField of its centres and coefficients (u_j; the DivFreeField's kernel
+// is not read), K RK4 steps of 1/K, each put back on the sphere: on `device` by
+// kernels/register.cl's rk4_advect_soa (kernels/rbf_advect.clh, kind 2), on the host device by
+// the same code on the host threads. Centres whose Gaussian is below e^-32 at a point are left
+// out (host/register/advect.cpp).
+void advect_on_sphere(Device& device, Points& x, const std::vector<DivFreeField>& fields, int steps);
+
+// The field's centres and weights as advect_on_sphere's carrier, the weights scaled by `scale`.
+inline DivFreeField carrier(const SphereField& f, double scale = 1) {
+  DivFreeField d;
+  d.lambda = f.lambda;
+  d.centres = to_matrix(f.centres);
+  d.coefficients = scale * to_matrix(f.weights);
+  return d;
 }
 
 }  // namespace vpm::detail

@@ -167,7 +167,7 @@ double correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const Eig
 
 // One level: the scalars smoothed at smoothing x width, the centres on an icosphere, at most
 // options.iterations Gauss-Newton steps.
-SphereMatchLevel match_level(std::vector<Vector3d>& x, std::vector<Vector3d>& carried, const Points& reference,
+SphereMatchLevel match_level(Device& device, std::vector<Vector3d>& x, std::vector<Vector3d>& carried, const Points& reference,
                              const Triangles& faces, const Eigen::VectorXd& values, const SphereTemplate& templ,
                              const SphereLocator& locator, const Eigen::VectorXd& area, const Eigen::VectorXd& tarea,
                              double width, const SphereMatchOptions& options, const SurfaceDomainMoves& domain,
@@ -194,7 +194,7 @@ SphereMatchLevel match_level(std::vector<Vector3d>& x, std::vector<Vector3d>& ca
     bool kept = false;
     double gain = 0;
     for (int h = 0; h <= kHalvings && !kept; ++h, alpha /= 2) {
-      std::vector<Vector3d> trial = advected(x, field, alpha);
+      std::vector<Vector3d> trial = advected(device, x, field, alpha);
       Points tm = to_matrix(trial);
       if (domain.flipped(tm, faces).size() > flipped) {
         // slivers sheared past their width: repaired, when that costs no more area than a step's
@@ -214,7 +214,7 @@ SphereMatchLevel match_level(std::vector<Vector3d>& x, std::vector<Vector3d>& ca
       kept = true;
       gain = (E - Et) / E;
       x = std::move(trial);
-      carried = advected(carried, field, alpha);
+      carried = advected(device, carried, field, alpha);
       hint = std::move(th), e = std::move(te), grad = std::move(tg), E = Et;
     }
     if (!kept) break;
@@ -246,7 +246,7 @@ std::vector<double> dense_widths(const std::vector<double>& widths, const std::v
 
 }  // namespace
 
-SphereMatchReport match_on_sphere(std::vector<Vector3d>& x, std::vector<Vector3d>& carried, const Points& reference,
+SphereMatchReport match_on_sphere(Device& device, std::vector<Vector3d>& x, std::vector<Vector3d>& carried, const Points& reference,
                                   const Triangles& faces, const Eigen::VectorXd& values, const SphereTemplate& templ,
                                   const SphereMatchOptions& options, const SurfaceDomainMoves& domain) {
   const auto t0 = Clock::now();
@@ -262,7 +262,7 @@ SphereMatchReport match_on_sphere(std::vector<Vector3d>& x, std::vector<Vector3d
   rep.correlation_before = correlation(f0, f0 + e, area);
   for (double width : dense_widths(options.widths, carried)) {
     if (options.iterations <= 0) break;
-    rep.levels.push_back(match_level(x, carried, reference, faces, values, templ, locator, area, tarea, width, options, domain, hint));
+    rep.levels.push_back(match_level(device, x, carried, reference, faces, values, templ, locator, area, tarea, width, options, domain, hint));
   }
   sample(raw, x, f0, hint, e, nullptr);
   rep.correlation_after = correlation(f0, f0 + e, area);

@@ -16,6 +16,7 @@
 #include "map/surface_polish.hpp"
 #include "register/sphere_field.hpp"
 #include "register/sphere_match.hpp"
+#include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/registration.hpp"
 #include "vpm/timing.hpp"
@@ -184,18 +185,19 @@ double loo_width_factor(const std::vector<Vector3d>& p, const std::vector<Vector
 
 // Steps 3-4 from the rotated points x and landmarks p: the RK4 flow, then the last step onto the
 // targets q. Fills res.points and the landmark errors.
-void flow(std::vector<Vector3d> x, const std::vector<Vector3d>& p, const std::vector<Vector3d>& q, double lambda,
-          int steps, SurfaceRegistrationResult& res) {
-  std::vector<Vector3d> moving = p;  // the landmarks, advected with the vertices to measure the flow's error
-  const double dt = 1.0 / steps;
-  SphereField f0 = field_at(p, q, 0, lambda);
-  for (int k = 0; k < steps; ++k) {
-    const SphereField fh = field_at(p, q, (k + 0.5) * dt, lambda);
-    SphereField f1 = field_at(p, q, (k + 1) * dt, lambda);
-    detail::rk4_step(x, f0, fh, f1, dt);
-    detail::rk4_step(moving, f0, fh, f1, dt);
-    f0 = std::move(f1);
-  }
+void flow(Device& device, std::vector<Vector3d> x, const std::vector<Vector3d>& p, const std::vector<Vector3d>& q,
+          double lambda, int steps, SurfaceRegistrationResult& res) {
+  // the vertices and the landmarks (advected with them to measure the flow's error) in one call,
+  // through the fields at the 2K + 1 stage times
+  std::vector<DivFreeField> fields;
+  for (int s = 0; s <= 2 * steps; ++s) fields.push_back(detail::carrier(field_at(p, q, s / (2.0 * steps), lambda)));
+  std::vector<Vector3d> both = x;
+  both.insert(both.end(), p.begin(), p.end());
+  Points m = detail::to_matrix(both);
+  detail::advect_on_sphere(device, m, fields, steps);
+  for (size_t i = 0; i < x.size(); ++i) x[i] = m.row(static_cast<Eigen::Index>(i)).transpose();
+  std::vector<Vector3d> moving(p.size());
+  for (size_t i = 0; i < p.size(); ++i) moving[i] = m.row(static_cast<Eigen::Index>(x.size() + i)).transpose();
   // the last step: the field that carries each landmark's image onto its target, one exp step
   std::vector<Vector3d> rest(p.size());
   res.flow_landmark_max_error = res.landmark_max_error = 0;
@@ -249,14 +251,14 @@ namespace {
 
 // The landmark flow of steps 3-5 from x (rotated) carrying p onto q: the width factor given, or
 // chosen by leave-one-out and, while the repair leaves faces flipped, the next narrower one.
-void landmark_flow(const std::vector<Vector3d>& x, const std::vector<Vector3d>& p, const std::vector<Vector3d>& q,
+void landmark_flow(Device& device, const std::vector<Vector3d>& x, const std::vector<Vector3d>& p, const std::vector<Vector3d>& q,
                    const Points& reference, const Triangles& faces, const detail::SurfaceDomainMoves& domain,
                    const SurfaceRegistrationOptions& options, SurfaceRegistrationResult& res) {
   const double spacing = std::min(mean_spacing(p), mean_spacing(q));
   res.width_factor = options.width_factor > 0 ? options.width_factor : loo_width_factor(p, q, spacing);
   while (true) {
     res.width = chord_width(res.width_factor, spacing);
-    flow(x, p, q, 1 / (res.width * res.width), options.steps, res);
+    flow(device, x, p, q, 1 / (res.width * res.width), options.steps, res);
     res.flow_metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::sphere);
     res.repaired_faces = detail::repair_sphere_flips(domain, faces, res.points);
     const double* narrower = std::find(std::begin(kWidthFactors), std::end(kWidthFactors), res.width_factor);
@@ -270,8 +272,10 @@ void landmark_flow(const std::vector<Vector3d>& x, const std::vector<Vector3d>& 
 // Both registrations: `templ` null for landmarks alone.
 SurfaceRegistrationResult run(const Points& sphere, const Triangles& faces, const Points& landmarks, const Points& targets,
                               const SurfaceRegistrationOptions& options, const Eigen::VectorXd* values,
-                              const SphereTemplate* templ) {
+                              const SphereTemplate* templ, Device* device) {
   const auto t0 = Clock::now();
+  std::shared_ptr<Device> host;
+  Device& dev = device ? *device : *(host = Device::host());
   check_inputs(landmarks, targets, options, templ != nullptr);
   const std::vector<Vector3d> start = unit_rows(sphere, "vertex"), input_landmarks = unit_rows(landmarks, "landmark");
   std::vector<Vector3d> x = start, p = input_landmarks;
@@ -291,7 +295,7 @@ SurfaceRegistrationResult run(const Points& sphere, const Triangles& faces, cons
   for (size_t i = 0; i < start.size(); ++i) reference.row(static_cast<Eigen::Index>(i)) = start[i].transpose();
   const detail::SurfaceDomainMoves domain{SurfaceDomain::sphere, {}, landmark_corners(start, faces, input_landmarks)};
   if (!p.empty()) {
-    landmark_flow(x, p, q, reference, faces, domain, options, res);
+    landmark_flow(dev, x, p, q, reference, faces, domain, options, res);
   } else {
     res.points = reference;
     for (size_t i = 0; i < x.size(); ++i) res.points.row(static_cast<Eigen::Index>(i)) = x[i].transpose();
@@ -299,9 +303,9 @@ SurfaceRegistrationResult run(const Points& sphere, const Triangles& faces, cons
   }
   if (templ) {
     std::vector<Vector3d> moved = detail::unit_rows(res.points), carried = q;
-    res.match = detail::match_on_sphere(moved, carried, reference, faces, *values, *templ, options.match, domain);
+    res.match = detail::match_on_sphere(dev, moved, carried, reference, faces, *values, *templ, options.match, domain);
     if (!p.empty()) {  // the landmarks back onto their targets from where the dense steps left them
-      flow(moved, carried, q, 1 / (res.width * res.width), options.steps, res);
+      flow(dev, moved, carried, q, 1 / (res.width * res.width), options.steps, res);
       res.repaired_faces += detail::repair_sphere_flips(domain, faces, res.points);
     } else {
       for (size_t i = 0; i < moved.size(); ++i) res.points.row(static_cast<Eigen::Index>(i)) = moved[i].transpose();
@@ -317,13 +321,14 @@ SurfaceRegistrationResult run(const Points& sphere, const Triangles& faces, cons
 }  // namespace
 
 SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangles& faces, const Points& landmarks,
-                                             const Points& targets, const SurfaceRegistrationOptions& options) {
-  return run(sphere, faces, landmarks, targets, options, nullptr, nullptr);
+                                             const Points& targets, const SurfaceRegistrationOptions& options,
+                                             Device* device) {
+  return run(sphere, faces, landmarks, targets, options, nullptr, nullptr, device);
 }
 
 SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangles& faces, const Eigen::VectorXd& values,
                                              const SphereTemplate& templ, const Points& landmarks, const Points& targets,
-                                             const SurfaceRegistrationOptions& options) {
+                                             const SurfaceRegistrationOptions& options, Device* device) {
   if (values.size() != sphere.rows())
     throw InputError("sphere registration: " + std::to_string(values.size()) + " values for " + std::to_string(sphere.rows()) + " vertices");
   if (templ.values.size() != templ.sphere.rows())
@@ -333,7 +338,7 @@ SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangl
   const std::vector<Vector3d> ts = unit_rows(templ.sphere, "template vertex");
   SphereTemplate t{Points(templ.sphere.rows(), 3), templ.faces, templ.values};
   for (size_t i = 0; i < ts.size(); ++i) t.sphere.row(static_cast<Eigen::Index>(i)) = ts[i].transpose();
-  return run(sphere, faces, landmarks, targets, options, &values, &t);
+  return run(sphere, faces, landmarks, targets, options, &values, &t, device);
 }
 
 namespace detail {

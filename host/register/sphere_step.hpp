@@ -47,8 +47,9 @@ Eigen::SparseMatrix<double> centre_gram(const Centres& cs);
 /// (see sphere_step.cpp).
 BinnedField gauss_newton_field(const SparseRows& J, const Eigen::VectorXd& area, const Eigen::VectorXd& e,
                                const Eigen::SparseMatrix<double>& K, const Centres& cs, double ridge);
-/// Points moved through `alpha` x the stationary field (two RK4 steps, put back on the sphere).
-std::vector<Vector3d> advected(std::vector<Vector3d> x, const BinnedField& field, double alpha);
+/// Points moved through `alpha` x the stationary field on `device` (advect_on_sphere: two RK4
+/// steps, each put back on the sphere).
+std::vector<Vector3d> advected(Device& device, const std::vector<Vector3d>& x, const BinnedField& field, double alpha);
 /// The largest |v| at the points.
 double max_speed(const std::vector<Vector3d>& x, const BinnedField& field);
 

@@ -125,8 +125,11 @@ struct SurfaceRegistrationResult {
 /// faces `faces` by moving `landmarks` (L x 3 on the sphere) onto `targets`. Throws InputError for
 /// points off the sphere, fewer than one landmark, counts that differ, or a landmark and its
 /// target antipodal (no unique great circle); NumericalError when the field cannot be fitted.
+/// `device` (may be null: the host) is where the flows' advections run (kernels/register.cl's
+/// rk4_advect_soa; the host device: the same code on the host threads); the rest runs on the host.
 SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangles& faces, const Points& landmarks,
-                                             const Points& targets, const SurfaceRegistrationOptions& options = {});
+                                             const Points& targets, const SurfaceRegistrationOptions& options = {},
+                                             Device* device = nullptr);
 
 /// Registers a surface mapped to the unit disk (vpm::map_to_disk's points: z = 0, the boundary
 /// loop on the circle) by moving `landmarks` onto `targets` (L x 3, z = 0, both strictly inside
@@ -142,10 +145,11 @@ SurfaceRegistrationResult register_in_disk(const Points& disk, const Triangles& 
 /// Dense registration: the subject's sphere map `sphere` (n x 3) with faces `faces` and its
 /// per-vertex scalar `values` (length n) registered onto `templ`'s, the landmarks (L x 3, L >= 0:
 /// none) moved exactly onto their targets as above. InputError for counts that differ, points
-/// off the sphere, scalars that are not finite or constant.
+/// off the sphere, scalars that are not finite or constant. `device` as above (the dense steps'
+/// advections too).
 SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangles& faces, const Eigen::VectorXd& values,
                                              const SphereTemplate& templ, const Points& landmarks, const Points& targets,
-                                             const SurfaceRegistrationOptions& options = {});
+                                             const SurfaceRegistrationOptions& options = {}, Device* device = nullptr);
 
 /// {"steps", "width", "width_factor", "rotation_angle_deg", "landmark_rms_error", "landmark_max_error",
 ///  "flow_landmark_max_error", "flow": to_json(SurfaceMetrics) (before the restoration),

@@ -169,7 +169,8 @@ def register_on_sphere(vertices, faces, landmarks=None, targets=None, *, values=
     iterations pull the subject's scalar onto the template's (landmarks then optional).
     Options: steps (RK4 steps, 32), width_factor (0: chosen by leave-one-out), rigid (True: the
     best rotation first), restore (True), iterations (dense Gauss-Newton steps per level, 8),
-    widths (the dense levels' Gaussian widths, coarse first).
+    widths (the dense levels' Gaussian widths, coarse first), device (where the flows' advections
+    run: a vpm.devices() index or "host"; default the module's device).
 
     Returns (points, report): (n, 3) unit vectors (the input's rows) and a vpm.SurfaceMapReport
     whose `initial` holds the metrics after the flow and `final` after the restoration (against

@@ -164,6 +164,11 @@ def test_register_on_sphere(vpm, tmp_path):
     assert report.final.face_area_ratio.mean_abs_dev <= report.initial.face_area_ratio.mean_abs_dev
     by_id, _ = vpm.register_on_sphere(sphere, f, ids, tgt)  # landmarks as vertex ids
     assert np.array_equal(by_id, reg)
+    # the flow on the host and on the module's device (OpenCL where there is one): round-off apart
+    flows = [vpm.register_on_sphere(sphere, f, src, tgt, restore=False, **d)[0] for d in ({"device": "host"}, {})]
+    assert np.abs(flows[0] - flows[1]).max() < 1e-9
+    with pytest.raises(ValueError, match="no-such-device"):
+        vpm.register_on_sphere(sphere, f, src, tgt, device="no-such-device")
     with pytest.raises(ValueError, match="vertex id out of range"):
         vpm.register_on_sphere(sphere, f, np.array([0, len(sphere)]), tgt[:2])
     same, _ = vpm.register_on_sphere(sphere, f, src, src)
