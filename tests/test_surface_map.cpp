@@ -8,9 +8,11 @@
 #include <fstream>
 #include <string>
 
+#include "support/devices.hpp"
 #include "support/process.hpp"
 #include "support/scratch.hpp"
 #include "vpm/config.hpp"
+#include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/icosphere.hpp"
 #include "vpm/io.hpp"
@@ -138,6 +140,34 @@ TEST_CASE("surface map: an ellipsoid with a bump reaches face areas within 0.5 %
     CHECK(j.find(k) != nullptr);
   CHECK(j["final"]["face_area_ratio"]["mean_abs_dev"].number() <= 0.005);
   CHECK(j["rounds"].at(0).find("kind")->string() == "polish");
+}
+
+TEST_CASE("surface map on host and device: the equal-area steps' solves on PoCL give the host's map") {
+  const TriSurface s = bumpy_ellipsoid(3);
+  SurfaceMapOptions o, sphere_only;
+  o.sphere.density_solve = InitialMapOptions::DensitySolve::device;  // the device even for a small surface
+  sphere_only = o;
+  sphere_only.polish_rounds = 0;
+  Points host_sphere;
+  SurfaceMapReport host;
+  for (auto& dev : test::devices()) {
+    INFO("device " << dev->name());
+    const SurfaceMapResult r0 = map_to_sphere(s, sphere_only, dev.get()), r = map_to_sphere(s, o, dev.get());
+    check_on_sphere_without_flips(r, s);
+    CHECK(r.report.final.face_area_ratio.mean_abs_dev <= 0.005);
+    if (dev->is_host()) {
+      host_sphere = r0.sphere, host = r.report;
+      CHECK(r.report.sphere.density_solver != "device-amg-cg");
+      continue;
+    }
+    CHECK(r.report.sphere.density_solver == "device-amg-cg");
+    // AMG-CG to a relative residual of 1e-10 against the host's Cholesky: the same sphere map; the
+    // polish from it takes the same steps to the same distortion (its CGLS stops on residuals, so
+    // the points agree to the tolerance's scale, not to round-off)
+    CHECK((r0.sphere - host_sphere).cwiseAbs().maxCoeff() < 1e-6);
+    CHECK(r.report.polish.size() == host.polish.size());
+    CHECK(r.report.final.face_area_ratio.mean_abs_dev == Approx(host.final.face_area_ratio.mean_abs_dev).epsilon(0.02));
+  }
 }
 
 TEST_CASE("surface map: a surface with inward faces is mapped with them reversed, as well") {
