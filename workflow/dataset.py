@@ -168,7 +168,7 @@ def subjects_from_bids(root, feature, more):
         if not os.path.isdir(d):
             raise DatasetError(f"{table}:{row['_line']}: {sid}: no folder {d}")
         check_path(d, root, "subject folder")
-        subs[sid] = {"group": row["group"], **anatomy(root, sid, d),
+        subs[sid] = {"group": row["group"], **anatomy(root, sid, d), "surface": "", "overlay": "",
                      feature: find_one(os.path.join(d, feature), f"{sid}*_{feature}.nii*", f"{feature} image", root)}
         for name, spec in more.items():
             folder, _, suffix = spec.partition("/")
@@ -181,13 +181,18 @@ def subjects_from_bids(root, feature, more):
 def subjects_from_table(path, features):
     """The same from a TSV with participant_id, group, image, labels and one column per feature
     (paths relative to the table; they may point anywhere the user can read, but must exist and
-    pass check_path)."""
+    pass check_path); with a `surface` column (and `overlay`), each subject's surface and its
+    per-vertex scalar (add_surfaces_from_bids's keys)."""
     base = os.path.dirname(os.path.abspath(path))
     subs = {}
-    for row in read_participants(path):
+    rows = read_participants(path)
+    surface_cols = [c for c in ("surface", "overlay") if c in rows[0]]
+    if surface_cols == ["overlay"]:
+        raise DatasetError(f"{path}:1: an 'overlay' column without a 'surface' column")
+    for row in rows:
         sid, line = row["participant_id"], row["_line"]
-        entry = {"group": row["group"]}
-        for col in ("image", "labels", *features):
+        entry = {"group": row["group"], "surface": "", "overlay": ""}
+        for col in ("image", "labels", *features, *surface_cols):
             if not row.get(col):
                 raise DatasetError(f"{path}:{line}: no '{col}' for {sid}")
             p = os.path.join(base, row[col])
@@ -199,3 +204,21 @@ def subjects_from_table(path, features):
         entry.update(scheme="atlas", source="table")
         subs[sid] = entry
     return subs
+
+
+def add_surfaces_from_bids(subjects, root, name, overlay):
+    """Each subject's surface, derivatives/freesurfer/<sub>/surf/<name> (any surface vpm reads:
+    FreeSurfer's lh.white, a GIfTI, ...), and with `overlay` its per-vertex scalar beside it (e.g.
+    lh.sulc), as subjects[sid]["surface"] and ["overlay"] ("" for none). Every subject must have
+    them; `name` and `overlay` are file names, not paths."""
+    for n, what in ((name, "surfaces.name"), (overlay, "surfaces.overlay")):
+        if n and ("/" in n or os.sep in n or n in (".", "..")):
+            raise DatasetError(f"{what}: '{n}' is not a file name (a file in derivatives/freesurfer/<sub>/surf/)")
+        if n:
+            check_path(n, what=what)
+    root = os.path.abspath(root)
+    for sid, entry in subjects.items():
+        surf = os.path.join(root, "derivatives", "freesurfer", sid, "surf")
+        entry["surface"] = find_one(surf, glob.escape(name), f"surface {name}", root)
+        entry["overlay"] = find_one(surf, glob.escape(overlay), f"overlay {overlay}", root) if overlay else ""
+    return subjects
