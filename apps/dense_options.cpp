@@ -6,6 +6,7 @@
 
 #include "vpm/error.hpp"
 #include "vpm/format.hpp"
+#include "vpm/surface_registration.hpp"
 
 namespace vpm::cli {
 
@@ -89,12 +90,18 @@ void restore_step_options(const Args& args, RegistrationOptions& o) {
 Command with_dense_options(Command command, const std::string& after, int default_iterations,
                            DenseForce default_force) {
   const DenseRegistrationOptions d;
-  std::string widths;
-  for (size_t i = 0; i < d.widths.size(); ++i) widths += (i ? "," : "") + format_sig(d.widths[i], 6);
+  const SphereMatchOptions sphere;
+  auto list = [](const std::vector<double>& v) {
+    std::string out;
+    for (size_t i = 0; i < v.size(); ++i) out += (i ? "," : "") + format_sig(v[i], 6);
+    return out;
+  };
+  const std::string widths = list(d.widths) + "; surfaces " + list(sphere.widths);
   const std::vector<OptionSpec> rows = {
           {"--dense-iterations", "N",
            "dense iterations after the landmarks: the subject pulled onto the template (--dense-force) by "
-           "divergence-free flows (default " + std::to_string(default_iterations) + ")"},
+           "divergence-free flows (default " + std::to_string(default_iterations) + "; surfaces, a level " +
+               std::to_string(sphere.iterations) + ")"},
           {"--dense-widths", "W[,W...]", "Gaussian widths of the dense levels, coarse to fine (default " + widths + ")",
            false, 0, true, true},
           {"--dense-step", "S", "fraction of the boundary displacement taken per dense iteration (default " +

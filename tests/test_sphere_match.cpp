@@ -121,7 +121,7 @@ TEST_CASE("dense sphere registration: a scalar's known area-preserving deformati
   CHECK(after < 0.35 * before);
   CHECK(r.match.correlation_before < 0.9);
   CHECK(r.match.correlation_after > 0.999);
-  REQUIRE(r.match.levels.size() == 3);
+  REQUIRE(r.match.levels.size() == 4);
   for (const SphereMatchLevel& l : r.match.levels) CHECK(l.mismatch_after < l.mismatch_before);
   CHECK(r.metrics.flipped_faces == 0);
   CHECK(r.metrics.face_area_ratio.mean_abs_dev <= 0.005);
@@ -207,7 +207,7 @@ TEST_CASE("vpm register SPHERE --template --overlay --template-overlay: the scal
   Json r = Json::parse(slurp(dir + "/r.json"));
   CHECK(r["input"]["landmarks"].number() == 0);
   CHECK(r["registration"]["match"]["correlation_after"].number() > 0.99);
-  CHECK(r["registration"]["match"]["levels"].size() == 3);
+  CHECK(r["registration"]["match"]["levels"].size() == 4);
   CHECK(r["registration"]["final"]["flipped_faces"].number() == 0);
   const TriSurface out = read_surface(dir + "/reg.gii");
   CHECK(mean_angle(out.vertices, twisted(s.vertices)) < 0.35 * mean_angle(s.vertices, twisted(s.vertices)));

@@ -58,8 +58,9 @@ struct SphereMatchOptions {
   /// Gauss-Newton iterations at most per level (0: none, landmarks only).
   int iterations = 8;
   /// Gaussian widths of the levels (chord length), coarse first; each level's centres are the
-  /// vertices of the icosphere whose edges are at most the width (42, 162, 642 for these).
-  std::vector<double> widths = {0.56, 0.28, 0.14};
+  /// vertices of the icosphere whose edges are at most the width (42, 162, 642, 2,562 for these;
+  /// the finest level chosen on the development set, docs/surfaces.md "Measured").
+  std::vector<double> widths = {0.56, 0.28, 0.14, 0.07};
   double smoothing = 0.5;  ///< the scalars' smoothing scale, x the level's width
   double ridge = 0.05;     ///< the smoothness weight mu, relative to the data term
   double max_move = 0.25;  ///< the largest vertex move of one iteration, x the level's width
