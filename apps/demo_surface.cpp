@@ -165,13 +165,16 @@ SurfaceDemo surface_demo(const TetMesh& tmpl, const TetMesh& subj, const fs::pat
   Points lp(d.landmarks, 3), lq(d.landmarks, 3);
   for (int i = 0; i < d.landmarks; ++i) lp.row(i) = p[static_cast<size_t>(i)].transpose(), lq.row(i) = q[static_cast<size_t>(i)].transpose();
   d.by_landmarks = register_on_sphere(sm.sphere, s.surface.triangles, lp, lq);
-  d.by_curvature = register_on_sphere(sm.sphere, s.surface.triangles, sc, SphereTemplate{tm.sphere, t.surface.triangles, tc}, lp, lq);
+  const SphereTemplate templ{tm.sphere, t.surface.triangles, tc};
+  d.by_curvature = register_on_sphere(sm.sphere, s.surface.triangles, sc, templ, lp, lq);
+  d.by_curvature_alone = register_on_sphere(sm.sphere, s.surface.triangles, sc, templ, Points(0, 3), Points(0, 3));
   write_sphere(out / "subject_sphere_registered.vtp", d.by_curvature.points, s, sc);
   const Points samples = fibonacci(kDiceSamples);
   const std::vector<int> truth = labels_at(tm.sphere, t, samples);
   d.dice_before = dice(labels_at(sm.sphere, s, samples), truth);
   d.dice_landmarks = dice(labels_at(d.by_landmarks.points, s, samples), truth);
   d.dice_curvature = dice(labels_at(d.by_curvature.points, s, samples), truth);
+  d.dice_curvature_alone = dice(labels_at(d.by_curvature_alone.points, s, samples), truth);
   patch_to_disk(t.surface, tm.sphere, out, d);
   return d;
 }
@@ -183,6 +186,7 @@ Json to_json(const SurfaceDemo& d, const RegionNames& names) {
   j["landmarks"] = d.landmarks;
   j["registration_landmarks"] = to_json(d.by_landmarks, SurfaceRegistrationOptions{});
   j["registration_curvature"] = to_json(d.by_curvature, SurfaceRegistrationOptions{});
+  j["registration_curvature_alone"] = to_json(d.by_curvature_alone, SurfaceRegistrationOptions{});
   Json held = Json::array();
   for (size_t i = 0; i < kSurfaceHeldOut.size(); ++i) {
     Json o = Json::object();
@@ -191,6 +195,7 @@ Json to_json(const SurfaceDemo& d, const RegionNames& names) {
     o["dice_sphere_before"] = d.dice_before[i];
     o["dice_sphere_landmarks"] = d.dice_landmarks[i];
     o["dice_sphere_curvature"] = d.dice_curvature[i];
+    o["dice_sphere_curvature_alone"] = d.dice_curvature_alone[i];
     held.push_back(o);
   }
   j["held_out"] = held;
@@ -208,11 +213,16 @@ std::string surface_summary(const SurfaceDemo& d, const RegionNames& names) {
     << "registration on the sphere: " << d.landmarks << " region centroids, then the mean curvature (correlation "
     << strprintf("%.2f -> %.2f", d.by_curvature.match.correlation_before, d.by_curvature.match.correlation_after)
     << "), face area |r-1| " << pct(d.by_curvature.metrics) << ", " << d.by_curvature.metrics.flipped_faces << " flipped; "
-    << "Dice of the held-out regions on the sphere:\n"
-    << strprintf("  %-34s %10s %10s %10s\n", "", "before", "landmarks", "+curvature");
+    << "the curvature alone: a rotation of "
+    << strprintf("%.0f deg", Eigen::AngleAxisd(d.by_curvature_alone.match.rotation).angle() * 180 / M_PI)
+    << " found first (smoothed correlation "
+    << strprintf("%.2f -> %.2f", d.by_curvature_alone.match.search_correlation_identity, d.by_curvature_alone.match.search_correlation_best)
+    << "), face area |r-1| " << pct(d.by_curvature_alone.metrics) << ", " << d.by_curvature_alone.metrics.flipped_faces
+    << " flipped; Dice of the held-out regions on the sphere:\n"
+    << strprintf("  %-34s %10s %10s %10s %10s\n", "", "before", "landmarks", "+curvature", "curvature");
   for (size_t i = 0; i < kSurfaceHeldOut.size(); ++i)
-    o << strprintf("  %-34s %10.3f %10.3f %10.3f\n", name_of(names, kSurfaceHeldOut[i]).c_str(), d.dice_before[i],
-                   d.dice_landmarks[i], d.dice_curvature[i]);
+    o << strprintf("  %-34s %10.3f %10.3f %10.3f %10.3f\n", name_of(names, kSurfaceHeldOut[i]).c_str(), d.dice_before[i],
+                   d.dice_landmarks[i], d.dice_curvature[i], d.dice_curvature_alone[i]);
   if (d.patch_mapped)
     o << "a cortical patch of colin27 (" << d.patch_map.faces << " faces) to the disk: face area |r-1| " << pct(d.patch_map.final)
       << ", " << d.patch_map.final.flipped_faces << " flipped, " << d.patch_map.ears << " ears\n";

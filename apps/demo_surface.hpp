@@ -22,10 +22,12 @@ extern const std::vector<int> kSurfaceHeldOut;
 struct SurfaceDemo {
   SurfaceMapReport template_map, subject_map;      ///< the two boundaries to the sphere
   int landmarks = 0;                               ///< region centroids matched
-  SurfaceRegistrationResult by_landmarks, by_curvature;  ///< the subject on the sphere
+  /// the subject on the sphere: by the landmarks, by them and then the curvature, by the
+  /// curvature alone (its rotation search first)
+  SurfaceRegistrationResult by_landmarks, by_curvature, by_curvature_alone;
   /// Dice of each held-out region on the sphere (kSurfaceHeldOut order): the maps as they are,
-  /// after the landmarks, after the landmarks and the curvature
-  std::vector<double> dice_before, dice_landmarks, dice_curvature;
+  /// after the landmarks, after the landmarks and the curvature, after the curvature alone
+  std::vector<double> dice_before, dice_landmarks, dice_curvature, dice_curvature_alone;
   SurfaceMapReport patch_map;                      ///< the cortical patch to the disk
   bool patch_mapped = false;
   std::string patch_note;                          ///< why not, when not

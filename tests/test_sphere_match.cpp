@@ -121,7 +121,9 @@ TEST_CASE("dense sphere registration: a scalar's known area-preserving deformati
   CHECK(after < 0.35 * before);
   CHECK(r.match.correlation_before < 0.9);
   CHECK(r.match.correlation_after > 0.999);
-  REQUIRE(r.match.levels.size() == 4);
+  // the default levels 0.56 to 0.07 but the last, narrower than 1.5 mean edges (0.075) of 2,562 vertices
+  REQUIRE(r.match.levels.size() == 3);
+  CHECK(r.match.levels.back().width == 0.14);
   for (const SphereMatchLevel& l : r.match.levels) CHECK(l.mismatch_after < l.mismatch_before);
   CHECK(r.metrics.flipped_faces == 0);
   CHECK(r.metrics.face_area_ratio.mean_abs_dev <= 0.005);
@@ -150,6 +152,39 @@ TEST_CASE("dense sphere registration: a subject onto itself is the identity, lan
   CHECK_THROWS_WITH(register_on_sphere(s.vertices, s.triangles, Eigen::VectorXd::Constant(f.size(), 2.0), t, Points(0, 3), Points(0, 3)),
                     Catch::Contains("constant"));
   CHECK_THROWS_AS(register_on_sphere(s.vertices, s.triangles, from, to.topRows(3)), InputError);
+}
+
+TEST_CASE("dense sphere registration without landmarks: a rotation between the sphere maps found first, or not at all") {
+  const TriSurface subject = icosphere(4), tpl = icosphere(5);
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(1.75, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
+  // the template is the subject's anatomy rotated by R (a sphere map is unique only up to one)
+  const SphereTemplate t{tpl.vertices * R.transpose(), tpl.triangles, features(tpl.vertices)};
+  const Points truth = subject.vertices * R.transpose();
+  const SurfaceRegistrationResult r =
+      register_on_sphere(subject.vertices, subject.triangles, features(subject.vertices), t, Points(0, 3), Points(0, 3));
+  INFO("distance to the truth " << mean_angle(subject.vertices, truth) << " -> " << mean_angle(r.points, truth));
+  REQUIRE(r.match.rotation_searched);
+  CHECK(r.match.search_correlation_identity < 0.5);
+  CHECK(r.match.search_correlation_best > 0.99);
+  CHECK(Eigen::AngleAxisd(r.match.rotation * R.transpose()).angle() < 0.02);  // R found
+  CHECK(r.match.correlation_after > 0.999);
+  CHECK(mean_angle(r.points, truth) < 0.01);
+  CHECK(r.metrics.flipped_faces == 0);
+  CHECK(to_json(r, SurfaceRegistrationOptions{})["match"]["rotation_search"]["angle_deg"].number() == Approx(1.75 * 180 / M_PI).epsilon(0.01));
+  // without the search the dense steps stay near the start
+  SurfaceRegistrationOptions off;
+  off.match.rotation_search = false;
+  off.match.widths = {0.56, 0.28};
+  const SurfaceRegistrationResult n =
+      register_on_sphere(subject.vertices, subject.triangles, features(subject.vertices), t, Points(0, 3), Points(0, 3), off);
+  CHECK(!n.match.rotation_searched);
+  CHECK(mean_angle(n.points, truth) > 0.5);
+  // with landmarks the rigid step sets the rotation: no search
+  Points from(4, 3), to(4, 3);
+  for (int i = 0; i < 4; ++i) from.row(i) = subject.vertices.row(i * 301), to.row(i) = truth.row(i * 301);
+  SurfaceRegistrationOptions coarse;
+  coarse.match.widths = {0.56, 0.28};
+  CHECK(!register_on_sphere(subject.vertices, subject.triangles, features(subject.vertices), t, from, to, coarse).match.rotation_searched);
 }
 
 TEST_CASE("sphere registration on host and device: the landmark flow and the dense steps' advections agree") {
@@ -207,7 +242,7 @@ TEST_CASE("vpm register SPHERE --template --overlay --template-overlay: the scal
   Json r = Json::parse(slurp(dir + "/r.json"));
   CHECK(r["input"]["landmarks"].number() == 0);
   CHECK(r["registration"]["match"]["correlation_after"].number() > 0.99);
-  CHECK(r["registration"]["match"]["levels"].size() == 4);
+  CHECK(r["registration"]["match"]["levels"].size() == 3);
   CHECK(r["registration"]["final"]["flipped_faces"].number() == 0);
   const TriSurface out = read_surface(dir + "/reg.gii");
   CHECK(mean_angle(out.vertices, twisted(s.vertices)) < 0.35 * mean_angle(s.vertices, twisted(s.vertices)));

@@ -12,6 +12,7 @@
 #include "map/surface_area.hpp"
 #include "register/point_bins.hpp"
 #include "register/sphere_field.hpp"
+#include "register/sphere_rotation.hpp"
 #include "register/sphere_step.hpp"
 #include "vpm/error.hpp"
 #include "vpm/icosphere.hpp"
@@ -29,6 +30,8 @@ constexpr int kHalvings = 4;
 // A step whose flipped slivers were repaired is kept only if the repaired step changes the face
 // areas (mean |r - 1| against the positions before it) by at most this.
 constexpr double kRepairAreaChange = 0.001;
+// The rotation search's rotation is applied when it shrinks 1 - correlation to this fraction.
+constexpr double kRotationGain = 0.5;
 
 // A third of the chord areas of each vertex's faces.
 Eigen::VectorXd vertex_areas(const Points& x, const Triangles& f) {
@@ -225,23 +228,55 @@ SphereMatchLevel match_level(Device& device, std::vector<Vector3d>& x, std::vect
   return lv;
 }
 
+// A level narrower than this many times the subject's mean edge (the side of an equilateral
+// triangle of the mean face area) is left out: its Gaussians are sampled by a handful of vertices
+// each, as many unknowns as equations, at the cost of the finest system (on 2,562 vertices the
+// 0.07 level took 10 of 12 s). Every surface of the development and report sets (19k-128k faces)
+// runs every default level.
+constexpr double kWidthPerEdge = 1.5;
+
 // The levels that run: with landmarks, those narrower than the landmarks' mean nearest-neighbour
 // chord (the landmark flow has set the deformation on the scales above it; a wider dense level
-// there pulls against the held landmarks), at least the finest.
-std::vector<double> dense_widths(const std::vector<double>& widths, const std::vector<Vector3d>& landmarks) {
-  if (landmarks.size() < 2 || widths.empty()) return widths;
-  double spacing = 0;
-  for (size_t i = 0; i < landmarks.size(); ++i) {
-    double best = 2;
-    for (size_t j = 0; j < landmarks.size(); ++j)
-      if (j != i) best = std::min(best, (landmarks[i] - landmarks[j]).norm());
-    spacing += best / static_cast<double>(landmarks.size());
+// there pulls against the held landmarks), at least the finest; of those, the ones at least
+// kWidthPerEdge mean edges wide (at least the widest).
+std::vector<double> dense_widths(const std::vector<double>& widths, const std::vector<Vector3d>& landmarks,
+                                 const Points& reference, const Triangles& faces) {
+  std::vector<double> out = widths;
+  if (landmarks.size() >= 2 && !widths.empty()) {
+    double spacing = 0;
+    for (size_t i = 0; i < landmarks.size(); ++i) {
+      double best = 2;
+      for (size_t j = 0; j < landmarks.size(); ++j)
+        if (j != i) best = std::min(best, (landmarks[i] - landmarks[j]).norm());
+      spacing += best / static_cast<double>(landmarks.size());
+    }
+    out.clear();
+    for (double w : widths)
+      if (w < spacing) out.push_back(w);
+    if (out.empty()) out.push_back(*std::min_element(widths.begin(), widths.end()));
   }
-  std::vector<double> out;
-  for (double w : widths)
-    if (w < spacing) out.push_back(w);
-  if (out.empty()) out.push_back(*std::min_element(widths.begin(), widths.end()));
-  return out;
+  const double edge = std::sqrt(4 / std::sqrt(3.0) * face_areas(reference, faces).mean());
+  std::vector<double> resolved;
+  for (double w : out)
+    if (w >= kWidthPerEdge * edge) resolved.push_back(w);
+  if (resolved.empty() && !out.empty()) resolved.push_back(*std::max_element(out.begin(), out.end()));
+  return resolved;
+}
+
+// The rotation search (sphere_rotation.hpp) with both scalars smoothed at `width`; x rotated
+// when the rotation found halves 1 - correlation.
+void rotate_first(std::vector<Vector3d>& x, const Points& reference, const Triangles& faces, const Eigen::VectorXd& values,
+                  const SphereTemplate& templ, const SphereLocator& locator, const Eigen::VectorXd& area,
+                  const Eigen::VectorXd& tarea, double width, SphereMatchReport& rep) {
+  const Eigen::VectorXd f = standardise(smooth(reference, faces, values, area, width), area, "subject");
+  const Eigen::VectorXd g = standardise(smooth(templ.sphere, templ.faces, templ.values, tarea, width), tarea, "template");
+  const RotationFound found = search_rotation(to_matrix(x), faces, f, locator, g);
+  rep.rotation_searched = true;
+  rep.search_correlation_identity = found.correlation_identity;
+  rep.search_correlation_best = found.correlation;
+  if (!(1 - found.correlation <= kRotationGain * (1 - found.correlation_identity))) return;
+  rep.rotation = found.rotation;
+  for (Vector3d& p : x) p = (found.rotation * p).normalized();
 }
 
 }  // namespace
@@ -260,7 +295,9 @@ SphereMatchReport match_on_sphere(Device& device, std::vector<Vector3d>& x, std:
   Eigen::VectorXd e;
   sample(raw, x, f0, hint, e, nullptr);
   rep.correlation_before = correlation(f0, f0 + e, area);
-  for (double width : dense_widths(options.widths, carried)) {
+  if (carried.empty() && options.rotation_search && options.iterations > 0 && !options.widths.empty())
+    rotate_first(x, reference, faces, values, templ, locator, area, tarea, options.widths.front(), rep);
+  for (double width : dense_widths(options.widths, carried, reference, faces)) {
     if (options.iterations <= 0) break;
     rep.levels.push_back(match_level(device, x, carried, reference, faces, values, templ, locator, area, tarea, width, options, domain, hint));
   }

@@ -35,6 +35,13 @@ Json to_json(const SurfaceRegistrationResult& r, const SurfaceRegistrationOption
       o["mismatch_after"] = l.mismatch_after;
       m["levels"].push_back(o);
     }
+    if (r.match.rotation_searched) {
+      Json s = Json::object();
+      s["correlation_identity"] = r.match.search_correlation_identity;
+      s["correlation_best"] = r.match.search_correlation_best;
+      s["angle_deg"] = Eigen::AngleAxisd(r.match.rotation).angle() * 180 / M_PI;
+      m["rotation_search"] = s;
+    }
     m["seconds"] = r.match.seconds;
     j["match"] = m;
   }

@@ -59,11 +59,19 @@ struct SphereMatchOptions {
   int iterations = 8;
   /// Gaussian widths of the levels (chord length), coarse first; each level's centres are the
   /// vertices of the icosphere whose edges are at most the width (42, 162, 642, 2,562 for these;
-  /// the finest level chosen on the development set, docs/surfaces.md "Measured").
+  /// the finest level chosen on the development set, docs/surfaces.md "Measured"). A level
+  /// narrower than 1.5 times the subject's mean edge is left out (a 5k-face surface stops at
+  /// 0.14), and with landmarks one wider than their mean spacing.
   std::vector<double> widths = {0.56, 0.28, 0.14, 0.07};
   double smoothing = 0.5;  ///< the scalars' smoothing scale, x the level's width
   double ridge = 0.05;     ///< the smoothness weight mu, relative to the data term
   double max_move = 0.25;  ///< the largest vertex move of one iteration, x the level's width
+  /// Without landmarks: first, when the two scalars smoothed at the coarsest width correlate
+  /// below 0.75 as the maps are, the rotation that best correlates them (a grid of rotations
+  /// refined by a pattern search), applied when it at least halves 1 - that correlation (two
+  /// sphere maps are unique only up to a rotation; the dense steps do not undo one from far). A
+  /// subject onto itself keeps the identity.
+  bool rotation_search = true;
 };
 
 /// The template of a dense registration: a surface mapped to the sphere and its per-vertex
@@ -87,6 +95,12 @@ struct SphereMatchReport {
   /// Area-weighted correlation of the subject's scalar with the template's at the subject's
   /// vertices (both unsmoothed), before and after the dense iterations.
   double correlation_before = 0, correlation_after = 0;
+  /// The rotation search (without landmarks): whether it ran, the smoothed scalars' correlation
+  /// without a rotation and at the best one found, the rotation applied (identity when it did not
+  /// halve 1 - correlation).
+  bool rotation_searched = false;
+  double search_correlation_identity = 0, search_correlation_best = 0;
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
   double seconds = 0;
 };
 
@@ -155,7 +169,8 @@ SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangl
 /// {"steps", "width", "width_factor", "rotation_angle_deg", "landmark_rms_error", "landmark_max_error",
 ///  "flow_landmark_max_error", "flow": to_json(SurfaceMetrics) (before the restoration),
 ///  "restore": {"rounds", "held_vertices", "repaired_faces"}, "final": to_json(SurfaceMetrics),
-///  "match": {"correlation_before", "correlation_after", "levels": [{"width", "centres",
+///  "match": {"correlation_before", "correlation_after", "rotation_search": {"correlation_identity",
+///  "correlation_best", "angle_deg"} (when it ran), "levels": [{"width", "centres",
 ///  "iterations", "mismatch_before", "mismatch_after"}], "seconds"} (dense registrations only),
 ///  "timings_s": {"total"}}
 Json to_json(const SurfaceRegistrationResult& result, const SurfaceRegistrationOptions& options);
