@@ -12,6 +12,7 @@
 #include "core/parallel.hpp"
 #include "map/surface_area.hpp"
 #include "map/surface_polish.hpp"
+#include "register/landmark_gram.hpp"
 #include "vpm/error.hpp"
 #include "vpm/surface_registration.hpp"
 #include "vpm/timing.hpp"
@@ -60,13 +61,6 @@ Eigen::MatrixXd gram(const std::vector<Vector2d>& at, double lambda) {
   return G;
 }
 
-Eigen::LLT<Eigen::MatrixXd> factor(const Eigen::MatrixXd& G) {
-  Eigen::LLT<Eigen::MatrixXd> llt(G);
-  if (llt.info() != Eigen::Success)
-    throw NumericalError("disk registration: the landmark field's Gram matrix is not positive definite (landmarks closer than round-off?)");
-  return llt;
-}
-
 Eigen::VectorXd stacked(const std::vector<Vector2d>& u) {
   Eigen::VectorXd b(2 * static_cast<Eigen::Index>(u.size()));
   for (size_t i = 0; i < u.size(); ++i) b.segment<2>(2 * static_cast<Eigen::Index>(i)) = u[i];
@@ -74,7 +68,7 @@ Eigen::VectorXd stacked(const std::vector<Vector2d>& u) {
 }
 
 DiskField fit(const std::vector<Vector2d>& at, const std::vector<Vector2d>& velocity, double lambda) {
-  const Eigen::VectorXd c = factor(gram(at, lambda)).solve(stacked(velocity));
+  const Eigen::VectorXd c = detail::factor_gram(gram(at, lambda), "disk registration").solve(stacked(velocity));
   DiskField f;
   f.lambda = lambda;
   f.centres = at;
@@ -84,12 +78,7 @@ DiskField fit(const std::vector<Vector2d>& at, const std::vector<Vector2d>& velo
 
 // Rippa's leave-one-out error with 2 x 2 blocks (as on the sphere).
 double loo_error(const std::vector<Vector2d>& at, const std::vector<Vector2d>& velocity, double lambda) {
-  const int L = static_cast<int>(at.size());
-  const Eigen::MatrixXd inv = factor(gram(at, lambda)).solve(Eigen::MatrixXd::Identity(2 * L, 2 * L));
-  const Eigen::VectorXd a = inv * stacked(velocity);
-  double sum = 0;
-  for (int i = 0; i < L; ++i) sum += (inv.block<2, 2>(2 * i, 2 * i).inverse() * a.segment<2>(2 * i)).squaredNorm();
-  return std::sqrt(sum / L);
+  return detail::block_loo_error(gram(at, lambda), stacked(velocity), "disk registration");
 }
 
 double mean_spacing(const std::vector<Vector2d>& v) {

@@ -54,7 +54,7 @@ int centre_level(double width) {
 // k(r) = exp(-|r|^2 / (2 sigma^2)) over the vertices within 3 sigma, evaluated at the nodes of an
 // icosphere of spacing at most sigma / 2 and interpolated from them (the average varies on the
 // scale sigma): independent of how the surface is triangulated, at a cost set by sigma.
-Eigen::VectorXd smooth(const Points& x, const Triangles& f, const Eigen::VectorXd& values, const Eigen::VectorXd& area,
+Eigen::VectorXd smooth(const Points& x, const Eigen::VectorXd& values, const Eigen::VectorXd& area,
                        double sigma) {
   const TriSurface nodes = icosphere(centre_level(sigma / 2));
   const Eigen::Index m = nodes.vertices.rows();
@@ -75,7 +75,6 @@ Eigen::VectorXd smooth(const Points& x, const Triangles& f, const Eigen::VectorX
       at(i) = den > 0 ? num / den : 0;
     }
   });
-  (void)f;
   const SphereLocator locator(nodes.vertices, nodes.triangles);
   const std::vector<SphereLocation> loc = locator.locate_all(x);
   Eigen::VectorXd out(x.rows());
@@ -178,8 +177,8 @@ SphereMatchLevel match_level(Device& device, std::vector<Vector3d>& x, std::vect
   SphereMatchLevel lv;
   lv.width = width;
   const double sigma = options.smoothing * width, lambda = 1 / (width * width);
-  const Eigen::VectorXd f = standardise(smooth(reference, faces, values, area, sigma), area, "subject");
-  TemplateLevel tl{&locator, standardise(smooth(templ.sphere, templ.faces, templ.values, tarea, sigma), tarea, "template"), {}};
+  const Eigen::VectorXd f = standardise(smooth(reference, values, area, sigma), area, "subject");
+  TemplateLevel tl{&locator, standardise(smooth(templ.sphere, templ.values, tarea, sigma), tarea, "template"), {}};
   tl.grad = vertex_gradients(templ.sphere, templ.faces, tl.g);
   const Centres cs(icosphere(centre_level(width)).vertices, width);
   lv.centres = cs.size();
@@ -268,8 +267,8 @@ std::vector<double> dense_widths(const std::vector<double>& widths, const std::v
 void rotate_first(std::vector<Vector3d>& x, const Points& reference, const Triangles& faces, const Eigen::VectorXd& values,
                   const SphereTemplate& templ, const SphereLocator& locator, const Eigen::VectorXd& area,
                   const Eigen::VectorXd& tarea, double width, SphereMatchReport& rep) {
-  const Eigen::VectorXd f = standardise(smooth(reference, faces, values, area, width), area, "subject");
-  const Eigen::VectorXd g = standardise(smooth(templ.sphere, templ.faces, templ.values, tarea, width), tarea, "template");
+  const Eigen::VectorXd f = standardise(smooth(reference, values, area, width), area, "subject");
+  const Eigen::VectorXd g = standardise(smooth(templ.sphere, templ.values, tarea, width), tarea, "template");
   const RotationFound found = search_rotation(to_matrix(x), faces, f, locator, g);
   rep.rotation_searched = true;
   rep.search_correlation_identity = found.correlation_identity;

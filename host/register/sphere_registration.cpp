@@ -14,6 +14,7 @@
 #include "core/parallel.hpp"
 #include "map/surface_area.hpp"
 #include "map/surface_polish.hpp"
+#include "register/landmark_gram.hpp"
 #include "register/sphere_field.hpp"
 #include "register/sphere_match.hpp"
 #include "vpm/device.hpp"
@@ -73,18 +74,11 @@ Gram gram(const std::vector<Vector3d>& at, const std::vector<Vector3d>& velocity
   return g;
 }
 
-Eigen::LLT<Eigen::MatrixXd> factor(const Eigen::MatrixXd& G) {
-  Eigen::LLT<Eigen::MatrixXd> llt(G);
-  if (llt.info() != Eigen::Success)
-    throw NumericalError("sphere registration: the landmark field's Gram matrix is not positive definite (landmarks closer than round-off?)");
-  return llt;
-}
-
 SphereField fit(const std::vector<Vector3d>& at, const std::vector<Vector3d>& velocity, double lambda) {
   const int L = static_cast<int>(at.size());
   const Gram g = gram(at, velocity, lambda);
   const std::vector<Eigen::Matrix<double, 3, 2>>& P = g.P;
-  const Eigen::VectorXd a = factor(g.G).solve(g.rhs);
+  const Eigen::VectorXd a = detail::factor_gram(g.G, "sphere registration").solve(g.rhs);
   SphereField f;
   f.lambda = lambda;
   f.centres = at;
@@ -94,17 +88,10 @@ SphereField fit(const std::vector<Vector3d>& at, const std::vector<Vector3d>& ve
 }
 
 // Leave-one-out error of the field fitted to the landmarks' first motion (each landmark's step
-// toward its target predicted from the others'): the root mean square over landmarks of the
-// block residuals [(G^-1)_ii]^-1 (G^-1 b)_i (Rippa's formula, 2 x 2 blocks).
+// toward its target predicted from the others').
 double loo_error(const std::vector<Vector3d>& at, const std::vector<Vector3d>& velocity, double lambda) {
-  const int L = static_cast<int>(at.size());
   const Gram g = gram(at, velocity, lambda);
-  const Eigen::LLT<Eigen::MatrixXd> llt = factor(g.G);
-  const Eigen::MatrixXd inv = llt.solve(Eigen::MatrixXd::Identity(2 * L, 2 * L));
-  const Eigen::VectorXd a = inv * g.rhs;
-  double sum = 0;
-  for (int i = 0; i < L; ++i) sum += inv.block<2, 2>(2 * i, 2 * i).inverse().operator*(a.segment<2>(2 * i)).squaredNorm();
-  return std::sqrt(sum / L);
+  return detail::block_loo_error(g.G, g.rhs, "sphere registration");
 }
 
 // slerp(p, q, t) and its derivative (constant angular speed theta).
