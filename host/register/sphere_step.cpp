@@ -12,8 +12,12 @@ namespace vpm::detail {
 
 namespace {
 
-// How firmly the dense steps hold the landmarks (gauss_newton_field).
-constexpr double kHold = 10;
+// How firmly the dense steps hold the landmarks (gauss_newton_field). At 10 the landmarks drifted
+// and the landmark flow that puts them back undid the dense steps' work (one report run ended
+// 0.0148 rad from the truth, farther than the landmarks alone); 100, chosen on the development
+// set (the gap narrowed on two of three seeds), brings every report run within 0.01 of the ideal
+// Dice (docs/surfaces.md "Measured").
+constexpr double kHold = 100;
 // The Gram matrix's blocks with lambda |c_j - c_k|^2 above this (below 1e-10 of the diagonal)
 // are left out.
 constexpr double kGramCutoff = 25;

@@ -41,7 +41,7 @@
 //     changes the face areas by at most 0.1 %); a level ends when a step gains less than 0.1 %
 //     of the mismatch, or after `iterations`.
 // With landmarks, the system of step c also pulls the field's value at each landmark to zero
-// (weighted 10 times the data term), only the levels narrower than the landmarks' mean
+// (weighted 100 times the data term), only the levels narrower than the landmarks' mean
 // nearest-neighbour chord run (the landmark flow set the coarser scales), and after the levels
 // one more landmark flow puts the landmarks back onto their targets exactly. Steps 5-6 follow.
 #include <Eigen/Core>
