@@ -12,6 +12,7 @@
 #include "core/parallel.hpp"
 #include "map/surface_area.hpp"
 #include "map/surface_polish.hpp"
+#include "register/dense_surface.hpp"
 #include "register/landmark_gram.hpp"
 #include "vpm/error.hpp"
 #include "vpm/surface_registration.hpp"
@@ -171,27 +172,6 @@ void flow(std::vector<Vector2d> x, const std::vector<char>& boundary, const std:
   res.points = to_points(x);
 }
 
-// Flipped faces unflipped by moving their interior corners (not held) to their neighbours' mean.
-int repair_flips(const detail::SurfaceDomainMoves& domain, const Triangles& f, Points& x) {
-  std::vector<int> flipped = domain.flipped(x, f);
-  const int found = static_cast<int>(flipped.size());
-  std::vector<std::vector<int>> ring(static_cast<size_t>(x.rows()));
-  for (Eigen::Index t = 0; t < f.rows() && found > 0; ++t)
-    for (int k = 0; k < 3; ++k) ring[static_cast<size_t>(f(t, k))].push_back(f(t, (k + 1) % 3));
-  for (int sweep = 0; sweep < 50 && !flipped.empty(); ++sweep) {
-    for (int t : flipped)
-      for (int k = 0; k < 3; ++k) {
-        const size_t v = static_cast<size_t>(f(t, k));
-        if (domain.boundary[v] || (!domain.fixed.empty() && domain.fixed[v]) || ring[v].empty()) continue;
-        Eigen::RowVector3d m = Eigen::RowVector3d::Zero();
-        for (int w : ring[v]) m += x.row(w);
-        x.row(static_cast<Eigen::Index>(v)) = m / static_cast<double>(ring[v].size());
-      }
-    flipped = domain.flipped(x, f);
-  }
-  return found;
-}
-
 // 1 on the corners of the faces that contain a landmark (held still by the restoration).
 std::vector<char> landmark_corners(const std::vector<Vector2d>& x, const Triangles& f, const std::vector<Vector2d>& p) {
   std::vector<char> fixed(x.size(), 0);
@@ -252,7 +232,7 @@ SurfaceRegistrationResult register_in_disk(const Points& disk, const Triangles& 
     res.width = res.width_factor * spacing;
     flow(x, domain.boundary, p, q, 1 / (res.width * res.width), options.steps, res);
     res.flow_metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::disk);
-    res.repaired_faces = repair_flips(domain, faces, res.points);
+    res.repaired_faces = detail::repair_flips(domain, faces, res.points);
     const double* narrower = std::find(std::begin(kWidthFactors), std::end(kWidthFactors), res.width_factor);
     if (options.width_factor > 0 || domain.flipped(res.points, faces).empty() || narrower == std::begin(kWidthFactors) ||
         narrower == std::end(kWidthFactors))

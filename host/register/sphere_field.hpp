@@ -94,13 +94,15 @@ inline Vector3d log_map(const Vector3d& x, const Vector3d& q) {
 // out (host/register/advect.cpp).
 void advect_on_sphere(Device& device, Points& x, const std::vector<DivFreeField>& fields, int steps);
 
-// The field's centres and weights as advect_on_sphere's carrier, the weights scaled by `scale`.
-inline DivFreeField carrier(const SphereField& f, double scale = 1) {
+// A field's centres and weights as advect_on_sphere's carrier, the weights scaled by `scale`.
+inline DivFreeField carrier(double lambda, const std::vector<Vector3d>& centres, const std::vector<Vector3d>& weights,
+                            double scale = 1) {
   DivFreeField d;
-  d.lambda = f.lambda;
-  d.centres = to_matrix(f.centres);
-  d.coefficients = scale * to_matrix(f.weights);
+  d.lambda = lambda;
+  d.centres = to_matrix(centres);
+  d.coefficients = scale * to_matrix(weights);
   return d;
 }
+inline DivFreeField carrier(const SphereField& f, double scale = 1) { return carrier(f.lambda, f.centres, f.weights, scale); }
 
 }  // namespace vpm::detail

@@ -10,6 +10,7 @@
 
 #include "core/parallel.hpp"
 #include "map/surface_area.hpp"
+#include "register/dense_surface.hpp"
 #include "register/point_bins.hpp"
 #include "register/sphere_field.hpp"
 #include "register/sphere_rotation.hpp"
@@ -22,25 +23,6 @@
 namespace vpm::detail {
 
 namespace {
-
-// A step is kept when it lowers the mismatch by this fraction at least; a level ends when the
-// gain is below kLevelGain.
-constexpr double kMinGain = 1e-4, kLevelGain = 1e-3;
-constexpr int kHalvings = 4;
-// A step whose flipped slivers were repaired is kept only if the repaired step changes the face
-// areas (mean |r - 1| against the positions before it) by at most this.
-constexpr double kRepairAreaChange = 0.001;
-// The rotation search's rotation is applied when it shrinks 1 - correlation to this fraction.
-constexpr double kRotationGain = 0.5;
-
-// A third of the chord areas of each vertex's faces.
-Eigen::VectorXd vertex_areas(const Points& x, const Triangles& f) {
-  const Eigen::VectorXd a = face_areas(x, f);
-  Eigen::VectorXd v = Eigen::VectorXd::Zero(x.rows());
-  for (Eigen::Index t = 0; t < f.rows(); ++t)
-    for (int k = 0; k < 3; ++k) v(f(t, k)) += a(t) / 3;
-  return v;
-}
 
 // The icosphere level whose edges (about 1.05 / 2^level) are at most `width`.
 int centre_level(double width) {
@@ -84,15 +66,6 @@ Eigen::VectorXd smooth(const Points& x, const Eigen::VectorXd& values, const Eig
     for (int k = 0; k < 3; ++k) out(i) += l.bary[k] * at(nodes.triangles(l.face, k));
   }
   return out;
-}
-
-// Area-weighted standardisation: mean 0, spread 1 (InputError naming `what` for a constant scalar).
-Eigen::VectorXd standardise(const Eigen::VectorXd& v, const Eigen::VectorXd& area, const char* what) {
-  const double total = area.sum(), mean = area.dot(v) / total;
-  const Eigen::VectorXd c = v.array() - mean;
-  const double sd = std::sqrt(area.dot(c.cwiseProduct(c)) / total);
-  if (!(sd > 1e-12 * (1 + std::abs(mean)))) throw InputError(std::string(what) + ": the scalar is constant; nothing to match");
-  return c / sd;
 }
 
 // The template at one level: its smoothed, standardised scalar, per-vertex tangent gradients,
@@ -152,21 +125,6 @@ void sample(const TemplateLevel& tl, const std::vector<Vector3d>& x, const Eigen
   });
 }
 
-double mismatch(const Eigen::VectorXd& e, const Eigen::VectorXd& area) { return area.dot(e.cwiseProduct(e)) / area.sum(); }
-
-}  // namespace
-
-namespace {
-
-
-// Area-weighted correlation of two scalars.
-double correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const Eigen::VectorXd& w) {
-  const double W = w.sum();
-  const Eigen::VectorXd ca = a.array() - w.dot(a) / W, cb = b.array() - w.dot(b) / W;
-  const double d = std::sqrt(w.dot(ca.cwiseProduct(ca)) * w.dot(cb.cwiseProduct(cb)));
-  return d > 0 ? w.dot(ca.cwiseProduct(cb)) / d : 0;
-}
-
 // One level: the scalars smoothed at smoothing x width, the centres on an icosphere, at most
 // options.iterations Gauss-Newton steps.
 SphereMatchLevel match_level(Device& device, std::vector<Vector3d>& x, std::vector<Vector3d>& carried, const Points& reference,
@@ -201,7 +159,7 @@ SphereMatchLevel match_level(Device& device, std::vector<Vector3d>& x, std::vect
       if (domain.flipped(tm, faces).size() > flipped) {
         // slivers sheared past their width: repaired, when that costs no more area than a step's
         // discretisation does
-        repair_sphere_flips(domain, faces, tm);
+        repair_flips(domain, faces, tm);
         if (domain.flipped(tm, faces).size() > flipped ||
             surface_metrics(to_matrix(x), tm, faces, SurfaceDomain::sphere).face_area_ratio.mean_abs_dev > kRepairAreaChange)
           continue;

@@ -23,9 +23,4 @@ SphereMatchReport match_on_sphere(Device& device, std::vector<Eigen::Vector3d>& 
                                   const SphereTemplate& templ, const SphereMatchOptions& options,
                                   const SurfaceDomainMoves& domain);
 
-/// Faces flipped at x (slivers sheared past their width) unflipped: each corner of a flipped
-/// face, but those domain.fixed holds, moved to the normalised mean of its neighbours, sweeps
-/// until none is flipped (at most 50). Returns the number of faces found flipped at first.
-int repair_sphere_flips(const SurfaceDomainMoves& domain, const Triangles& faces, Points& x);
-
 }  // namespace vpm::detail

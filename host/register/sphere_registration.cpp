@@ -14,6 +14,7 @@
 #include "core/parallel.hpp"
 #include "map/surface_area.hpp"
 #include "map/surface_polish.hpp"
+#include "register/dense_surface.hpp"
 #include "register/landmark_gram.hpp"
 #include "register/sphere_field.hpp"
 #include "register/sphere_match.hpp"
@@ -247,7 +248,7 @@ void landmark_flow(Device& device, const std::vector<Vector3d>& x, const std::ve
     res.width = chord_width(res.width_factor, spacing);
     flow(device, x, p, q, 1 / (res.width * res.width), options.steps, res);
     res.flow_metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::sphere);
-    res.repaired_faces = detail::repair_sphere_flips(domain, faces, res.points);
+    res.repaired_faces = detail::repair_flips(domain, faces, res.points);
     const double* narrower = std::find(std::begin(kWidthFactors), std::end(kWidthFactors), res.width_factor);
     if (options.width_factor > 0 || domain.flipped(res.points, faces).empty() || narrower == std::begin(kWidthFactors) ||
         narrower == std::end(kWidthFactors))
@@ -293,7 +294,7 @@ SurfaceRegistrationResult run(const Points& sphere, const Triangles& faces, cons
     res.match = detail::match_on_sphere(dev, moved, carried, reference, faces, *values, *templ, options.match, domain);
     if (!p.empty()) {  // the landmarks back onto their targets from where the dense steps left them
       flow(dev, moved, carried, q, 1 / (res.width * res.width), options.steps, res);
-      res.repaired_faces += detail::repair_sphere_flips(domain, faces, res.points);
+      res.repaired_faces += detail::repair_flips(domain, faces, res.points);
     } else {
       for (size_t i = 0; i < moved.size(); ++i) res.points.row(static_cast<Eigen::Index>(i)) = moved[i].transpose();
     }
@@ -327,37 +328,5 @@ SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangl
   for (size_t i = 0; i < ts.size(); ++i) t.sphere.row(static_cast<Eigen::Index>(i)) = ts[i].transpose();
   return run(sphere, faces, landmarks, targets, options, &values, &t, device);
 }
-
-namespace detail {
-
-// Faces the flow flipped (slivers of the sphere map sheared past their width, the surface's form
-// of the ball's folded tets) repaired: each corner of a flipped face, but the held ones, moved to
-// the normalised mean of its neighbours, sweeps until none is flipped (at most 50).
-// Returns the number of faces it found flipped; the metrics say what is left.
-int repair_sphere_flips(const SurfaceDomainMoves& domain, const Triangles& f, Points& x) {
-  std::vector<int> flipped = domain.flipped(x, f);
-  const int found = static_cast<int>(flipped.size());
-  if (flipped.empty()) return 0;
-  std::vector<std::vector<int>> ring(static_cast<size_t>(x.rows()));
-  for (Eigen::Index t = 0; t < f.rows(); ++t)
-    for (int k = 0; k < 3; ++k) {
-      ring[static_cast<size_t>(f(t, k))].push_back(f(t, (k + 1) % 3));
-      ring[static_cast<size_t>(f(t, k))].push_back(f(t, (k + 2) % 3));
-    }
-  for (int sweep = 0; sweep < 50 && !flipped.empty(); ++sweep) {
-    for (int t : flipped)
-      for (int k = 0; k < 3; ++k) {
-        const int v = f(t, k);
-        if (!domain.fixed.empty() && domain.fixed[static_cast<size_t>(v)]) continue;
-        Vector3d m = Vector3d::Zero();
-        for (int w : ring[static_cast<size_t>(v)]) m += x.row(w).transpose();
-        x.row(v) = m.normalized().transpose();
-      }
-    flipped = domain.flipped(x, f);
-  }
-  return found;
-}
-
-}  // namespace detail
 
 }  // namespace vpm

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <vector>
 
+#include "register/dense_surface.hpp"
 #include "vpm/icosphere.hpp"
 
 namespace vpm::detail {
@@ -22,12 +23,6 @@ constexpr double kAngleStep = 0.5;
 // halved down to kStop.
 constexpr int kStarts = 3;
 constexpr double kStart = 0.25, kStop = 0.002;
-// Maps whose smoothed scalars correlate at least this well as they are are not searched: the
-// coarse scalar then has flat directions (turns that barely change it) along which the search
-// slides to a wrong rotation (on the development surface 12-27 degrees, one seed's distance to
-// the truth 0.11 -> 0.38 rad); the maps to search start far below (vpm demo's two brains: 0.08,
-// 0.34; the development and report surfaces: 0.87-0.98).
-constexpr double kAligned = 0.75;
 
 Eigen::VectorXd interpolate(const SphereLocator& loc, const Eigen::VectorXd& v, const Points& at) {
   const std::vector<SphereLocation> l = loc.locate_all(at);

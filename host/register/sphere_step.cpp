@@ -5,19 +5,11 @@
 #include <cmath>
 
 #include "core/parallel.hpp"
-#include "linalg/sparse_cholesky.hpp"
-#include "vpm/error.hpp"
 
 namespace vpm::detail {
 
 namespace {
 
-// How firmly the dense steps hold the landmarks (gauss_newton_field). At 10 the landmarks drifted
-// and the landmark flow that puts them back undid the dense steps' work (one report run ended
-// 0.0148 rad from the truth, farther than the landmarks alone); 100, chosen on the development
-// set (the gap narrowed on two of three seeds), brings every report run within 0.01 of the ideal
-// Dice (docs/surfaces.md "Measured").
-constexpr double kHold = 100;
 // The Gram matrix's blocks with lambda |c_j - c_k|^2 above this (below 1e-10 of the diagonal)
 // are left out.
 constexpr double kGramCutoff = 25;
@@ -101,47 +93,10 @@ Eigen::SparseMatrix<double> centre_gram(const Centres& cs) {
   return K;
 }
 
-namespace {
-
-// J^T diag(w) J, the rows of J in one block per host thread (Eigen's sparse product is serial;
-// it was a quarter of a 64k-face registration).
-Eigen::SparseMatrix<double> normal_matrix(const SparseRows& J, const Eigen::VectorXd& w) {
-  const int T = std::max(1, std::min(host_threads(), static_cast<int>(J.rows() / 4096)));
-  std::vector<Eigen::SparseMatrix<double>> part(static_cast<size_t>(T));
-  parallel_for(T, 1, [&](int b0, int b1) {
-    for (int b = b0; b < b1; ++b) {
-      const Eigen::Index r0 = J.rows() * b / T, r1 = J.rows() * (b + 1) / T;
-      const Eigen::SparseMatrix<double> Jb = J.middleRows(r0, r1 - r0);
-      const Eigen::SparseMatrix<double> WJb = w.segment(r0, r1 - r0).asDiagonal() * Jb;
-      part[static_cast<size_t>(b)] = Eigen::SparseMatrix<double>(Jb.transpose()) * WJb;
-    }
-  });
-  for (size_t b = 1; b < part.size(); ++b) part[0] += part[b];
-  return part[0];
-}
-
-}  // namespace
-
-// The step's weights a: the minimum of sum_i w_i (e_i + J_i a)^2 + mu a^T K a, the vertex rows
-// weighted by their area shares, the landmark rows together kHold x the data rows (so the field
-// nearly vanishes at the landmarks and the dense steps keep what they matched), mu = ridge x the
-// data term's trace over K's: the normal equations (sparse: centres interact within 8 widths)
-// by a sparse Cholesky factorisation (CHOLMOD's supernodal one where vpm has it: linalg/sparse_cholesky.hpp).
+// The step's weights a (gauss_newton_weights), the field's u_j = P_j a_j.
 BinnedField gauss_newton_field(const SparseRows& J, const Eigen::VectorXd& area, const Eigen::VectorXd& e,
                                const Eigen::SparseMatrix<double>& K, const Centres& cs, double ridge) {
-  const Eigen::Index n = area.size(), m = J.rows();
-  Eigen::VectorXd w = Eigen::VectorXd::Zero(m), r = Eigen::VectorXd::Zero(m);
-  w.head(n) = area;
-  r.head(n) = e;
-  const Eigen::VectorXd sq = J.cwiseProduct(J) * Eigen::VectorXd::Ones(J.cols());  // |J_i|^2
-  const double data = area.dot(sq.head(n)), held = sq.tail(m - n).sum();
-  if (m > n && held > 0) w.tail(m - n).setConstant(kHold * data / held);
-  const double mu = ridge * data / K.diagonal().sum();
-  Eigen::SparseMatrix<double> N = normal_matrix(J, w);
-  N += mu * K;
-  SparseCholesky chol;
-  if (!chol.factorize(N)) throw NumericalError("sphere registration: the dense step's system could not be factored");
-  const Eigen::VectorXd a = chol.solve(Eigen::VectorXd(-(J.transpose() * w.cwiseProduct(r))));
+  const Eigen::VectorXd a = gauss_newton_weights(J, area, e, K, ridge, "sphere registration");
   BinnedField field{&cs, {}};
   for (int j = 0; j < cs.size(); ++j) field.u.push_back(cs.P[static_cast<size_t>(j)] * a.segment<2>(2 * j));
   return field;
@@ -150,12 +105,8 @@ BinnedField gauss_newton_field(const SparseRows& J, const Eigen::VectorXd& area,
 // Points moved through `alpha` x the stationary field (two RK4 steps, put back on the sphere).
 std::vector<Vector3d> advected(Device& device, const std::vector<Vector3d>& x, const BinnedField& field, double alpha) {
   if (x.empty()) return x;
-  DivFreeField f;
-  f.lambda = field.at->lambda;
-  f.centres = to_matrix(field.at->c);
-  f.coefficients = alpha * to_matrix(field.u);
   Points m = to_matrix(x);
-  advect_on_sphere(device, m, {f}, 2);
+  advect_on_sphere(device, m, {carrier(field.at->lambda, field.at->c, field.u, alpha)}, 2);
   std::vector<Vector3d> out(x.size());
   for (size_t i = 0; i < x.size(); ++i) out[i] = m.row(static_cast<Eigen::Index>(i)).transpose();
   return out;

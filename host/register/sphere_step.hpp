@@ -6,6 +6,7 @@
 #include <Eigen/SparseCore>
 #include <vector>
 
+#include "register/dense_surface.hpp"
 #include "register/point_bins.hpp"
 #include "register/sphere_field.hpp"
 #include "vpm/mesh.hpp"
@@ -34,8 +35,6 @@ struct BinnedField {
   std::vector<Vector3d> u;  ///< u_j = P_j a_j
   Vector3d operator()(const Vector3d& x) const;
 };
-
-using SparseRows = Eigen::SparseMatrix<double, Eigen::RowMajor>;
 
 /// The rows of the Gauss-Newton system: one a vertex of `x` (with the template's gradient
 /// `grad` there), two a landmark (the field's tangent components, held at zero).

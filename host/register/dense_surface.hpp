@@ -1,0 +1,58 @@
+#pragma once
+// Private: what the dense registrations on the sphere (sphere_match.cpp) and in the disk
+// (disk_match.cpp) share: the vertices' area shares, the scalars' standardisation and
+// correlation, the Gauss-Newton weights of a step's field, the repair of flipped faces, and the
+// rules that keep or end a step.
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <vector>
+
+#include "map/surface_polish.hpp"
+#include "vpm/mesh.hpp"
+
+namespace vpm::detail {
+
+/// A step is kept when it lowers the mismatch by this fraction at least; a level ends when the
+/// gain is below kLevelGain; a step is halved at most kHalvings times.
+constexpr double kMinGain = 1e-4, kLevelGain = 1e-3;
+constexpr int kHalvings = 4;
+/// A step whose flipped slivers were repaired is kept only if the repaired step changes the face
+/// areas (mean |r - 1| against the positions before it) by at most this.
+constexpr double kRepairAreaChange = 0.001;
+/// Below this correlation of the smoothed scalars a registration without landmarks first searches
+/// a rotation; maps that correlate better are not searched: the coarse scalar then has flat
+/// directions (turns that barely change it) along which the search slides to a wrong rotation (on
+/// the sphere's development surface 12-27 degrees, one seed's distance to the truth 0.11 -> 0.38
+/// rad); the maps to search start far below (vpm demo's two brains: 0.08, 0.34; the development
+/// and report surfaces: 0.87-0.98). The rotation found is applied when it shrinks 1 - correlation
+/// to kRotationGain of what it was.
+constexpr double kAligned = 0.75, kRotationGain = 0.5;
+
+using SparseRows = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+
+/// A third of the areas of each vertex's faces.
+Eigen::VectorXd vertex_areas(const Points& x, const Triangles& f);
+/// Area-weighted standardisation: mean 0, spread 1 (InputError naming `what` for a constant scalar).
+Eigen::VectorXd standardise(const Eigen::VectorXd& v, const Eigen::VectorXd& area, const char* what);
+/// Area-weighted correlation of two scalars.
+double correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const Eigen::VectorXd& w);
+/// The area-weighted mean squared residual.
+inline double mismatch(const Eigen::VectorXd& e, const Eigen::VectorXd& area) {
+  return area.dot(e.cwiseProduct(e)) / area.sum();
+}
+
+/// The weights a of a step's field: the minimum of sum_i w_i (e_i + J_i a)^2 + mu a^T K a. The
+/// first area.size() rows of J are the vertices' (w_i their area shares, e their residuals), the
+/// rest hold the field at the landmarks at zero (weighted together 100 x the data term, so the
+/// dense steps keep what they matched); mu = ridge x the data term's trace over K's. NumericalError
+/// naming `who` when the normal equations cannot be factored.
+Eigen::VectorXd gauss_newton_weights(const SparseRows& J, const Eigen::VectorXd& area, const Eigen::VectorXd& e,
+                                     const Eigen::SparseMatrix<double>& K, double ridge, const char* who);
+
+/// Faces flipped at x (slivers sheared past their width) unflipped: each corner of a flipped
+/// face, but those domain.fixed holds and the disk's boundary loop, moved to the mean of its
+/// neighbours and put back on the domain, sweeps until none is flipped (at most 50). Returns the
+/// number of faces found flipped at first; domain.flipped says what is left.
+int repair_flips(const SurfaceDomainMoves& domain, const Triangles& f, Points& x);
+
+}  // namespace vpm::detail
