@@ -141,8 +141,6 @@ int register_surface(const Args& args, const std::string& in, const std::string&
   auto t0 = Clock::now();
   TriSurface input = read_surface(in);
   const SurfaceDomain domain = surface_domain(input);
-  if (domain == SurfaceDomain::disk && args.has("--template"))
-    throw InputError("--template: the dense registration is on the sphere only; " + in + " is mapped to the disk (it has a boundary loop)");
   const TriSurface surface = domain == SurfaceDomain::disk ? read_disk(in, std::move(input)) : read_sphere(in, std::move(input));
   LandmarkFile from, to;
   const auto src = args.get("--landmarks"), dst = args.get("--targets"), templ = args.get("--template");
@@ -155,20 +153,24 @@ int register_surface(const Args& args, const std::string& in, const std::string&
   } else {
     from.points = to.points = Points(0, 3);
   }
-  std::optional<SphereTemplate> t;
-  Eigen::VectorXd values;
+  TriSurface ts;  // the template, mapped to the subject's domain
+  Eigen::VectorXd values, tvalues;
   if (templ) {
-    const TriSurface ts = read_sphere(*templ);
-    t = SphereTemplate{ts.vertices, ts.triangles, read_values(*args.get("--template-overlay"), ts, *templ)};
+    ts = domain == SurfaceDomain::disk ? read_disk(*templ, read_surface(*templ)) : read_sphere(*templ);
+    tvalues = read_values(*args.get("--template-overlay"), ts, *templ);
     values = read_values(*args.get("--overlay"), surface, in);
   }
   const double t_read = seconds_since(t0);
   Device& dev = Device::current();
   SurfaceRegistrationResult r;
   try {
-    r = t ? register_on_sphere(surface.vertices, surface.triangles, values, *t, from.points, to.points, opt, &dev)
-          : domain == SurfaceDomain::disk ? register_in_disk(surface.vertices, surface.triangles, from.points, to.points, opt)
-                                          : register_on_sphere(surface.vertices, surface.triangles, from.points, to.points, opt, &dev);
+    const Points &v = surface.vertices, &p = from.points, &q = to.points;
+    const Triangles& f = surface.triangles;
+    if (domain == SurfaceDomain::disk)
+      r = templ ? register_in_disk(v, f, values, DiskTemplate{ts.vertices, ts.triangles, tvalues}, p, q, opt) : register_in_disk(v, f, p, q, opt);
+    else
+      r = templ ? register_on_sphere(v, f, values, SphereTemplate{ts.vertices, ts.triangles, tvalues}, p, q, opt, &dev)
+                : register_on_sphere(v, f, p, q, opt, &dev);
   } catch (const InputError& e) {
     throw InputError((src ? *src + ", " + *dst : in + ", " + *templ) + ": " + e.what());
   }
@@ -185,7 +187,7 @@ int register_surface(const Args& args, const std::string& in, const std::string&
   write_surface(out, registered);
   info(std::string("registered ") + (domain == SurfaceDomain::disk ? "in the disk" : "on the sphere") + ": landmark rms error " + strprintf("%.2e", r.landmark_rms_error) + " (max " +
        strprintf("%.2e", r.landmark_max_error) + ")" +
-       (t ? strprintf(", scalar correlation %.3f -> %.3f", r.match.correlation_before, r.match.correlation_after) : "") +
+       (templ ? strprintf(", scalar correlation %.3f -> %.3f", r.match.correlation_before, r.match.correlation_after) : "") +
        ", face area mean |r-1| " + strprintf("%.3f %%", 100 * r.metrics.face_area_ratio.mean_abs_dev) + " (flow " +
        strprintf("%.3f %%", 100 * r.flow_metrics.face_area_ratio.mean_abs_dev) + "), " +
        std::to_string(r.metrics.flipped_faces) + " flipped faces; wrote " + out);

@@ -243,5 +243,91 @@ TEST_CASE("disk registration: landmarks exact, a swirl recovered, areas kept, th
   CHECK(rep["domain"].string() == "disk");
   CHECK(rep["landmark_max_error"].number() <= 1e-6);  // the .gii holds the disk in float32
   CHECK(run_status(cmd + " --template " + dir + "/disk.gii --overlay x --template-overlay y 2>" + dir + "/err.txt") == 2);
-  CHECK_THAT(slurp(dir + "/err.txt"), Catch::Contains("on the sphere only"));
+  CHECK_THAT(slurp(dir + "/err.txt"), Catch::Contains("y: neither a file nor a point field"));
+}
+
+namespace {
+
+// A smooth scalar of the plane with features at several scales (plane waves of wave numbers 3-8).
+Eigen::VectorXd plane_features(const Points& x) {
+  static const double waves[][4] = {{3, 1, 0.2, 1.0}, {-2, 4, 1.1, 0.8}, {5, 2, 2.3, 0.6}, {1, -6, 0.4, 0.5}, {6, 5, 1.7, 0.4}};
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(x.rows());
+  for (Eigen::Index i = 0; i < x.rows(); ++i)
+    for (const auto& w : waves) v(i) += w[3] * std::sin(w[0] * x(i, 0) + w[1] * x(i, 1) + w[2]);
+  return v;
+}
+
+Points swirled(const Points& x) {
+  Points y(x.rows(), 3);
+  for (Eigen::Index i = 0; i < x.rows(); ++i) y.row(i) = swirl(x.row(i).transpose()).transpose();
+  return y;
+}
+
+double mean_distance(const Points& a, const Points& b) { return (a - b).rowwise().norm().mean(); }
+
+}  // namespace
+
+TEST_CASE("dense disk registration: a swirl recovered from a scalar, areas kept, the circle kept, identity on itself") {
+  const TriSurface subject = disk_map_of_cap(4), tpl = disk_map_of_cap(5);  // two triangulations
+  // the template is the subject's anatomy swirled: its value at swirl(y) is plane_features(y)
+  const DiskTemplate t{swirled(tpl.vertices), tpl.triangles, plane_features(tpl.vertices)};
+  const Points truth = swirled(subject.vertices);
+  const Eigen::VectorXd f = plane_features(subject.vertices);
+  const SurfaceRegistrationResult r = register_in_disk(subject.vertices, subject.triangles, f, t, Points(0, 3), Points(0, 3));
+  const double before = mean_distance(subject.vertices, truth), after = mean_distance(r.points, truth);
+  INFO("distance to the truth " << before << " -> " << after);
+  CHECK(before > 0.05);
+  CHECK(after < 0.35 * before);
+  CHECK(!r.match.rotation_searched);  // correlated enough as they are
+  CHECK(r.match.correlation_after > 0.99);
+  CHECK(r.match.correlation_after > r.match.correlation_before);
+  for (const SphereMatchLevel& l : r.match.levels) CHECK(l.mismatch_after < l.mismatch_before);
+  CHECK(r.metrics.flipped_faces == 0);
+  CHECK(r.metrics.face_area_ratio.mean_abs_dev <= 0.005);
+  CHECK(r.metrics.max_radius_error <= 1e-12);  // the boundary loop on the circle
+  CHECK((r.points.col(2).array() == 0).all());
+
+  // with landmarks: exact, and the scalar still pulls the rest
+  Points from(6, 3), to(6, 3);
+  for (int i = 0, found = 0; found < 6; i += 53)
+    if (subject.vertices.row(i).norm() < 0.9) from.row(found) = subject.vertices.row(i), to.row(found++) = truth.row(i);
+  const SurfaceRegistrationResult both = register_in_disk(subject.vertices, subject.triangles, f, t, from, to);
+  CHECK(both.landmark_max_error <= 1e-10);
+  CHECK(both.metrics.flipped_faces == 0);
+  CHECK(mean_distance(both.points, truth) < 0.5 * before);
+
+  // a subject onto itself; a template turned by 100 degrees found by the rotation search
+  const DiskTemplate same{subject.vertices, subject.triangles, f};
+  const SurfaceRegistrationResult self = register_in_disk(subject.vertices, subject.triangles, f, same, Points(0, 3), Points(0, 3));
+  CHECK((self.points - subject.vertices).cwiseAbs().maxCoeff() <= 1e-12);
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(100 * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const DiskTemplate turned{tpl.vertices * R.transpose(), tpl.triangles, plane_features(tpl.vertices)};
+  const SurfaceRegistrationResult found = register_in_disk(subject.vertices, subject.triangles, f, turned, Points(0, 3), Points(0, 3));
+  CHECK(found.match.rotation_searched);
+  CHECK(std::abs(std::atan2(found.match.rotation(1, 0), found.match.rotation(0, 0)) * 180 / M_PI - 100) < 2);
+  CHECK(mean_distance(found.points, subject.vertices * R.transpose()) < 0.02);
+
+  // the command line: the scalars as point fields of the .vtp files, a sphere template refused
+  const std::string dir = vpm::test::fresh_dir("register_disk_dense");
+  TriSurface s = subject, ts{t.disk, t.faces, {}, {}};
+  s.point_data.push_back({"f", f, false});
+  ts.point_data.push_back({"f", t.values, false});
+  write_surface(dir + "/subject.vtp", s);
+  write_surface(dir + "/template.vtp", ts);
+  write_surface(dir + "/sphere.vtp", icosphere(2));
+  const std::string cmd = std::string(VPM_BINARY) + " register " + dir + "/subject.vtp -o " + dir + "/reg.vtp --overlay f --template-overlay f";
+  REQUIRE(run_status(cmd + " --template " + dir + "/template.vtp --report " + dir + "/r.json 2>" + dir + "/err.txt") == 0);
+  Json rep = Json::parse(slurp(dir + "/r.json"));
+  CHECK(rep["domain"].string() == "disk");
+  CHECK(rep["registration"]["match"]["correlation_after"].number() == Approx(r.match.correlation_after).epsilon(1e-6));
+  CHECK(rep["registration"]["final"]["flipped_faces"].number() == 0);
+  CHECK(run_status(cmd + " --template " + dir + "/sphere.vtp 2>" + dir + "/err.txt") == 2);
+  CHECK_THAT(slurp(dir + "/err.txt"), Catch::Contains("not in the unit disk"));
+
+  CHECK_THROWS_AS(register_in_disk(subject.vertices, subject.triangles, f.head(10), t, from, to), InputError);
+  CHECK_THROWS_WITH(register_in_disk(subject.vertices, subject.triangles, Eigen::VectorXd::Constant(f.size(), 2.0), t, Points(0, 3), Points(0, 3)),
+                    Catch::Contains("constant"));
+  CHECK_THROWS_AS(register_in_disk(subject.vertices, subject.triangles, f, DiskTemplate{2 * tpl.vertices, tpl.triangles, t.values},
+                                   Points(0, 3), Points(0, 3)),
+                  InputError);
 }

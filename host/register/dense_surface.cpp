@@ -48,12 +48,17 @@ Eigen::VectorXd vertex_areas(const Points& x, const Triangles& f) {
   return v;
 }
 
-Eigen::VectorXd standardise(const Eigen::VectorXd& v, const Eigen::VectorXd& area, const char* what) {
+Spread spread(const Eigen::VectorXd& v, const Eigen::VectorXd& area, const char* what) {
   const double total = area.sum(), mean = area.dot(v) / total;
   const Eigen::VectorXd c = v.array() - mean;
   const double sd = std::sqrt(area.dot(c.cwiseProduct(c)) / total);
   if (!(sd > 1e-12 * (1 + std::abs(mean)))) throw InputError(std::string(what) + ": the scalar is constant; nothing to match");
-  return c / sd;
+  return {mean, sd};
+}
+
+Eigen::VectorXd standardise(const Eigen::VectorXd& v, const Eigen::VectorXd& area, const char* what) {
+  const Spread s = spread(v, area, what);
+  return (v.array() - s.mean) / s.sd;
 }
 
 double correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const Eigen::VectorXd& w) {
@@ -61,6 +66,42 @@ double correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const Eig
   const Eigen::VectorXd ca = a.array() - w.dot(a) / W, cb = b.array() - w.dot(b) / W;
   const double d = std::sqrt(w.dot(ca.cwiseProduct(ca)) * w.dot(cb.cwiseProduct(cb)));
   return d > 0 ? w.dot(ca.cwiseProduct(cb)) / d : 0;
+}
+
+// A level narrower than this many times the subject's mean edge (the side of an equilateral
+// triangle of the mean face area) is left out: its Gaussians are sampled by a handful of vertices
+// each, as many unknowns as equations, at the cost of the finest system (on 2,562 vertices the
+// 0.07 level took 10 of 12 s). Every surface of the development and report sets (19k-128k faces)
+// runs every default level.
+constexpr double kWidthPerEdge = 1.5;
+
+// The levels that run: with landmarks, those narrower than the landmarks' mean nearest-neighbour
+// chord (the landmark flow has set the deformation on the scales above it; a wider dense level
+// there pulls against the held landmarks), at least the finest; of those, the ones at least
+// kWidthPerEdge mean edges wide (at least the widest).
+std::vector<double> dense_widths(const std::vector<double>& widths, const Points& landmarks, const Points& reference,
+                                 const Triangles& faces) {
+  std::vector<double> out = widths;
+  const Eigen::Index L = landmarks.rows();
+  if (L >= 2 && !widths.empty()) {
+    double spacing = 0;
+    for (Eigen::Index i = 0; i < L; ++i) {
+      double best = 2;
+      for (Eigen::Index j = 0; j < L; ++j)
+        if (j != i) best = std::min(best, (landmarks.row(i) - landmarks.row(j)).norm());
+      spacing += best / static_cast<double>(L);
+    }
+    out.clear();
+    for (double w : widths)
+      if (w < spacing) out.push_back(w);
+    if (out.empty()) out.push_back(*std::min_element(widths.begin(), widths.end()));
+  }
+  const double edge = std::sqrt(4 / std::sqrt(3.0) * face_areas(reference, faces).mean());
+  std::vector<double> resolved;
+  for (double w : out)
+    if (w >= kWidthPerEdge * edge) resolved.push_back(w);
+  if (resolved.empty() && !out.empty()) resolved.push_back(*std::max_element(out.begin(), out.end()));
+  return resolved;
 }
 
 // The normal equations (sparse: centres interact within a few widths) by a sparse Cholesky
@@ -80,6 +121,20 @@ Eigen::VectorXd gauss_newton_weights(const SparseRows& J, const Eigen::VectorXd&
   SparseCholesky chol;
   if (!chol.factorize(N)) throw NumericalError(std::string(who) + ": the dense step's system could not be factored");
   return chol.solve(Eigen::VectorXd(-(J.transpose() * w.cwiseProduct(r))));
+}
+
+void restore_areas(const SurfaceDomainMoves& domain, const Points& reference, const Triangles& faces,
+                   const SurfaceRegistrationOptions& options, SurfaceRegistrationResult& res) {
+  if (options.restore_rounds <= 0 || !domain.flipped(res.points, faces).empty() ||
+      surface_metrics(reference, res.points, faces, domain.domain).face_area_ratio.mean_abs_dev <= options.restore_tolerance)
+    return;
+  SurfaceMapOptions polish;
+  polish.tolerance = options.restore_tolerance;
+  polish.polish_rounds = options.restore_rounds;
+  SurfaceMapReport rep;
+  polish_surface(domain, faces, face_areas(reference, faces), polish, res.points, rep);
+  res.restore_rounds = static_cast<int>(rep.polish.size());
+  for (char c : domain.fixed) res.held_vertices += c;
 }
 
 // Each corner's neighbours listed twice (once per face on each side of the edge): the mean is

@@ -9,6 +9,7 @@
 
 #include "map/surface_polish.hpp"
 #include "vpm/mesh.hpp"
+#include "vpm/surface_registration.hpp"
 
 namespace vpm::detail {
 
@@ -32,6 +33,11 @@ using SparseRows = Eigen::SparseMatrix<double, Eigen::RowMajor>;
 
 /// A third of the areas of each vertex's faces.
 Eigen::VectorXd vertex_areas(const Points& x, const Triangles& f);
+/// The area-weighted mean and spread of a scalar (InputError naming `what` when it is constant).
+struct Spread {
+  double mean = 0, sd = 1;
+};
+Spread spread(const Eigen::VectorXd& v, const Eigen::VectorXd& area, const char* what);
 /// Area-weighted standardisation: mean 0, spread 1 (InputError naming `what` for a constant scalar).
 Eigen::VectorXd standardise(const Eigen::VectorXd& v, const Eigen::VectorXd& area, const char* what);
 /// Area-weighted correlation of two scalars.
@@ -41,6 +47,12 @@ inline double mismatch(const Eigen::VectorXd& e, const Eigen::VectorXd& area) {
   return area.dot(e.cwiseProduct(e)) / area.sum();
 }
 
+/// The levels of `widths` that run: with landmarks (L x 3, their current positions), those
+/// narrower than the landmarks' mean nearest-neighbour distance, at least the finest; of those, the
+/// ones at least 1.5 of the subject's mean edges wide (`reference`, `faces`), at least the widest.
+std::vector<double> dense_widths(const std::vector<double>& widths, const Points& landmarks, const Points& reference,
+                                 const Triangles& faces);
+
 /// The weights a of a step's field: the minimum of sum_i w_i (e_i + J_i a)^2 + mu a^T K a. The
 /// first area.size() rows of J are the vertices' (w_i their area shares, e their residuals), the
 /// rest hold the field at the landmarks at zero (weighted together 100 x the data term, so the
@@ -48,6 +60,13 @@ inline double mismatch(const Eigen::VectorXd& e, const Eigen::VectorXd& area) {
 /// naming `who` when the normal equations cannot be factored.
 Eigen::VectorXd gauss_newton_weights(const SparseRows& J, const Eigen::VectorXd& area, const Eigen::VectorXd& e,
                                      const Eigen::SparseMatrix<double>& K, double ridge, const char* who);
+
+/// The restoration (vpm/surface_registration.hpp step 6): when res.points has no flipped face and
+/// its face areas miss options.restore_tolerance, at most options.restore_rounds steps of the
+/// surface map's polish towards the areas of `reference`, domain.fixed held still; fills
+/// res.restore_rounds and res.held_vertices.
+void restore_areas(const SurfaceDomainMoves& domain, const Points& reference, const Triangles& faces,
+                   const SurfaceRegistrationOptions& options, SurfaceRegistrationResult& res);
 
 /// Faces flipped at x (slivers sheared past their width) unflipped: each corner of a flipped
 /// face, but those domain.fixed holds and the disk's boundary loop, moved to the mean of its

@@ -13,6 +13,8 @@
 #include "map/surface_area.hpp"
 #include "map/surface_polish.hpp"
 #include "register/dense_surface.hpp"
+#include "register/disk_field.hpp"
+#include "register/disk_match.hpp"
 #include "register/landmark_gram.hpp"
 #include "vpm/error.hpp"
 #include "vpm/surface_registration.hpp"
@@ -24,32 +26,11 @@ namespace {
 
 using Eigen::Matrix2d;
 using Eigen::Vector2d;
+using detail::DiskField;
+using detail::stream_hessian;
 
 constexpr double kWidthFactors[] = {0.5, 1, 1.5, 2, 3, 4};
-constexpr double kCutoff = 40;        // lambda |x - y|^2 beyond this: below 1e-17 of the peak
 constexpr double kMaxRadius = 0.999;  // landmarks and targets strictly inside the disk
-const Matrix2d kJ = (Matrix2d() << 0, 1, -1, 0).finished();  // v = J grad psi
-
-// M(x, y) = grad_x grad_y^T of the stream-function kernel s(x) s(y) exp(-lambda |x - y|^2),
-// s(x) = 1 - |x|^2: zero on the circle, so every field J sum_j M(x, y_j) b_j is divergence-free
-// and tangent to the circle (the stream function is constant there).
-Matrix2d stream_hessian(const Vector2d& x, const Vector2d& y, double lambda) {
-  const Vector2d r = x - y;
-  const double k = std::exp(-lambda * r.squaredNorm()), sx = 1 - x.squaredNorm(), sy = 1 - y.squaredNorm();
-  return k * (4 * x * y.transpose() - 4 * lambda * sy * x * r.transpose() + 4 * lambda * sx * r * y.transpose() +
-              sx * sy * (2 * lambda * Matrix2d::Identity() - 4 * lambda * lambda * r * r.transpose()));
-}
-
-struct DiskField {
-  double lambda = 1;
-  std::vector<Vector2d> centres, weights;  // y_j, b_j
-  Vector2d operator()(const Vector2d& x) const {
-    Vector2d w = Vector2d::Zero();
-    for (size_t j = 0; j < centres.size(); ++j)
-      if (lambda * (x - centres[j]).squaredNorm() <= kCutoff) w += stream_hessian(x, centres[j], lambda) * weights[j];
-    return kJ * w;
-  }
-};
 
 // G_ij = J M(y_i, y_j) J^T: symmetric positive definite (the kernel of a derivative of a
 // positive definite kernel), so c = G^-1 u and b_j = J^T c_j interpolate.
@@ -57,7 +38,7 @@ Eigen::MatrixXd gram(const std::vector<Vector2d>& at, double lambda) {
   const int L = static_cast<int>(at.size());
   Eigen::MatrixXd G(2 * L, 2 * L);
   for (int i = 0; i < L; ++i)
-    for (int j = 0; j < L; ++j) G.block<2, 2>(2 * i, 2 * j) = kJ * stream_hessian(at[i], at[j], lambda) * kJ.transpose();
+    for (int j = 0; j < L; ++j) G.block<2, 2>(2 * i, 2 * j) = detail::quarter_turn() * stream_hessian(at[i], at[j], lambda) * detail::quarter_turn().transpose();
   G.diagonal().array() += 1e-13 * G.diagonal().maxCoeff();
   return G;
 }
@@ -73,7 +54,7 @@ DiskField fit(const std::vector<Vector2d>& at, const std::vector<Vector2d>& velo
   DiskField f;
   f.lambda = lambda;
   f.centres = at;
-  for (size_t j = 0; j < at.size(); ++j) f.weights.push_back(kJ.transpose() * c.segment<2>(2 * static_cast<Eigen::Index>(j)));
+  for (size_t j = 0; j < at.size(); ++j) f.weights.push_back(detail::quarter_turn().transpose() * c.segment<2>(2 * static_cast<Eigen::Index>(j)));
   return f;
 }
 
@@ -112,14 +93,6 @@ DiskField field_at(const std::vector<Vector2d>& p, const std::vector<Vector2d>& 
   return fit(at, vel, lambda);
 }
 
-// x on the domain: the boundary loop's vertices on the circle, every point within it.
-void place(std::vector<Vector2d>& x, const std::vector<char>& boundary) {
-  for (size_t i = 0; i < x.size(); ++i) {
-    const double r = x[i].norm();
-    if ((i < boundary.size() && boundary[i]) || r > 1) x[i] /= r;
-  }
-}
-
 void rk4_step(std::vector<Vector2d>& x, const std::vector<char>& boundary, const DiskField& f0, const DiskField& fh,
               const DiskField& f1, double dt) {
   detail::parallel_for(static_cast<int>(x.size()), 256, [&](int i0, int i1) {
@@ -128,13 +101,7 @@ void rk4_step(std::vector<Vector2d>& x, const std::vector<char>& boundary, const
       x[i] += dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
     }
   });
-  place(x, boundary);
-}
-
-Points to_points(const std::vector<Vector2d>& x) {
-  Points m(static_cast<Eigen::Index>(x.size()), 3);
-  for (size_t i = 0; i < x.size(); ++i) m.row(static_cast<Eigen::Index>(i)) << x[i].x(), x[i].y(), 0.0;
-  return m;
+  detail::place_in_disk(x, boundary);
 }
 
 // The RK4 flow of every vertex along the landmarks' straight pathlines, then one step of the
@@ -160,7 +127,7 @@ void flow(std::vector<Vector2d> x, const std::vector<char>& boundary, const std:
   }
   const DiskField last = fit(moving, rest, lambda);
   for (Vector2d& v : x) v += last(v);
-  place(x, boundary);
+  detail::place_in_disk(x, boundary);
   double sq = 0;
   res.landmark_max_error = 0;
   for (size_t i = 0; i < p.size(); ++i) {
@@ -169,7 +136,7 @@ void flow(std::vector<Vector2d> x, const std::vector<char>& boundary, const std:
     res.landmark_max_error = std::max(res.landmark_max_error, e);
   }
   res.landmark_rms_error = std::sqrt(sq / static_cast<double>(p.size()));
-  res.points = to_points(x);
+  res.points = detail::disk_points(x);
 }
 
 // 1 on the corners of the faces that contain a landmark (held still by the restoration).
@@ -207,25 +174,21 @@ double best_angle(const std::vector<Vector2d>& p, const std::vector<Vector2d>& q
 
 }  // namespace
 
-SurfaceRegistrationResult register_in_disk(const Points& disk, const Triangles& faces, const Points& landmarks,
-                                           const Points& targets, const SurfaceRegistrationOptions& options) {
-  const auto t0 = Clock::now();
-  if (landmarks.rows() < 1) throw InputError("disk registration: no landmarks");
+namespace {
+
+void check_inputs(const Points& landmarks, const Points& targets, const SurfaceRegistrationOptions& options, bool dense) {
+  if (landmarks.rows() < 1 && !dense) throw InputError("disk registration: no landmarks");
   if (landmarks.rows() != targets.rows())
     throw InputError("disk registration: " + std::to_string(landmarks.rows()) + " landmarks but " + std::to_string(targets.rows()) + " targets");
   if (options.steps < 1) throw InputError("disk registration: steps must be at least 1");
-  const std::vector<Vector2d> start = disk_rows(disk, "vertex", 1 + 1e-6), input_landmarks = disk_rows(landmarks, "landmark", kMaxRadius);
-  const std::vector<Vector2d> q = disk_rows(targets, "target", kMaxRadius);
-  const Points reference = to_points(start);
-  const detail::SurfaceDomainMoves domain{SurfaceDomain::disk, detail::loop_mask(static_cast<int>(disk.rows()), faces),
-                                          landmark_corners(start, faces, input_landmarks)};
-  SurfaceRegistrationResult res;
-  const double angle = options.rigid && input_landmarks.size() >= 2 ? best_angle(input_landmarks, q) : 0;
-  res.rotation = Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  const Eigen::Rotation2Dd R(angle);
-  std::vector<Vector2d> x = start, p = input_landmarks;
-  for (auto& v : x) v = R * v;
-  for (auto& v : p) v = R * v;
+  if (!(options.width_factor >= 0)) throw InputError("disk registration: width_factor must be positive (or 0: chosen)");
+}
+
+// The landmark flow from x (rotated) carrying p onto q: the width factor given, or chosen by
+// leave-one-out and, while the repair leaves faces flipped, the next narrower one.
+void landmark_flow(const std::vector<Vector2d>& x, const std::vector<Vector2d>& p, const std::vector<Vector2d>& q, const Points& reference,
+                   const Triangles& faces, const detail::SurfaceDomainMoves& domain, const SurfaceRegistrationOptions& options,
+                   SurfaceRegistrationResult& res) {
   const double spacing = std::min(mean_spacing(p), mean_spacing(q));
   res.width_factor = options.width_factor > 0 ? options.width_factor : loo_width_factor(p, q, spacing);
   while (true) {
@@ -239,19 +202,66 @@ SurfaceRegistrationResult register_in_disk(const Points& disk, const Triangles& 
       break;
     res.width_factor = *(narrower - 1);
   }
-  if (options.restore_rounds > 0 && domain.flipped(res.points, faces).empty() &&
-      surface_metrics(reference, res.points, faces, SurfaceDomain::disk).face_area_ratio.mean_abs_dev > options.restore_tolerance) {
-    SurfaceMapOptions polish;
-    polish.tolerance = options.restore_tolerance;
-    polish.polish_rounds = options.restore_rounds;
-    SurfaceMapReport rep;
-    detail::polish_surface(domain, faces, detail::face_areas(reference, faces), polish, res.points, rep);
-    res.restore_rounds = static_cast<int>(rep.polish.size());
-    for (char c : domain.fixed) res.held_vertices += c;
+}
+
+// Both registrations: `templ` null for landmarks alone.
+SurfaceRegistrationResult run(const Points& disk, const Triangles& faces, const Points& landmarks, const Points& targets,
+                              const SurfaceRegistrationOptions& options, const Eigen::VectorXd* values, const DiskTemplate* templ) {
+  const auto t0 = Clock::now();
+  check_inputs(landmarks, targets, options, templ != nullptr);
+  const std::vector<Vector2d> start = disk_rows(disk, "vertex", 1 + 1e-6), input_landmarks = disk_rows(landmarks, "landmark", kMaxRadius);
+  const std::vector<Vector2d> q = disk_rows(targets, "target", kMaxRadius);
+  const Points reference = detail::disk_points(start);
+  const detail::SurfaceDomainMoves domain{SurfaceDomain::disk, detail::loop_mask(static_cast<int>(disk.rows()), faces),
+                                          landmark_corners(start, faces, input_landmarks)};
+  SurfaceRegistrationResult res;
+  const double angle = options.rigid && input_landmarks.size() >= 2 ? best_angle(input_landmarks, q) : 0;
+  res.rotation = Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Rotation2Dd R(angle);
+  std::vector<Vector2d> x = start, p = input_landmarks;
+  for (auto& v : x) v = R * v;
+  for (auto& v : p) v = R * v;
+  if (!p.empty()) {
+    landmark_flow(x, p, q, reference, faces, domain, options, res);
+  } else {
+    res.points = detail::disk_points(x);
+    res.flow_metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::disk);
   }
+  if (templ) {
+    std::vector<Vector2d> moved = detail::disk_vectors(res.points), carried = q;
+    res.match = detail::match_in_disk(moved, carried, reference, faces, *values, *templ, options.match, domain);
+    if (!p.empty()) {  // the landmarks back onto their targets from where the dense steps left them
+      flow(moved, domain.boundary, carried, q, 1 / (res.width * res.width), options.steps, res);
+      res.repaired_faces += detail::repair_flips(domain, faces, res.points);
+    } else {
+      res.points = detail::disk_points(moved);
+    }
+    res.flow_metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::disk);
+  }
+  detail::restore_areas(domain, reference, faces, options, res);
   res.metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::disk);
   res.seconds = seconds_since(t0);
   return res;
+}
+
+}  // namespace
+
+SurfaceRegistrationResult register_in_disk(const Points& disk, const Triangles& faces, const Points& landmarks,
+                                           const Points& targets, const SurfaceRegistrationOptions& options) {
+  return run(disk, faces, landmarks, targets, options, nullptr, nullptr);
+}
+
+SurfaceRegistrationResult register_in_disk(const Points& disk, const Triangles& faces, const Eigen::VectorXd& values,
+                                           const DiskTemplate& templ, const Points& landmarks, const Points& targets,
+                                           const SurfaceRegistrationOptions& options) {
+  if (values.size() != disk.rows())
+    throw InputError("disk registration: " + std::to_string(values.size()) + " values for " + std::to_string(disk.rows()) + " vertices");
+  if (templ.values.size() != templ.disk.rows())
+    throw InputError("disk registration: the template has " + std::to_string(templ.values.size()) + " values for " +
+                     std::to_string(templ.disk.rows()) + " vertices");
+  if (!values.allFinite() || !templ.values.allFinite()) throw InputError("disk registration: a value is not finite");
+  const DiskTemplate t{detail::disk_points(disk_rows(templ.disk, "template vertex", 1 + 1e-6)), templ.faces, templ.values};
+  return run(disk, faces, landmarks, targets, options, &values, &t);
 }
 
 }  // namespace vpm

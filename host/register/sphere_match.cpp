@@ -185,41 +185,6 @@ SphereMatchLevel match_level(Device& device, std::vector<Vector3d>& x, std::vect
   return lv;
 }
 
-// A level narrower than this many times the subject's mean edge (the side of an equilateral
-// triangle of the mean face area) is left out: its Gaussians are sampled by a handful of vertices
-// each, as many unknowns as equations, at the cost of the finest system (on 2,562 vertices the
-// 0.07 level took 10 of 12 s). Every surface of the development and report sets (19k-128k faces)
-// runs every default level.
-constexpr double kWidthPerEdge = 1.5;
-
-// The levels that run: with landmarks, those narrower than the landmarks' mean nearest-neighbour
-// chord (the landmark flow has set the deformation on the scales above it; a wider dense level
-// there pulls against the held landmarks), at least the finest; of those, the ones at least
-// kWidthPerEdge mean edges wide (at least the widest).
-std::vector<double> dense_widths(const std::vector<double>& widths, const std::vector<Vector3d>& landmarks,
-                                 const Points& reference, const Triangles& faces) {
-  std::vector<double> out = widths;
-  if (landmarks.size() >= 2 && !widths.empty()) {
-    double spacing = 0;
-    for (size_t i = 0; i < landmarks.size(); ++i) {
-      double best = 2;
-      for (size_t j = 0; j < landmarks.size(); ++j)
-        if (j != i) best = std::min(best, (landmarks[i] - landmarks[j]).norm());
-      spacing += best / static_cast<double>(landmarks.size());
-    }
-    out.clear();
-    for (double w : widths)
-      if (w < spacing) out.push_back(w);
-    if (out.empty()) out.push_back(*std::min_element(widths.begin(), widths.end()));
-  }
-  const double edge = std::sqrt(4 / std::sqrt(3.0) * face_areas(reference, faces).mean());
-  std::vector<double> resolved;
-  for (double w : out)
-    if (w >= kWidthPerEdge * edge) resolved.push_back(w);
-  if (resolved.empty() && !out.empty()) resolved.push_back(*std::max_element(out.begin(), out.end()));
-  return resolved;
-}
-
 // The rotation search (sphere_rotation.hpp) with both scalars smoothed at `width`; x rotated
 // when the rotation found halves 1 - correlation.
 void rotate_first(std::vector<Vector3d>& x, const Points& reference, const Triangles& faces, const Eigen::VectorXd& values,
@@ -254,7 +219,7 @@ SphereMatchReport match_on_sphere(Device& device, std::vector<Vector3d>& x, std:
   rep.correlation_before = correlation(f0, f0 + e, area);
   if (carried.empty() && options.rotation_search && options.iterations > 0 && !options.widths.empty())
     rotate_first(x, reference, faces, values, templ, locator, area, tarea, options.widths.front(), rep);
-  for (double width : dense_widths(options.widths, carried, reference, faces)) {
+  for (double width : dense_widths(options.widths, to_matrix(carried), reference, faces)) {
     if (options.iterations <= 0) break;
     rep.levels.push_back(match_level(device, x, carried, reference, faces, values, templ, locator, area, tarea, width, options, domain, hint));
   }

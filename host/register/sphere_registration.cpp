@@ -208,22 +208,6 @@ void flow(Device& device, std::vector<Vector3d> x, const std::vector<Vector3d>& 
   for (size_t i = 0; i < x.size(); ++i) res.points.row(static_cast<Eigen::Index>(i)) = x[i].transpose();
 }
 
-// Step 6: the chord triangles' areas back to the input's (`reference`), the landmarks' faces
-// held still, when the map has no flipped face and misses the tolerance.
-void restore(const detail::SurfaceDomainMoves& domain, const Points& reference, const Triangles& faces,
-             const SurfaceRegistrationOptions& options, SurfaceRegistrationResult& res) {
-  if (options.restore_rounds <= 0 || !domain.flipped(res.points, faces).empty() ||
-      surface_metrics(reference, res.points, faces, SurfaceDomain::sphere).face_area_ratio.mean_abs_dev <= options.restore_tolerance)
-    return;
-  SurfaceMapOptions polish;
-  polish.tolerance = options.restore_tolerance;
-  polish.polish_rounds = options.restore_rounds;
-  SurfaceMapReport rep;
-  detail::polish_surface(domain, faces, detail::face_areas(reference, faces), polish, res.points, rep);
-  res.restore_rounds = static_cast<int>(rep.polish.size());
-  for (char c : domain.fixed) res.held_vertices += c;
-}
-
 void check_inputs(const Points& landmarks, const Points& targets, const SurfaceRegistrationOptions& options, bool dense) {
   if (landmarks.rows() < 1 && !dense) throw InputError("sphere registration: no landmarks");
   if (landmarks.rows() != targets.rows())
@@ -300,7 +284,7 @@ SurfaceRegistrationResult run(const Points& sphere, const Triangles& faces, cons
     }
     res.flow_metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::sphere);
   }
-  restore(domain, reference, faces, options, res);
+  detail::restore_areas(domain, reference, faces, options, res);
   res.metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::sphere);
   res.seconds = seconds_since(t0);
   return res;

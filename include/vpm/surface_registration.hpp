@@ -82,6 +82,14 @@ struct SphereTemplate {
   Eigen::VectorXd values;  ///< length m
 };
 
+/// The template of a dense registration in the disk: a surface mapped to the disk and its
+/// per-vertex scalar.
+struct DiskTemplate {
+  Points disk;             ///< m x 3 in the unit disk (z = 0), its boundary loop on the circle
+  Triangles faces;         ///< counter-clockwise, fold-free in the disk
+  Eigen::VectorXd values;  ///< length m
+};
+
 /// One level of the dense iterations.
 struct SphereMatchLevel {
   double width = 0;
@@ -156,6 +164,19 @@ SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangl
 /// against round-off). InputError for points outside the disk or landmarks on its edge.
 SurfaceRegistrationResult register_in_disk(const Points& disk, const Triangles& faces, const Points& landmarks,
                                            const Points& targets, const SurfaceRegistrationOptions& options = {});
+
+/// Dense registration in the disk: the subject's disk map `disk` (n x 3) and its per-vertex
+/// scalar `values` registered onto `templ`'s by the steps a-d above in the plane, each step's
+/// field the disk's stream-function field (boundary vertices slide along the circle): the
+/// scalars smoothed on a square grid of nodes (spacing half the smoothing scale) instead of an
+/// icosphere's, the field's centres on a triangular lattice of spacing 0.94 x the level's width
+/// instead of an icosphere's vertices, the rotation search (without landmarks) over rotations
+/// about the centre. The landmarks (L >= 0) are moved exactly onto their targets as in the landmark
+/// registration. InputError as the sphere's dense registration's, for points outside the disk.
+/// On the host threads.
+SurfaceRegistrationResult register_in_disk(const Points& disk, const Triangles& faces, const Eigen::VectorXd& values,
+                                           const DiskTemplate& templ, const Points& landmarks, const Points& targets,
+                                           const SurfaceRegistrationOptions& options = {});
 
 /// Dense registration: the subject's sphere map `sphere` (n x 3) with faces `faces` and its
 /// per-vertex scalar `values` (length n) registered onto `templ`'s, the landmarks (L x 3, L >= 0:

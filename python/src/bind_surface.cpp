@@ -73,6 +73,22 @@ py::tuple registration_result(const SurfaceRegistrationOptions& o, Work&& work) 
   return py::make_tuple(owned_array(std::move(out)), std::move(report));
 }
 
+// A dense registration's scalars: `values` and `templ` ((vertices, faces, values)) both given or
+// neither; false when neither.
+bool dense_inputs(const py::object& values, const py::object& templ, Eigen::Index vertices, Eigen::VectorXd& subject,
+                  SphereTemplate& t) {
+  const bool dense = !templ.is_none();
+  if (dense != !values.is_none()) throw py::value_error("values and template: give both (a dense registration) or neither");
+  if (!dense) return false;
+  const auto parts = templ.cast<py::tuple>();
+  if (parts.size() != 3) throw py::value_error("template: expected (vertices, faces, values)");
+  t.sphere = to_points(parts[0], "template vertices");
+  t.faces = to_triangles(parts[1], t.sphere.rows());
+  t.values = to_values(parts[2], t.sphere.rows(), "template values");
+  subject = to_values(values, vertices, "values");
+  return true;
+}
+
 // vpm._register_on_sphere (vpm/surface_registration.hpp).
 void bind_sphere_registration(py::module_& m) {
   m.def(
@@ -86,18 +102,9 @@ void bind_sphere_registration(py::module_& m) {
         SurfaceRegistrationOptions o = landmark_options(steps, width_factor, rigid, restore);
         o.match.iterations = iterations;
         if (!widths.empty()) o.match.widths = widths;
-        const bool dense = !templ.is_none();
-        if (dense != !values.is_none()) throw py::value_error("values and template: give both (a dense registration) or neither");
         SphereTemplate t;
         Eigen::VectorXd subject_values;
-        if (dense) {
-          const auto parts = templ.cast<py::tuple>();
-          if (parts.size() != 3) throw py::value_error("template: expected (vertices, faces, values)");
-          t.sphere = to_points(parts[0], "template vertices");
-          t.faces = to_triangles(parts[1], t.sphere.rows());
-          t.values = to_values(parts[2], t.sphere.rows(), "template values");
-          subject_values = to_values(values, v.rows(), "values");
-        }
+        const bool dense = dense_inputs(values, templ, v.rows(), subject_values, t);
         const std::shared_ptr<Device> dev = device_for(device);
         return registration_result(o, [&] {
           return dense ? register_on_sphere(v, f, subject_values, t, from, to, o, dev.get())
@@ -115,16 +122,26 @@ void bind_disk_registration(py::module_& m) {
   m.def(
       "_register_in_disk",
       [](const py::object& vertices, const py::object& faces, const py::object& landmarks, const py::object& targets,
-         int steps, double width_factor, bool rigid, bool restore) {
+         int steps, double width_factor, bool rigid, bool restore, const py::object& values, const py::object& templ,
+         int iterations, const std::vector<double>& widths) {
         const Points v = to_points(vertices, "vertices");
         const Triangles f = to_triangles(faces, v.rows());
         const Points from = to_points(landmarks, "landmarks"), to = to_points(targets, "targets");
-        const SurfaceRegistrationOptions o = landmark_options(steps, width_factor, rigid, restore);
-        return registration_result(o, [&] { return register_in_disk(v, f, from, to, o); });
+        SurfaceRegistrationOptions o = landmark_options(steps, width_factor, rigid, restore);
+        o.match.iterations = iterations;
+        if (!widths.empty()) o.match.widths = widths;
+        SphereTemplate t;
+        Eigen::VectorXd subject_values;
+        const bool dense = dense_inputs(values, templ, v.rows(), subject_values, t);
+        return registration_result(o, [&] {
+          return dense ? register_in_disk(v, f, subject_values, DiskTemplate{t.sphere, t.faces, t.values}, from, to, o)
+                       : register_in_disk(v, f, from, to, o);
+        });
       },
       py::arg("vertices"), py::arg("faces"), py::arg("landmarks"), py::arg("targets"), py::kw_only(),
       py::arg("steps") = SurfaceRegistrationOptions{}.steps, py::arg("width_factor") = SurfaceRegistrationOptions{}.width_factor,
-      py::arg("rigid") = true, py::arg("restore") = true);
+      py::arg("rigid") = true, py::arg("restore") = true, py::arg("values") = py::none(), py::arg("template") = py::none(),
+      py::arg("iterations") = SphereMatchOptions{}.iterations, py::arg("widths") = std::vector<double>{});
 }
 
 void bind_sphere_locator(py::module_& m) {

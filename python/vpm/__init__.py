@@ -182,15 +182,19 @@ def register_on_sphere(vertices, faces, landmarks=None, targets=None, *, values=
     return _vpm._register_on_sphere(vertices, faces, landmarks, targets, values=values, template=template, **options)
 
 
-def register_in_disk(vertices, faces, landmarks, targets, **options):
+def register_in_disk(vertices, faces, landmarks=None, targets=None, *, values=None, template=None, **options):
     """Registers a surface mapped to the unit disk (map_to_disk's points) by moving `landmarks`
     onto `targets` ((L, 3) points with z = 0 strictly inside the disk, or (L,) vertex ids) with a
     divergence-free flow tangent to the circle, the face areas then restored: `vpm register DISK`.
-    Options as register_on_sphere's landmark ones (steps, width_factor, rigid, restore). Returns
-    (points, report) as register_on_sphere."""
+    With `values` and `template` ((vertices, faces, values) of a template mapped to the disk),
+    dense iterations pull the subject's scalar onto the template's (landmarks then optional).
+    Options as register_on_sphere's (steps, width_factor, rigid, restore, iterations, widths; on
+    the host threads). Returns (points, report) as register_on_sphere."""
     vertices = np.asarray(vertices, dtype=np.float64)
+    if landmarks is None and targets is None:
+        landmarks = targets = np.zeros((0, 3))
     landmarks, targets = (_vertex_rows(vertices, a, name) for a, name in ((landmarks, "landmarks"), (targets, "targets")))
-    return _vpm._register_in_disk(vertices, faces, landmarks, targets, **options)
+    return _vpm._register_in_disk(vertices, faces, landmarks, targets, values=values, template=template, **options)
 
 
 def _vertex_rows(vertices, a, name):

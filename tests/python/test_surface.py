@@ -127,6 +127,19 @@ def test_map_to_disk(vpm):
     assert np.linalg.norm(reg[:, :2], axis=1).max() <= 1 + 1e-12
     with pytest.raises(ValueError, match="strictly inside"):
         vpm.register_in_disk(disk, np.array(faces), inner[:2], np.array([[1.0, 0, 0], [0, 0.5, 0]]))
+    # dense: a template whose scalar is the subject's turned by the same swirl, recovered
+    r = np.linalg.norm(disk[:, :2], axis=1)
+    turn = 0.15 * np.sin(np.pi * r)
+    c, s = np.cos(turn), np.sin(turn)
+    truth = np.column_stack([c * disk[:, 0] - s * disk[:, 1], s * disk[:, 0] + c * disk[:, 1], 0 * c])
+    values = np.sin(disk[:, :2] @ np.array([[3, 1], [-2, 4], [5, 2]]).T + [0.2, 1.1, 2.3]).sum(1)
+    dense, rep = vpm.register_in_disk(disk, np.array(faces), values=values, template=(truth, np.array(faces), values))
+    d = rep.to_dict()
+    assert d["match"]["correlation_after"] > 0.99 and d["match"]["correlation_after"] > d["match"]["correlation_before"]
+    assert np.linalg.norm(dense - truth, axis=1).mean() < 0.5 * np.linalg.norm(disk - truth, axis=1).mean()
+    assert rep.final.flipped_faces == 0
+    with pytest.raises(ValueError, match="give both"):
+        vpm.register_in_disk(disk, np.array(faces), values=values)
 
 
 def test_overlays_against_nibabel(vpm, tmp_path):
