@@ -267,9 +267,10 @@ def one_seed(vpm_cli, s, out, seed, a, names):
     return rows
 
 
-def table(rows, runs):
+def table(rows, runs, distance="truth_mean_rad", p95="truth_p95_rad", unit=" (rad)"):
+    """The markdown table of the rows; `distance`, `p95` the keys of the distance to the truth."""
     lines = ["| surface | set | seed | method | exit | landmarks / held-out regions | held-out Dice mean / worst (region) "
-             "| gap to the ideal's mean | distance to the truth mean / p95 (rad) | face area mean \\|r-1\\| | flipped "
+             f"| gap to the ideal's mean | distance to the truth mean / p95{unit} | face area mean \\|r-1\\| | flipped "
              f"| scalar correlation before -> after | s (median of {runs}) |", "|" + "---|" * 13]
     for r in rows:
         head = (f"| {r['surface']} | {r['set']} | {r['seed']} | {r['method']} | {'-' if r['exit'] is None else r['exit']} "
@@ -280,7 +281,7 @@ def table(rows, runs):
         corr = f"{r['correlation_before']:.3f} -> {r['correlation_after']:.3f}" if "correlation_after" in r else "-"
         secs = f"{r['seconds']:.2f}" if "seconds" in r else "-"
         lines.append(head + f"| {r['dice_mean']:.4f} / {r['dice_worst']:.3f} ({r['dice_worst_region']}) | {r['dice_gap']:.4f} "
-                     f"| {r['truth_mean_rad']:.4f} / {r['truth_p95_rad']:.4f} | {100 * r['face']:.2f} % | {r['flipped']} "
+                     f"| {r[distance]:.4f} / {r[p95]:.4f} | {100 * r['face']:.2f} % | {r['flipped']} "
                      f"| {corr} | {secs} |")
     return "\n".join(lines)
 

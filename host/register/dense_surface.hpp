@@ -5,9 +5,12 @@
 // rules that keep or end a step.
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <cmath>
 #include <vector>
 
+#include "core/parallel.hpp"
 #include "map/surface_polish.hpp"
+#include "register/point_bins.hpp"
 #include "vpm/mesh.hpp"
 #include "vpm/surface_registration.hpp"
 
@@ -33,6 +36,34 @@ using SparseRows = Eigen::SparseMatrix<double, Eigen::RowMajor>;
 
 /// A third of the areas of each vertex's faces.
 Eigen::VectorXd vertex_areas(const Points& x, const Triangles& f);
+/// The area-weighted Gaussian average of the rows of x's `values`,
+/// sum_j a_j k(p - x_j) f_j / sum_j a_j k(p - x_j) with k(r) = exp(-|r|^2 / (2 sigma^2)) over the
+/// rows within 3 sigma, at the `count` points node(0), ..., node(count - 1) (0 where no row is
+/// within reach): the smoothing of the dense iterations' scalars, independent of how the surface
+/// is triangulated.
+template <class Node>
+Eigen::VectorXd gaussian_average(const Points& x, const Eigen::VectorXd& values, const Eigen::VectorXd& area, double sigma,
+                                 int count, Node&& node) {
+  const double radius = 3 * sigma, inv = 1 / (2 * sigma * sigma);
+  const PointBins bins(x, radius);
+  Eigen::VectorXd at(count);
+  parallel_for(count, 64, [&](int i0, int i1) {
+    for (int i = i0; i < i1; ++i) {
+      const Eigen::Vector3d p = node(i);
+      double num = 0, den = 0;
+      bins.visit(p, [&](int j) {
+        const double d2 = (x.row(j).transpose() - p).squaredNorm();
+        if (d2 > radius * radius) return;
+        const double w = area(j) * std::exp(-d2 * inv);
+        num += w * values(j);
+        den += w;
+      });
+      at(i) = den > 0 ? num / den : 0;
+    }
+  });
+  return at;
+}
+
 /// The area-weighted mean and spread of a scalar (InputError naming `what` when it is constant).
 struct Spread {
   double mean = 0, sd = 1;

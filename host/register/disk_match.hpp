@@ -13,8 +13,8 @@ namespace vpm::detail {
 
 /// Moves the subject's vertices `x` (in the disk, in place; domain.boundary's on the circle) so
 /// that its per-vertex scalar `values` matches `templ`'s; `carried` (the landmarks' images) moves
-/// with them. `reference` is the subject's input disk (where its scalar is smoothed and its area
-/// shares are taken); no step adds a flipped face. Without landmarks, a rotation about the centre
+/// with them. `reference` is the subject's input disk (where its area shares are taken; its scalar
+/// is smoothed where the vertices are when each level starts); no step adds a flipped face. Without landmarks, a rotation about the centre
 /// is searched first (options.rotation_search). On the host threads.
 SphereMatchReport match_in_disk(std::vector<Eigen::Vector2d>& x, std::vector<Eigen::Vector2d>& carried,
                                 const Points& reference, const Triangles& faces, const Eigen::VectorXd& values,

@@ -39,24 +39,8 @@ int centre_level(double width) {
 Eigen::VectorXd smooth(const Points& x, const Eigen::VectorXd& values, const Eigen::VectorXd& area,
                        double sigma) {
   const TriSurface nodes = icosphere(centre_level(sigma / 2));
-  const Eigen::Index m = nodes.vertices.rows();
-  const double radius = 3 * sigma, inv = 1 / (2 * sigma * sigma);
-  const PointBins bins(x, radius);
-  Eigen::VectorXd at(m);
-  parallel_for(static_cast<int>(m), 64, [&](int i0, int i1) {
-    for (int i = i0; i < i1; ++i) {
-      const Vector3d p = nodes.vertices.row(i).transpose();
-      double num = 0, den = 0;
-      bins.visit(p, [&](int j) {
-        const double d2 = (x.row(j).transpose() - p).squaredNorm();
-        if (d2 > radius * radius) return;
-        const double w = area(j) * std::exp(-d2 * inv);
-        num += w * values(j);
-        den += w;
-      });
-      at(i) = den > 0 ? num / den : 0;
-    }
-  });
+  const Eigen::VectorXd at = gaussian_average(x, values, area, sigma, static_cast<int>(nodes.vertices.rows()),
+                                              [&](int i) { return Vector3d(nodes.vertices.row(i).transpose()); });
   const SphereLocator locator(nodes.vertices, nodes.triangles);
   const std::vector<SphereLocation> loc = locator.locate_all(x);
   Eigen::VectorXd out(x.rows());
