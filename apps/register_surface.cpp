@@ -167,7 +167,8 @@ int register_surface(const Args& args, const std::string& in, const std::string&
     const Points &v = surface.vertices, &p = from.points, &q = to.points;
     const Triangles& f = surface.triangles;
     if (domain == SurfaceDomain::disk)
-      r = templ ? register_in_disk(v, f, values, DiskTemplate{ts.vertices, ts.triangles, tvalues}, p, q, opt) : register_in_disk(v, f, p, q, opt);
+      r = templ ? register_in_disk(v, f, values, DiskTemplate{ts.vertices, ts.triangles, tvalues}, p, q, opt, &dev)
+                : register_in_disk(v, f, p, q, opt, &dev);
     else
       r = templ ? register_on_sphere(v, f, values, SphereTemplate{ts.vertices, ts.triangles, tvalues}, p, q, opt, &dev)
                 : register_on_sphere(v, f, p, q, opt, &dev);
@@ -194,8 +195,7 @@ int register_surface(const Args& args, const std::string& in, const std::string&
   if (const auto report_path = args.get("--report")) {
     Json report = report_json(in, surface, templ, from.points.rows(), r, opt);
     report["domain"] = to_string(domain);
-    // where the flows' advections ran (the disk's run on the host)
-    report["device"] = domain == SurfaceDomain::disk ? Device::host()->name() : dev.name();
+    report["device"] = dev.name();  // where the flows' advections ran
     report["timings_s"] = Json::object();
     report["timings_s"]["read"] = t_read;
     report["timings_s"]["register"] = r.seconds;

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <random>
 
+#include "support/devices.hpp"
 #include "support/process.hpp"
 #include "support/scratch.hpp"
 #include "vpm/error.hpp"
@@ -330,4 +331,44 @@ TEST_CASE("dense disk registration: a swirl recovered from a scalar, areas kept,
   CHECK_THROWS_AS(register_in_disk(subject.vertices, subject.triangles, f, DiskTemplate{2 * tpl.vertices, tpl.triangles, t.values},
                                    Points(0, 3), Points(0, 3)),
                   InputError);
+}
+
+TEST_CASE("disk registration on host and device: the landmark flow and the dense steps' advections agree") {
+  const TriSurface subject = disk_map_of_cap(3), tpl = disk_map_of_cap(4);
+  const DiskTemplate t{swirled(tpl.vertices), tpl.triangles, plane_features(tpl.vertices)};
+  const Points truth = swirled(subject.vertices);
+  Points from(5, 3), to(5, 3);
+  for (int i = 0, found = 0; found < 5; i += 37)
+    if (subject.vertices.row(i).norm() < 0.9) from.row(found) = subject.vertices.row(i), to.row(found++) = truth.row(i);
+  SurfaceRegistrationOptions o;
+  o.restore_rounds = 0;  // the flows alone (the restoration is the host's polish)
+  o.match.widths = {0.56, 0.28};
+  o.match.iterations = 3;
+  const Eigen::VectorXd f = plane_features(subject.vertices);
+  Points host_landmarks, host_dense;
+  SphereMatchReport host_match;
+  for (auto& dev : test::devices()) {
+    INFO("device " << dev->name());
+    const SurfaceRegistrationResult l = register_in_disk(subject.vertices, subject.triangles, from, to, o, dev.get());
+    const SurfaceRegistrationResult d = register_in_disk(subject.vertices, subject.triangles, f, t, from, to, o, dev.get());
+    for (const SurfaceRegistrationResult* r : {&l, &d}) {
+      CHECK(r->landmark_max_error <= 1e-10);
+      CHECK(r->metrics.flipped_faces == 0);
+      CHECK(r->metrics.max_radius_error <= 1e-12);
+    }
+    REQUIRE(!d.match.levels.empty());
+    CHECK(d.match.levels.back().iterations > 0);
+    if (dev->is_host()) {
+      host_landmarks = l.points, host_dense = d.points, host_match = d.match;
+      CHECK((l.points - subject.vertices).cwiseAbs().maxCoeff() > 0.01);  // the flows moved the vertices
+      continue;
+    }
+    // the same code (kernels/rbf_advect.clh, the disk's field) on both: round-off apart
+    CHECK((l.points - host_landmarks).cwiseAbs().maxCoeff() < 1e-10);
+    CHECK((d.points - host_dense).cwiseAbs().maxCoeff() < 1e-9);
+    for (size_t k = 0; k < d.match.levels.size(); ++k) {
+      CHECK(d.match.levels[k].iterations == host_match.levels[k].iterations);
+      CHECK(d.match.levels[k].mismatch_after == Approx(host_match.levels[k].mismatch_after).epsilon(1e-9));
+    }
+  }
 }

@@ -1,11 +1,13 @@
 // ---- advection: K RK4 steps through the fields, on the host or the device, written once
-// (kernels/rbf_advect.clh): the ball's RBF fields (advect) and the sphere's (advect_on_sphere) ----
+// (kernels/rbf_advect.clh): the ball's RBF fields (advect), the sphere's (advect_on_sphere) and the
+// disk's (advect_in_disk) ----
 #include <algorithm>
 #include <cmath>
 
 #include <boost/compute/container/vector.hpp>
 
 #include "register/registration_steps.hpp"
+#include "register/disk_field.hpp"
 #include "register/sphere_field.hpp"
 #include "core/device_cl.hpp"
 #include "core/parallel.hpp"
@@ -112,7 +114,7 @@ PackedFields pack_fields(const std::vector<DivFreeField>& f, int steps) {
 }
 
 // The host: rbf_advect.clh's rk4_points one point at a time (LANES 1) on the host threads.
-// `kind`: rbf_advect.clh's (0 free, 1 tangent, 2 the sphere's).
+// `kind`: rbf_advect.clh's (0 free, 1 tangent, 2 the sphere's, 3 the disk's).
 void advect_host(Points& x, const std::vector<DivFreeField>& f, int steps, int kind) {
   const PackedFields pk = pack_fields(f, steps);
   const detail::CentreGrid grid = {pk.origin(0), pk.origin(1), pk.origin(2), pk.side, pk.g};
@@ -185,6 +187,10 @@ namespace detail {
 
 void advect_on_sphere(Device& dev, Points& x, const std::vector<DivFreeField>& f, int steps) {
   advect_kind(dev, x, f, steps, 2);
+}
+
+void advect_in_disk(Device& dev, Points& x, const std::vector<DivFreeField>& f, int steps) {
+  advect_kind(dev, x, f, steps, 3);
 }
 
 }  // namespace detail

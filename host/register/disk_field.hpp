@@ -8,6 +8,11 @@
 #include <vector>
 
 #include "vpm/mesh.hpp"
+#include "vpm/rbf.hpp"
+
+namespace vpm {
+class Device;
+}
 
 namespace vpm::detail {
 
@@ -63,6 +68,34 @@ inline std::vector<Vector2d> disk_vectors(const Points& m) {
   std::vector<Vector2d> v(static_cast<size_t>(m.rows()));
   for (Eigen::Index i = 0; i < m.rows(); ++i) v[static_cast<size_t>(i)] = Vector2d(m(i, 0), m(i, 1));
   return v;
+}
+
+/// A field's centres and coefficients (as rows (x, y, 0)) as advect_in_disk's carrier, the
+/// coefficients scaled by `scale`.
+inline DivFreeField disk_carrier(double lambda, const std::vector<Vector2d>& centres, const std::vector<Vector2d>& weights,
+                                 double scale = 1) {
+  DivFreeField d;
+  d.lambda = lambda;
+  d.centres = disk_points(centres);
+  d.coefficients = scale * disk_points(weights);
+  return d;
+}
+inline DivFreeField disk_carrier(const DiskField& f) { return disk_carrier(f.lambda, f.centres, f.weights); }
+
+/// Moves the points (rows (x, y, 0)) through disk fields: one (stationary) or 2K+1 (field s at
+/// time s / (2K)), K RK4 steps of 1/K, points outside the circle put back on it after each: on
+/// `device` by kernels/register.cl's rk4_advect_soa (kernels/rbf_advect.clh, kind 3), on the host
+/// device by the same code on the host threads (host/register/advect.cpp).
+void advect_in_disk(Device& device, Points& x, const std::vector<DivFreeField>& fields, int steps);
+
+/// The same for 2-D points, then the boundary loop's vertices (boundary[i] = 1) put back on the
+/// circle (place_in_disk).
+inline void advect_in_disk(Device& device, std::vector<Vector2d>& x, const std::vector<DivFreeField>& fields, int steps,
+                           const std::vector<char>& boundary) {
+  Points m = disk_points(x);
+  advect_in_disk(device, m, fields, steps);
+  x = disk_vectors(m);
+  place_in_disk(x, boundary);
 }
 
 }  // namespace vpm::detail

@@ -176,19 +176,11 @@ Eigen::SparseMatrix<double> centre_gram(const Lattice& lat) {
   return K;
 }
 
-// Points moved through alpha x the stationary field: two RK4 steps, each put back on the domain.
-std::vector<Vector2d> advected(std::vector<Vector2d> x, const LatticeField& field, double alpha, const std::vector<char>& boundary) {
-  for (int step = 0; step < 2; ++step) {
-    const double dt = alpha / 2;
-    parallel_for(static_cast<int>(x.size()), 256, [&](int i0, int i1) {
-      for (int i = i0; i < i1; ++i) {
-        Vector2d& p = x[static_cast<size_t>(i)];
-        const Vector2d k1 = field(p), k2 = field(p + dt / 2 * k1), k3 = field(p + dt / 2 * k2), k4 = field(p + dt * k3);
-        p += dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
-      }
-    });
-    place_in_disk(x, boundary);
-  }
+// Points moved through alpha x the stationary field on `device` (advect_in_disk: two RK4 steps),
+// then put back on the domain.
+std::vector<Vector2d> advected(Device& device, std::vector<Vector2d> x, const LatticeField& field, double alpha,
+                               const std::vector<char>& boundary) {
+  if (!x.empty()) advect_in_disk(device, x, {disk_carrier(field.at->lambda, field.at->c, field.b, alpha)}, 2, boundary);
   return x;
 }
 
@@ -227,7 +219,7 @@ struct LevelScalars {
 };
 
 // One level: at most options.iterations Gauss-Newton steps of a field of width `width`.
-SphereMatchLevel match_level(std::vector<Vector2d>& x, std::vector<Vector2d>& carried, const Triangles& faces, const LevelScalars& s,
+SphereMatchLevel match_level(Device& device, std::vector<Vector2d>& x, std::vector<Vector2d>& carried, const Triangles& faces, const LevelScalars& s,
                              double width, const SphereMatchOptions& options, const SurfaceDomainMoves& domain) {
   SphereMatchLevel lv;
   lv.width = width;
@@ -248,7 +240,7 @@ SphereMatchLevel match_level(std::vector<Vector2d>& x, std::vector<Vector2d>& ca
     double alpha = std::min(1.0, options.max_move * width / speed), gain = 0;
     bool kept = false;
     for (int h = 0; h <= kHalvings && !kept; ++h, alpha /= 2) {
-      std::vector<Vector2d> trial = advected(x, field, alpha, domain.boundary);
+      std::vector<Vector2d> trial = advected(device, x, field, alpha, domain.boundary);
       Points tm = disk_points(trial);
       if (domain.flipped(tm, faces).size() > flipped) {  // repaired when that costs little area
         repair_flips(domain, faces, tm);
@@ -265,7 +257,7 @@ SphereMatchLevel match_level(std::vector<Vector2d>& x, std::vector<Vector2d>& ca
       kept = true;
       gain = (E - Et) / E;
       x = std::move(trial);
-      carried = advected(carried, field, alpha, {});
+      carried = advected(device, carried, field, alpha, {});
       e = std::move(te), grad = std::move(tg), E = Et;
     }
     if (!kept) break;
@@ -333,7 +325,7 @@ Eigen::VectorXd template_at(const DiskTemplate& templ, const std::vector<Vector2
 
 }  // namespace
 
-SphereMatchReport match_in_disk(std::vector<Vector2d>& x, std::vector<Vector2d>& carried, const Points& reference, const Triangles& faces,
+SphereMatchReport match_in_disk(Device& device, std::vector<Vector2d>& x, std::vector<Vector2d>& carried, const Points& reference, const Triangles& faces,
                                 const Eigen::VectorXd& values, const DiskTemplate& templ, const SphereMatchOptions& options,
                                 const SurfaceDomainMoves& domain) {
   const auto t0 = Clock::now();
@@ -347,7 +339,7 @@ SphereMatchReport match_in_disk(std::vector<Vector2d>& x, std::vector<Vector2d>&
   for (double width : dense_widths(options.widths, disk_points(carried), reference, faces)) {
     if (options.iterations <= 0) break;
     const LevelScalars s = level_scalars(disk_points(x), values, area, templ, tarea, options.smoothing * width);
-    rep.levels.push_back(match_level(x, carried, faces, s, width, options, domain));
+    rep.levels.push_back(match_level(device, x, carried, faces, s, width, options, domain));
   }
   rep.correlation_after = correlation(f0, template_at(templ, x), area);
   rep.seconds = seconds_since(t0);

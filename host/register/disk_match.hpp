@@ -9,14 +9,19 @@
 #include "map/surface_polish.hpp"
 #include "vpm/surface_registration.hpp"
 
+namespace vpm {
+class Device;
+}
+
 namespace vpm::detail {
 
 /// Moves the subject's vertices `x` (in the disk, in place; domain.boundary's on the circle) so
 /// that its per-vertex scalar `values` matches `templ`'s; `carried` (the landmarks' images) moves
 /// with them. `reference` is the subject's input disk (where its area shares are taken; its scalar
 /// is smoothed where the vertices are when each level starts); no step adds a flipped face. Without landmarks, a rotation about the centre
-/// is searched first (options.rotation_search). On the host threads.
-SphereMatchReport match_in_disk(std::vector<Eigen::Vector2d>& x, std::vector<Eigen::Vector2d>& carried,
+/// is searched first (options.rotation_search). The advections run on `device` (advect_in_disk),
+/// the rest on the host threads.
+SphereMatchReport match_in_disk(Device& device, std::vector<Eigen::Vector2d>& x, std::vector<Eigen::Vector2d>& carried,
                                 const Points& reference, const Triangles& faces, const Eigen::VectorXd& values,
                                 const DiskTemplate& templ, const SphereMatchOptions& options,
                                 const SurfaceDomainMoves& domain);

@@ -16,6 +16,7 @@
 #include "register/disk_field.hpp"
 #include "register/disk_match.hpp"
 #include "register/landmark_gram.hpp"
+#include "vpm/device.hpp"
 #include "vpm/error.hpp"
 #include "vpm/surface_registration.hpp"
 #include "vpm/timing.hpp"
@@ -93,32 +94,20 @@ DiskField field_at(const std::vector<Vector2d>& p, const std::vector<Vector2d>& 
   return fit(at, vel, lambda);
 }
 
-void rk4_step(std::vector<Vector2d>& x, const std::vector<char>& boundary, const DiskField& f0, const DiskField& fh,
-              const DiskField& f1, double dt) {
-  detail::parallel_for(static_cast<int>(x.size()), 256, [&](int i0, int i1) {
-    for (int i = i0; i < i1; ++i) {
-      const Vector2d k1 = f0(x[i]), k2 = fh(x[i] + dt / 2 * k1), k3 = fh(x[i] + dt / 2 * k2), k4 = f1(x[i] + dt * k3);
-      x[i] += dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
-    }
-  });
-  detail::place_in_disk(x, boundary);
-}
-
-// The RK4 flow of every vertex along the landmarks' straight pathlines, then one step of the
-// field that carries the landmarks' images exactly onto their targets. Fills res.points and the
-// landmark errors.
-void flow(std::vector<Vector2d> x, const std::vector<char>& boundary, const std::vector<Vector2d>& p,
+// The RK4 flow of every vertex along the landmarks' straight pathlines (on `device`), then one
+// step of the field that carries the landmarks' images exactly onto their targets. Fills
+// res.points and the landmark errors.
+void flow(Device& device, std::vector<Vector2d> x, const std::vector<char>& boundary, const std::vector<Vector2d>& p,
           const std::vector<Vector2d>& q, double lambda, int steps, SurfaceRegistrationResult& res) {
-  std::vector<Vector2d> moving = p;
-  const double dt = 1.0 / steps;
-  DiskField f0 = field_at(p, q, 0, lambda);
-  for (int k = 0; k < steps; ++k) {
-    const DiskField fh = field_at(p, q, (k + 0.5) * dt, lambda);
-    DiskField f1 = field_at(p, q, (k + 1) * dt, lambda);
-    rk4_step(x, boundary, f0, fh, f1, dt);
-    rk4_step(moving, {}, f0, fh, f1, dt);
-    f0 = std::move(f1);
-  }
+  // the vertices and the landmarks (advected with them to measure the flow's error) in one call,
+  // through the fields at the 2K + 1 stage times
+  std::vector<DivFreeField> fields;
+  for (int s = 0; s <= 2 * steps; ++s) fields.push_back(detail::disk_carrier(field_at(p, q, s / (2.0 * steps), lambda)));
+  const size_t n = x.size();
+  x.insert(x.end(), p.begin(), p.end());
+  detail::advect_in_disk(device, x, fields, steps, boundary);
+  const std::vector<Vector2d> moving(x.begin() + static_cast<std::ptrdiff_t>(n), x.end());
+  x.resize(n);
   std::vector<Vector2d> rest(p.size());
   res.flow_landmark_max_error = 0;
   for (size_t i = 0; i < p.size(); ++i) {
@@ -186,14 +175,14 @@ void check_inputs(const Points& landmarks, const Points& targets, const SurfaceR
 
 // The landmark flow from x (rotated) carrying p onto q: the width factor given, or chosen by
 // leave-one-out and, while the repair leaves faces flipped, the next narrower one.
-void landmark_flow(const std::vector<Vector2d>& x, const std::vector<Vector2d>& p, const std::vector<Vector2d>& q, const Points& reference,
+void landmark_flow(Device& device, const std::vector<Vector2d>& x, const std::vector<Vector2d>& p, const std::vector<Vector2d>& q, const Points& reference,
                    const Triangles& faces, const detail::SurfaceDomainMoves& domain, const SurfaceRegistrationOptions& options,
                    SurfaceRegistrationResult& res) {
   const double spacing = std::min(mean_spacing(p), mean_spacing(q));
   res.width_factor = options.width_factor > 0 ? options.width_factor : loo_width_factor(p, q, spacing);
   while (true) {
     res.width = res.width_factor * spacing;
-    flow(x, domain.boundary, p, q, 1 / (res.width * res.width), options.steps, res);
+    flow(device, x, domain.boundary, p, q, 1 / (res.width * res.width), options.steps, res);
     res.flow_metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::disk);
     res.repaired_faces = detail::repair_flips(domain, faces, res.points);
     const double* narrower = std::find(std::begin(kWidthFactors), std::end(kWidthFactors), res.width_factor);
@@ -206,8 +195,11 @@ void landmark_flow(const std::vector<Vector2d>& x, const std::vector<Vector2d>& 
 
 // Both registrations: `templ` null for landmarks alone.
 SurfaceRegistrationResult run(const Points& disk, const Triangles& faces, const Points& landmarks, const Points& targets,
-                              const SurfaceRegistrationOptions& options, const Eigen::VectorXd* values, const DiskTemplate* templ) {
+                              const SurfaceRegistrationOptions& options, const Eigen::VectorXd* values, const DiskTemplate* templ,
+                              Device* device) {
   const auto t0 = Clock::now();
+  std::shared_ptr<Device> host;
+  Device& dev = device ? *device : *(host = Device::host());
   check_inputs(landmarks, targets, options, templ != nullptr);
   const std::vector<Vector2d> start = disk_rows(disk, "vertex", 1 + 1e-6), input_landmarks = disk_rows(landmarks, "landmark", kMaxRadius);
   const std::vector<Vector2d> q = disk_rows(targets, "target", kMaxRadius);
@@ -222,16 +214,16 @@ SurfaceRegistrationResult run(const Points& disk, const Triangles& faces, const 
   for (auto& v : x) v = R * v;
   for (auto& v : p) v = R * v;
   if (!p.empty()) {
-    landmark_flow(x, p, q, reference, faces, domain, options, res);
+    landmark_flow(dev, x, p, q, reference, faces, domain, options, res);
   } else {
     res.points = detail::disk_points(x);
     res.flow_metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::disk);
   }
   if (templ) {
     std::vector<Vector2d> moved = detail::disk_vectors(res.points), carried = q;
-    res.match = detail::match_in_disk(moved, carried, reference, faces, *values, *templ, options.match, domain);
+    res.match = detail::match_in_disk(dev, moved, carried, reference, faces, *values, *templ, options.match, domain);
     if (!p.empty()) {  // the landmarks back onto their targets from where the dense steps left them
-      flow(moved, domain.boundary, carried, q, 1 / (res.width * res.width), options.steps, res);
+      flow(dev, moved, domain.boundary, carried, q, 1 / (res.width * res.width), options.steps, res);
       res.repaired_faces += detail::repair_flips(domain, faces, res.points);
     } else {
       res.points = detail::disk_points(moved);
@@ -247,13 +239,13 @@ SurfaceRegistrationResult run(const Points& disk, const Triangles& faces, const 
 }  // namespace
 
 SurfaceRegistrationResult register_in_disk(const Points& disk, const Triangles& faces, const Points& landmarks,
-                                           const Points& targets, const SurfaceRegistrationOptions& options) {
-  return run(disk, faces, landmarks, targets, options, nullptr, nullptr);
+                                           const Points& targets, const SurfaceRegistrationOptions& options, Device* device) {
+  return run(disk, faces, landmarks, targets, options, nullptr, nullptr, device);
 }
 
 SurfaceRegistrationResult register_in_disk(const Points& disk, const Triangles& faces, const Eigen::VectorXd& values,
                                            const DiskTemplate& templ, const Points& landmarks, const Points& targets,
-                                           const SurfaceRegistrationOptions& options) {
+                                           const SurfaceRegistrationOptions& options, Device* device) {
   if (values.size() != disk.rows())
     throw InputError("disk registration: " + std::to_string(values.size()) + " values for " + std::to_string(disk.rows()) + " vertices");
   if (templ.values.size() != templ.disk.rows())
@@ -261,7 +253,7 @@ SurfaceRegistrationResult register_in_disk(const Points& disk, const Triangles& 
                      std::to_string(templ.disk.rows()) + " vertices");
   if (!values.allFinite() || !templ.values.allFinite()) throw InputError("disk registration: a value is not finite");
   const DiskTemplate t{detail::disk_points(disk_rows(templ.disk, "template vertex", 1 + 1e-6)), templ.faces, templ.values};
-  return run(disk, faces, landmarks, targets, options, &values, &t);
+  return run(disk, faces, landmarks, targets, options, &values, &t, device);
 }
 
 }  // namespace vpm

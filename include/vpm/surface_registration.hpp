@@ -161,9 +161,11 @@ SurfaceRegistrationResult register_on_sphere(const Points& sphere, const Triangl
 /// stream function psi(x) = (1 - |x|^2) sum_j b_j . grad_y [(1 - |y|^2) exp(-lambda |x - y|^2)]
 /// at y = y_j, zero on the circle: divergence-free and tangent to the circle, so boundary vertices
 /// slide along it and interior ones stay inside (the boundary loop is put back on the circle
-/// against round-off). InputError for points outside the disk or landmarks on its edge.
+/// against round-off). InputError for points outside the disk or landmarks on its edge. `device`
+/// as on the sphere (the flows' advections: kernels/rbf_advect.clh's disk field).
 SurfaceRegistrationResult register_in_disk(const Points& disk, const Triangles& faces, const Points& landmarks,
-                                           const Points& targets, const SurfaceRegistrationOptions& options = {});
+                                           const Points& targets, const SurfaceRegistrationOptions& options = {},
+                                           Device* device = nullptr);
 
 /// Dense registration in the disk: the subject's disk map `disk` (n x 3) and its per-vertex
 /// scalar `values` registered onto `templ`'s by the steps a-d above in the plane, each step's
@@ -173,10 +175,10 @@ SurfaceRegistrationResult register_in_disk(const Points& disk, const Triangles& 
 /// instead of an icosphere's vertices, the rotation search (without landmarks) over rotations
 /// about the centre. The landmarks (L >= 0) are moved exactly onto their targets as in the landmark
 /// registration. InputError as the sphere's dense registration's, for points outside the disk.
-/// On the host threads.
+/// `device` as above (the dense steps' advections too).
 SurfaceRegistrationResult register_in_disk(const Points& disk, const Triangles& faces, const Eigen::VectorXd& values,
                                            const DiskTemplate& templ, const Points& landmarks, const Points& targets,
-                                           const SurfaceRegistrationOptions& options = {});
+                                           const SurfaceRegistrationOptions& options = {}, Device* device = nullptr);
 
 /// Dense registration: the subject's sphere map `sphere` (n x 3) with faces `faces` and its
 /// per-vertex scalar `values` (length n) registered onto `templ`'s, the landmarks (L x 3, L >= 0:

@@ -123,7 +123,7 @@ void bind_disk_registration(py::module_& m) {
       "_register_in_disk",
       [](const py::object& vertices, const py::object& faces, const py::object& landmarks, const py::object& targets,
          int steps, double width_factor, bool rigid, bool restore, const py::object& values, const py::object& templ,
-         int iterations, const std::vector<double>& widths) {
+         int iterations, const std::vector<double>& widths, std::optional<std::string> device) {
         const Points v = to_points(vertices, "vertices");
         const Triangles f = to_triangles(faces, v.rows());
         const Points from = to_points(landmarks, "landmarks"), to = to_points(targets, "targets");
@@ -133,15 +133,17 @@ void bind_disk_registration(py::module_& m) {
         SphereTemplate t;
         Eigen::VectorXd subject_values;
         const bool dense = dense_inputs(values, templ, v.rows(), subject_values, t);
+        const std::shared_ptr<Device> dev = device_for(device);
         return registration_result(o, [&] {
-          return dense ? register_in_disk(v, f, subject_values, DiskTemplate{t.sphere, t.faces, t.values}, from, to, o)
-                       : register_in_disk(v, f, from, to, o);
+          return dense ? register_in_disk(v, f, subject_values, DiskTemplate{t.sphere, t.faces, t.values}, from, to, o, dev.get())
+                       : register_in_disk(v, f, from, to, o, dev.get());
         });
       },
       py::arg("vertices"), py::arg("faces"), py::arg("landmarks"), py::arg("targets"), py::kw_only(),
       py::arg("steps") = SurfaceRegistrationOptions{}.steps, py::arg("width_factor") = SurfaceRegistrationOptions{}.width_factor,
       py::arg("rigid") = true, py::arg("restore") = true, py::arg("values") = py::none(), py::arg("template") = py::none(),
-      py::arg("iterations") = SphereMatchOptions{}.iterations, py::arg("widths") = std::vector<double>{});
+      py::arg("iterations") = SphereMatchOptions{}.iterations, py::arg("widths") = std::vector<double>{},
+      py::arg("device") = py::none());
 }
 
 void bind_sphere_locator(py::module_& m) {

@@ -188,8 +188,8 @@ def register_in_disk(vertices, faces, landmarks=None, targets=None, *, values=No
     divergence-free flow tangent to the circle, the face areas then restored: `vpm register DISK`.
     With `values` and `template` ((vertices, faces, values) of a template mapped to the disk),
     dense iterations pull the subject's scalar onto the template's (landmarks then optional).
-    Options as register_on_sphere's (steps, width_factor, rigid, restore, iterations, widths; on
-    the host threads). Returns (points, report) as register_on_sphere."""
+    Options as register_on_sphere's (steps, width_factor, rigid, restore, iterations, widths,
+    device). Returns (points, report) as register_on_sphere."""
     vertices = np.asarray(vertices, dtype=np.float64)
     if landmarks is None and targets is None:
         landmarks = targets = np.zeros((0, 3))
