@@ -326,6 +326,15 @@ TEST_CASE("dense disk registration: a swirl recovered from a scalar, areas kept,
   CHECK_THAT(slurp(dir + "/err.txt"), Catch::Contains("not in the unit disk"));
 
   CHECK_THROWS_AS(register_in_disk(subject.vertices, subject.triangles, f.head(10), t, from, to), InputError);
+  for (double bad : {0.0, -1.0, std::nan("")}) {  // refused before any work (a negative width has no smoothing reach)
+    SurfaceRegistrationOptions o;
+    o.match.widths = {0.56, bad};
+    CHECK_THROWS_WITH(register_in_disk(subject.vertices, subject.triangles, f, t, from, to, o), Catch::Contains("dense widths"));
+    CHECK_THROWS_WITH(register_on_sphere(icosphere(2).vertices, icosphere(2).triangles, Eigen::VectorXd::LinSpaced(162, 0, 1),
+                                         SphereTemplate{icosphere(2).vertices, icosphere(2).triangles, Eigen::VectorXd::LinSpaced(162, 0, 1)},
+                                         Points(0, 3), Points(0, 3), o),
+                      Catch::Contains("dense widths"));
+  }
   CHECK_THROWS_WITH(register_in_disk(subject.vertices, subject.triangles, Eigen::VectorXd::Constant(f.size(), 2.0), t, Points(0, 3), Points(0, 3)),
                     Catch::Contains("constant"));
   CHECK_THROWS_AS(register_in_disk(subject.vertices, subject.triangles, f, DiskTemplate{2 * tpl.vertices, tpl.triangles, t.values},

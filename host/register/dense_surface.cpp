@@ -104,6 +104,16 @@ std::vector<double> dense_widths(const std::vector<double>& widths, const Points
   return resolved;
 }
 
+void check_match_options(const SphereMatchOptions& o, const char* who) {
+  const std::string w(who);
+  for (double width : o.widths)
+    if (!(width > 0 && width <= 2)) throw InputError(w + ": dense widths must be in (0, 2] (chord lengths), got " + std::to_string(width));
+  if (!(o.smoothing > 0 && std::isfinite(o.smoothing))) throw InputError(w + ": the dense smoothing must be positive");
+  if (!(o.max_move > 0 && o.max_move <= 1)) throw InputError(w + ": the dense max_move must be in (0, 1]");
+  if (!(o.ridge >= 0 && std::isfinite(o.ridge))) throw InputError(w + ": the dense ridge must be non-negative");
+  if (o.iterations < 0) throw InputError(w + ": dense iterations must be non-negative");
+}
+
 // The normal equations (sparse: centres interact within a few widths) by a sparse Cholesky
 // factorisation (CHOLMOD's supernodal one where vpm has it: linalg/sparse_cholesky.hpp).
 Eigen::VectorXd gauss_newton_weights(const SparseRows& J, const Eigen::VectorXd& area, const Eigen::VectorXd& e,

@@ -84,6 +84,10 @@ inline double mismatch(const Eigen::VectorXd& e, const Eigen::VectorXd& area) {
 std::vector<double> dense_widths(const std::vector<double>& widths, const Points& landmarks, const Points& reference,
                                  const Triangles& faces);
 
+/// InputError naming `who` unless every width is in (0, 2], smoothing and max_move positive (max_move
+/// at most 1), ridge non-negative, iterations non-negative (all finite).
+void check_match_options(const SphereMatchOptions& options, const char* who);
+
 /// The weights a of a step's field: the minimum of sum_i w_i (e_i + J_i a)^2 + mu a^T K a. The
 /// first area.size() rows of J are the vertices' (w_i their area shares, e their residuals), the
 /// rest hold the field at the landmarks at zero (weighted together 100 x the data term, so the

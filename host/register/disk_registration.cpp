@@ -201,6 +201,7 @@ SurfaceRegistrationResult run(const Points& disk, const Triangles& faces, const 
   std::shared_ptr<Device> host;
   Device& dev = device ? *device : *(host = Device::host());
   check_inputs(landmarks, targets, options, templ != nullptr);
+  if (templ) detail::check_match_options(options.match, "disk registration");
   const std::vector<Vector2d> start = disk_rows(disk, "vertex", 1 + 1e-6), input_landmarks = disk_rows(landmarks, "landmark", kMaxRadius);
   const std::vector<Vector2d> q = disk_rows(targets, "target", kMaxRadius);
   const Points reference = detail::disk_points(start);

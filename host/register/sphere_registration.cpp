@@ -249,6 +249,7 @@ SurfaceRegistrationResult run(const Points& sphere, const Triangles& faces, cons
   std::shared_ptr<Device> host;
   Device& dev = device ? *device : *(host = Device::host());
   check_inputs(landmarks, targets, options, templ != nullptr);
+  if (templ) detail::check_match_options(options.match, "sphere registration");
   const std::vector<Vector3d> start = unit_rows(sphere, "vertex"), input_landmarks = unit_rows(landmarks, "landmark");
   std::vector<Vector3d> x = start, p = input_landmarks;
   const std::vector<Vector3d> q = unit_rows(targets, "target");
