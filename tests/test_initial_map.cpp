@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 #include <Eigen/Geometry>
@@ -337,4 +338,40 @@ TEST_CASE("sphere map: where the conformal map flips triangles the progressive s
   CHECK(b.report.area_distortion_final < 0.1);
   CHECK(parse_sphere_start("progressive") == InitialMapOptions::SphereStart::progressive);
   CHECK_THROWS_AS(parse_sphere_start("tutte"), InputError);
+}
+
+TEST_CASE("sphere map: where the conformal start stays crowded after the area flow the progressive start is tried and kept when better") {
+  // a ball with six limbs (radius 1 + 4 exp(-(angle / 0.4)^2) towards each axis): its conformal
+  // map does not flip but crushes the limbs' ends, and the area flow does not recover them
+  TetMesh m = test::smooth_ball_mesh(10);
+  const Eigen::Vector3d axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  for (Eigen::Index i = 0; i < m.vertices.rows(); ++i) {
+    const Eigen::Vector3d x = m.vertices.row(i);
+    if (!(x.norm() > 0)) continue;
+    double g = 1;
+    for (const auto& d : axes) {
+      const double angle = std::acos(std::clamp(x.dot(d) / x.norm(), -1.0, 1.0)) / 0.4;
+      g += 4 * std::exp(-angle * angle);
+    }
+    m.vertices.row(i) *= g;
+  }
+  const SphereMapResult a = sphere_map(TriSurface{m.vertices, boundary_faces(m.tets)});
+  CHECK(a.report.flipped_after_conformal == 0);
+  REQUIRE(a.report.conformal_log_misfit);
+  REQUIRE(a.report.progressive_log_misfit);
+  CHECK(*a.report.conformal_log_misfit > SphereMapReport::kCrowdedMisfit);
+  CHECK(*a.report.progressive_log_misfit < 0.01 * *a.report.conformal_log_misfit);
+  CHECK(a.report.start == "progressive");
+  CHECK(a.report.density_misfit_after == *a.report.progressive_log_misfit);
+  CHECK(a.flipped_triangles == 0);
+  CHECK(a.report.area_distortion_final < 0.25);
+  const Json j = to_json(a.report);
+  CHECK(j.find("conformal_log_misfit")->number() == *a.report.conformal_log_misfit);
+  CHECK(j.find("progressive_log_misfit")->number() == *a.report.progressive_log_misfit);
+  // a shape the conformal start serves is not compared
+  const TetMesh e = test::ellipsoid_mesh(8);
+  const SphereMapResult b = sphere_map(TriSurface{e.vertices, boundary_faces(e.tets)});
+  CHECK(b.report.start == "conformal");
+  CHECK(!b.report.conformal_log_misfit);
+  CHECK(!to_json(b.report).find("conformal_log_misfit"));
 }

@@ -117,20 +117,24 @@ def one(vpm, out, name, runs, timeout):
                face=r["final"]["face_area_ratio"]["mean_abs_dev"],
                vertex=r["final"]["vertex_area_ratio"]["mean_abs_dev"],
                flipped=r["final"]["flipped_faces"], steps=len(r["rounds"]), stop=r["stop_reason"], domain=r["domain"],
+               face_p99_log=r["final"]["face_area_ratio"]["p99_abs_log"],
+               start=r.get("sphere_map", {}).get("start", "disk"),
                ears=r.get("disk_map", {}).get("ears"),
                converged=r["converged"], polish_s=r["timings_s"]["polish"])
     return row
 
 
 def table(rows, runs):
-    lines = [f"| surface | set | vertices / faces | exit | face area \\|r-1\\|: sphere map (disk embedding) -> polished | vertex \\|r-1\\| "
-             f"| flipped | steps (stop) | s (median of {runs}) |", "|---|---|---|---|---|---|---|---|---|"]
+    lines = [f"| surface | set | vertices / faces | exit | start | face area \\|r-1\\|: sphere map (disk embedding) -> polished "
+             f"| face p99 \\|log r\\| | vertex \\|r-1\\| | flipped | steps (stop) | s (median of {runs}) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         if "face" not in r:
-            lines.append(f"| {r['surface']} | {r['set']} | - | {r['exit']} | {r['message']} |||||")
+            lines.append(f"| {r['surface']} | {r['set']} | - | {r['exit']} | {r['message']} |||||||")
             continue
-        lines.append(f"| {r['surface']} | {r['set']} | {r['vertices']:,} / {r['faces']:,} | {r['exit']} | "
-                     f"{100 * r['sphere_map']:.2f} % -> **{100 * r['face']:.2f} %** | {100 * r['vertex']:.2f} % | "
+        lines.append(f"| {r['surface']} | {r['set']} | {r['vertices']:,} / {r['faces']:,} | {r['exit']} | {r['start']} | "
+                     f"{100 * r['sphere_map']:.2f} % -> **{100 * r['face']:.2f} %** | {r['face_p99_log']:.2f} | "
+                     f"{100 * r['vertex']:.2f} % | "
                      f"{r['flipped']} | {r['steps']} ({r['stop']}) | {r['seconds']:.2f} |")
     return "\n".join(lines)
 

@@ -1,6 +1,8 @@
 // Step 2 of the initial map (vpm/initial_map.hpp): the boundary surface to the unit sphere by a
 // spherical conformal map (planar harmonic map, inverse stereographic projection, south-pole
-// correction), orientation check, Moebius balancing and optional area correction.
+// correction), orientation check and Moebius balancing, or the progressive embedding where that
+// flips or stays crowded; then the area equalisation and optional area correction. The report's
+// JSON and the options' names: map/sphere_map_report.cpp.
 #include "vpm/initial_map.hpp"
 
 #include <Eigen/Dense>
@@ -247,6 +249,74 @@ void equalise(const Points& in, const Triangles& f, const InitialMapOptions& opt
   rep.seconds_density = seconds_since(t0);
 }
 
+// The progressive embedding (map/sphere_steps.hpp) as the start; its statistics go to `rep`.
+Points progressive_start(const Points& in, const Triangles& f, SphereMapReport& rep) {
+  ProgressiveStats ps;
+  Points s = progressive_sphere(in, f, &ps);
+  rep.start = "progressive";
+  rep.progressive_passes = ps.passes;
+  rep.progressive_collapses = ps.collapses;
+  rep.progressive_sweeps = ps.sweeps;
+  rep.progressive_seconds = ps.seconds;
+  return s;
+}
+
+// The log misfit the area equalisation left (the start's when it was not kept).
+double misfit_left(const SphereMapReport& rep) {
+  return rep.density_kept ? rep.density_misfit_after : rep.density_misfit_before;
+}
+
+// The conformal start (steps 2.1-2.4); returns the chord triangles facing inwards.
+int conformal_start(const Points& in, const Triangles& f, const InitialMapOptions& opt, Points& s,
+                    SphereMapReport& rep) {
+  const auto t0 = Clock::now();
+  int flips = 0;
+  s = conformal_sphere(in, f, rep, &flips);
+  if (opt.south_pole_correction && s.allFinite()) correct_south_pole(in, f, s, &flips, rep);
+  normalize_rows(s);
+  // 3. orientation: outward faces must have det > 0 in the majority (total signed volume > 0)
+  double vol = 0;
+  for (Eigen::Index i = 0; i < f.rows(); ++i)
+    vol += Eigen::Vector3d(s.row(f(i, 0))).dot(Eigen::Vector3d(s.row(f(i, 1))).cross(Eigen::Vector3d(s.row(f(i, 2)))));
+  rep.mirrored = vol < 0;
+  if (vol < 0) s.col(0) *= -1;
+  rep.area_distortion_conformal = area_distortion(in, s, f);
+  rep.seconds_conformal = seconds_since(t0);
+  const auto t1 = Clock::now();
+  if (opt.moebius_balance) balance(in, f, opt, s, &flips, rep);
+  rep.seconds_moebius = seconds_since(t1);
+  return flipped_sphere_triangles(s, f);
+}
+
+// The start and its area equalisation: the conformal start, or the progressive one where the
+// conformal start flips triangles, where the user asks for it, or where the conformal start
+// stays crowded after its equalisation (SphereMapReport::kCrowdedMisfit: limbs shrunk below
+// what the flow recovers); of the two equalised starts the one with the smaller log misfit.
+Points equalised_start(const Points& in, const Triangles& f, const InitialMapOptions& opt, SphereMapReport& rep,
+                       Device* device) {
+  const bool automatic = opt.sphere_start == InitialMapOptions::SphereStart::automatic;
+  const bool equal_area = opt.sphere_density != InitialMapOptions::SphereDensity::conformal;
+  Points s;
+  const int flips = automatic ? conformal_start(in, f, opt, s, rep) : 0;
+  const SphereMapReport started = rep;
+  const bool compare = automatic && flips == 0;
+  if (compare) {
+    if (equal_area) equalise(in, f, opt, s, rep, device);
+    if (!equal_area || misfit_left(rep) <= SphereMapReport::kCrowdedMisfit) return s;
+  }
+  SphereMapReport alt = started;
+  Points p = progressive_start(in, f, alt);
+  const bool folded = flipped_sphere_triangles(p, f) > 0;
+  if (equal_area && !folded) equalise(in, f, opt, p, alt, device);
+  if (compare) {
+    rep.conformal_log_misfit = alt.conformal_log_misfit = misfit_left(rep);
+    rep.progressive_log_misfit = alt.progressive_log_misfit = misfit_left(alt);
+    if (folded || !(misfit_left(alt) < misfit_left(rep))) return s;
+  }
+  rep = alt;
+  return p;
+}
+
 }  // namespace
 
 SphereMapResult sphere_map(const TriSurface& surf, const InitialMapOptions& opt) { return sphere_map(surf, opt, nullptr); }
@@ -259,38 +329,7 @@ SphereMapResult sphere_map(const TriSurface& surf, const InitialMapOptions& opt,
   const Triangles& f = cs.f;
   rep.vertices = static_cast<int>(in.rows());
   rep.faces = static_cast<int>(f.rows());
-  int flips = 0;
-  Points s;
-  if (opt.sphere_start == InitialMapOptions::SphereStart::automatic) {
-    const auto t0 = Clock::now();
-    s = conformal_sphere(in, f, rep, &flips);
-    if (opt.south_pole_correction && s.allFinite()) correct_south_pole(in, f, s, &flips, rep);
-    normalize_rows(s);
-    // 3. orientation: outward faces must have det > 0 in the majority (total signed volume > 0)
-    double vol = 0;
-    for (Eigen::Index i = 0; i < f.rows(); ++i)
-      vol += Eigen::Vector3d(s.row(f(i, 0))).dot(Eigen::Vector3d(s.row(f(i, 1))).cross(Eigen::Vector3d(s.row(f(i, 2)))));
-    rep.mirrored = vol < 0;
-    if (vol < 0) s.col(0) *= -1;
-    rep.area_distortion_conformal = area_distortion(in, s, f);
-    rep.seconds_conformal = seconds_since(t0);
-    const auto t1 = Clock::now();
-    if (opt.moebius_balance) balance(in, f, opt, s, &flips, rep);
-    rep.seconds_moebius = seconds_since(t1);
-    flips = flipped_sphere_triangles(s, f);
-  }
-  if (opt.sphere_start == InitialMapOptions::SphereStart::progressive || flips > 0) {
-    ProgressiveStats ps;
-    s = progressive_sphere(in, f, &ps);
-    flips = flipped_sphere_triangles(s, f);
-    rep.start = "progressive";
-    rep.progressive_passes = ps.passes;
-    rep.progressive_collapses = ps.collapses;
-    rep.progressive_sweeps = ps.sweeps;
-    rep.progressive_seconds = ps.seconds;
-  }
-  if (opt.sphere_density != InitialMapOptions::SphereDensity::conformal && flips == 0)
-    equalise(in, f, opt, s, rep, device);
+  Points s = equalised_start(in, f, opt, rep, device);
   if (opt.area_correction) rep.area_correction_steps = area_flow(in, f, s, opt.area_correction_steps, false);
   if (flipped_sphere_triangles(s, f) > 0) {
     // Extreme conformal scale factors (protrusions, coarse elongated shapes) can make a chord
@@ -299,7 +338,7 @@ SphereMapResult sphere_map(const TriSurface& surf, const InitialMapOptions& opt,
     rep.repair_steps = area_flow(in, f, s, std::max(opt.area_correction_steps, 100), true);
   }
   normalize_rows(s);
-  flips = flipped_sphere_triangles(s, f);
+  const int flips = flipped_sphere_triangles(s, f);
   rep.area_distortion_final = area_distortion(in, s, f);
   rep.flipped_triangles = flips;
   r.flipped_triangles = flips;
@@ -307,80 +346,6 @@ SphereMapResult sphere_map(const TriSurface& surf, const InitialMapOptions& opt,
   r.sphere.col(2).setOnes();
   for (size_t i = 0; i < cs.used.size(); ++i) r.sphere.row(cs.used[i]) = s.row(static_cast<Eigen::Index>(i));
   return r;
-}
-
-InitialMapOptions::SphereDensity parse_sphere_density(const std::string& name) {
-  using D = InitialMapOptions::SphereDensity;
-  if (name == "conformal") return D::conformal;
-  if (name == "area") return D::area;
-  throw InputError("sphere density '" + name + "' is not one of conformal, area");
-}
-
-InitialMapOptions::DensitySolve parse_density_solve(const std::string& name) {
-  return parse_execution_place(name, "sphere solve");
-}
-
-InitialMapOptions::SphereStart parse_sphere_start(const std::string& name) {
-  using S = InitialMapOptions::SphereStart;
-  if (name == "auto") return S::automatic;
-  if (name == "progressive") return S::progressive;
-  throw InputError("sphere start '" + name + "' is not one of auto, progressive");
-}
-
-const char* to_string(InitialMapOptions::SphereDensity d) {
-  using D = InitialMapOptions::SphereDensity;
-  return d == D::conformal ? "conformal" : "area";
-}
-
-Json to_json(const SphereMapReport& r) {
-  Json j = Json::object();
-  j["vertices"] = r.vertices;
-  j["faces"] = r.faces;
-  j["planar_weights"] = r.planar_weights;
-  j["flipped_after_conformal"] = r.flipped_after_conformal;
-  if (r.flipped_after_south_pole) j["flipped_after_south_pole"] = *r.flipped_after_south_pole;
-  if (r.south_pole_correction) j["south_pole_correction"] = *r.south_pole_correction;
-  j["mirrored"] = r.mirrored;
-  j["area_distortion_conformal"] = r.area_distortion_conformal;
-  if (r.moebius_iterations) {
-    j["moebius_iterations"] = *r.moebius_iterations;
-    j["moebius_centroid_norm"] = r.moebius_centroid_norm;
-    j["area_distortion_balanced"] = r.area_distortion_balanced;
-    j["moebius_kept"] = r.moebius_kept;
-  }
-  if (r.area_correction_steps) j["area_correction_steps"] = *r.area_correction_steps;
-  if (r.density_steps) {
-    Json e = Json::object();
-    e["target"] = r.density_target;
-    e["steps"] = *r.density_steps;
-    e["log_misfit_before"] = r.density_misfit_before;
-    e["log_misfit_after"] = r.density_misfit_after;
-    e["area_distortion"] = r.area_distortion_density;
-    e["kept"] = r.density_kept;
-    if (!r.density_solver.empty()) e["solver"] = r.density_solver;
-    if (r.placement.density_solve) e["placement"] = to_json(r.placement);
-    j["density"] = e;
-  }
-  j["start"] = r.start;
-  if (r.progressive_passes) {
-    Json p = Json::object();
-    p["passes"] = *r.progressive_passes;
-    p["collapses"] = r.progressive_collapses;
-    p["sweeps"] = r.progressive_sweeps;
-    p["seconds"] = r.progressive_seconds;
-    j["progressive"] = p;
-  }
-  if (r.flipped_before_repair) j["flipped_before_repair"] = *r.flipped_before_repair;
-  if (r.repair_steps) j["repair_steps"] = *r.repair_steps;
-  j["area_distortion_final"] = r.area_distortion_final;
-  j["flipped_triangles"] = r.flipped_triangles;
-  Json t = Json::object();
-  t["conformal"] = r.seconds_conformal;
-  t["moebius"] = r.seconds_moebius;
-  t["density"] = r.seconds_density;
-  t["density_solve"] = r.seconds_density_solve;
-  j["timings_s"] = t;
-  return j;
 }
 
 }  // namespace vpm

@@ -88,7 +88,9 @@ struct InitialMapOptions {
   double density_tolerance = 0.02;  ///< stop at this area distortion (mean |area ratio - 1|)
   /// Where the sphere map starts. automatic: the conformal map, and when that leaves chord
   /// triangles facing inwards (long tubes and limbs shrink by e^(-length / radius) in a
-  /// conformal map, below double precision) a progressive embedding instead: the surface
+  /// conformal map, below double precision) or stays crowded after the area equalisation
+  /// (SphereMapReport::kCrowdedMisfit; the equalised start with the smaller misfit is kept)
+  /// a progressive embedding instead: the surface
   /// simplified to a tetrahedron by edge collapses and rebuilt on the sphere vertex by vertex,
   /// every move checked to keep each triangle facing outwards (flip-free by construction);
   /// the area equalisation then runs from it. progressive: that embedding always.
@@ -161,6 +163,15 @@ struct SphereMapReport {
   std::optional<int> progressive_passes;
   int progressive_collapses = 0, progressive_sweeps = 0;
   double progressive_seconds = 0;
+  /// The automatic start's comparison, when the conformal start stayed crowded (its log misfit
+  /// after the equalisation above kCrowdedMisfit) and the progressive one was tried: each
+  /// start's log misfit after its equalisation (`start` names the one kept, the smaller).
+  std::optional<double> conformal_log_misfit, progressive_log_misfit;
+  /// Above this log misfit (area-weighted mean square of log(sphere area / target)) after the
+  /// equalisation, the conformal start counts as crowded. Chosen on the development surfaces
+  /// of docs/surfaces.md, which bound it: the folded AAL surface's conformal start leaves 0.003
+  /// after the flow, the cartoon figure's 1.31 (limbs crushed; 0.034 from the progressive one).
+  static constexpr double kCrowdedMisfit = 0.1;
   std::optional<int> flipped_before_repair;  ///< chord triangles facing inwards, repaired by
   std::optional<int> repair_steps;           ///< ... this many area-flow steps
   double area_distortion_final = 0;
@@ -173,7 +184,8 @@ struct SphereMapReport {
 ///  "south_pole_correction"?, "mirrored", "area_distortion_conformal", "moebius_iterations"?,
 ///  "moebius_centroid_norm"?, "area_distortion_balanced"?, "moebius_kept"?,
 ///  "area_correction_steps"?, "density"? {"target","steps","log_misfit_before",
-///  "log_misfit_after","area_distortion","kept"}, "start", "progressive"? {"passes","collapses",
+///  "log_misfit_after","area_distortion","kept"}, "start", "conformal_log_misfit"?,
+///  "progressive_log_misfit"?, "progressive"? {"passes","collapses",
 ///  "sweeps","seconds"}, "flipped_before_repair"?, "repair_steps"?, "area_distortion_final",
 ///  "flipped_triangles", "timings_s" {"conformal","moebius","density","density_solve"}}
 ///  (? = only when present)
