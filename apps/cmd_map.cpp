@@ -115,7 +115,7 @@ vpm::cli::Registrar reg(vpm::cli::with_expert({"map", "MESH|SURFACE -o OUT", "ma
                           {"--sphere-solve", "auto|host|device", "the sphere map's equal-area solves: host Cholesky, device AMG-CG, or auto (default: a GPU from 50,000 boundary vertices)"},
                           {"--boundary", "slide|fixed", "boundary vertices slide on the sphere (moser default) or stay"},
                           {"--solver", "cg|paper", "Jacobi CG (default) or the paper's BiCGSTAB on the normal equations"},
-                          {"--preconditioner", "auto|jacobi|amg", "of CG: Jacobi, smoothed-aggregation AMG, or auto (default: AMG on CPUs from 2M tets)"},
+                          {"--preconditioner", "auto|jacobi|amg", "of CG: Jacobi, smoothed-aggregation AMG, or auto (default: AMG on CPUs from 600k tets)"},
                           {"--rk-steps", "N", "RK4 steps per Moser round (default " + std::to_string(vpm::VolumeMapOptions{}.rk_steps) + ")"},
                           {"--overlays", "A,B", "surfaces: per-vertex files (FreeSurfer lh.curv, lh.thickness; GIfTI .shape.gii) carried to the output's point fields"},
                           {"--max-seconds", "S", "time budget: the rounds stop when it is spent and the map reached is written (exit 4)"},

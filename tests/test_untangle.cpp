@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "map/untangle_problem.hpp"
 #include "support/devices.hpp"
 #include "support/fixtures.hpp"
 #include "support/shapes.hpp"
@@ -234,4 +235,26 @@ TEST_CASE("untangle never returns more folds than it was given") {
     }
   }
   CHECK(reverted >= 1);  // seed 26 (local options, one L-BFGS step) ends worse: 207 -> 210 folds
+}
+
+TEST_CASE("the eps update: the floor of sigma bounds how slowly eps shrinks while the energy rises") {
+  // a fold that the last minimisation did not clear (Dmin < 0) and an energy that rose: sigma
+  // falls back to its floor s (the paper's 0.1, UntangleOptions::stalled_sigma_min after a
+  // stalled round), mu = (1 - s) chi(Dmin, eps), eps' = 2 sqrt(mu (mu - Dmin))
+  const double eps = 3.4e-6, dmin = -4.3e-6, e_prev = 3.35, e = 3.36;
+  auto expected = [&](double sigma) {
+    const double mu = (1 - sigma) * untangle_chi(dmin, eps);
+    return 2 * std::sqrt(mu * (mu - dmin));
+  };
+  const double slow = untangle_next_eps(e, e_prev, dmin, eps, 0.1);
+  const double fast = untangle_next_eps(e, e_prev, dmin, eps, 0.5);
+  CHECK(slow == Approx(expected(0.1)).epsilon(1e-14));
+  CHECK(fast == Approx(expected(0.5)).epsilon(1e-14));
+  CHECK(slow < eps);
+  CHECK(fast < 0.8 * slow);
+  // an energy that fell by more than the floor sets sigma itself
+  CHECK(untangle_next_eps(2.0, 3.0, dmin, eps, 0.1) == Approx(expected(1.0 / 3.0)).epsilon(1e-14));
+  CHECK(untangle_next_eps(2.0, 3.0, dmin, eps, 0.5) == Approx(expected(0.5)).epsilon(1e-14));
+  // every det J at or above mu: eps drops to the floor
+  CHECK(untangle_next_eps(e, e_prev, 0.2, eps, 0.1) == 1e-10);
 }

@@ -24,11 +24,12 @@ std::string quality(const ValidationReport& v) {
 
 // Measured peaks (docs/robustness.md, "Limits"; 2-core AMD EPYC VM, 2026-11-27), PoCL's being
 // the larger at every size: 121 MB at 10k tets, 218 MB at 120k, 480 MB at 383k, 1.11 GB at 1.1M
-// (902 bytes a tet over 120 MB fits these within 15 MB), 2.53 GB at 2.18M (AMG from 2M tets on
-// CPUs: 1,160 bytes a tet), 8.9 GB at 9.85M (docs/volume_map.md); a cold PoCL kernel cache adds
-// 145 MB. The line below lies above every one of them (by 5 % at 2.18M, 25-33 % at 1.1M and 10M).
+// (902 bytes a tet over 120 MB fits these within 15 MB), 1.33-1.47 GB at 1.1M and 2.53 GB at
+// 2.18M with AMG (from 600k tets on CPUs: 1,160-1,200 bytes a tet), 8.9 GB at 9.85M
+// (docs/volume_map.md); a cold PoCL kernel cache adds 145 MB. The line below lies above every
+// one of them (by 5 % at 1.1M, 7 % at 2.18M, 30 % at 10M).
 constexpr double kMapBaseBytes = 270e6;
-constexpr double kMapBytesPerTet = 1100;
+constexpr double kMapBytesPerTet = 1150;
 
 double map_memory_estimate(long long tets) { return kMapBaseBytes + kMapBytesPerTet * double(std::max(0LL, tets)); }
 

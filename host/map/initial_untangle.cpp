@@ -79,9 +79,11 @@ int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boun
   if (local) {  // few folds: free only their neighbourhood (fast), widening it while that helps
     Points trial = ball;
     int left = folds;
+    UntangleOptions lo = opt.untangle_options;
+    lo.stalled_sigma_min = opt.local_untangle_sigma_min;
     for (int k = 0, rings = opt.local_untangle_rings; k < kLocalWidenings && left > 0; ++k, rings *= 2) {
       const UntangleResult ul = untangle_local(device, m.vertices, m.tets, trial, boundary,
-                                               inverted_tets(trial, m.tets), rings, opt.untangle_options);
+                                               inverted_tets(trial, m.tets), rings, lo);
       rep.untangle = InitialUntangle{ul, true, rings};
       if (ul.inverted_after >= left) break;  // no progress: the global run takes over
       left = ul.inverted_after;

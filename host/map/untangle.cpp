@@ -180,10 +180,14 @@ void prepare_reference(Problem& p, const Points& reference, const Tets& tets, co
   }
 }
 
+// The paper's floor of sigma in the eps update.
+constexpr double kPaperSigmaMin = 0.1;
+
 // The outer loop: one L-BFGS minimisation per eps, eps updated from the smallest det J.
 void minimise(const Problem& p, Points& x, const UntangleOptions& o, Clock::time_point t0, UntangleResult& r) {
   Eval ev = evaluate(p, x, 1.0, nullptr);
   r.min_det_before = ev.min_det;
+  double d_prev = ev.min_det;
   double eps = std::sqrt(1e-12 + 0.04 * std::pow(std::min(ev.min_det, 0.0), 2));
   double e_prev = evaluate(p, x, eps, nullptr).energy;
   r.energy_before = e_prev;
@@ -201,12 +205,11 @@ void minimise(const Problem& p, Points& x, const UntangleOptions& o, Clock::time
     const double e = ev.energy;
     r.energy_after = e;
     r.final_eps = eps;
-    const double sigma = std::max(1.0 - e / e_prev, 0.1);
-    const double mu = (1 - sigma) * untangle_chi(ev.min_det, eps);
-    if (ev.min_det < mu)
-      eps = 2 * std::sqrt(mu * (mu - ev.min_det));
-    else
-      eps = 1e-10;
+    // a fold that the minimisation hardly moved (Dmin <= 0, raised by under a tenth) takes the
+    // stalled floor of sigma; progress keeps the paper's
+    const bool stalled = ev.min_det <= 0 && ev.min_det < d_prev + 0.1 * std::abs(d_prev);
+    eps = untangle_next_eps(e, e_prev, ev.min_det, eps, stalled ? o.stalled_sigma_min : kPaperSigmaMin);
+    d_prev = ev.min_det;
     if (ev.min_det > 0 && (o.stop_when_untangled || std::abs(e_prev - e) <= o.outer_energy_tolerance * std::abs(e)))
       break;
     e_prev = e;

@@ -2,6 +2,7 @@
 // Private to the untangler (host/map/untangle*.cpp): the optimisation problem and the
 // evaluation of the energy and its gradient (see vpm/untangle.hpp for the energy).
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <vector>
@@ -16,6 +17,16 @@ class Device;
 inline double untangle_chi(double d, double eps) {
   const double s = std::sqrt(eps * eps + d * d);
   return d >= 0 ? 0.5 * (d + s) : 0.5 * eps * eps / (s - d);
+}
+
+/// The next eps of the outer loop (Garanzha et al. 2021) after a minimisation that took the
+/// energy from `e_prev` to `e` and left the smallest det J `min_det` at `eps`:
+/// sigma = max(1 - e / e_prev, sigma_min), mu = (1 - sigma) chi(min_det, eps), then
+/// 2 sqrt(mu (mu - min_det)) while min_det < mu, else 1e-10.
+inline double untangle_next_eps(double e, double e_prev, double min_det, double eps, double sigma_min) {
+  const double sigma = std::max(1.0 - e / e_prev, sigma_min);
+  const double mu = (1 - sigma) * untangle_chi(min_det, eps);
+  return min_det < mu ? 2 * std::sqrt(mu * (mu - min_det)) : 1e-10;
 }
 
 class UntangleDeviceEval;

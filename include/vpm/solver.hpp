@@ -48,8 +48,10 @@ enum class PreconditionerChoice { automatic, jacobi, amg };
 PreconditionerChoice parse_preconditioner_choice(const std::string& name);
 const char* to_string(PreconditionerChoice choice);
 
-/// Meshes from this many tets on get AMG from PreconditionerChoice::automatic on CPU devices.
-inline constexpr long long kAutoAmgTets = 2'000'000;
+/// Meshes from this many tets on get AMG from PreconditionerChoice::automatic on CPU devices:
+/// whole `vpm map` of Colin27 on 2 cores, AMG against Jacobi, 1.00x at 383k tets, 1.04x at 688k,
+/// 1.10x at 2.2M, for 14-17 % more memory (bench/results/solver_amg_600k/).
+inline constexpr long long kAutoAmgTets = 600'000;
 /// The preconditioner `choice` stands for on `device` for the Laplacian of a mesh of `tets`
 /// tets: jacobi and amg as named; automatic: AMG on CPU devices (the host and OpenCL CPU
 /// devices) from kAutoAmgTets tets on, Jacobi below and on GPUs: on CPUs AMG's fewer iterations

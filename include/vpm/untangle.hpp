@@ -16,8 +16,9 @@
 // rescaled to the total signed volume of `x` (UntangleOptions::rescale_reference).
 // Each outer iteration minimises E with L-BFGS over the free vertices at fixed eps, then
 // updates eps = 2 sqrt(mu (mu - Dmin)), mu = (1 - sigma) chi(Dmin, eps),
-// sigma = max(1 - E/E_prev, 0.1) while Dmin < mu (else eps = 1e-10): eps shrinks as the
-// folds clear, so the barrier at D = 0 takes hold only when all D can be made positive.
+// sigma = max(1 - E/E_prev, 0.1) while Dmin < mu (else eps = 1e-10; a stalled fold may take a
+// larger floor, UntangleOptions::stalled_sigma_min): eps shrinks as the folds clear, so the
+// barrier at D = 0 takes hold only when all D can be made positive.
 //
 // Host implementation (Eigen, 2+ threads for large problems); the per-tet energy and gradient
 // can also be evaluated on an OpenCL device (overloads taking a Device).
@@ -38,6 +39,11 @@ struct UntangleOptions {
   double theta = 1.0 / 128.0;
   /// Outer iterations (eps updates). Each runs one L-BFGS minimisation.
   int max_outer_iterations = 50;
+  /// Smallest sigma of the eps update after an outer iteration that left a fold stalled (Dmin
+  /// <= 0 and raised by under a tenth of |Dmin|); otherwise the paper's 0.1. The default, 0.1,
+  /// is the paper's schedule throughout; larger values shrink eps faster past a fold that sits
+  /// still (InitialMapOptions::local_untangle_sigma_min).
+  double stalled_sigma_min = 0.1;
   /// L-BFGS iterations per outer iteration.
   int max_lbfgs_iterations = 100;
   /// L-BFGS memory (number of correction pairs).
