@@ -282,6 +282,7 @@ std::vector<int> inverted_tets(const Points& x, const Tets& tets) {
 UntangleOptions untangle_local_options() {
   UntangleOptions o;
   o.theta = 0.5;
+  o.stalled_sigma_min = 0.5;
   return o;
 }
 

@@ -42,7 +42,7 @@ struct UntangleOptions {
   /// Smallest sigma of the eps update after an outer iteration that left a fold stalled (Dmin
   /// <= 0 and raised by under a tenth of |Dmin|); otherwise the paper's 0.1. The default, 0.1,
   /// is the paper's schedule throughout; larger values shrink eps faster past a fold that sits
-  /// still (InitialMapOptions::local_untangle_sigma_min).
+  /// still (InitialMapOptions::local_untangle_sigma_min, untangle_local_options()).
   double stalled_sigma_min = 0.1;
   /// L-BFGS iterations per outer iteration.
   int max_lbfgs_iterations = 100;
@@ -96,7 +96,9 @@ Json to_json(const UntangleResult& result);
 UntangleResult untangle(const Points& reference, const Tets& tets, Points& x,
                         const std::vector<char>& fixed, const UntangleOptions& options = {});
 
-/// Options of the local untangle between Moser rounds: theta = 0.5.
+/// Options of the local untangle between Moser and polish rounds (and of the sphere map's and
+/// the registration check's local runs): theta = 0.5, and stalled_sigma_min = 0.5 so that a
+/// fold an eps round hardly moved does not hold eps near its value for tens of rounds.
 UntangleOptions untangle_local_options();
 
 /// Local variant (docs/design.md 4.1 step 6): frees only the vertices of `folded` (tet indices)
