@@ -11,7 +11,7 @@ PKGS=(
   libcgal-dev libgmp-dev libmpfr-dev
   libhdf5-dev python3-h5py  # element tables and reference sums (HDF5); h5py reads them in Python without vpm
   libsuitesparse-dev libopenblas0-pthread  # CHOLMOD's supernodal Cholesky for the sphere map, on OpenBLAS
-  libcgal-demo  # bench only: the public surface models of bench/shapes (--models)
+  libcgal-demo  # the public surface models of bench/shapes (--models; its quick form in the tests)
   libviennacl-dev python3-vtk9 python3-numpy
   libhypre-dev openmpi-bin  # bench only: hypre BoomerAMG, the solver benchmark's peer, and its mpirun
   elastix  # bench only: the image registration a user would otherwise pick, bench/register_peers' peer

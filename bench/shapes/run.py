@@ -4,8 +4,11 @@
 a user sees it (exit status, converged, distortion, folds, time).
 
 Usage: run.py OUT_DIR [--sizes 30k,300k] [--shapes limbs,hand,...] [--models cgal-hand,...]
-       [--vpm build/vpm] [--timeout 600]
-Writes OUT_DIR/shapes.json and OUT_DIR/shapes.md (and prints the table). Sizes: 30k (mesh-image's
+       [--vpm build/vpm] [--timeout 600] [--check]
+Writes OUT_DIR/shapes.json and OUT_DIR/shapes.md (and prints the table). --check (the quick
+form the test suite runs, tests/CMakeLists.txt bench:shapes-quick) exits 1 naming every row that
+misses the targets of the shapes that meet them: meshed, `vpm map` exit 0, fold-free, vertex
+mean abs(r-1) <= 2 % and tet <= 8 %. Sizes: 30k (mesh-image's
 default density, 25-30k tets) and 300k (--max-volume chosen for about 300k tets).
 
 --models adds public surface models that Debian's libcgal-demo ships (data.tar.gz, meshes/*.off;
@@ -92,6 +95,20 @@ def one(vpm, out, shape, size, timeout):
     return row
 
 
+CHECK_VERTEX, CHECK_TET = 0.02, 0.08  # the targets of the shapes benchmark (docs/shapes.md)
+
+
+def misses(row):
+    """What a row misses of --check's targets (empty: none)."""
+    if row.get("mesh_exit") != 0:
+        return f"mesh-image exit {row.get('mesh_exit')}: {row.get('message', '')}"
+    if row.get("map_exit") != 0:
+        return f"map exit {row.get('map_exit')}: {row.get('message', '')}"
+    if row["folds"] != 0 or row["vertex"] > CHECK_VERTEX or row["tet"] > CHECK_TET:
+        return f"{row['folds']} folds, vertex {100 * row['vertex']:.2f} %, tet {100 * row['tet']:.2f} %"
+    return ""
+
+
 def table(rows):
     lines = ["| shape | tets | exit | converged | vertex \\|r-1\\| | tet \\|r-1\\| | folds | initial map vertex / max \\|log r\\| | map s (untangle) |",
              "|---|---|---|---|---|---|---|---|---|"]
@@ -117,6 +134,7 @@ def main():
     ap.add_argument("--models", default="", help="libcgal-demo models: " + ",".join(MODELS) + " or all")
     ap.add_argument("--vpm", default=os.path.join(HERE, "..", "..", "build", "vpm"))
     ap.add_argument("--timeout", type=int, default=600)
+    ap.add_argument("--check", action="store_true", help="exit 1 unless every row meets the targets")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     shapes = [] if a.shapes == "none" else a.shapes.split(",")
@@ -137,6 +155,11 @@ def main():
     md = table(rows)
     open(os.path.join(a.out, "shapes.md"), "w").write(md + "\n")
     print(md)
+    if a.check:
+        bad = [f"{r['shape']} {r['size']}: {misses(r)}" for r in rows if misses(r)]
+        for b in bad:
+            print(f"run.py: {b}", file=sys.stderr)
+        sys.exit(1 if bad else 0)
 
 
 if __name__ == "__main__":
