@@ -73,8 +73,8 @@ struct VolumeMapOptions {
   /// bicgstab is refused (InputError).
   SolverMethod solver = SolverMethod::cg;
   /// Preconditioner of cg: jacobi, amg (smoothed aggregation, vpm/amg.hpp; the hierarchy is
-  /// built once and its values refreshed every solve) or automatic: AMG on CPU devices from 2M
-  /// tets on, else Jacobi (vpm::choose_preconditioner).
+  /// built once and its values refreshed every solve) or automatic: AMG on CPU devices from 600k
+  /// tets on (vpm::kAutoAmgTets), else Jacobi (vpm::choose_preconditioner).
   PreconditionerChoice preconditioner = PreconditionerChoice::automatic;
   /// Relative residual of each linear solve.
   double solver_tolerance = 1e-8;
