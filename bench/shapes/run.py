@@ -156,7 +156,7 @@ def main():
     open(os.path.join(a.out, "shapes.md"), "w").write(md + "\n")
     print(md)
     if a.check:
-        bad = [f"{r['shape']} {r['size']}: {misses(r)}" for r in rows if misses(r)]
+        bad = [f"{r['shape']} {r['size']}: {m}" for r in rows if (m := misses(r))]
         for b in bad:
             print(f"run.py: {b}", file=sys.stderr)
         sys.exit(1 if bad else 0)

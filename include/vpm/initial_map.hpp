@@ -116,8 +116,8 @@ struct InitialMapOptions {
   /// IfFolded: first untangle locally (the folded tets and this many rings of neighbours free,
   /// boundary fixed, same energy and theta), then globally if folds remain. 0: global only.
   int local_untangle_rings = 3;
-  /// UntangleOptions::stalled_sigma_min of those local runs (the other runs keep the paper's
-  /// 0.1): a fold next to the fixed boundary of a large brain sat still for 38 outer iterations
+  /// UntangleOptions::stalled_sigma_min of those local runs (as in the volume map's local runs,
+  /// untangle_local_options(); the global run keeps the paper's 0.1): a fold next to the fixed boundary of a large brain sat still for 38 outer iterations
   /// at 0.1 while eps fell 5 % a round (Colin27 at 383k tets: 6 folds, 12 s); docs/initial_map.md
   /// step 4.
   double local_untangle_sigma_min = 0.5;
