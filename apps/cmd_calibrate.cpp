@@ -19,6 +19,9 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
     throw vpm::InputError("option --min-cluster: not taken (it is what vpm calibrate finds)");
   vpm::CalibrationSettings s = vpm::cli::comparison_settings(args, true);
   s.rate = args.get_double("--rate", 1.0);
+  s.calibrate_tfce = args.has("--tfce");
+  if (s.calibrate_tfce && args.has("--peak"))
+    throw vpm::InputError("options --tfce and --peak exclude each other (a TFCE focus has no peak rule)");
   if (!(s.rate >= 0)) throw vpm::InputError("option --rate: must be >= 0 false clusters per 10 normals");
   const std::optional<vpm::Covariates> cov = vpm::cli::read_participants(args, s);
   const vpm::ReferenceRecipe recipe = vpm::cli::reference_recipe(s, cov);
@@ -36,7 +39,8 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   const std::string peak = !s.calibrate_peak ? ""
                            : c.peak > 0 ? ", peak |z| " + vpm::format_sig(c.peak)
                                         : ", no peak level (a normal's peak |z| is infinite: the peak rule is off)";
-  vpm::cli::info("wrote " + *out + ": min_cluster " + std::to_string(c.min_cluster) + peak + " (" +
+  const std::string tfce = s.calibrate_tfce ? ", TFCE level " + vpm::format_sig(c.tfce_level) : "";
+  vpm::cli::info("wrote " + *out + ": min_cluster " + std::to_string(c.min_cluster) + peak + tfce + " (" +
                  vpm::format_sig(c.rate_at(c.min_cluster)) + " false clusters per 10 normals, at most " +
                  vpm::format_sig(s.rate) + "; min_cluster 1: " + vpm::format_sig(c.rate_at(1)) + ") over " +
                  std::to_string(c.normals) + " normals left out in turn");
@@ -46,6 +50,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
 std::vector<vpm::cli::OptionSpec> rows() {
   std::vector<vpm::cli::OptionSpec> r = vpm::cli::comparison_option_rows(true);
   r.push_back({"--rate", "R", "false clusters allowed per 10 normals (default 1)"});
+  r.push_back({"--tfce", "", "also the TFCE level (vpm compare --tfce-level) at which at most R normals in 10 show a focus", false, 0, false, true});
   r.push_back({"--normals", "A.h5,B.h5,...|@LIST", "the normals' subject tables (vpm sample), each left out in turn; at least 4", true, 0, true});
   r.push_back({"--reference", "SUMS.h5", "the sums of every normal (vpm reference; default: summed from --normals in a first pass)"});
   r.push_back({"--feature", "NAME", "the feature compared (a NAME of vpm sample --images)", true, 0, true});

@@ -9,6 +9,7 @@
 #include "vpm/covariates.hpp"
 #include "vpm/json.hpp"
 #include "vpm/error.hpp"
+#include "vpm/format.hpp"
 #include "vpm/io.hpp"
 #include "vpm/map_back.hpp"
 #include "vpm/statistics.hpp"
@@ -23,15 +24,21 @@ std::string beside(const std::string& tsv, const std::string& suffix) {
 
 // --min-cluster-from CAL.json: the min_cluster (and peak level, when calibrated) a calibration of
 // these normals found (vpm calibrate), refused when it was made with other options.
+// A TFCE calibration sets the TFCE level (and `rule` keeps its null for the foci's p-values).
 vpm::CompareOptions options_with_calibration(const vpm::cli::Args& args, const vpm::CalibrationSettings& s,
-                                             const std::vector<std::string>& normals) {
+                                             const std::vector<std::string>& normals, vpm::CalibratedRule& rule) {
   vpm::CompareOptions o = s.compare;
   const auto from = args.get("--min-cluster-from");
   if (!from) return o;
   if (args.has("--min-cluster")) throw vpm::InputError("options --min-cluster and --min-cluster-from exclude each other");
-  const vpm::CalibratedRule rule = vpm::calibrated_rule(vpm::read_json_file(*from), s, normals, *from);
+  rule = vpm::calibrated_rule(vpm::read_json_file(*from), s, normals, *from);
   o.min_cluster = rule.min_cluster;
   o.peak = rule.peak;
+  if (rule.tfce_level > 0) {
+    if (args.has("--tfce-level"))
+      throw vpm::InputError("option --tfce-level: " + *from + " is a TFCE calibration; it sets the level");
+    o.tfce_level = rule.tfce_level;
+  }
   return o;
 }
 
@@ -72,17 +79,21 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   const vpm::cli::LoadedReference loaded =
       vpm::cli::load_reference(args, vpm::cli::reference_recipe(settings, cov), cov, 3);
   const vpm::CanonicalElements& el = *loaded.elements;
-  const vpm::CompareOptions opt = options_with_calibration(args, settings, loaded.sums.normals());
+  vpm::CalibratedRule rule;
+  const vpm::CompareOptions opt = options_with_calibration(args, settings, loaded.sums.normals(), rule);
   const vpm::Reference ref = loaded.sums.reference(&el, settings.shrinkage);
   vpm::ElementTable patient = vpm::read_subject_table(*patient_path);
   const std::vector<double> row = cov ? vpm::covariate_row(*cov, patient.subject, *patient_path) : std::vector<double>{};
   patient.subject = *patient_path;
-  const vpm::Comparison c = vpm::compare_to_reference(el, ref, patient, opt, row);
+  vpm::Comparison c = vpm::compare_to_reference(el, ref, patient, opt, row);
+  vpm::family_p_values(c, rule);
   map_back(args, *out, el, c);  // first: OUT.tsv, written last, marks a complete run
   vpm::write_comparison(*out, el, ref, loaded.sums.normals(), *patient_path, opt, c);
-  vpm::cli::info("wrote " + *out + ": " + std::to_string(c.clusters.size()) + " foci (|z| >= " +
-                 std::to_string(c.threshold_used) + ", clusters of >= " + std::to_string(opt.min_cluster) +
-                 " elements) against " + std::to_string(ref.subjects) + " normals");
+  const std::string rule_text = opt.tfce_level > 0 ? "TFCE score >= " + vpm::format_sig(opt.tfce_level)
+                                                    : "|z| >= " + std::to_string(c.threshold_used) + ", clusters of >= " +
+                                                          std::to_string(opt.min_cluster) + " elements";
+  vpm::cli::info("wrote " + *out + ": " + std::to_string(c.clusters.size()) + " foci (" + rule_text + ") against " +
+                 std::to_string(ref.subjects) + " normals");
   return 0;
 }
 
@@ -92,6 +103,7 @@ std::vector<vpm::cli::OptionSpec> with_shared_rows(std::vector<vpm::cli::OptionS
   rows.insert(rows.begin() + 3,
               {{"--min-cluster", "C", "foci are clusters of at least C adjacent elements (default 3)", false, 1},
                {"--min-cluster-from", "CAL.json", "the min_cluster (and peak level) a calibration of these normals found (vpm calibrate)", false, 1}});
+  rows.push_back({"--tfce-level", "T", "threshold-free cluster enhancement: foci are the connected elements whose TFCE score reaches T (a calibration with --tfce sets it; default off)", false, 0, false, true});
   rows.insert(rows.end(), rest.begin(), rest.end());
   return rows;
 }

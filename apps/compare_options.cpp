@@ -15,6 +15,7 @@ CompareOptions compare_options(const Args& args, bool peak_auto) {
   o.min_cluster = args.get_int("--min-cluster", o.min_cluster);
   o.extend = args.get_double("--extend", 0);
   o.relative_extent = args.get_double("--relative-extent", 0);
+  o.tfce_level = args.get_double("--tfce-level", 0);
   o.test = parse_option("--test", [&] { return parse_single_case_test(args.get("--test", "z")); });
   o.peak = peak_auto && args.get("--peak", "") == "auto" ? 0.0 : args.get_double("--peak", 0);
   const std::string sign = args.get("--sign", "both");

@@ -23,23 +23,8 @@ using namespace vpm;
 
 namespace {
 
-// "pet" ~ N(100, 5) per element, minus `loss` on `focus`.
 ElementTable subject(const std::string& id, unsigned seed, const std::set<int>& focus = {}, double loss = 0) {
-  const CanonicalElements el(test::small_elements());
-  ElementTable t;
-  t.definition = el.definition();
-  t.subject = id;
-  ElementFeature f;
-  f.name = "pet";
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g(100, 5);
-  for (int e = 0; e < el.size(); ++e) {
-    f.mean.push_back(g(rng) - (focus.count(e) ? loss : 0));
-    f.std.push_back(1);
-    f.count.push_back(8);
-  }
-  t.features.push_back(f);
-  return t;
+  return test::noisy_pet_table(id, seed, focus, loss);
 }
 
 std::vector<ElementTable> normals(std::vector<std::string>& names) {

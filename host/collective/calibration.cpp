@@ -10,6 +10,7 @@
 #include "collective/comparison.hpp"
 #include "core/parallel.hpp"
 #include "vpm/error.hpp"
+#include "vpm/tfce.hpp"
 
 namespace vpm {
 
@@ -17,15 +18,37 @@ namespace {
 
 // The clusters of normal `values` (normals()[index] of the totals) compared with the reference of
 // the others at min_cluster 1: (candidates, peak_z) each.
+// With s.calibrate_tfce, `tfce_max` is set to the normal's highest TFCE score over the signs compared.
 std::vector<std::pair<int, double>> leave_out(const CanonicalElements& el, const ReferenceSums& totals, size_t index,
-                                              const NormalValues& values, const CalibrationSettings& s) {
+                                              const NormalValues& values, const CalibrationSettings& s,
+                                              double& tfce_max) {
   const Reference ref = totals.reference_without(&el, s.shrinkage, index, values);
   CompareOptions o = s.compare;
   o.min_cluster = 1;
   const Comparison c = detail::compare_values(el, ref, values, o, totals.design()[index], totals.normals()[index]);
   std::vector<std::pair<int, double>> out;
   for (const FocusCluster& f : c.clusters) out.emplace_back(f.candidates, f.peak_z);
+  tfce_max = 0;
+  if (s.calibrate_tfce)
+    for (int sign : {1, -1})
+      if (s.compare.sign == 0 || s.compare.sign == sign)
+        for (double v : tfce_scores(el, c.z, sign)) tfce_max = std::max(tfce_max, v);
   return out;
+}
+
+// CalibrationSettings::calibrate_tfce's level: strictly beyond the (k + 1)-th highest maximum;
+// every normal may pass when k >= their number (the lowest positive score then).
+double calibrated_tfce(const std::vector<LeftOutNormal>& per_normal, size_t k) {
+  std::vector<double> maxima;
+  for (const LeftOutNormal& n : per_normal) maxima.push_back(n.tfce_max);
+  std::sort(maxima.begin(), maxima.end(), std::greater<>());
+  const TfceParameters p;
+  const double lowest = std::pow(p.step, p.height_power) * p.step;  // one element at the first height
+  if (k >= maxima.size()) return lowest;
+  if (!(maxima[k] > 0)) return lowest;
+  // the next step of the 6th significant digit: strictly beyond, and kept by the JSON's 10 digits
+  const double q = std::pow(10.0, std::floor(std::log10(maxima[k])) - 5.0);
+  return std::max(lowest, (std::floor(maxima[k] / q) + 1.0) * q);
 }
 
 // The order of strong clusters: highest |peak_z| first, ties by normal, then candidates (a total
@@ -93,6 +116,8 @@ ClusterCalibration calibrate_min_cluster(const CanonicalElements& el, const Refe
   if (!(s.rate >= 0)) throw InputError("calibration: the rate must be >= 0 false clusters per 10 normals");
   if (s.calibrate_peak && s.compare.peak != 0)
     throw InputError("calibration: a fixed peak level and a calibrated one exclude each other");
+  if (s.calibrate_tfce && (s.calibrate_peak || s.compare.peak != 0 || s.compare.tfce_level != 0))
+    throw InputError("calibration: a TFCE level is calibrated without a peak rule or a fixed TFCE level");
   ReferenceRecipe wanted = totals.recipe();  // the settings' recipe, with the sums' covariate columns
   wanted.feature = s.feature;
   wanted.normalisation = s.normalisation;
@@ -121,8 +146,9 @@ ClusterCalibration calibrate_min_cluster(const CanonicalElements& el, const Refe
       for (int i = t * chunk; i < std::min(cal.normals, (t + 1) * chunk); ++i) try {
           const size_t n = static_cast<size_t>(i);
           const NormalValues v = left_out.values(n);
-          const auto clusters = leave_out(el, totals, index.at(left_out.names[n]), v, s);
-          cal.per_normal[n] = {left_out.names[n], static_cast<int>(clusters.size())};
+          double tfce_max = 0;
+          const auto clusters = leave_out(el, totals, index.at(left_out.names[n]), v, s, tfce_max);
+          cal.per_normal[n] = {left_out.names[n], static_cast<int>(clusters.size()), tfce_max};
           for (const auto& [candidates, peak_z] : clusters)
             gathered[static_cast<size_t>(t)].add(i, candidates, peak_z, keep, s.compare.peak);
         } catch (...) {
@@ -139,6 +165,9 @@ ClusterCalibration calibrate_min_cluster(const CanonicalElements& el, const Refe
   std::sort(cal.strong.begin(), cal.strong.end(), stronger);
   if (keep > 0 && cal.strong.size() > keep) cal.strong.resize(keep);
   cal.peak = s.calibrate_peak ? calibrated_peak(cal, k, s) : s.compare.peak;
+  if (s.calibrate_tfce)  // at most rate/10 of the normals over the level
+    cal.tfce_level = calibrated_tfce(
+        cal.per_normal, static_cast<size_t>(std::floor(s.rate * static_cast<double>(cal.normals) / 10.0 + 1e-12)));
   const int largest = static_cast<int>(cal.sizes.size()) - 1;
   for (int m = 1; m <= std::max(largest, 0) + 1; ++m) {
     cal.false_clusters.push_back(static_cast<int>(cal.clusters_at(m)));
@@ -218,9 +247,12 @@ Json to_json(const ClusterCalibration& c) {
     Json o = Json::object();
     o["normal"] = n.name;
     o["clusters"] = n.clusters;
+    if (c.settings.calibrate_tfce) o["tfce_max"] = n.tfce_max;
     per.push_back(o);
   }
   j["per_normal"] = per;
+  j["tfce"] = c.settings.calibrate_tfce;
+  j["tfce_level"] = c.tfce_level;
   return j;
 }
 
@@ -299,7 +331,33 @@ CalibratedRule calibrated_rule(const Json& cal, const CalibrationSettings& s, co
     if (!(level > 0 && std::isfinite(level))) throw InputError(source + ": \"peak\" is not a positive |z| level");
     rule.peak = level;
   }
+  const Json* tfce = cal.find("tfce");  // absent before the TFCE calibration: none
+  if (tfce && tfce->type() != Json::Type::Bool) throw InputError(source + ": \"tfce\" is not true or false");
+  if (tfce && tfce->boolean()) {
+    const Json& l = member(cal, "tfce_level", source);
+    const double level = l.type() == Json::Type::Number ? l.number() : -1;
+    if (!(level > 0 && std::isfinite(level))) throw InputError(source + ": \"tfce_level\" is not a positive score");
+    rule.tfce_level = level;
+    const Json& per = member(cal, "per_normal", source);
+    for (size_t i = 0; i < per.size(); ++i) {
+      const Json* m = per.at(i).find("tfce_max");
+      const double v = m && m->type() == Json::Type::Number ? m->number() : -1;
+      if (!(v >= 0 && std::isfinite(v)))
+        throw InputError(source + ": per_normal[" + std::to_string(i) + "] has no \"tfce_max\" score");
+      rule.tfce_null.push_back(v);
+    }
+    std::sort(rule.tfce_null.begin(), rule.tfce_null.end(), std::greater<>());
+  }
   return rule;
+}
+
+void family_p_values(Comparison& c, const CalibratedRule& rule) {
+  if (rule.tfce_null.empty()) return;
+  for (FocusCluster& f : c.clusters) {
+    const auto above = std::count_if(rule.tfce_null.begin(), rule.tfce_null.end(),
+                                     [&](double m) { return m >= f.peak_tfce; });
+    f.p_family = (1.0 + static_cast<double>(above)) / (1.0 + static_cast<double>(rule.tfce_null.size()));
+  }
 }
 
 }  // namespace vpm

@@ -109,6 +109,7 @@ std::vector<ComparisonFile> read_comparisons(const fs::path& results, const std:
     if (const Json* extend = opt->find("extend")) c.options.extend = extend->number();  // absent before 2026-11-26
     if (const Json* peak = opt->find("peak")) c.options.peak = peak->number();        // absent before 2026-11-25
     if (const Json* rel = opt->find("relative_extent")) c.options.relative_extent = rel->number();  // absent before 2026-11-28
+    if (const Json* tfce = opt->find("tfce_level")) c.options.tfce_level = tfce->number();  // absent: clusters
     if (const Json* test = opt->find("test")) c.options.test = parse_single_case_test(test->string());
     if (const auto bad = compare_option_error(c.options))
       throw InputError(side + ": options." + bad->field + ": " + bad->problem);

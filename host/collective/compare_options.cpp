@@ -2,6 +2,8 @@
 // compare_to_reference, the command line, the Python binding and the view's sidecar reader.
 #include "vpm/statistics.hpp"
 
+#include <cmath>
+
 namespace vpm {
 
 std::optional<CompareOptionError> compare_option_error(const CompareOptions& o) {
@@ -13,6 +15,8 @@ std::optional<CompareOptionError> compare_option_error(const CompareOptions& o) 
   if (!(o.relative_extent >= 0 && o.relative_extent <= 1))
     return CompareOptionError{"relative_extent", "must be in (0, 1] (or 0: off)"};
   if (!(o.peak >= 0)) return CompareOptionError{"peak", "must be positive (or 0: off)"};
+  if (!(o.tfce_level >= 0 && o.tfce_level < HUGE_VAL))
+    return CompareOptionError{"tfce_level", "must be positive and finite (or 0: off)"};
   if (o.sign < -1 || o.sign > 1) return CompareOptionError{"sign", "must be -1 (hypo), 0 (both) or 1 (hyper)"};
   return std::nullopt;
 }

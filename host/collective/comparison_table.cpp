@@ -52,6 +52,7 @@ void write_comparison(const std::string& tsv_path, const CanonicalElements& el, 
   o["peak"] = opt.peak;
   o["test"] = to_string(opt.test);
   o["sign"] = opt.sign;
+  o["tfce_level"] = opt.tfce_level;
   j["options"] = o;
   j["result"] = to_json(c);
   write_json_file(sidecar_path(tsv_path), j);

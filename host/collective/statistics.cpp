@@ -10,6 +10,7 @@
 #include "collective/comparison.hpp"
 #include "collective/distributions.hpp"
 #include "vpm/error.hpp"
+#include "vpm/tfce.hpp"
 
 namespace vpm {
 
@@ -158,6 +159,18 @@ double fdr_threshold(const std::vector<double>& z, double q, int sign) {
   return hi;
 }
 
+// A gathered cluster's elements sorted, its volume and its peak |z| (of its sign).
+void finish(const CanonicalElements& el, const std::vector<double>& z, FocusCluster& c) {
+  std::sort(c.elements.begin(), c.elements.end());
+  for (int e : c.elements) {
+    c.volume += el.volume(e);
+    if (c.peak_element < 0 || z[e] * c.sign > c.peak_z * c.sign) {
+      c.peak_element = e;
+      c.peak_z = z[e];
+    }
+  }
+}
+
 // Connected components of the elements of one sign with sign * z >= low; a component is a focus
 // when at least min_size of its elements reach `cut` (low == cut: plain clusters of candidates),
 // or when one reaches `peak` (> 0; and `cut`).
@@ -190,14 +203,7 @@ std::vector<FocusCluster> clusters_of(const CanonicalElements& el, const std::ve
     }
     if (core < min_size && !(peak > 0 && core > 0 && top >= peak)) continue;
     c.candidates = core;
-    std::sort(c.elements.begin(), c.elements.end());
-    for (int e : c.elements) {
-      c.volume += el.volume(e);
-      if (c.peak_element < 0 || z[e] * sign > c.peak_z * sign) {
-        c.peak_element = e;
-        c.peak_z = z[e];
-      }
-    }
+    finish(el, z, c);
     out.push_back(std::move(c));
   }
   return out;
@@ -242,6 +248,42 @@ void delineate(const CanonicalElements& el, const std::vector<double>& z, double
   c.elements = std::move(kept);
   c.volume = 0;
   for (int e : c.elements) c.volume += el.volume(e);
+}
+
+// CompareOptions::tfce_level: the foci are the connected sets of elements of one sign with
+// sign * z >= low (the hysteresis level; without one, the TFCE-significant elements alone) that
+// hold an element whose TFCE score reaches the level: TFCE tells which foci there are, z their
+// extent. Each has its peak |z|, its highest score and its significant elements as candidates.
+std::vector<FocusCluster> tfce_clusters(const CanonicalElements& el, const std::vector<double>& z, int sign,
+                                        double level, double low) {
+  const std::vector<double> score = tfce_scores(el, z, sign);
+  const int n = el.size();
+  const CanonicalElements::Adjacency& adj = el.adjacency();
+  auto in = [&](int e) { return score[e] >= level || (low > 0 && !std::isnan(z[e]) && z[e] * sign >= low); };
+  std::vector<char> seen(n, 0);
+  std::vector<FocusCluster> out;
+  for (int s0 = 0; s0 < n; ++s0) {
+    if (seen[s0] || score[s0] < level) continue;  // grown from a significant element
+    FocusCluster c;
+    c.sign = sign;
+    std::vector<int> stack{s0};
+    seen[s0] = 1;
+    while (!stack.empty()) {
+      const int e = stack.back();
+      stack.pop_back();
+      c.elements.push_back(e);
+      c.candidates += score[e] >= level;
+      c.peak_tfce = std::max(c.peak_tfce, score[e]);
+      for (int nb : adj.of(e))
+        if (!seen[nb] && in(nb)) {
+          seen[nb] = 1;
+          stack.push_back(nb);
+        }
+    }
+    finish(el, z, c);
+    out.push_back(std::move(c));
+  }
+  return out;
 }
 
 }  // namespace
@@ -294,6 +336,13 @@ Comparison compare_values(const CanonicalElements& el, const Reference& ref, con
   c.threshold_used = opt.fdr_q > 0 ? fdr_threshold(c.z, opt.fdr_q, opt.sign) : opt.threshold;
   for (int sign : {1, -1}) {
     if (opt.sign != 0 && opt.sign != sign) continue;
+    if (opt.tfce_level > 0) {
+      for (FocusCluster& f : tfce_clusters(el, c.z, sign, opt.tfce_level, opt.extend)) {
+        if (opt.relative_extent > 0) delineate(el, c.z, opt.relative_extent, f);
+        c.clusters.push_back(std::move(f));
+      }
+      continue;
+    }
     const double low = opt.extend > 0 ? std::min(opt.extend, c.threshold_used) : c.threshold_used;
     for (FocusCluster& f : clusters_of(el, c.z, c.threshold_used, low, sign, opt.min_cluster, opt.peak)) {
       if (opt.relative_extent > 0) delineate(el, c.z, opt.relative_extent, f);
@@ -325,6 +374,8 @@ Json to_json(const Comparison& c) {
     o["volume"] = f.volume;
     o["peak_element"] = f.peak_element;
     o["peak_z"] = f.peak_z;
+    if (f.peak_tfce > 0) o["peak_tfce"] = f.peak_tfce;
+    if (f.p_family >= 0) o["p_family"] = f.p_family;
     list.push_back(o);
   }
   j["clusters"] = list;

@@ -35,6 +35,12 @@ struct CalibrationSettings {
   /// when every cluster may pass; 0, off, when that peak is infinite: a reference without
   /// spread somewhere); min_cluster then holds the whole rate with that rule applied
   bool calibrate_peak = false;
+  /// true: the calibration sets CompareOptions::tfce_level too (vpm/tfce.hpp; compare.peak and
+  /// calibrate_peak must then be off): the lowest level strictly beyond the (k + 1)-th highest of
+  /// the left-out normals' largest TFCE scores, k = floor(rate x normals / 10), so that at most
+  /// k of them (rate/10 of the subjects: a family-wise rate per subject) show a focus. The cluster
+  /// curve and min_cluster are calibrated as without it.
+  bool calibrate_tfce = false;
 };
 
 /// One normal left out: how many clusters it showed at min_cluster 1 (their sizes and peaks are
@@ -43,6 +49,7 @@ struct CalibrationSettings {
 struct LeftOutNormal {
   std::string name;
   int clusters = 0;
+  double tfce_max = 0;  ///< with CalibrationSettings::calibrate_tfce: its highest TFCE score (both signs compared)
 };
 
 /// A left-out normal's cluster that the peak rule can keep, small as it is.
@@ -72,6 +79,8 @@ struct ClusterCalibration {
   /// first; with a fixed level every cluster reaching it; none without a peak rule.
   std::vector<StrongCluster> strong;
   std::vector<LeftOutNormal> per_normal;
+  /// with CalibrationSettings::calibrate_tfce: the TFCE level (else 0)
+  double tfce_level = 0;
   /// The false clusters min_cluster m keeps over all left-out normals (0 past the curve's end
   /// unless a peak rule keeps small ones), and that per 10 normals.
   long clusters_at(int m) const;
@@ -99,13 +108,18 @@ ClusterCalibration calibrate_min_cluster(const CanonicalElements& elements, cons
 ///  calibrated), sign, test}, "rate", "normals", "min_cluster", "calibrate_peak", "peak" (the
 ///  level applied), "curve": [{"min_cluster", "false_clusters", "per_10_normals"}],
 ///  "sizes": [clusters with 0, 1, 2, ... candidates], "strong": [{"normal", "candidates", "peak_z"}],
-///  "per_normal": [{"normal", "clusters"}]}
+///  "per_normal": [{"normal", "clusters", "tfce_max" (with calibrate_tfce)}], "tfce" (calibrate_tfce),
+///  "tfce_level" (0 without)}
 Json to_json(const ClusterCalibration& calibration);
 
 /// What a calibration sets in a comparison: CompareOptions::min_cluster and ::peak.
 struct CalibratedRule {
   int min_cluster = 0;
   double peak = 0;  ///< the calibrated level, or the comparison's own fixed one
+  double tfce_level = 0;  ///< a TFCE calibration's level (CompareOptions::tfce_level), else 0
+  /// a TFCE calibration's per-normal maxima, highest first: a focus's family-wise p-value is
+  /// (1 + the maxima at or above its peak score) / (1 + their number)
+  std::vector<double> tfce_null;
 };
 
 /// The rule of a calibration JSON written by to_json (a file from elsewhere: checked), after
@@ -113,8 +127,14 @@ struct CalibratedRule {
 /// covariates and image covariate (absent in a file: none) and every compare option but
 /// min_cluster, the peak being 0 in both when the calibration set it) and on the normals named
 /// `normals` (the same set, any order): InputError naming `source` and the first difference.
-/// A file without "calibrate_peak" (written by an older vpm) sets no peak.
+/// A file without "calibrate_peak" (written by an older vpm) sets no peak; one without "tfce" no
+/// TFCE level.
 CalibratedRule calibrated_rule(const Json& calibration, const CalibrationSettings& settings,
                                const std::vector<std::string>& normals, const std::string& source);
+
+/// FocusCluster::p_family of every focus of `comparison` from a TFCE calibration's null
+/// (rule.tfce_null, the normals' maxima): (1 + the maxima at or above the focus's peak score) /
+/// (1 + their number). Nothing without a null.
+void family_p_values(Comparison& comparison, const CalibratedRule& rule);
 
 }  // namespace vpm

@@ -125,6 +125,14 @@ struct CompareOptions {
   /// +1: only increases (hyper), -1: only decreases (hypo), 0: both (clusters never mix signs)
   int sign = 0;
   SingleCaseTest test = SingleCaseTest::z;
+  /// > 0: threshold-free cluster enhancement (vpm/tfce.hpp) instead of the cut and the cluster
+  /// size: a focus is a connected set of elements of one sign with |z| >= extend (without extend,
+  /// of the significant elements alone) holding an element whose TFCE score of sign * z reaches
+  /// this level (`vpm calibrate --tfce` sets it from the normals left out: the level their maxima
+  /// stay under at the stated rate, a family-wise rule). TFCE decides which foci there are, z
+  /// their extent; threshold, fdr_q, min_cluster and peak are not used, relative_extent still
+  /// trims, and a focus's candidates are its significant elements. 0: off (the clusters above).
+  double tfce_level = 0;
 };
 
 /// An option of CompareOptions out of its range: `field` names the member (as the sidecar's
@@ -152,6 +160,10 @@ struct FocusCluster {
   double volume = 0;          ///< ball volume (sum of element volumes; the ball is 4 pi / 3)
   int peak_element = -1;
   double peak_z = 0;
+  double peak_tfce = 0;       ///< with CompareOptions::tfce_level: the focus's highest TFCE score (else 0)
+  /// with a TFCE calibration (vpm/calibration.hpp family_p_values): the chance that a subject
+  /// without a focus shows a score this high anywhere, from the normals left out; -1: not known
+  double p_family = -1;
 };
 
 struct Comparison {

@@ -72,7 +72,7 @@ py::dict compare_py(const py::list& normals, const py::object& patient, const st
                     const std::string& normalisation, double threshold, double fdr, int min_cluster, double extend,
                     double relative_extent, double peak, const std::string& sign, const std::string& test, int smooth, double shrink,
                     const std::vector<std::string>& covariates, const std::string& participants,
-                    const std::string& image_covariate) {
+                    const std::string& image_covariate, double tfce_level) {
   const std::vector<ElementTable> ns = tables_of(normals);
   py::list one;
   one.append(patient);
@@ -81,6 +81,7 @@ py::dict compare_py(const py::list& normals, const py::object& patient, const st
   CompareOptions o;
   o.threshold = threshold, o.fdr_q = fdr, o.min_cluster = min_cluster, o.extend = extend, o.peak = peak;
   o.relative_extent = relative_extent;
+  o.tfce_level = tfce_level;
   o.test = parse_single_case_test(test);
   if (sign == "both") o.sign = 0;
   else if (sign == "hyper") o.sign = 1;
@@ -168,7 +169,7 @@ void bind_collective(py::module_& m) {
         py::arg("min_cluster") = 3, py::arg("extend") = 0.0, py::arg("relative_extent") = 0.0, py::arg("peak") = 0.0, py::arg("sign") = "both",
         py::arg("test") = "z", py::arg("smooth") = 0, py::arg("shrink") = 0.0,
         py::arg("covariates") = std::vector<std::string>{}, py::arg("participants") = "",
-        py::arg("image_covariate") = "");
+        py::arg("image_covariate") = "", py::arg("tfce_level") = 0.0);
   m.def("to_native", [](const py::object& mesh, const py::object& points) {
     auto msh = mesh_argument(mesh, py::none());
     Points p = to_points(points, "points");

@@ -284,7 +284,9 @@ def compare(normals, patient, feature, **options):
     covariates (column names, e.g. ["age", "sex"]) with participants (the table that holds them,
     each table looked up by its subject): the reference then models them and reference_mean is
     the patient's prediction; image_covariate (another feature of the tables, e.g. "t1w"): each
-    element's model gains the subjects' own value of it there. Returns a Comparison."""
+    element's model gains the subjects' own value of it there; tfce_level (> 0: threshold-free
+    cluster enhancement decides the foci, `vpm compare --tfce-level`; each cluster then has
+    peak_tfce). Returns a Comparison."""
     if options.get("covariates") is None:
         options.pop("covariates", None)
     else:

@@ -19,7 +19,7 @@ PUBLIC = {
     "image": ["image", "mesh_image", "mesh_image_report", "voxelize"],
     "map": ["initial_map", "untangle", "volume_map", "volume_map_peers", "polish", "ball_map", "surface_map"],
     "register": ["rbf", "registration", "dense_registration", "registration_preset", "transfer", "surface_registration"],
-    "collective": ["collective", "elements", "element_sampler", "sampling", "covariates", "statistics", "reference_sums", "calibration", "map_back", "cohort_view", "view_page", "label_names", "template_registration"],
+    "collective": ["collective", "elements", "element_sampler", "sampling", "covariates", "statistics", "tfce", "reference_sums", "calibration", "map_back", "cohort_view", "view_page", "label_names", "template_registration"],
 }
 WITH = {"with_tetgen": "image", "with_cgal": "image", "with_nifti": "image", "with_cholmod": "linalg", "with_gifti": "io"}
 

@@ -101,6 +101,12 @@ def test_sample_and_compare(vpm, ball, image_array, tmp_path):
     assert (r.cluster > 0).sum() < (h.cluster > 0).sum()
     with pytest.raises(ValueError, match="relative_extent"):
         vpm.compare(tables[:3], tables[3], "pet", relative_extent=1.5)
+    # TFCE: each focus holds an element at the level; none reaches an unreachable one
+    t = vpm.compare(tables[:3], tables[3], "pet", extend=2, sign="hypo", tfce_level=1.0)
+    assert t.clusters and all(c["peak_tfce"] >= 1.0 and c["peak_z"] < 0 for c in t.clusters)
+    assert not vpm.compare(tables[:3], tables[3], "pet", extend=2, sign="hypo", tfce_level=1e9).clusters
+    with pytest.raises(ValueError, match="tfce_level"):
+        vpm.compare(tables[:3], tables[3], "pet", tfce_level=-1)
     # every option's range is the library's (compare_option_error), worded with the keywords
     with pytest.raises(ValueError, match="^fdr: "):
         vpm.compare(tables[:3], tables[3], "pet", fdr=1.0)

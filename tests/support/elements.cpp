@@ -1,5 +1,7 @@
 #include "support/elements.hpp"
 
+#include <random>
+
 namespace vpm::test {
 
 ElementDefinition small_elements() {
@@ -15,6 +17,24 @@ std::set<int> planted_focus(const CanonicalElements& elements, int e0) {
   for (int n : elements.neighbours(e0))
     if (elements.shell_of(n) == elements.shell_of(e0)) s.insert(n);
   return s;
+}
+
+ElementTable noisy_pet_table(const std::string& id, unsigned seed, const std::set<int>& focus, double loss) {
+  const CanonicalElements el(small_elements());
+  ElementTable t;
+  t.definition = el.definition();
+  t.subject = id;
+  ElementFeature f;
+  f.name = "pet";
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(100, 5);
+  for (int e = 0; e < el.size(); ++e) {
+    f.mean.push_back(g(rng) - (focus.count(e) ? loss : 0));
+    f.std.push_back(1);
+    f.count.push_back(8);
+  }
+  t.features.push_back(f);
+  return t;
 }
 
 }  // namespace vpm::test

@@ -1,8 +1,10 @@
 #pragma once
 // Canonical-element fixtures shared by the statistics and covariate tests.
 #include <set>
+#include <string>
 
 #include "vpm/elements.hpp"
+#include "vpm/sampling.hpp"
 
 namespace vpm::test {
 
@@ -11,5 +13,9 @@ ElementDefinition small_elements();
 
 /// The element e0 and its neighbours in its shell: a planted focus of adjacent elements.
 std::set<int> planted_focus(const CanonicalElements& elements, int e0);
+
+/// A subject table of small_elements(): feature "pet" ~ N(100, 5) per element (drawn from
+/// `seed`), minus `loss` on `focus`; std 1 and 8 samples an element.
+ElementTable noisy_pet_table(const std::string& id, unsigned seed, const std::set<int>& focus = {}, double loss = 0);
 
 }  // namespace vpm::test
