@@ -132,6 +132,23 @@ PY
 if smk 'compare={peak: high}' -n > "$work/peak.log" 2>&1; then fail "compare.peak: a word ran"; fi
 grep -q "compare.peak: 'high' is neither auto nor a |z| level >= 0" "$work/peak.log" ||
   { cat "$work/peak.log"; fail "compare.peak: no clear refusal"; }
+# compare.detection: tfce calibrates its TFCE level (vpm calibrate --tfce, no peak rule), so it
+# needs 4 normals (this cohort has 3) and refuses another word; with the 4-normal cohort the
+# calibration and the comparisons are planned with it
+if smk 'compare={detection: tfce}' -n > "$work/tfce.log" 2>&1; then fail "detection tfce ran with 3 normals"; fi
+grep -q "compare.detection: tfce calibrates its level on the normals" "$work/tfce.log" ||
+  { cat "$work/tfce.log"; fail "detection tfce: no clear refusal with 3 normals"; }
+if smk 'compare={detection: blobs}' -n > "$work/tfce.log" 2>&1; then fail "detection: a word ran"; fi
+grep -q "compare.detection: 'blobs' is neither clusters nor tfce" "$work/tfce.log" ||
+  { cat "$work/tfce.log"; fail "detection: no clear refusal of a word"; }
+(cd "$work" && snakemake -s "$src/workflow/Snakefile" --cores 2 "${fast[@]}" --config bids="$work/four_bids" \
+   out="$work/four_results" vpm="$build/vpm" 'compare={detection: tfce}' --forcerun calibrate -n -p) > "$work/tfce.log" 2>&1 ||
+  { tail -40 "$work/tfce.log"; fail "detection tfce: the 4-normal plan failed"; }
+grep -qE "vpm\S* calibrate .*--tfce" "$work/tfce.log" && grep -qE "vpm\S* compare .*--min-cluster-from" "$work/tfce.log" ||
+  { cat "$work/tfce.log"; fail "detection tfce: the calibration and comparisons are not planned with --tfce"; }
+if grep -E "vpm\S* (calibrate|compare) " "$work/tfce.log" | grep -q -- "--peak"; then
+  cat "$work/tfce.log"; fail "detection tfce: a peak rule is planned beside TFCE"
+fi
 # compare.covariates: a column the participants table lacks stops the workflow before any job,
 # naming the table and the line; with columns it has, the comparisons are planned again with
 # them (quoted, one word each)
