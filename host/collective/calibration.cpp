@@ -288,6 +288,21 @@ std::vector<std::string> calibrated_normals(const Json& cal, const std::string& 
   return names;
 }
 
+// `key` of a calibration file: absent (a file from before it) or false: false; else true or InputError.
+bool optional_flag(const Json& cal, const char* key, const std::string& source) {
+  const Json* v = cal.find(key);
+  if (v && v->type() != Json::Type::Bool) throw InputError(source + ": \"" + key + "\" is not true or false");
+  return v && v->boolean();
+}
+
+// The positive finite number at `key`, or InputError saying it is not `what`.
+double positive_level(const Json& cal, const char* key, const char* what, const std::string& source) {
+  const Json& v = member(cal, key, source);
+  const double level = v.type() == Json::Type::Number ? v.number() : -1;
+  if (!(level > 0 && std::isfinite(level))) throw InputError(source + ": \"" + key + "\" is not " + what);
+  return level;
+}
+
 }  // namespace
 
 CalibratedRule calibrated_rule(const Json& cal, const CalibrationSettings& s, const std::vector<std::string>& normals,
@@ -323,21 +338,10 @@ CalibratedRule calibrated_rule(const Json& cal, const CalibrationSettings& s, co
     throw InputError(source + ": the calibration found no min_cluster at or under its rate (a --peak rule keeps "
                               "small clusters in the normals); lower --peak or raise the rate");
   CalibratedRule rule{static_cast<int>(v), s.compare.peak};
-  const Json* calibrated = cal.find("calibrate_peak");  // absent before 2026-11-29 (ninth session): no
-  if (calibrated && calibrated->type() != Json::Type::Bool) throw InputError(source + ": \"calibrate_peak\" is not true or false");
-  if (calibrated && calibrated->boolean()) {
-    const Json& p = member(cal, "peak", source);
-    const double level = p.type() == Json::Type::Number ? p.number() : -1;
-    if (!(level > 0 && std::isfinite(level))) throw InputError(source + ": \"peak\" is not a positive |z| level");
-    rule.peak = level;
-  }
-  const Json* tfce = cal.find("tfce");  // absent before the TFCE calibration: none
-  if (tfce && tfce->type() != Json::Type::Bool) throw InputError(source + ": \"tfce\" is not true or false");
-  if (tfce && tfce->boolean()) {
-    const Json& l = member(cal, "tfce_level", source);
-    const double level = l.type() == Json::Type::Number ? l.number() : -1;
-    if (!(level > 0 && std::isfinite(level))) throw InputError(source + ": \"tfce_level\" is not a positive score");
-    rule.tfce_level = level;
+  if (optional_flag(cal, "calibrate_peak", source))  // absent before 2026-11-29 (ninth session): no
+    rule.peak = positive_level(cal, "peak", "a positive |z| level", source);
+  if (optional_flag(cal, "tfce", source)) {  // absent before the TFCE calibration: none
+    rule.tfce_level = positive_level(cal, "tfce_level", "a positive score", source);
     const Json& per = member(cal, "per_normal", source);
     for (size_t i = 0; i < per.size(); ++i) {
       const Json* m = per.at(i).find("tfce_max");
