@@ -8,6 +8,13 @@ phase() { echo "test.sh: $1 took $((SECONDS - phase_start)) s"; phase_start=$SEC
 bash scripts/setup.sh
 BUILD_DIR=${BUILD_DIR:-build}
 export BUILD_DIR
+# The builds and the tests' outputs take about 5 GiB here (the build 3.1, the sanitizer tree 0.7,
+# the workflow tests' cohorts in the build); a file system that fills up mid-run shows as tests
+# failing on files they wrote short, so say it first.
+free_gib=$(df -P -k . | awk 'NR == 2 { print int($4 / 1048576) }')
+if [[ -n $free_gib && $free_gib -lt 6 ]]; then
+  echo "test.sh: warning: only $free_gib GiB free on $(df -P . | awk 'NR == 2 { print $6 }'); the builds and tests write about 5 GiB" >&2
+fi
 # In CI (or with SANITIZE=1): the quick part of the test suite again under ASan + UBSan, then a
 # short fuzz pass over every reader in the same clang build (docs/robustness.md "Sanitizers" and
 # "Fuzzing"); SANITIZE=full runs the whole suite under them (about an hour on 2 cores).

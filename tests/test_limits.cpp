@@ -8,6 +8,7 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <stdexcept>
 
 #include "support/fixtures.hpp"
 #include "support/kill.hpp"
@@ -62,6 +63,8 @@ struct N1 {
     out.write(reinterpret_cast<const char*>(h), sizeof h);
     std::vector<char> zeros(data_bytes, 0);
     out.write(zeros.data(), std::streamsize(zeros.size()));
+    out.close();
+    if (!out) throw std::runtime_error(path + ": the test could not write its header (file system full?)");
   }
 };
 
