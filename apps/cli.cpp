@@ -106,8 +106,8 @@ std::string option_lines(const OptionSpec& o, size_t width) {
   return "  " + t + std::string(width + 2 - t.size(), ' ') + wrapped(o.help, width + 4) + "\n";
 }
 
-// The synopsis wrapped at 100 columns before an optional item ("[..." or "(..."), continuation
-// lines indented.
+// The synopsis wrapped at 100 columns before an optional item ("[..." or "(...") or a flag
+// ("--..."; never between a flag and its value), continuation lines indented.
 std::string wrapped_synopsis(const std::string& text) {
   constexpr size_t kColumns = 100;
   std::vector<std::string> items(1);
@@ -121,7 +121,8 @@ std::string wrapped_synopsis(const std::string& text) {
   }
   std::string out, line;
   for (const std::string& item : items) {
-    if (!line.empty() && (item[0] == '[' || item[0] == '(') && line.size() + 1 + item.size() > kColumns) {
+    const bool breakable = item[0] == '[' || item[0] == '(' || item.rfind("--", 0) == 0;
+    if (!line.empty() && breakable && line.size() + 1 + item.size() > kColumns) {
       out += line + "\n";
       line = "      " + item;
     } else {

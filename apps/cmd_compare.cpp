@@ -1,5 +1,6 @@
 // vpm compare: a patient's subject table against the normals' (vpm/statistics.hpp), optionally
 // mapped back to the patient's native space (vpm/map_back.hpp).
+#include <map>
 #include <optional>
 #include <sstream>
 
@@ -11,6 +12,7 @@
 #include "vpm/error.hpp"
 #include "vpm/format.hpp"
 #include "vpm/io.hpp"
+#include "vpm/label_names.hpp"
 #include "vpm/map_back.hpp"
 #include "vpm/statistics.hpp"
 
@@ -42,9 +44,10 @@ vpm::CompareOptions options_with_calibration(const vpm::cli::Args& args, const v
   return o;
 }
 
-// --mesh / --image: the result on the patient's native mesh (.vtu) and image grid (NIfTI).
+// --mesh / --image: the result on the patient's native mesh (.vtu) and image grid (NIfTI);
+// `names` the --label-names table (read before the comparison: a bad one stops it first).
 void map_back(const vpm::cli::Args& args, const std::string& out, const vpm::CanonicalElements& el,
-              const vpm::Comparison& c) {
+              const vpm::Comparison& c, const std::optional<std::map<int, std::string>>& names) {
   const auto mesh_path = args.get("--mesh");
   if (!mesh_path) return;
 
@@ -58,7 +61,8 @@ void map_back(const vpm::cli::Args& args, const std::string& out, const vpm::Can
     vpm::write_nifti(beside(out, "_foci.nii.gz"), foci);
     std::optional<vpm::Image> labels;
     if (const auto labels_path = args.get("--labels")) labels = vpm::read_image(*labels_path);
-    vpm::write_native_foci(beside(out, "_foci.tsv"), vpm::native_foci(foci, c, labels ? &*labels : nullptr));
+    vpm::write_native_foci(beside(out, "_foci.tsv"),
+                           vpm::native_foci(foci, c, labels ? &*labels : nullptr, names ? &*names : nullptr));
   }
 }
 
@@ -75,6 +79,10 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   if (args.has("--image") && !args.has("--mesh"))
     throw vpm::InputError("option --image needs --mesh (the patient's registered mesh)");
   if (args.has("--labels") && !args.has("--image")) throw vpm::InputError("option --labels needs --image");
+  if (args.has("--label-names") && !args.has("--labels"))
+    throw vpm::InputError("option --label-names needs --labels (the atlas whose regions it names)");
+  std::optional<std::map<int, std::string>> names;
+  if (const auto names_path = args.get("--label-names")) names = vpm::read_label_names(*names_path);
   const std::optional<vpm::Covariates> cov = vpm::cli::read_participants(args, settings);
   const vpm::cli::LoadedReference loaded =
       vpm::cli::load_reference(args, vpm::cli::reference_recipe(settings, cov), cov, 3);
@@ -87,7 +95,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   patient.subject = *patient_path;
   vpm::Comparison c = vpm::compare_to_reference(el, ref, patient, opt, row);
   vpm::family_p_values(c, rule);
-  map_back(args, *out, el, c);  // first: OUT.tsv, written last, marks a complete run
+  map_back(args, *out, el, c, names);  // first: OUT.tsv, written last, marks a complete run
   vpm::write_comparison(*out, el, ref, loaded.sums.normals(), *patient_path, opt, c);
   const std::string rule_text = opt.tfce_level > 0 ? "TFCE score >= " + vpm::format_sig(opt.tfce_level)
                                                     : "|z| >= " + std::to_string(c.threshold_used) + ", clusters of >= " +
@@ -114,7 +122,8 @@ vpm::cli::Registrar reg(
      with_shared_rows({
       {"--mesh", "REGISTERED.vtu", "the patient's registered mesh: writes OUT_native.vtu with fields z, focus"},
       {"--image", "IMAGE.nii[.gz]", "with --mesh: OUT_z.nii.gz, OUT_foci.nii.gz on this image's grid and the foci table OUT_foci.tsv (mm^3, centroid)"},
-      {"--labels", "ATLAS.nii[.gz]", "with --image: the patient's atlas labels; OUT_foci.tsv names each focus's main region"},
+      {"--labels", "ATLAS.nii[.gz]", "with --image: the patient's atlas labels; OUT_foci.tsv gives each focus's main region"},
+      {"--label-names", "NAMES.txt", "with --labels: its region names for OUT_foci.tsv (AAL's aal.nii.txt or a FreeSurfer colour table)"},
       {"--normals", "A.h5,B.h5,...|@LIST", "the normals' subject tables (vpm sample), at least 3, summed in one pass", true, 2},
       {"--reference", "SUMS.h5", "the normals' sums written by vpm reference instead", true, 2},
       {"--patient", "P.h5", "the patient's subject table", true, 0, true},

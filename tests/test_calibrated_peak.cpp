@@ -144,6 +144,78 @@ TEST_CASE("calibrated peak: through the file to the comparison, refused with a f
   CHECK_THROWS_WITH(calibrated_rule(bad, compare, names, "cal.json"), Catch::Contains("\"peak\""));
 }
 
+TEST_CASE("calibration: each normal's largest and strongest cluster, and a focus's family-wise p-value from them") {
+  const CanonicalElements el(test::small_elements());
+  std::vector<std::string> names;
+  const std::vector<ElementTable> n = normals(names);
+  const CalibrationSettings s = settings();
+  const ClusterCalibration cal = calibrate_min_cluster(el, n, names, s);
+  CalibrationSettings compare = s;
+  compare.calibrate_peak = false;
+  const CalibratedRule rule = calibrated_rule(to_json(cal), compare, names, "cal.json");
+  REQUIRE(rule.cluster_null.size() == n.size());
+  CompareOptions all = s.compare;
+  all.min_cluster = 1;
+  int with_clusters = 0;
+  for (size_t i = 0; i < n.size(); ++i) {
+    std::vector<ElementTable> others;
+    std::vector<std::string> other_names;
+    for (size_t j = 0; j < n.size(); ++j)
+      if (j != i) others.push_back(n[j]), other_names.push_back(names[j]);
+    const Reference ref = build_reference(el, others, other_names, "pet", s.normalisation, 0);
+    Comparison c = compare_to_reference(el, ref, n[i], all);
+    // the normal's largest and strongest cluster are those of its direct comparison
+    int largest = 0;
+    double strongest = 0;
+    for (const FocusCluster& f : c.clusters) largest = std::max(largest, f.candidates), strongest = std::max(strongest, std::abs(f.peak_z));
+    INFO(names[i]);
+    CHECK(cal.per_normal[i].largest == largest);
+    CHECK(cal.per_normal[i].strongest == Approx(strongest).epsilon(1e-12));
+    CHECK(rule.cluster_null[i].first == largest);
+    with_clusters += largest > 0;
+    // each of its clusters: 1 + the normals with one at least as large or as strong, over 11;
+    // its own largest (or strongest) cluster counts the normal itself
+    family_p_values(c, rule);
+    for (const FocusCluster& f : c.clusters) {
+      int above = 0;
+      for (const LeftOutNormal& m : cal.per_normal) above += m.largest >= f.candidates || m.strongest >= std::abs(f.peak_z);
+      CHECK(f.p_family == Approx((1.0 + above) / 11));
+      if (f.candidates == largest) CHECK(f.p_family >= 2.0 / 11);
+    }
+  }
+  REQUIRE(with_clusters >= 2);
+  // a patient's loss far beyond every normal: p = 1 / 11
+  const Reference ref = build_reference(el, n, names, "pet", s.normalisation, 0);
+  const int e0 = el.size() / 2;
+  Comparison c = compare_to_reference(el, ref, subject("sub-P", 999, test::planted_focus(el, e0), 60), all);
+  REQUIRE(c.cluster[static_cast<size_t>(e0)] > 0);
+  family_p_values(c, rule);
+  CHECK(c.clusters[static_cast<size_t>(c.cluster[static_cast<size_t>(e0)] - 1)].p_family == Approx(1.0 / 11));
+  // a file from before these fields gives no p-value; a malformed one is refused
+  Json old = to_json(cal), bad = to_json(cal), infinite = to_json(cal);
+  Json per = Json::array(), broken = Json::array(), inf_per = Json::array();
+  for (size_t i = 0; i < old.find("per_normal")->size(); ++i) {
+    Json o = Json::object(), b = old.find("per_normal")->at(i), f = b;
+    o["normal"] = b.find("normal")->string();
+    o["clusters"] = b.find("clusters")->number();
+    per.push_back(o);
+    if (i == 3) b["largest"] = -2.0;
+    broken.push_back(b);
+    if (i == 0) f["strongest"] = Json::parse("null");  // how an infinite |z| is written
+    inf_per.push_back(f);
+  }
+  old["per_normal"] = per;
+  bad["per_normal"] = broken;
+  infinite["per_normal"] = inf_per;
+  CHECK(std::isinf(calibrated_rule(Json::parse(infinite.dump(-1)), compare, names, "inf.json").cluster_null[0].second));
+  const CalibratedRule none = calibrated_rule(old, compare, names, "old.json");
+  CHECK(none.cluster_null.empty());
+  Comparison fresh = compare_to_reference(el, ref, subject("sub-P", 999, test::planted_focus(el, e0), 60), all);
+  family_p_values(fresh, none);
+  for (const FocusCluster& f : fresh.clusters) CHECK(f.p_family == -1);
+  CHECK_THROWS_WITH(calibrated_rule(bad, compare, names, "bad.json"), Catch::Contains("bad.json: per_normal[3]"));
+}
+
 TEST_CASE("vpm calibrate --peak auto and vpm compare --min-cluster-from: the level recorded and applied") {
   const std::string dir = std::string(VPM_TEST_TMP) + "/cpeak_";
   std::vector<std::string> names;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <random>
 #include <set>
 #include <string>
@@ -190,6 +191,22 @@ TEST_CASE("statistics: native foci table: voxel volume, centroid, peak and main 
   CHECK(f[2].voxels == 0);
   CHECK(std::isnan(f[2].centroid(0)));
   CHECK(native_foci(foci, c)[0].label == 0);  // no label image
+  // region names from a label table (9 unlisted), the p-values carried; the TSV's last columns
+  c.clusters[0].p_family = 1.0 / 16;
+  const std::map<int, std::string> names{{7, "Caudate\tL"}, {3, "Thalamus_L"}};
+  const std::vector<NativeFocus> named = native_foci(foci, c, &labels, &names);
+  CHECK(named[0].region == "Caudate\tL");
+  CHECK(named[1].region.empty());
+  CHECK(named[0].p_family == 1.0 / 16);
+  CHECK(named[1].p_family == -1);
+  const std::string tsv = std::string(VPM_TEST_TMP) + "/native_foci.tsv";
+  write_native_foci(tsv, named);
+  std::ifstream in(tsv);
+  std::string header, first, second;
+  std::getline(in, header), std::getline(in, first), std::getline(in, second);
+  CHECK(header.substr(header.rfind("label_fraction")) == "label_fraction\tregion\tp_family");
+  CHECK(first.substr(first.find("\tCaudate")) == "\tCaudate L\t0.0625");  // a tab in a name: a space
+  CHECK(second.substr(second.size() - 4) == "\t\tNA");
 }
 
 TEST_CASE("statistics: options out of range are refused by the library by name, the command line names the flag") {
@@ -266,6 +283,34 @@ TEST_CASE("vpm compare writes z, foci and the patient's native maps, refuses mix
   CHECK_THAT(test::slurp(dir + "out_foci.tsv"), Catch::StartsWith("focus\tvoxels\tvolume_mm3\tcentroid_x"));
   CHECK(test::run_status(vpm + " compare --normals " + normals + " --patient " + dir + "p.tsv --feature pet -o " +
                          dir + "lab.tsv --labels " + dir + "grid.nii.gz --quiet 2> /dev/null") == 2);
+  // a 2 mm grid as its own atlas (label 1 everywhere) with AAL-style names: each focus's region named
+  Image fine = grid;
+  fine.dims = {51, 51, 51};
+  fine.spacing = {2, 2, 2};
+  fine.affine.topLeftCorner<3, 3>() = 2 * Eigen::Matrix3d::Identity();
+  fine.data.assign(fine.size(), 1.0f);
+  write_nifti(dir + "fine.nii.gz", fine);
+  {
+    std::ofstream names(dir + "names.txt");
+    names << "1 Whole_Grid 1001\n2 Other 1002\n";
+  }
+  const std::string mapped = vpm + " compare --normals " + normals + " --patient " + dir + "p.tsv --feature pet --mesh " +
+                             dir + "reg.vtu --image " + dir + "fine.nii.gz --labels " + dir + "fine.nii.gz --quiet";
+  REQUIRE(test::run_status(mapped + " --label-names " + dir + "names.txt -o " + dir + "named.tsv") == 0);
+  const std::string named = test::slurp(dir + "named_foci.tsv");
+  CHECK_THAT(named, Catch::Contains("\t1\t1\tWhole_Grid\tNA\n"));  // label 1, all of it; no calibration: NA
+  // names without an atlas, or a table that is not one: exit 2 naming it, before anything is written
+  const std::string nerr = dir + "names_err.txt";
+  CHECK(test::run_status(vpm + " compare --normals " + normals + " --patient " + dir + "p.tsv --feature pet -o " + dir +
+                         "nolab.tsv --label-names " + dir + "names.txt 2> " + nerr) == 2);
+  CHECK_THAT(test::slurp(nerr), Catch::Contains("--label-names needs --labels"));
+  {
+    std::ofstream names(dir + "bad_names.txt");
+    names << "1 Whole_Grid 1001\none Other\n";
+  }
+  CHECK(test::run_status(mapped + " --label-names " + dir + "bad_names.txt -o " + dir + "badnames.tsv 2> " + nerr) == 2);
+  CHECK_THAT(test::slurp(nerr), Catch::Contains("bad_names.txt:2"));
+  CHECK(test::run_status("test -e " + dir + "badnames_native.vtu") == 1);
   // another element definition among the normals: exit 2, nothing written
   ElementTable other = subject(3, 1.0);
   write_subject_table(dir + "other.tsv", other);

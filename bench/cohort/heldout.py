@@ -14,7 +14,13 @@
       `vpm calibrate` with its comparison options and FLAGS, e.g. "--peak auto --rate 1" or
       "--tfce --rate 0.5", and compared with --min-cluster-from), chooses the variant with the best median Dice over the development cohorts among
       those with at most 1 false cluster per 10 patients there, and writes DIR/heldout.json and
-      DIR/heldout.md: every variant on every cohort, the median and worst over each role.
+      DIR/heldout.md: every variant on every cohort, the median and worst over each role, and
+      beside them the voxel-wise peer where `peer` has run.
+  heldout.py peer  --spec S --out DIR [--jobs 2] [--only NAMES]
+      runs the voxel-wise analysis after elastix (bench/cohort/voxelwise_elastix.py, its default
+      setting: FWHM 8 mm, z <= -3, 340 mm^3) on every cohort with a finished workflow run, into
+      DIR/NAME/results/peer_elastix/ (about 2.5 CPU-minutes a subject; a rerun reuses the
+      registrations); `score` reports it scored the same way.
 
 Exit 2 (one line on stderr) on a missing input or a failed step.
 """
@@ -132,7 +138,44 @@ def score(a):
             table[c["name"]] = {v["name"]: dict(v["summary"], patients=len(v["patients"]))
                                for v in json.load(f)["variants"]}
         print(f"{c['name']}: scored", flush=True)
+    for c in cohorts:
+        if c["name"] in table:
+            p = peer_summary(os.path.join(a.out, c["name"]))
+            if p:
+                table[c["name"]][PEER] = p
     return 0 if only else report(a, cohorts, variants, table)
+
+
+PEER = "voxel-wise after elastix"
+
+
+def peer_summary(d):
+    """The voxel-wise peer's default-setting summary on cohort folder d (with "patients"), or None."""
+    path = os.path.join(d, "results", "peer_elastix", "evaluation.json")
+    if not os.path.exists(path):
+        return None
+    try:
+        with open(path) as f:
+            e = json.load(f)
+        s = next(x for x in e["settings"] if x["setting"] == e["default_setting"])
+        return dict(s["summary"], patients=len(s["patients"]))
+    except (OSError, ValueError, KeyError, StopIteration) as e:
+        fail(path, f"not the peer's evaluation ({e})")
+
+
+def peer(a):
+    only = set(a.only.split(",")) if a.only else None
+    for c in load_spec(a.spec):
+        if only and c["name"] not in only:
+            continue
+        d = os.path.join(a.out, c["name"])
+        if not os.path.exists(os.path.join(d, "results", "evaluation.json")):
+            fail(d, "no finished workflow run (results/evaluation.json): run `heldout.py run` first")
+        t0 = time.time()
+        step(["/usr/bin/python3", os.path.join(HERE, "voxelwise_elastix.py"), "--bids", os.path.join(d, "bids"),
+              "--results", os.path.join(d, "results"), "--jobs", str(a.jobs)], os.path.join(d, "peer.log"))
+        print(f"{c['name']}: peer done in {time.time() - t0:.0f} s", flush=True)
+    return 0
 
 
 def calibrated(a, d, v, vout):
@@ -173,6 +216,10 @@ def report(a, cohorts, variants, table):
     res = {"spec": a.spec, "variants": variants, "cohorts": cohorts, "per_cohort": table, "by_role": {}}
     for r, names in roles.items():
         res["by_role"][r] = {v["name"]: row([table[n][v["name"]] for n in names]) for v in variants}
+    for r, names in roles.items():  # the peer over the cohorts it ran on
+        have = [n for n in names if PEER in table[n]]
+        if have:
+            res["by_role"][r][PEER] = dict(row([table[n][PEER] for n in have]), cohorts=have)
     dev = res["by_role"]["development"]
     ok = [v["name"] for v in variants if (dev[v["name"]]["false_per_10_patients"] or 0) <= 1.0]
     chosen = max(ok or [v["name"] for v in variants], key=lambda n: (dev[n]["dice_median"], dev[n]["dice_worst"]))
@@ -194,16 +241,24 @@ def report(a, cohorts, variants, table):
                          f"{pct(s['dice_median'])} / {pct(s['dice_worst'])} | {pct(s['overlap_median'])} / "
                          f"{pct(s['overlap_worst'])} | {pct(s['precision_median'])} / {pct(s['precision_worst'])} | "
                          f"{s['found']}/{s['planted']} | {s['false_clusters']} ({s['false_per_10_patients']:.1f}) |")
+        if PEER in res["by_role"][r]:
+            s = res["by_role"][r][PEER]
+            lines.append(f"| {PEER} | FWHM 8 mm, z <= -3, 340 mm^3 (on {', '.join(s['cohorts'])}) | "
+                         f"{pct(s['dice_median'])} / {pct(s['dice_worst'])} | {pct(s['overlap_median'])} / "
+                         f"{pct(s['overlap_worst'])} | {pct(s['precision_median'])} / {pct(s['precision_worst'])} | "
+                         f"{s['found']}/{s['planted']} | {s['false_clusters']} ({s['false_per_10_patients']:.1f}) |")
         lines.append("")
     lines += ["### every cohort (Dice / found / false clusters)", "",
               "| variant | " + " | ".join(f"{c['name']} ({c['role'][0]})" for c in cohorts) + " |",
               "|---|" + "---|" * len(cohorts)]
-    for v in variants:
+    for name in [v["name"] for v in variants] + [PEER]:
         cells = []
         for c in cohorts:
-            s = table[c["name"]][v["name"]]
-            cells.append(f"{pct(s['pooled']['dice'] or 0.0)} / {s['foci_found']}/{s['foci_planted']} / {s['false_positive_clusters']}")
-        lines.append(f"| {v['name']} | " + " | ".join(cells) + " |")
+            s = table[c["name"]].get(name)
+            cells.append(f"{pct(s['pooled']['dice'] or 0.0)} / {s['foci_found']}/{s['foci_planted']} / "
+                         f"{s['false_positive_clusters']}" if s else "not run")
+        if name != PEER or any(PEER in table[c["name"]] for c in cohorts):
+            lines.append(f"| {name} | " + " | ".join(cells) + " |")
     with open(os.path.join(a.out, "heldout.json"), "w") as f:
         json.dump(res, f, indent=1)
     with open(os.path.join(a.out, "heldout.md"), "w") as f:
@@ -215,7 +270,7 @@ def report(a, cohorts, variants, table):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
-    for name in ("run", "score"):
+    for name in ("run", "score", "peer"):
         p = sub.add_parser(name)
         p.add_argument("--spec", default=os.path.join(HERE, "heldout.json"))
         p.add_argument("--out", required=True)
@@ -223,13 +278,16 @@ def main():
         if name == "run":
             p.add_argument("--cores", type=int, default=2)
             p.add_argument("--only", default="")
+        elif name == "peer":
+            p.add_argument("--jobs", type=int, default=2)
+            p.add_argument("--only", default="")
         else:
             p.add_argument("--variants", required=True)
             p.add_argument("--jobs", type=int, default=2)
             p.add_argument("--only", default="", help="score these cohorts only (no report); a later run reuses them")
     a = ap.parse_args()
     a.out = os.path.abspath(a.out)
-    return run(a) if a.cmd == "run" else score(a)
+    return {"run": run, "score": score, "peer": peer}[a.cmd](a)
 
 
 if __name__ == "__main__":

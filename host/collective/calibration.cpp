@@ -5,6 +5,7 @@
 #include <cmath>
 #include <exception>
 #include <functional>
+#include <limits>
 #include <map>
 
 #include "collective/comparison.hpp"
@@ -148,9 +149,13 @@ ClusterCalibration calibrate_min_cluster(const CanonicalElements& el, const Refe
           const NormalValues v = left_out.values(n);
           double tfce_max = 0;
           const auto clusters = leave_out(el, totals, index.at(left_out.names[n]), v, s, tfce_max);
-          cal.per_normal[n] = {left_out.names[n], static_cast<int>(clusters.size()), tfce_max};
-          for (const auto& [candidates, peak_z] : clusters)
+          LeftOutNormal& out = cal.per_normal[n];
+          out = {left_out.names[n], static_cast<int>(clusters.size()), 0, 0.0, tfce_max};
+          for (const auto& [candidates, peak_z] : clusters) {
             gathered[static_cast<size_t>(t)].add(i, candidates, peak_z, keep, s.compare.peak);
+            out.largest = std::max(out.largest, candidates);
+            out.strongest = std::max(out.strongest, std::abs(peak_z));
+          }
         } catch (...) {
           errors[static_cast<size_t>(i)] = std::current_exception();
         }
@@ -247,6 +252,8 @@ Json to_json(const ClusterCalibration& c) {
     Json o = Json::object();
     o["normal"] = n.name;
     o["clusters"] = n.clusters;
+    o["largest"] = n.largest;
+    o["strongest"] = n.strongest;
     if (c.settings.calibrate_tfce) o["tfce_max"] = n.tfce_max;
     per.push_back(o);
   }
@@ -303,6 +310,28 @@ double positive_level(const Json& cal, const char* key, const char* what, const 
   return level;
 }
 
+// Each normal's (largest, strongest) of per_normal; empty when a file from before them lacks
+// them (no p-values then); InputError for values that are there but not counts or levels.
+std::vector<std::pair<int, double>> cluster_null(const Json& per, const std::string& source) {
+  std::vector<std::pair<int, double>> out;
+  for (size_t i = 0; i < per.size(); ++i) {
+    const Json* largest = per.at(i).find("largest");
+    const Json* strongest = per.at(i).find("strongest");
+    if (!largest && !strongest) return {};
+    const double l = largest && largest->type() == Json::Type::Number ? largest->number() : -1;
+    // null: an infinite |z| (a reference without spread there), as to_json writes it
+    const double z = !strongest                                 ? -1
+                     : strongest->type() == Json::Type::Number ? strongest->number()
+                     : strongest->type() == Json::Type::Null   ? std::numeric_limits<double>::infinity()
+                                                               : -1;
+    if (!(l >= 0 && l <= 1e9 && l == std::floor(l)) || !(z >= 0))
+      throw InputError(source + ": per_normal[" + std::to_string(i) +
+                       "]: \"largest\" is not a count or \"strongest\" not a |z| level");
+    out.emplace_back(static_cast<int>(l), z);
+  }
+  return out;
+}
+
 }  // namespace
 
 CalibratedRule calibrated_rule(const Json& cal, const CalibrationSettings& s, const std::vector<std::string>& normals,
@@ -351,17 +380,26 @@ CalibratedRule calibrated_rule(const Json& cal, const CalibrationSettings& s, co
       rule.tfce_null.push_back(v);
     }
     std::sort(rule.tfce_null.begin(), rule.tfce_null.end(), std::greater<>());
+  } else {
+    rule.cluster_null = cluster_null(member(cal, "per_normal", source), source);
   }
   return rule;
 }
 
 void family_p_values(Comparison& c, const CalibratedRule& rule) {
-  if (rule.tfce_null.empty()) return;
-  for (FocusCluster& f : c.clusters) {
-    const auto above = std::count_if(rule.tfce_null.begin(), rule.tfce_null.end(),
-                                     [&](double m) { return m >= f.peak_tfce; });
-    f.p_family = (1.0 + static_cast<double>(above)) / (1.0 + static_cast<double>(rule.tfce_null.size()));
-  }
+  const auto p = [](std::ptrdiff_t above, size_t n) {
+    return (1.0 + static_cast<double>(above)) / (1.0 + static_cast<double>(n));
+  };
+  for (FocusCluster& f : c.clusters)
+    if (!rule.tfce_null.empty())
+      f.p_family = p(std::count_if(rule.tfce_null.begin(), rule.tfce_null.end(), [&](double m) { return m >= f.peak_tfce; }),
+                     rule.tfce_null.size());
+    else if (!rule.cluster_null.empty())
+      f.p_family = p(std::count_if(rule.cluster_null.begin(), rule.cluster_null.end(),
+                                   [&](const std::pair<int, double>& m) {
+                                     return m.first >= f.candidates || m.second >= std::abs(f.peak_z);
+                                   }),
+                     rule.cluster_null.size());
 }
 
 }  // namespace vpm

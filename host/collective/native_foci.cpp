@@ -9,12 +9,14 @@
 
 namespace vpm {
 
-std::vector<NativeFocus> native_foci(const Image& foci, const Comparison& c, const Image* labels) {
+std::vector<NativeFocus> native_foci(const Image& foci, const Comparison& c, const Image* labels,
+                                     const std::map<int, std::string>* names) {
   std::vector<NativeFocus> out(c.clusters.size());
   std::vector<std::map<int, long>> label_counts(out.size());
   for (size_t i = 0; i < out.size(); ++i) {
     out[i].id = c.clusters[i].id;
     out[i].peak_z = c.clusters[i].peak_z;
+    out[i].p_family = c.clusters[i].p_family;
   }
   std::map<int, size_t> row;
   for (size_t i = 0; i < out.size(); ++i) row[out[i].id] = i;
@@ -49,6 +51,8 @@ std::vector<NativeFocus> native_foci(const Image& foci, const Comparison& c, con
         f.label = label;
       }
     f.label_fraction = f.voxels > 0 ? static_cast<double>(best) / f.voxels : 0.0;
+    if (names && f.label > 0)
+      if (const auto it = names->find(f.label); it != names->end()) f.region = it->second;
   }
   return out;
 }
@@ -56,11 +60,19 @@ std::vector<NativeFocus> native_foci(const Image& foci, const Comparison& c, con
 void write_native_foci(const std::string& tsv_path, const std::vector<NativeFocus>& foci) {
   detail::AtomicFile file(tsv_path);
   std::ostream& out = file.stream();
-  out << "focus\tvoxels\tvolume_mm3\tcentroid_x\tcentroid_y\tcentroid_z\tpeak_z\tlabel\tlabel_fraction\n"
+  out << "focus\tvoxels\tvolume_mm3\tcentroid_x\tcentroid_y\tcentroid_z\tpeak_z\tlabel\tlabel_fraction\tregion\tp_family\n"
       << std::setprecision(6);
-  for (const NativeFocus& f : foci)
+  for (const NativeFocus& f : foci) {
+    std::string region = f.region;  // one field whatever the table held
+    for (char& ch : region)
+      if (ch == '\t' || ch == '\n' || ch == '\r') ch = ' ';
     out << f.id << '\t' << f.voxels << '\t' << f.volume_mm3 << '\t' << f.centroid(0) << '\t' << f.centroid(1) << '\t'
-        << f.centroid(2) << '\t' << f.peak_z << '\t' << f.label << '\t' << f.label_fraction << '\n';
+        << f.centroid(2) << '\t' << f.peak_z << '\t' << f.label << '\t' << f.label_fraction << '\t' << region << '\t';
+    if (f.p_family >= 0)
+      out << f.p_family << '\n';
+    else
+      out << "NA\n";
+  }
   file.commit();
 }
 

@@ -49,6 +49,8 @@ struct CalibrationSettings {
 struct LeftOutNormal {
   std::string name;
   int clusters = 0;
+  int largest = 0;        ///< candidates of its largest cluster (0: none)
+  double strongest = 0;   ///< |peak_z| of its strongest cluster (0: none; infinite where the reference has no spread)
   double tfce_max = 0;  ///< with CalibrationSettings::calibrate_tfce: its highest TFCE score (both signs compared)
 };
 
@@ -108,7 +110,9 @@ ClusterCalibration calibrate_min_cluster(const CanonicalElements& elements, cons
 ///  calibrated), sign, test}, "rate", "normals", "min_cluster", "calibrate_peak", "peak" (the
 ///  level applied), "curve": [{"min_cluster", "false_clusters", "per_10_normals"}],
 ///  "sizes": [clusters with 0, 1, 2, ... candidates], "strong": [{"normal", "candidates", "peak_z"}],
-///  "per_normal": [{"normal", "clusters", "tfce_max" (with calibrate_tfce)}], "tfce" (calibrate_tfce),
+///  "per_normal": [{"normal", "clusters", "largest", "strongest" (null: infinite), "tfce_max" (with
+///  calibrate_tfce)}],
+///  "tfce" (calibrate_tfce),
 ///  "tfce_level" (0 without)}
 Json to_json(const ClusterCalibration& calibration);
 
@@ -120,6 +124,10 @@ struct CalibratedRule {
   /// a TFCE calibration's per-normal maxima, highest first: a focus's family-wise p-value is
   /// (1 + the maxima at or above its peak score) / (1 + their number)
   std::vector<double> tfce_null;
+  /// without TFCE: each normal's largest cluster (candidates) and strongest |peak_z| (empty for
+  /// a file without them): a focus's family-wise p-value is (1 + the normals with a cluster at
+  /// least as large or at least as strong) / (1 + their number)
+  std::vector<std::pair<int, double>> cluster_null;
 };
 
 /// The rule of a calibration JSON written by to_json (a file from elsewhere: checked), after
@@ -132,9 +140,11 @@ struct CalibratedRule {
 CalibratedRule calibrated_rule(const Json& calibration, const CalibrationSettings& settings,
                                const std::vector<std::string>& normals, const std::string& source);
 
-/// FocusCluster::p_family of every focus of `comparison` from a TFCE calibration's null
-/// (rule.tfce_null, the normals' maxima): (1 + the maxima at or above the focus's peak score) /
-/// (1 + their number). Nothing without a null.
+/// FocusCluster::p_family of every focus of `comparison` from its calibration's null, the normals
+/// left out: with TFCE (rule.tfce_null) (1 + the normals' maxima at or above the focus's peak
+/// score) / (1 + their number); else (rule.cluster_null) (1 + the normals that showed a cluster
+/// with at least the focus's candidates or at least its |peak_z|) / (1 + their number), the
+/// chance that a subject without a focus shows one as large or as strong. Nothing without a null.
 void family_p_values(Comparison& comparison, const CalibratedRule& rule);
 
 }  // namespace vpm

@@ -2,6 +2,8 @@
 // A patient's per-element result mapped back to the patient's own native space (paper 6.2,
 // Fig. 10): through the patient's registered ball mesh, whose vertices sit in the common ball
 // and whose point field `original_position` holds their native positions.
+#include <map>
+#include <string>
 #include <vector>
 
 #include "vpm/elements.hpp"
@@ -34,15 +36,21 @@ struct NativeFocus {
   double peak_z = 0;         ///< FocusCluster::peak_z
   int label = 0;             ///< most frequent label under the cluster (0: no label image or none)
   double label_fraction = 0; ///< share of the cluster's voxels carrying `label`
+  std::string region;        ///< `label`'s name in the label table ("" when none is given or lists it)
+  double p_family = -1;      ///< FocusCluster::p_family (-1: not known)
 };
 
 /// Per cluster of `comparison` (foci_volume = native_volume of its cluster ids, on the patient's
 /// image grid): voxel count, volume in mm^3, world centroid, peak z, and with `labels` (an atlas
-/// image in the same native space; read at each voxel centre, nearest voxel) its main region.
-std::vector<NativeFocus> native_foci(const Image& foci_volume, const Comparison& comparison, const Image* labels = nullptr);
+/// image in the same native space; read at each voxel centre, nearest voxel) its main region,
+/// named from `names` (vpm/label_names.hpp) when given.
+std::vector<NativeFocus> native_foci(const Image& foci_volume, const Comparison& comparison, const Image* labels = nullptr,
+                                     const std::map<int, std::string>* names = nullptr);
 
 /// Writes `foci` as TSV: focus voxels volume_mm3 centroid_x centroid_y centroid_z peak_z label
-/// label_fraction. Atomic; InputError naming the path when it cannot be written.
+/// label_fraction region p_family (region empty when unnamed, p_family NA when not known; a
+/// region name's tabs and line breaks written as spaces). Atomic; InputError naming the path
+/// when it cannot be written.
 void write_native_foci(const std::string& tsv_path, const std::vector<NativeFocus>& foci);
 
 }  // namespace vpm

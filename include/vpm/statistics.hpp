@@ -161,8 +161,9 @@ struct FocusCluster {
   int peak_element = -1;
   double peak_z = 0;
   double peak_tfce = 0;       ///< with CompareOptions::tfce_level: the focus's highest TFCE score (else 0)
-  /// with a TFCE calibration (vpm/calibration.hpp family_p_values): the chance that a subject
-  /// without a focus shows a score this high anywhere, from the normals left out; -1: not known
+  /// with a calibration (vpm/calibration.hpp family_p_values): the chance that a subject
+  /// without a focus shows a focus this strong anywhere (a TFCE score this high, or a cluster as
+  /// large or as strong), from the normals left out; -1: not known
   double p_family = -1;
 };
 

@@ -68,6 +68,14 @@ for m in ("vpm", "baseline"):
     assert 0 <= p[m]["sensitivity"] <= 1 and p[m]["foci_planted"] == 2, p[m]
     s = e["summary"][m]
     assert s["foci_free_patients"] == 0 and s["false_clusters_in_foci_free"] == 0, s
+# the native foci table names each focus's main AAL region (view.label_names); no calibration
+# with 3 normals, so no family-wise p-value
+import csv
+names = dict(l.split()[:2] for l in open("/usr/share/mricron/templates/aal.nii.txt") if l.strip())
+rows = list(csv.DictReader(open(f"{r}/compare/sub-P01_pet_foci.tsv"), delimiter="\t"))
+assert len(rows) == len(c["result"]["clusters"]) > 0, len(rows)
+assert all(x["p_family"] == "NA" and x["region"] == names.get(x["label"], "") for x in rows), rows
+assert any(x["region"] for x in rows), rows
 PY
 # leave-one-normal-out (bench/cohort/lono.py) with the patient counted among the "normals":
 # its entry is a comparison against the three normals with the workflow's options, so it finds
@@ -127,6 +135,9 @@ assert cal["min_cluster"] >= 1 and c["options"]["min_cluster"] == cal["min_clust
 assert cal["calibrate_peak"] is True and cal["options"]["peak"] == 0 and cal["peak"] >= 3, {k: cal[k] for k in ("calibrate_peak", "peak")}
 assert c["options"]["peak"] == cal["peak"], (c["options"], cal["peak"])
 assert c["reference"]["subjects"] == 4 and c["reference"]["image_covariate"] == "t1w", c["reference"]
+# each normal's largest and strongest cluster: the null of the foci's family-wise p-values
+assert all(n["largest"] >= 0 and n["strongest"] >= 0 for n in cal["per_normal"]), cal["per_normal"]
+assert all(0.2 <= f["p_family"] <= 1 for f in c["result"]["clusters"]), c["result"]["clusters"]
 PY
 # compare.peak: neither auto nor a level stops the workflow before any job
 if smk 'compare={peak: high}' -n > "$work/peak.log" 2>&1; then fail "compare.peak: a word ran"; fi
