@@ -87,14 +87,7 @@ TEST_CASE("calibrated peak: half the rate beyond the level, the size holds the r
   rule.min_cluster = cal.min_cluster;
   rule.peak = cal.peak;
   for (size_t i = 0; i < n.size(); ++i) {
-    std::vector<ElementTable> others;
-    std::vector<std::string> other_names;
-    for (size_t j = 0; j < n.size(); ++j)
-      if (j != i) {
-        others.push_back(n[j]);
-        other_names.push_back(names[j]);
-      }
-    const Reference ref = build_reference(el, others, other_names, "pet", s.normalisation, 0);
+    const Reference ref = test::reference_without(el, n, names, i, s.normalisation);
     direct += static_cast<int>(compare_to_reference(el, ref, n[i], rule).clusters.size());
   }
   CHECK(direct == cal.clusters_at(cal.min_cluster));
@@ -158,11 +151,7 @@ TEST_CASE("calibration: each normal's largest and strongest cluster, and a focus
   all.min_cluster = 1;
   int with_clusters = 0;
   for (size_t i = 0; i < n.size(); ++i) {
-    std::vector<ElementTable> others;
-    std::vector<std::string> other_names;
-    for (size_t j = 0; j < n.size(); ++j)
-      if (j != i) others.push_back(n[j]), other_names.push_back(names[j]);
-    const Reference ref = build_reference(el, others, other_names, "pet", s.normalisation, 0);
+    const Reference ref = test::reference_without(el, n, names, i, s.normalisation);
     Comparison c = compare_to_reference(el, ref, n[i], all);
     // the normal's largest and strongest cluster are those of its direct comparison
     int largest = 0;

@@ -146,11 +146,7 @@ TEST_CASE("tfce calibration: at most the rate's normals over the level, a focus 
   rule.tfce_level = cal.tfce_level;
   int with_focus = 0;
   for (size_t i = 0; i < n.size(); ++i) {
-    std::vector<ElementTable> others;
-    std::vector<std::string> other_names;
-    for (size_t j = 0; j < n.size(); ++j)
-      if (j != i) others.push_back(n[j]), other_names.push_back(names[j]);
-    const Reference ref = build_reference(el, others, other_names, "pet", s.normalisation, 0);
+    const Reference ref = test::reference_without(el, n, names, i, s.normalisation);
     const Comparison c = compare_to_reference(el, ref, n[i], rule);
     with_focus += !c.clusters.empty();
     CHECK(c.clusters.empty() == (cal.per_normal[i].tfce_max < cal.tfce_level));

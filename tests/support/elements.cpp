@@ -37,4 +37,13 @@ ElementTable noisy_pet_table(const std::string& id, unsigned seed, const std::se
   return t;
 }
 
+Reference reference_without(const CanonicalElements& elements, const std::vector<ElementTable>& normals,
+                            const std::vector<std::string>& names, size_t left_out, Normalisation normalisation) {
+  std::vector<ElementTable> others;
+  std::vector<std::string> other_names;
+  for (size_t j = 0; j < normals.size(); ++j)
+    if (j != left_out) others.push_back(normals[j]), other_names.push_back(names[j]);
+  return build_reference(elements, others, other_names, "pet", normalisation, 0);
+}
+
 }  // namespace vpm::test
