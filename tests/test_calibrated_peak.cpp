@@ -162,13 +162,19 @@ TEST_CASE("calibration: each normal's largest and strongest cluster, and a focus
     CHECK(cal.per_normal[i].strongest == Approx(strongest).epsilon(1e-12));
     CHECK(rule.cluster_null[i].first == largest);
     with_clusters += largest > 0;
-    // each of its clusters: 1 + the normals with one at least as large or as strong, over 11;
-    // its own largest (or strongest) cluster counts the normal itself
+    // each of its clusters: the smaller of its two ranks among the normals (larger ones, stronger
+    // ones), and 1 + the normals whose own smaller rank is at or below it, over 11; its own
+    // largest cluster counts the normal itself
     family_p_values(c, rule);
+    const auto rank = [&](double size, double peak) {
+      int larger = 0, stronger = 0;
+      for (const LeftOutNormal& m : cal.per_normal) larger += m.largest >= size, stronger += m.strongest >= peak;
+      return std::min(larger, stronger);
+    };
     for (const FocusCluster& f : c.clusters) {
-      int above = 0;
-      for (const LeftOutNormal& m : cal.per_normal) above += m.largest >= f.candidates || m.strongest >= std::abs(f.peak_z);
-      CHECK(f.p_family == Approx((1.0 + above) / 11));
+      int below = 0;
+      for (const LeftOutNormal& m : cal.per_normal) below += rank(m.largest, m.strongest) <= rank(f.candidates, std::abs(f.peak_z));
+      CHECK(f.p_family == Approx((1.0 + below) / 11));
       if (f.candidates == largest) CHECK(f.p_family >= 2.0 / 11);
     }
   }

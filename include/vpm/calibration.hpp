@@ -125,8 +125,7 @@ struct CalibratedRule {
   /// (1 + the maxima at or above its peak score) / (1 + their number)
   std::vector<double> tfce_null;
   /// without TFCE: each normal's largest cluster (candidates) and strongest |peak_z| (empty for
-  /// a file without them): a focus's family-wise p-value is (1 + the normals with a cluster at
-  /// least as large or at least as strong) / (1 + their number)
+  /// a file without them), the null of family_p_values
   std::vector<std::pair<int, double>> cluster_null;
 };
 
@@ -142,9 +141,12 @@ CalibratedRule calibrated_rule(const Json& calibration, const CalibrationSetting
 
 /// FocusCluster::p_family of every focus of `comparison` from its calibration's null, the normals
 /// left out: with TFCE (rule.tfce_null) (1 + the normals' maxima at or above the focus's peak
-/// score) / (1 + their number); else (rule.cluster_null) (1 + the normals that showed a cluster
-/// with at least the focus's candidates or at least its |peak_z|) / (1 + their number), the
-/// chance that a subject without a focus shows one as large or as strong. Nothing without a null.
+/// score) / (1 + their number). Else (rule.cluster_null) the cluster rule's two statistics are
+/// combined by their smaller rank (Tippett's min-p over the normals left out): a cluster's rank is
+/// the number of normals whose largest cluster has at least its candidates or, if fewer, whose
+/// strongest has at least its |peak_z|; the p-value is (1 + the normals whose own rank is at or
+/// below the focus's) / (1 + their number): the chance that a subject without a focus shows a
+/// cluster as extreme, in size or in peak, anywhere. Nothing without a null.
 void family_p_values(Comparison& comparison, const CalibratedRule& rule);
 
 }  // namespace vpm
