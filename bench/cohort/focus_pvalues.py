@@ -8,8 +8,9 @@ one, so that its foci tables carry p_family), every patient's OUT_foci.tsv is re
 OUT_foci.nii.gz (focus ids on the native PET grid): a focus is true when one of its voxels lies in
 a planted focus (derivatives/truth/sub-X_foci.nii.gz > 0), false otherwise (the foci-free
 patients' foci all are). Written: per role (development, report) the true and false foci by
-p_family (each value, as p_family takes (1 + k) / (1 + n)), and the planted foci of at least
-1.5 ml with a loss of at least 20 % that were missed.
+p_family (each value, as p_family takes (1 + k) / (1 + n)), and how many of the planted foci of
+at least 1.5 ml (native PET voxels of the truth mask) with a loss of at least 20 % were found
+(one detected voxel in them).
 
 Usage: focus_pvalues.py --out DIR --variant NAME [--spec heldout.json] [--json PATH] [--md PATH]
 Exit 2 (one line on stderr) on a missing or malformed input.
@@ -50,8 +51,8 @@ def patient_foci(cohort_dir, variant, sid):
     return out
 
 
-def missed(cohort_dir, variant, sid):
-    """Planted foci of >= 1.5 ml with >= 20 % loss that no detected voxel touches: [(id, ml, loss)]."""
+def large_foci(cohort_dir, variant, sid):
+    """Planted foci of >= 1.5 ml (native PET voxels) with >= 20 % loss: [(id, ml, loss, found)]."""
     det, _ = evaluate.load(os.path.join(cohort_dir, "variants", variant, "compare", f"{sid}_pet_foci.nii.gz"))
     truth, aff = evaluate.load(os.path.join(cohort_dir, "bids", "derivatives", "truth", f"{sid}_foci.nii.gz"))
     voxel_ml = abs(np.linalg.det(aff[:3, :3])) / 1000.0
@@ -65,8 +66,8 @@ def missed(cohort_dir, variant, sid):
         inside = np.rint(truth) == fid
         ml = float(inside.sum()) * voxel_ml
         loss = losses.get(int(fid), float("nan"))
-        if ml >= 1.5 and loss >= 0.2 and not np.any(det[inside] > 0):
-            out.append((int(fid), round(ml, 2), loss))
+        if ml >= 1.5 and loss >= 0.2:
+            out.append((int(fid), round(ml, 2), loss, bool(np.any(det[inside] > 0))))
     return out
 
 
@@ -87,7 +88,7 @@ def main():
             "role": c["role"], "normals": c["normals"],
             "foci": {sid: [{"focus": f, "p_family": p, "true": t, "volume_mm3": v, "region": r} for f, p, t, v, r in fs]
                      for sid, fs in foci.items()},
-            "missed_large": {sid: missed(d, a.variant, sid) for sid in patients}}
+            "large_foci": {sid: large_foci(d, a.variant, sid) for sid in patients}}
     lines = [f"Each focus's p_family by truth, variant {a.variant} (a focus is true when it touches a planted one)", ""]
     for role in ("development", "report"):
         names = [n for n, c in res["cohorts"].items() if c["role"] == role]
@@ -100,8 +101,8 @@ def main():
         keys = sorted(set(true) | set(false), key=lambda k: (k == "NA", float(k) if k != "NA" else 0))
         lines += [f"### {role} cohorts ({', '.join(names)})", "", "| p_family | true foci | false foci |", "|---|---|---|"]
         lines += [f"| {k} | {true[k]} | {false[k]} |" for k in keys]
-        miss = sum(len(m) for n in names for m in res["cohorts"][n]["missed_large"].values())
-        lines += ["", f"planted foci of >= 1.5 ml with >= 20 % loss missed: {miss}", ""]
+        large = [f for n in names for fs in res["cohorts"][n]["large_foci"].values() for f in fs]
+        lines += ["", f"planted foci of >= 1.5 ml with >= 20 % loss found: {sum(f[3] for f in large)} of {len(large)}", ""]
     text = "\n".join(lines) + "\n"
     if a.json:
         with open(a.json, "w") as f:
