@@ -30,13 +30,19 @@ import evaluate  # noqa: E402
 import heldout  # noqa: E402
 
 
-def patient_foci(cohort_dir, variant, sid):
-    """[(focus id, p_family or None, true?, volume_mm3, region)] of one patient."""
+def load_patient(cohort_dir, variant, sid):
+    """(detected focus ids, truth ids, truth affine) of one patient, on its native PET grid."""
     base = os.path.join(cohort_dir, "variants", variant, "compare", f"{sid}_pet_foci")
     det, _ = evaluate.load(base + ".nii.gz")
-    truth, _ = evaluate.load(os.path.join(cohort_dir, "bids", "derivatives", "truth", f"{sid}_foci.nii.gz"))
+    truth, aff = evaluate.load(os.path.join(cohort_dir, "bids", "derivatives", "truth", f"{sid}_foci.nii.gz"))
     if det.shape != truth.shape:
         evaluate.fail(base + ".nii.gz", f"grid {det.shape} is not the truth's {truth.shape}")
+    return det, truth, aff
+
+
+def patient_foci(cohort_dir, variant, sid, det, truth):
+    """[(focus id, p_family or None, true?, volume_mm3, region)] of one patient."""
+    base = os.path.join(cohort_dir, "variants", variant, "compare", f"{sid}_pet_foci")
     out = []
     try:
         with open(base + ".tsv", newline="") as f:
@@ -51,10 +57,8 @@ def patient_foci(cohort_dir, variant, sid):
     return out
 
 
-def large_foci(cohort_dir, variant, sid):
+def large_foci(cohort_dir, sid, det, truth, aff):
     """Planted foci of >= 1.5 ml (native PET voxels) with >= 20 % loss: [(id, ml, loss, found)]."""
-    det, _ = evaluate.load(os.path.join(cohort_dir, "variants", variant, "compare", f"{sid}_pet_foci.nii.gz"))
-    truth, aff = evaluate.load(os.path.join(cohort_dir, "bids", "derivatives", "truth", f"{sid}_foci.nii.gz"))
     voxel_ml = abs(np.linalg.det(aff[:3, :3])) / 1000.0
     losses = {}
     with open(os.path.join(cohort_dir, "bids", "derivatives", "truth", "foci.tsv"), newline="") as f:
@@ -83,12 +87,13 @@ def main():
     for c in heldout.load_spec(a.spec):
         d = os.path.join(a.out, c["name"])
         _, patients = evaluate.read_participants(os.path.join(d, "bids"))
-        foci = {sid: patient_foci(d, a.variant, sid) for sid in patients}
+        grids = {sid: load_patient(d, a.variant, sid) for sid in patients}
+        foci = {sid: patient_foci(d, a.variant, sid, *grids[sid][:2]) for sid in patients}
         res["cohorts"][c["name"]] = {
             "role": c["role"], "normals": c["normals"],
             "foci": {sid: [{"focus": f, "p_family": p, "true": t, "volume_mm3": v, "region": r} for f, p, t, v, r in fs]
                      for sid, fs in foci.items()},
-            "large_foci": {sid: large_foci(d, a.variant, sid) for sid in patients}}
+            "large_foci": {sid: large_foci(d, sid, *grids[sid]) for sid in patients}}
     lines = [f"Each focus's p_family by truth, variant {a.variant} (a focus is true when it touches a planted one)", ""]
     for role in ("development", "report"):
         names = [n for n, c in res["cohorts"].items() if c["role"] == role]
