@@ -358,14 +358,14 @@ CalibratedRule calibrated_rule(const Json& cal, const CalibrationSettings& s, co
   std::sort(want_normals.begin(), want_normals.end());
   if (calibrated_normals(cal, source) != want_normals)
     throw InputError(source + ": calibrated on other normals (" + std::to_string(member(cal, "per_normal", source).size()) +
-                     ") than this comparison's " + std::to_string(normals.size()) + "; calibrate on the same --normals");
+                     ") than this comparison's " + std::to_string(normals.size()) + "; calibrate on the same normals");
   const Json& m = member(cal, "min_cluster", source);
   const double v = m.type() == Json::Type::Number ? m.number() : -1;
   if (!(v >= 0 && v <= 1e9 && v == std::floor(v)))
     throw InputError(source + ": \"min_cluster\" is not a count");
   if (v == 0)
-    throw InputError(source + ": the calibration found no min_cluster at or under its rate (a --peak rule keeps "
-                              "small clusters in the normals); lower --peak or raise the rate");
+    throw InputError(source + ": the calibration found no min_cluster at or under its rate (a peak rule keeps "
+                              "small clusters in the normals); lower the peak level or raise the rate");
   CalibratedRule rule{static_cast<int>(v), s.compare.peak};
   if (optional_flag(cal, "calibrate_peak", source))  // absent before 2026-11-29 (ninth session): no
     rule.peak = positive_level(cal, "peak", "a positive |z| level", source);

@@ -4,9 +4,12 @@
 
 #include "common.hpp"
 #include "report.hpp"
+#include "vpm/calibration.hpp"
 #include "vpm/covariates.hpp"
 #include "vpm/elements.hpp"
 #include "vpm/error.hpp"
+#include "vpm/format.hpp"
+#include "vpm/json.hpp"
 #include "vpm/label_names.hpp"
 #include "vpm/locate.hpp"
 #include "vpm/map_back.hpp"
@@ -67,18 +70,30 @@ std::vector<ElementTable> tables_of(const py::list& items) {
   return out;
 }
 
-// long: the keyword arguments of `vpm compare`, one line each
-py::dict compare_py(const py::list& normals, const py::object& patient, const std::string& feature,
-                    const std::string& normalisation, double threshold, double fdr, int min_cluster, double extend,
-                    double relative_extent, double peak, const std::string& sign, const std::string& test, int smooth, double shrink,
-                    const std::vector<std::string>& covariates, const std::string& participants,
-                    const std::string& image_covariate, double tfce_level) {
-  const std::vector<ElementTable> ns = tables_of(normals);
-  py::list one;
-  one.append(patient);
-  const ElementTable p = tables_of(one).front();
-  if (ns.empty()) throw InputError("normals: no tables");
-  CompareOptions o;
+// The normals' names as a calibration records them: a table given by its path is named by the
+// path (as `vpm calibrate --normals` names it), one in memory by its subject, else "normal i".
+std::vector<std::string> names_of(const py::list& items, const std::vector<ElementTable>& tables) {
+  std::vector<std::string> names;
+  for (size_t i = 0; i < tables.size(); ++i)
+    names.push_back(py::isinstance<py::str>(items[i])  ? items[i].cast<std::string>()
+                    : tables[i].subject.empty()         ? "normal " + std::to_string(i)
+                                                        : tables[i].subject);
+  return names;
+}
+
+// What compare and calibrate share: the feature, the reference's recipe and the compare options
+// (the keyword arguments are the fields' names, but fdr); min_cluster as given.
+// long: the keyword arguments, one line each
+CalibrationSettings settings_of(const std::string& feature, const std::string& normalisation, double threshold, double fdr,
+                                int min_cluster, double extend, double relative_extent, double peak,
+                                const std::string& sign, const std::string& test, int smooth, double shrink,
+                                const std::vector<std::string>& covariates, const std::string& participants,
+                                const std::string& image_covariate, double tfce_level) {
+  CalibrationSettings s;
+  s.feature = feature;
+  s.normalisation = parse_normalisation(normalisation);
+  s.smoothing = smooth, s.shrinkage = shrink, s.covariates = covariates, s.image_covariate = image_covariate;
+  CompareOptions& o = s.compare;
   o.threshold = threshold, o.fdr_q = fdr, o.min_cluster = min_cluster, o.extend = extend, o.peak = peak;
   o.relative_extent = relative_extent;
   o.tfce_level = tfce_level;
@@ -87,21 +102,49 @@ py::dict compare_py(const py::list& normals, const py::object& patient, const st
   else if (sign == "hyper") o.sign = 1;
   else if (sign == "hypo") o.sign = -1;
   else throw InputError("sign: '" + sign + "' is not one of both, hyper, hypo");
-  if (const auto bad = compare_option_error(o))  // the keyword arguments are the fields' names, but fdr
+  if (const auto bad = compare_option_error(o))
     throw InputError((bad->field == "fdr_q" ? std::string("fdr") : bad->field) + ": " + bad->problem);
-  const Normalisation n = parse_normalisation(normalisation);
-  std::vector<std::string> names;
-  for (size_t i = 0; i < ns.size(); ++i) names.push_back(ns[i].subject.empty() ? "normal " + std::to_string(i) : ns[i].subject);
   if (covariates.empty() != participants.empty())
     throw InputError("covariates and participants: give both (the columns and the table that holds them) or neither");
+  return s;
+}
+
+// long: the keyword arguments of `vpm compare`, one line each
+py::dict compare_py(const py::list& normals, const py::object& patient, const std::string& feature,
+                    const std::string& normalisation, double threshold, double fdr, int min_cluster, double extend,
+                    double relative_extent, double peak, const std::string& sign, const std::string& test, int smooth, double shrink,
+                    const std::vector<std::string>& covariates, const std::string& participants,
+                    const std::string& image_covariate, double tfce_level, const std::string& calibration,
+                    const std::string& calibration_source) {
+  const std::vector<ElementTable> ns = tables_of(normals);
+  py::list one;
+  one.append(patient);
+  const ElementTable p = tables_of(one).front();
+  if (ns.empty()) throw InputError("normals: no tables");
+  const CalibrationSettings s = settings_of(feature, normalisation, threshold, fdr, min_cluster, extend, relative_extent,
+                                            peak, sign, test, smooth, shrink, covariates, participants,
+                                            image_covariate, tfce_level);
+  const std::vector<std::string> names = names_of(normals, ns);
+  CompareOptions o = s.compare;
+  CalibratedRule rule;
+  if (!calibration.empty()) {  // what a calibration of these normals with these options sets
+    rule = calibrated_rule(Json::parse(calibration), s, names, calibration_source);
+    o.min_cluster = rule.min_cluster, o.peak = rule.peak;
+    if (rule.tfce_level > 0) {
+      if (tfce_level > 0) throw InputError("tfce_level: " + calibration_source + " is a TFCE calibration; it sets the level");
+      o.tfce_level = rule.tfce_level;
+    }
+  }
   const auto [c, ref] = without_gil(nullptr, [&] {
     const CanonicalElements el(p.definition);
     std::optional<Covariates> cov;
     if (!covariates.empty()) cov = read_covariates(participants, covariates);
-    Reference r = build_reference(el, ns, names, feature, n, smooth, shrink,
+    Reference r = build_reference(el, ns, names, feature, s.normalisation, smooth, shrink,
                                   cov ? covariate_design(*cov, ns, names) : CovariateDesign{}, image_covariate);
     const std::vector<double> row = cov ? covariate_row(*cov, p.subject, "the patient") : std::vector<double>{};
-    return std::make_pair(compare_to_reference(el, r, p, o, row), r);
+    Comparison cmp = compare_to_reference(el, r, p, o, row);
+    family_p_values(cmp, rule);
+    return std::make_pair(std::move(cmp), r);
   });
   py::dict out = json_to_python(to_json(c)).cast<py::dict>();
   out["z"] = vector_array(c.z);
@@ -109,7 +152,40 @@ py::dict compare_py(const py::list& normals, const py::object& patient, const st
   out["cluster"] = vector_array(c.cluster);
   out["reference_mean"] = vector_array(c.expected);  // with covariates: the patient's prediction
   out["reference_std"] = vector_array(ref.std);
+  out["min_cluster"] = o.min_cluster, out["peak"] = o.peak, out["tfce_level"] = o.tfce_level;
   return out;
+}
+
+// `vpm calibrate`: each normal left out in turn against the others; peak < 0 calibrates the peak
+// level too ("auto"). The calibration's JSON as `vpm calibrate -o` writes it.
+// long: the keyword arguments of `vpm calibrate`, one line each
+py::object calibrate_py(const py::list& normals, const std::string& feature, const std::string& normalisation,
+                        double threshold, double fdr, double extend, double relative_extent, double peak,
+                        const std::string& sign, const std::string& test, int smooth, double shrink,
+                        const std::vector<std::string>& covariates, const std::string& participants,
+                        const std::string& image_covariate, double rate, bool tfce) {
+  const std::vector<ElementTable> ns = tables_of(normals);
+  if (ns.size() < 4) throw InputError("normals: a calibration leaves each out in turn and needs at least 4, got " +
+                                      std::to_string(ns.size()));
+  CalibrationSettings s = settings_of(feature, normalisation, threshold, fdr, 1, extend, relative_extent,
+                                      peak < 0 ? 0 : peak, sign, test, smooth, shrink, covariates, participants,
+                                      image_covariate, 0);
+  s.calibrate_peak = peak < 0;
+  s.calibrate_tfce = tfce;
+  s.rate = rate;
+  if (tfce && (peak != 0)) throw InputError("tfce and peak exclude each other (a TFCE focus has no peak rule)");
+  if (!(rate >= 0)) throw InputError("rate: must be >= 0 false clusters per 10 normals");
+  const std::vector<std::string> names = names_of(normals, ns);
+  const ClusterCalibration c = without_gil(nullptr, [&] {
+    const CanonicalElements el(ns.front().definition);
+    std::optional<Covariates> cov;
+    if (!covariates.empty()) cov = read_covariates(participants, covariates);
+    return calibrate_min_cluster(el, ns, names, s, cov ? covariate_design(*cov, ns, names) : CovariateDesign{});
+  });
+  if (c.min_cluster == 0)
+    throw NumericalError("calibrate: no min_cluster keeps the normals at or under " + format_sig(rate) +
+                         " false clusters per 10 normals (a peak rule keeps small clusters); lower peak or raise rate");
+  return json_to_python(to_json(c));
 }
 
 void bind_elements(py::module_& m) {
@@ -169,7 +245,14 @@ void bind_collective(py::module_& m) {
         py::arg("min_cluster") = 3, py::arg("extend") = 0.0, py::arg("relative_extent") = 0.0, py::arg("peak") = 0.0, py::arg("sign") = "both",
         py::arg("test") = "z", py::arg("smooth") = 0, py::arg("shrink") = 0.0,
         py::arg("covariates") = std::vector<std::string>{}, py::arg("participants") = "",
-        py::arg("image_covariate") = "", py::arg("tfce_level") = 0.0);
+        py::arg("image_covariate") = "", py::arg("tfce_level") = 0.0, py::arg("calibration") = "",
+        py::arg("calibration_source") = "calibration");
+  m.def("_calibrate", &calibrate_py, py::arg("normals"), py::arg("feature"), py::kw_only(),
+        py::arg("normalisation") = "proportional", py::arg("threshold") = 3.0, py::arg("fdr") = 0.0,
+        py::arg("extend") = 0.0, py::arg("relative_extent") = 0.0, py::arg("peak") = 0.0, py::arg("sign") = "both",
+        py::arg("test") = "z", py::arg("smooth") = 0, py::arg("shrink") = 0.0,
+        py::arg("covariates") = std::vector<std::string>{}, py::arg("participants") = "",
+        py::arg("image_covariate") = "", py::arg("rate") = 1.0, py::arg("tfce") = false);
   m.def("to_native", [](const py::object& mesh, const py::object& points) {
     auto msh = mesh_argument(mesh, py::none());
     Points p = to_points(points, "points");

@@ -14,6 +14,7 @@ name), else on select_device()'s, else on VPM_DEVICE's (docs/design.md 3).
     ball, report = vpm.map_to_ball(mesh)
     print(report.final.vertex_volume_ratio.mean_abs_dev)
 """
+import json
 import os
 import sys
 from dataclasses import dataclass, field
@@ -31,7 +32,7 @@ __all__ = ["Mesh", "Image", "Elements", "ElementTable", "Comparison", "Numerical
            "InitialMapReport", "RegistrationReport", "MapMetrics", "RatioStats", "Report", "SurfaceMapReport",
            "SurfaceMetrics", "read_surface", "read_overlay", "write_surface", "map_to_sphere", "map_to_disk", "register_on_sphere", "register_in_disk", "locate_on_sphere", "mean_curvature",
            "read_mesh", "write_mesh", "validate", "read_image", "write_nifti", "image", "mesh_image",
-           "initial_map", "map_to_ball", "register", "elements", "sample", "compare", "read_table",
+           "initial_map", "map_to_ball", "register", "elements", "sample", "calibrate", "compare", "read_table",
            "to_native", "to_image", "read_label_names", "devices", "select_device", "device_name"]
 
 
@@ -276,21 +277,70 @@ class Comparison:
         return d
 
 
-def compare(normals, patient, feature, **options):
+def _json_document(what, value):
+    """(JSON text, its name in messages) of a dict or of the JSON file at a path."""
+    if isinstance(value, (str, os.PathLike)):
+        try:
+            with open(value, encoding="utf-8") as f:
+                return f.read(), os.fspath(value)
+        except OSError as e:
+            raise ValueError(f"{what}: {os.fspath(value)}: {e.strerror}") from None
+    if isinstance(value, dict):
+        return json.dumps(value), what
+    raise ValueError(f"{what}: expected a dict (vpm.calibrate's) or the path of a JSON file (vpm calibrate -o)")
+
+
+def calibrate(normals, feature, *, rate=1.0, peak=0.0, tfce=False, **options):
+    """The foci rule set by the normals themselves (`vpm calibrate`): each normal (at least 4;
+    ElementTables or paths) compared in turn with the others, with compare's `options` (all but
+    min_cluster), shows only false clusters; the calibration is the smallest min_cluster that
+    keeps them at or under `rate` per 10 normals. peak='auto' also sets the peak rule's level
+    (a smaller cluster is a focus when its peak |z| is stronger than the normals' false ones);
+    tfce=True the threshold-free cluster enhancement level at which at most `rate` normals in 10
+    show a focus (a family-wise rate per subject). Returns the calibration as `vpm calibrate -o`
+    writes it (a dict: min_cluster, peak, tfce_level, the curve, each normal's largest and
+    strongest cluster, ...); pass it to compare(calibration=...). The workflow's foci are
+    compare(extend=2.25, relative_extent=0.22) calibrated with peak='auto', rate=1
+    (docs/cohort.md). vpm.NumericalError when no cluster size holds the rate."""
+    if "min_cluster" in options:
+        raise ValueError("min_cluster: not taken (it is what calibrate finds)")
+    if isinstance(peak, str):
+        if peak != "auto":
+            raise ValueError(f"peak: '{peak}' is neither a level nor 'auto'")
+        peak = -1.0
+    elif peak < 0:
+        raise ValueError("peak: must be >= 0 (0: off) or 'auto'")
+    _list_option(options, "covariates")
+    return _vpm._calibrate(list(normals), feature, rate=rate, peak=peak, tfce=tfce, **options)
+
+
+def _list_option(options, name):
+    if options.get(name) is None:
+        options.pop(name, None)
+    else:
+        options[name] = list(options[name])
+
+
+def compare(normals, patient, feature, *, calibration=None, **options):
     """Compares a patient's table with the normals' (`vpm compare`): proportional scaling, the
     normals' per-element mean and std, z and foci. `normals`: ElementTables or paths; options:
-    normalisation, threshold (3), fdr, min_cluster (3), extend, relative_extent (0; the workflow
-    uses 0.3), peak, sign, test, smooth, shrink (0),
+    normalisation, threshold (3), fdr, min_cluster (3), extend (0; the workflow uses 2.25),
+    relative_extent (0; the workflow uses 0.22), peak, sign, test, smooth, shrink (0),
     covariates (column names, e.g. ["age", "sex"]) with participants (the table that holds them,
     each table looked up by its subject): the reference then models them and reference_mean is
     the patient's prediction; image_covariate (another feature of the tables, e.g. "t1w"): each
     element's model gains the subjects' own value of it there; tfce_level (> 0: threshold-free
     cluster enhancement decides the foci, `vpm compare --tfce-level`; each cluster then has
-    peak_tfce). Returns a Comparison."""
-    if options.get("covariates") is None:
-        options.pop("covariates", None)
-    else:
-        options["covariates"] = list(options["covariates"])
+    peak_tfce). calibration (vpm.calibrate's dict or the path of `vpm calibrate -o`'s file, made
+    on the same normals with the same options; `vpm compare --min-cluster-from`) sets min_cluster,
+    the peak level or the TFCE level, and gives each focus its family-wise p-value (p_family).
+    Returns a Comparison."""
+    _list_option(options, "covariates")
+    if calibration is not None:
+        taken = [k for k in ("min_cluster",) if k in options]
+        if taken:
+            raise ValueError(f"{taken[0]}: the calibration sets it (give one or the other)")
+        options["calibration"], options["calibration_source"] = _json_document("calibration", calibration)
     d = _vpm._compare(list(normals), patient, feature, **options)
     arrays = {k: d.pop(k) for k in ("z", "patient", "cluster", "reference_mean", "reference_std")}
     return Comparison(**arrays, clusters=d.get("clusters", []), threshold_used=d.get("threshold", 0.0),

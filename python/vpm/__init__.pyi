@@ -204,4 +204,12 @@ def compare(normals: Iterable[Union[ElementTable, str]], patient: Union[ElementT
             min_cluster: int = ..., extend: float = ..., relative_extent: float = ..., peak: float = ...,
             sign: Literal["both", "hyper", "hypo"] = ..., test: Literal["z", "crawford-howell"] = ...,
             smooth: int = ..., shrink: float = ..., covariates: Optional[Sequence[str]] = ...,
-            participants: str = ..., image_covariate: str = ...) -> Comparison: ...
+            participants: str = ..., image_covariate: str = ..., tfce_level: float = ...,
+            calibration: Optional[Union[dict, str, os.PathLike]] = ...) -> Comparison: ...
+def calibrate(normals: Iterable[Union[ElementTable, str]], feature: str, *, rate: float = ...,
+              peak: Union[float, Literal["auto"]] = ..., tfce: bool = ...,
+              normalisation: Literal["proportional", "none"] = ..., threshold: float = ..., fdr: float = ...,
+              extend: float = ..., relative_extent: float = ..., sign: Literal["both", "hyper", "hypo"] = ...,
+              test: Literal["z", "crawford-howell"] = ..., smooth: int = ..., shrink: float = ...,
+              covariates: Optional[Sequence[str]] = ..., participants: str = ...,
+              image_covariate: str = ...) -> dict: ...
