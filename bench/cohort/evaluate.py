@@ -22,7 +22,11 @@ Metrics (D = detected voxels, T = planted voxels, native PET grid):
   Jaccard = |D & T| / |D | T|. "Volume overlap" (Hu et al., TVCG 2014: 94.2 % foci overlap for
   vpm vs 82.2 % for individual analysis) is taken to be the sensitivity: the fraction of the
   planted foci volume covered by detected foci. A focus is found when >= 1 detected voxel lies
-  in it; a false-positive cluster is a 26-connected component of D with no truth voxel.
+  in it; a false-positive cluster is a 26-connected component of D with no truth voxel, a false
+  focus one of the method's own foci (a cluster id of its detection image: vpm's focus ids, the
+  voxel-wise analyses' clusters) with no truth voxel. A focus that a native image shows in
+  pieces (an element cluster across a sulcus, a template cluster pulled back) is one focus, true
+  when any piece touches a planted one: each piece that does not is a false-positive cluster.
   Pooled figures sum the voxel counts over patients; means average the per-patient ratios.
 
 Patients planted with no focus (synth_cohort.py --foci-free: an all-zero truth mask) are scored
@@ -178,11 +182,13 @@ def score(detected, truth):
                           "fraction_covered": hit / n, "found": hit > 0})
     comp, ncomp = ndimage.label(d, structure=CONN26)
     with_truth = np.unique(comp[d & t])
+    ids = np.unique(detected[d])
     return {"sensitivity": ratio(inter, nt), "precision": ratio(inter, nd),
             "dice": ratio(2 * inter, nd + nt), "jaccard": ratio(inter, union),
             "volume_overlap": ratio(inter, nt),
             "foci_found": sum(p["found"] for p in per_focus), "foci_planted": len(per_focus),
             "false_positive_clusters": int(ncomp - len(with_truth)),
+            "false_foci": int(len(ids) - len(np.unique(detected[d & t]))),
             "counts": {"intersection": inter, "detected": nd, "truth": nt, "union": union},
             "per_focus": per_focus}
 
@@ -198,7 +204,7 @@ def summarise(scores):
     for k in RATIOS:
         vals = [s[k] for s in scores if s[k] is not None]
         means[k] = float(np.mean(vals)) if vals else None
-    totals = {k: sum(s[k] for s in scores) for k in ("foci_found", "foci_planted", "false_positive_clusters")}
+    totals = {k: sum(s[k] for s in scores) for k in ("foci_found", "foci_planted", "false_positive_clusters", "false_foci")}
     free = [s for s in scores if s["foci_planted"] == 0]  # planted with nothing: an empty truth mask
     return {"mean_over_patients": means, "pooled": pooled, **totals, "foci_free_patients": len(free),
             "false_clusters_in_foci_free": sum(s["false_positive_clusters"] for s in free)}
@@ -328,6 +334,7 @@ def main():
                           "(our reading of Hu et al., TVCG 2014)",
         "foci_found": "planted foci with >= 1 detected voxel",
         "false_positive_clusters": "26-connected components of D with no truth voxel",
+        "false_foci": "the method's own foci (the cluster ids of its detection image) with no truth voxel",
         "foci_free_patients": "patients planted with no focus (an all-zero truth mask)",
         "false_clusters_in_foci_free": "false_positive_clusters summed over the foci-free patients "
                                        "(every cluster detected in them)",
