@@ -12,8 +12,9 @@
       {name, options}: compare flags over the workflow's own, as bench/cohort/compare_variants.py
       takes them; with "calibrate": FLAGS the variant is calibrated on the cohort's normals first,
       `vpm calibrate` with its comparison options and FLAGS, e.g. "--peak auto --rate 1" or
-      "--tfce --rate 0.5", and compared with --min-cluster-from), chooses the variant with the best median Dice over the development cohorts among
-      those with at most 1 false cluster per 10 patients there, and writes DIR/heldout.json and
+      "--tfce --rate 0.5", and compared with --min-cluster-from), chooses the variant with the
+      best median Dice over the development cohorts among those with at most 1 false cluster per
+      10 patients there (none when no variant is: the defaults stay), and writes DIR/heldout.json and
       DIR/heldout.md: every variant on every cohort, the median and worst over each role, and
       beside them the voxel-wise peer where `peer` has run. False clusters are evaluate.py's
       (native voxel pieces touching no planted focus), false foci the method's own foci touching
@@ -251,13 +252,16 @@ def report(a, cohorts, variants, table):
             res["by_role"][r][PEER] = dict(row([table[n][PEER] for n in have]), cohorts=have)
     dev = res["by_role"]["development"]
     ok = [v["name"] for v in variants if (dev[v["name"]]["false_per_10_patients"] or 0) <= 1.0]
-    chosen = max(ok or [v["name"] for v in variants], key=lambda n: (dev[n]["dice_median"], dev[n]["dice_worst"]))
+    chosen = max(ok, key=lambda n: (dev[n]["dice_median"], dev[n]["dice_worst"])) if ok else None
     res["chosen"] = chosen
     res["chosen_within_false_rate"] = bool(ok)
     pct = lambda x: f"{100 * x:.1f}"
-    why = ("best median Dice among the variants with at most 1 false cluster per 10 patients there" if ok else
-           "no variant kept to 1 false cluster per 10 patients there: the best median Dice of all")
-    lines = [f"Chosen on the development cohorts ({', '.join(roles['development'])}): **{chosen}** ({why}).", ""]
+    if ok:
+        lines = [f"Chosen on the development cohorts ({', '.join(roles['development'])}): **{chosen}** (best median "
+                 "Dice among the variants with at most 1 false cluster per 10 patients there).", ""]
+    else:
+        lines = [f"None chosen on the development cohorts ({', '.join(roles['development'])}): no variant kept to 1 "
+                 "false cluster per 10 patients there, so the workflow's defaults stay.", ""]
     for r in ("development", "report"):
         lines += [f"### {r} cohorts ({', '.join(roles[r])})", "",
                   "| variant | options | Dice median / worst | overlap median / worst | precision median / worst | found | "
