@@ -132,8 +132,8 @@ void patch_to_disk(const TriSurface& s, const Points& sphere, const fs::path& ou
     const SurfaceMapResult r = map_to_disk(patch);
     d.patch_map = r.report;
     d.patch_mapped = true;
-    TriSurface disk{r.sphere, patch.triangles, {}, {}};
-    disk.point_data.push_back({"original_position", patch.vertices, false});
+    TriSurface disk{r.sphere, mapped_faces(patch.triangles, r), {}, {}};
+    disk.point_data.push_back({"original_position", extend_to_mapped(patch.vertices, r), false});
     disk.cell_data.push_back({"face_area_ratio", r.report.final.face_ratio, false});
     write_surface((out / "colin27_patch_disk.vtp").string(), disk);
   } catch (const InputError& e) {
@@ -225,7 +225,8 @@ std::string surface_summary(const SurfaceDemo& d, const RegionNames& names) {
                    d.dice_landmarks[i], d.dice_curvature[i], d.dice_curvature_alone[i]);
   if (d.patch_mapped)
     o << "a cortical patch of colin27 (" << d.patch_map.faces << " faces) to the disk: face area |r-1| " << pct(d.patch_map.final)
-      << ", " << d.patch_map.final.flipped_faces << " flipped, " << d.patch_map.ears << " ears\n";
+      << ", " << d.patch_map.final.flipped_faces << " flipped, " << d.patch_map.ears << " ears ("
+      << d.patch_map.split_edges << " split)\n";
   else
     o << "the cortical patch was not a disk: " << d.patch_note << "\n";
   return o.str();

@@ -89,13 +89,15 @@ int map_surface(const Args& args, const std::string& in, const std::string& out,
   }
   const SurfaceMapReport& rep = r.report;
 
+  // the mapped surface: the input's faces, or with its ears split (disk; vertices appended, the
+  // input positions and overlays there their edge's means)
   TriSurface mapped;
   mapped.vertices = r.sphere;
-  mapped.triangles = surface.triangles;
-  mapped.point_data.push_back({"original_position", surface.vertices, false});
+  mapped.triangles = mapped_faces(surface.triangles, r);
+  mapped.point_data.push_back({"original_position", extend_to_mapped(surface.vertices, r), false});
   mapped.point_data.push_back({"vertex_area_ratio", rep.final.vertex_ratio, false});
   mapped.cell_data.push_back({"face_area_ratio", rep.final.face_ratio, false});
-  for (const Field& f : overlays) mapped.point_data.push_back(f);
+  for (const Field& f : overlays) mapped.point_data.push_back({f.name, extend_to_mapped(f.values, r), f.integer});
   t0 = Clock::now();
   write_surface(out, mapped);
   Json report = to_json(rep);

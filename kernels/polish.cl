@@ -66,12 +66,14 @@ inline void polish_gather(const int v, __global const int* inc_ptr, __global con
   *sz = az;
 }
 
-// s = P A^T y; P: flags 0 free, 1 tangent to the sphere at x_v, 2 zero, 3 in an anchor group:
+// w = P A^T y; P: flags 0 free, 1 tangent to the sphere at x_v, 2 zero, 3 in an anchor group:
 // anchor[v] = g and anchor_row[v] = its row there, the group's vertices
 // group_vertex[group_ptr[g] ..) and its projector (k x k, row-major at
-// group_matrix[group_offset[g]]): s_v = sum_j P[row][j] (A^T y)_(vertex j);
-// partial[g] = |s|^2, partial[G + g] = |y|^2 over this work item's range of y (used once for
-// |b|^2 and for the final |r|^2).
+// group_matrix[group_offset[g]]): w_v = sum_j P[row][j] (A^T y)_(vertex j).
+// recur 0 (the start, y = b): s = w, partial[g] = |s|^2, partial[G + g] = |y|^2 over this work
+// item's range of the m tets' rows.
+// recur 1 (an iteration, y = q = A p): s -= alpha w and dx += alpha p (alpha = S[P_ALPHA], the
+// gradient's recurrence of host/map/polish_cgls.hpp), partial[g] = |s|^2, partial[G + g] = 0.
 __kernel void polish_apply_t(const int n, const int m, __global const int* inc_ptr,
                              __global const int* inc_slot, __global const real* sg,
                              __global const real* y, __global const char* flags,
@@ -79,8 +81,10 @@ __kernel void polish_apply_t(const int n, const int m, __global const int* inc_p
                              __global const int* anchor, __global const int* anchor_row,
                              __global const int* group_ptr,
                              __global const int* group_vertex, __global const int* group_offset,
-                             __global const real* group_matrix) {
+                             __global const real* group_matrix, const int recur,
+                             __global const real* S, __global real* dx, __global const real* p) {
   REDUCE_SCRATCH;
+  const real alpha = recur ? S[P_ALPHA] : 0.0;
   real acc = 0.0;
   STRIDE_BEGIN(n) {
     real sx = 0.0, sy = 0.0, sz = 0.0;
@@ -103,14 +107,35 @@ __kernel void polish_apply_t(const int n, const int m, __global const int* inc_p
         sz += P[j] * gz;
       }
     }
+    if (recur) {
+      sx = s[3 * i] - alpha * sx;
+      sy = s[3 * i + 1] - alpha * sy;
+      sz = s[3 * i + 2] - alpha * sz;
+      for (int c = 0; c < 3; ++c) dx[3 * i + c] += alpha * p[3 * i + c];
+    }
     s[3 * i] = sx;
     s[3 * i + 1] = sy;
     s[3 * i + 2] = sz;
     acc += sx * sx + sy * sy + sz * sz;
   }
   real yy = 0.0;
-  STRIDE_BEGIN(m) yy += y[i] * y[i];
+  if (!recur) {
+    STRIDE_BEGIN(m) yy += y[i] * y[i];
+  }
   STORE_PARTIALS(acc, yy, partial);
+}
+
+// partial[G + g] = |b - q|^2 over this work item's range of the m tets' rows (the final residual,
+// q = A dx), partial[g] = 0
+__kernel void polish_residual(const int m, __global const real* b, __global const real* q,
+                              __global real* partial) {
+  REDUCE_SCRATCH;
+  real rr = 0.0;
+  STRIDE_BEGIN(m) {
+    const real d = b[i] - q[i];
+    rr += d * d;
+  }
+  STORE_PARTIALS(0.0, rr, partial);
 }
 
 __kernel void polish_scalars(const int G, const int op, __global const real* partial,
@@ -119,14 +144,6 @@ __kernel void polish_scalars(const int G, const int op, __global const real* par
   real p0, p1;
   COMBINE_PARTIALS(G, partial, op == P_OP_INIT || op == P_OP_RR, p0, p1);
   if (get_global_id(0) == 0) pl_scalars(op, p0, p1, S);
-}
-
-// dx += alpha p (3n entries); r -= alpha q (m entries)
-__kernel void polish_update(const int n3, const int m, __global const real* S, __global real* dx,
-                            __global const real* p, __global real* r, __global const real* q) {
-  const real alpha = S[P_ALPHA];
-  STRIDE_BEGIN(n3) dx[i] += alpha * p[i];
-  STRIDE_BEGIN(m) r[i] -= alpha * q[i];
 }
 
 // p = s + beta p; with beta = 0 (the first call, or once stopped) p = s, never reading p

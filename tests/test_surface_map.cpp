@@ -79,6 +79,31 @@ TriSurface bumpy_disk(int rings, int sectors) {
   return s;
 }
 
+// bumpy_disk cut by a straight line (the faces whose centroid has x < 0.55 kept, vertices
+// renumbered): the cut's zigzag leaves faces whose three corners are on the boundary (ears).
+TriSurface cut_disk() {
+  const TriSurface d = bumpy_disk(12, 48);
+  std::vector<int> id(static_cast<size_t>(d.vertices.rows()), -1), kept;
+  std::vector<Eigen::RowVector3i> faces;
+  for (Eigen::Index t = 0; t < d.triangles.rows(); ++t) {
+    const double x = d.vertices(d.triangles(t, 0), 0) + d.vertices(d.triangles(t, 1), 0) + d.vertices(d.triangles(t, 2), 0);
+    if (x / 3 >= 0.55) continue;
+    Eigen::RowVector3i f;
+    for (int k = 0; k < 3; ++k) {
+      int& v = id[static_cast<size_t>(d.triangles(t, k))];
+      if (v < 0) v = static_cast<int>(kept.size()), kept.push_back(d.triangles(t, k));
+      f(k) = v;
+    }
+    faces.push_back(f);
+  }
+  TriSurface s;
+  s.vertices.resize(static_cast<Eigen::Index>(kept.size()), 3);
+  for (size_t i = 0; i < kept.size(); ++i) s.vertices.row(static_cast<Eigen::Index>(i)) = d.vertices.row(kept[i]);
+  s.triangles.resize(static_cast<Eigen::Index>(faces.size()), 3);
+  for (size_t t = 0; t < faces.size(); ++t) s.triangles.row(static_cast<Eigen::Index>(t)) = faces[t];
+  return s;
+}
+
 }  // namespace
 
 TEST_CASE("disk map: a disk with a bump reaches face areas within 0.5 %, boundary on the circle, none flipped") {
@@ -107,6 +132,58 @@ TEST_CASE("disk map: a disk with a bump reaches face areas within 0.5 %, boundar
   Json j = to_json(rep);
   CHECK(j["domain"].string() == "disk");
   CHECK(j["disk_map"]["boundary_vertices"].number() == 48);
+}
+
+TEST_CASE("disk map: ears are split (an interior edge halved each) and then keep their area") {
+  const TriSurface s = cut_disk();
+  validate_disk_surface(s, "cut disk");
+  const Eigen::Index n = s.vertices.rows(), m = s.triangles.rows();
+  SurfaceMapOptions keep;
+  keep.split_ears = false;
+  const SurfaceMapResult as_is = map_to_disk(s, keep);
+  CHECK(as_is.report.ears == 4);
+  CHECK(as_is.report.split_edges == 0);
+  CHECK(as_is.sphere.rows() == n);
+  CHECK(&mapped_faces(s.triangles, as_is) == &s.triangles);
+  CHECK(as_is.report.final.face_area_ratio.min < 0.05);  // the ears stay crushed on the circle
+
+  const SurfaceMapResult r = map_to_disk(s);
+  const SurfaceMapReport& rep = r.report;
+  CHECK(rep.ears == 4);
+  CHECK(rep.split_edges == 4);
+  REQUIRE(r.added.size() == 4);
+  REQUIRE(r.sphere.rows() == n + 4);
+  const Triangles& f = mapped_faces(s.triangles, r);
+  CHECK(f.rows() == m + 8);  // each halved edge splits its two faces
+  CHECK(f.maxCoeff() == n + 3);
+  CHECK(rep.final.flipped_faces == 0);
+  CHECK(rep.final.face_area_ratio.mean_abs_dev <= 0.005);
+  CHECK(rep.final.face_area_ratio.min > 0.8);
+  CHECK(rep.final.face_ratio.size() == f.rows());
+  for (int i = 0; i < 4; ++i) CHECK(r.sphere.row(n + i).norm() < 1 - 1e-6);  // the new vertices are interior
+  // the input's positions carried: the added rows the midpoints of their edges; the metrics
+  // against them are the report's
+  const FieldValues ref = extend_to_mapped(s.vertices, r);
+  REQUIRE(ref.rows() == n + 4);
+  CHECK(ref.topRows(n) == FieldValues(s.vertices));
+  for (int i = 0; i < 4; ++i)
+    CHECK((ref.row(n + i) - 0.5 * (s.vertices.row(r.added[i][0]) + s.vertices.row(r.added[i][1]))).norm() == 0.0);
+  const SurfaceMetrics again = surface_metrics(ref, r.sphere, f, SurfaceDomain::disk);
+  CHECK(again.face_area_ratio.mean_abs_dev == Approx(rep.final.face_area_ratio.mean_abs_dev).epsilon(1e-12));
+  CHECK_THROWS_WITH(extend_to_mapped(FieldValues::Zero(n + 1, 1), r), Catch::Contains("rows"));
+  CHECK(to_json(rep)["disk_map"]["split_edges"].number() == 4);
+  // vpm map writes the split surface: its vertices and faces, the input positions there
+  const std::string dir = vpm::test::fresh_dir("ears");
+  write_surface(dir + "/cut.off", s);
+  REQUIRE(run_status(kVpm + " map " + dir + "/cut.off -o " + dir + "/disk.vtp --report " + dir + "/r.json --quiet") ==
+          0);
+  const TriSurface out = read_surface(dir + "/disk.vtp");
+  CHECK(out.vertices.rows() == n + 4);
+  CHECK(out.triangles == f);
+  CHECK_THAT(slurp(dir + "/disk.vtp"), Catch::Contains("Name=\"original_position\""));
+  Json j = Json::parse(slurp(dir + "/r.json"));
+  CHECK(j["disk_map"]["split_edges"].number() == 4);
+  CHECK(j["input"]["vertices"].number() == static_cast<double>(n));
 }
 
 TEST_CASE("surface map: an ellipsoid with a bump reaches face areas within 0.5 %, every face outwards") {

@@ -15,7 +15,8 @@ Surfaces, all from data Debian ships:
       come (irregular triangles)
   colin27-patch-ears, colin27-patch  disk-like: the faces of colin27-22k whose centroid lies in
       the top 35 % of its height, as cut (with "ears": faces whose three corners are on the
-      cut), and with the ears removed; mapped to the unit disk
+      cut; `vpm map` splits them, SurfaceMapOptions::split_ears), and with the ears removed from
+      the input; mapped to the unit disk
 The split (docs/surfaces.md): defaults of the surface map were chosen on the DEVELOPMENT set
 (aal-19k, cgal-cow, cgal-homer) and are reported on the others.
 """
@@ -119,7 +120,7 @@ def one(vpm, out, name, runs, timeout):
                flipped=r["final"]["flipped_faces"], steps=len(r["rounds"]), stop=r["stop_reason"], domain=r["domain"],
                face_p99_log=r["final"]["face_area_ratio"]["p99_abs_log"],
                start=r.get("sphere_map", {}).get("start", "disk"),
-               ears=r.get("disk_map", {}).get("ears"),
+               ears=r.get("disk_map", {}).get("ears"), split_edges=r.get("disk_map", {}).get("split_edges"),
                converged=r["converged"], polish_s=r["timings_s"]["polish"])
     return row
 

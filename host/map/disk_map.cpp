@@ -1,10 +1,13 @@
-// The area-preserving map of a disk-like surface to the unit disk (vpm/surface_map.hpp): the
-// boundary loop on the unit circle by arc length, the interior by Floater's mean value
+// The area-preserving map of a disk-like surface to the unit disk (vpm/surface_map.hpp): ears
+// split, the boundary loop on the unit circle by arc length, the interior by Floater's mean value
 // coordinates (fold-free: each interior vertex a convex combination of its neighbours, Tutte's
 // theorem), then the polish of the face areas (map/surface_polish.hpp) in the plane.
 #include <Eigen/Geometry>
 #include <Eigen/SparseLU>
+#include <algorithm>
 #include <cmath>
+#include <map>
+#include <utility>
 #include <vector>
 
 #include "map/surface_area.hpp"
@@ -75,7 +78,81 @@ Points disk_embedding(const Points& x, const Triangles& f, const std::vector<int
   return u;
 }
 
+// The ears (faces whose three corners are on the boundary) split: each ear's longest interior
+// edge (one shared by two faces) halved by a new vertex appended to `x`, the faces on a halved
+// edge replaced by two (corner order, so orientation, kept). A new vertex is interior (its edge
+// is), so no face left has three boundary corners, unless an ear has no interior edge (the
+// surface is that one face). Returns the faces; `added` gets each new vertex's edge ends.
+Triangles split_ears(Points& x, const Triangles& f, const std::vector<char>& boundary,
+                     std::vector<std::array<int, 2>>& added) {
+  const int n = static_cast<int>(x.rows());
+  std::map<std::pair<int, int>, int> faces_on;  // edge (low, high) -> faces on it
+  auto key = [](int a, int b) { return std::make_pair(std::min(a, b), std::max(a, b)); };
+  for (Eigen::Index t = 0; t < f.rows(); ++t)
+    for (int k = 0; k < 3; ++k) ++faces_on[key(f(t, k), f(t, (k + 1) % 3))];
+  std::map<std::pair<int, int>, int> mid;  // halved edge -> its new vertex
+  for (Eigen::Index t = 0; t < f.rows(); ++t) {
+    if (!(boundary[static_cast<size_t>(f(t, 0))] && boundary[static_cast<size_t>(f(t, 1))] &&
+          boundary[static_cast<size_t>(f(t, 2))]))
+      continue;
+    std::pair<int, int> best{-1, -1};
+    double best_len = -1;
+    for (int k = 0; k < 3; ++k) {
+      const auto e = key(f(t, k), f(t, (k + 1) % 3));
+      const double len = (x.row(e.first) - x.row(e.second)).squaredNorm();
+      if (faces_on[e] == 2 && len > best_len) best = e, best_len = len;
+    }
+    if (best.first >= 0 && !mid.count(best)) {
+      mid[best] = n + static_cast<int>(added.size());
+      added.push_back({best.first, best.second});
+    }
+  }
+  if (added.empty()) return f;
+  x.conservativeResize(n + static_cast<Eigen::Index>(added.size()), 3);
+  for (size_t i = 0; i < added.size(); ++i)
+    x.row(n + static_cast<Eigen::Index>(i)) = 0.5 * (x.row(added[i][0]) + x.row(added[i][1]));
+  // a face has at most one halved edge unless two ears chose two of its edges: then its halves are
+  // split again (the loop below runs until no face holds a halved edge)
+  std::vector<Eigen::RowVector3i> out;
+  std::vector<Eigen::RowVector3i> todo;
+  for (Eigen::Index t = 0; t < f.rows(); ++t) todo.push_back(f.row(t));
+  while (!todo.empty()) {
+    const Eigen::RowVector3i t = todo.back();
+    todo.pop_back();
+    int k = 0;
+    while (k < 3 && !mid.count(key(t(k), t((k + 1) % 3)))) ++k;
+    if (k == 3) {
+      out.push_back(t);
+      continue;
+    }
+    const int p = t(k), q = t((k + 1) % 3), r = t((k + 2) % 3), m = mid.at(key(p, q));
+    todo.emplace_back(p, m, r);
+    todo.emplace_back(m, q, r);
+  }
+  Triangles g(static_cast<Eigen::Index>(out.size()), 3);
+  // the faces in the input's order where they are kept (the loop above reversed them)
+  std::reverse(out.begin(), out.end());
+  for (size_t i = 0; i < out.size(); ++i) g.row(static_cast<Eigen::Index>(i)) = out[i];
+  return g;
+}
+
 }  // namespace
+
+FieldValues extend_to_mapped(const FieldValues& values, const SurfaceMapResult& result) {
+  const Eigen::Index n = result.sphere.rows() - static_cast<Eigen::Index>(result.added.size());
+  if (values.rows() != n)
+    throw InputError("a per-vertex field has " + std::to_string(values.rows()) + " rows, the surface " +
+                     std::to_string(n) + " vertices");
+  FieldValues out(result.sphere.rows(), values.cols());
+  out.topRows(n) = values;
+  for (size_t i = 0; i < result.added.size(); ++i)
+    out.row(n + static_cast<Eigen::Index>(i)) = 0.5 * (values.row(result.added[i][0]) + values.row(result.added[i][1]));
+  return out;
+}
+
+const Triangles& mapped_faces(const Triangles& input_faces, const SurfaceMapResult& result) {
+  return result.added.empty() ? input_faces : result.faces;
+}
 
 SurfaceMapResult map_to_disk(const TriSurface& input, const SurfaceMapOptions& opt) {
   const auto t_total = Clock::now();
@@ -86,30 +163,40 @@ SurfaceMapResult map_to_disk(const TriSurface& input, const SurfaceMapOptions& o
   rep.vertices = static_cast<int>(input.vertices.rows());
   rep.faces = static_cast<int>(input.triangles.rows());
   rep.tolerance = opt.tolerance;
-  const Triangles& f = input.triangles;
-  const int n = rep.vertices;
-  const std::vector<int> loop = detail::boundary_loop(n, f, "surface");
-  detail::SurfaceDomainMoves domain{SurfaceDomain::disk, std::vector<char>(static_cast<size_t>(n), 0)};
-  for (int v : loop) domain.boundary[static_cast<size_t>(v)] = 1;
+  const int n_in = rep.vertices;
+  const std::vector<int> loop = detail::boundary_loop(n_in, input.triangles, "surface");
+  std::vector<char> on_loop(static_cast<size_t>(n_in), 0);
+  for (int v : loop) on_loop[static_cast<size_t>(v)] = 1;
   rep.boundary_vertices = static_cast<int>(loop.size());
-  for (Eigen::Index t = 0; t < f.rows(); ++t)
-    if (domain.boundary[static_cast<size_t>(f(t, 0))] && domain.boundary[static_cast<size_t>(f(t, 1))] &&
-        domain.boundary[static_cast<size_t>(f(t, 2))])
+  for (Eigen::Index t = 0; t < input.triangles.rows(); ++t)
+    if (on_loop[static_cast<size_t>(input.triangles(t, 0))] && on_loop[static_cast<size_t>(input.triangles(t, 1))] &&
+        on_loop[static_cast<size_t>(input.triangles(t, 2))])
       ++rep.ears;
+  // the surface mapped: the input, or with its ears split (new vertices interior, after the input's)
+  Points reference = input.vertices;
+  if (opt.split_ears && rep.ears > 0) res.faces = split_ears(reference, input.triangles, on_loop, res.added);
+  rep.split_edges = static_cast<int>(res.added.size());
+  const Triangles& f = mapped_faces(input.triangles, res);
+  const int n = static_cast<int>(reference.rows());
+  detail::SurfaceDomainMoves domain{SurfaceDomain::disk, std::vector<char>(static_cast<size_t>(n), 0)};
+  std::copy(on_loop.begin(), on_loop.end(), domain.boundary.begin());
+  if (opt.progress && rep.split_edges > 0)
+    opt.progress(
+        strprintf("disk map: %d ears split (%d interior edges halved, a vertex each)", rep.ears, rep.split_edges));
 
   auto t0 = Clock::now();
-  Points x = disk_embedding(input.vertices, f, loop, domain.boundary);
+  Points x = disk_embedding(reference, f, loop, domain.boundary);
   rep.seconds_sphere_map = seconds_since(t0);
-  rep.initial = surface_metrics(input.vertices, x, f, SurfaceDomain::disk);
+  rep.initial = surface_metrics(reference, x, f, SurfaceDomain::disk);
   if (rep.initial.flipped_faces > 0)
     throw NumericalError("map_to_disk: the mean value embedding flipped " + std::to_string(rep.initial.flipped_faces) +
                          " faces (a boundary vertex whose faces are all on the circle?)");
   if (opt.progress)
     opt.progress(strprintf("disk embedding: face area mean |r-1| %.4f, %.2f s", rep.initial.face_area_ratio.mean_abs_dev,
                            rep.seconds_sphere_map));
-  detail::polish_surface(domain, f, detail::face_areas(input.vertices, f), opt, x, rep);
+  detail::polish_surface(domain, f, detail::face_areas(reference, f), opt, x, rep);
   res.sphere = std::move(x);
-  rep.final = surface_metrics(input.vertices, res.sphere, f, SurfaceDomain::disk);
+  rep.final = surface_metrics(reference, res.sphere, f, SurfaceDomain::disk);
   rep.converged = rep.final.face_area_ratio.mean_abs_dev <= opt.tolerance;
   rep.seconds_total = seconds_since(t_total);
   return res;

@@ -84,7 +84,7 @@ struct DevicePolisher::Impl {
   bc::vector<double> group_matrix;
   bc::vector<char> freedom;
   bc::vector<double> x, target, sg, b, r, q, dx, p, s, partial, S;
-  bc::kernel k_setup, k_apply, k_apply_t, k_scalars, k_update, k_update_p;
+  bc::kernel k_setup, k_apply, k_start, k_recur, k_scalars, k_update_p, k_apply_dx, k_residual;
   Impl(Device& d, int n_, int m_, int rows_)
       : dev(d), n(n_), m(m_), rows(rows_), tets(d.cl().context), inc_ptr(d.cl().context), inc_slot(d.cl().context),
         anchor(d.cl().context), anchor_row(d.cl().context), group_ptr(d.cl().context), group_vertex(d.cl().context), group_offset(d.cl().context),
@@ -96,12 +96,13 @@ struct DevicePolisher::Impl {
     k_scalars.set_arg(1, op);
     dev.cl().launch(k_scalars, dev.combine_items());
   }
-  void apply_t() { dev.cl().launch(k_apply_t, G); }   // s = P A^T r; |s|^2, |r|^2
+  void start() { dev.cl().launch(k_start, G); }       // s = P A^T b; |s|^2, |b|^2
   void apply() { dev.cl().launch(k_apply, G); }       // q = A p; |q|^2
-  void update() { dev.cl().launch(k_update, G); }     // dx += alpha p; r -= alpha q
+  void update() { dev.cl().launch(k_recur, G); }      // s -= alpha P A^T q, dx += alpha p; |s|^2
   void update_p() { dev.cl().launch(k_update_p, G); } // p = s + beta p
   bool stopped() const { return false; }              // never waits for the device
   PolishDirection result();
+  void make_kernels();
 };
 
 namespace {
@@ -188,27 +189,41 @@ DevicePolisher::DevicePolisher(Device& dev, const Tets& tets, int n, const std::
     bc::fill(v->begin(), v->end(), 0.0, queue);
   if (!hold_sg.empty()) bc::copy(hold_sg.begin(), hold_sg.end(), I.sg.begin() + 12 * static_cast<size_t>(m), queue);
 
-  I.k_setup = dev.cl().kernel("polish", "polish_setup");
-  I.k_setup.set_args(m, I.tets, I.x, I.target, I.sg, I.b, I.r);
-  I.k_apply = dev.cl().kernel("polish", "polish_apply");
-  I.k_apply.set_args(rows, I.tets, I.sg, I.p, I.q, I.partial);
-  I.k_apply_t = dev.cl().kernel("polish", "polish_apply_t");
-  I.k_apply_t.set_args(n, m, I.inc_ptr, I.inc_slot, I.sg, I.r, I.freedom, I.x, I.s, I.partial, I.anchor,
-                       I.anchor_row, I.group_ptr, I.group_vertex, I.group_offset, I.group_matrix);
-  I.k_scalars = dev.cl().kernel("polish", "polish_scalars");
-  I.k_scalars.set_arg(0, static_cast<int>(dev.reduction_partials(I.G)));
-  set_args_at(I.k_scalars, 2, I.partial, I.S);
-  I.k_update = dev.cl().kernel("polish", "polish_update");
-  I.k_update.set_args(3 * n, rows, I.S, I.dx, I.p, I.r, I.q);
-  I.k_update_p = dev.cl().kernel("polish", "polish_update_p");
-  I.k_update_p.set_args(3 * n, I.S, I.p, I.s);
+  I.make_kernels();
 }
 
 DevicePolisher::~DevicePolisher() = default;
 
+// The kernels with their arguments bound (the buffers exist).
+void DevicePolisher::Impl::make_kernels() {
+  auto& cl = dev.cl();
+  k_setup = cl.kernel("polish", "polish_setup");
+  k_setup.set_args(m, tets, x, target, sg, b, r);
+  k_apply = cl.kernel("polish", "polish_apply");
+  k_apply.set_args(rows, tets, sg, p, q, partial);
+  // the start reads y = r (b on the tets' rows, 0 on the holds'), the iterations y = q
+  k_start = cl.kernel("polish", "polish_apply_t");
+  k_start.set_args(n, m, inc_ptr, inc_slot, sg, r, freedom, x, s, partial, anchor, anchor_row, group_ptr,
+                   group_vertex, group_offset, group_matrix, 0, S, dx, p);
+  k_recur = cl.kernel("polish", "polish_apply_t");
+  k_recur.set_args(n, m, inc_ptr, inc_slot, sg, q, freedom, x, s, partial, anchor, anchor_row, group_ptr,
+                   group_vertex, group_offset, group_matrix, 1, S, dx, p);
+  k_apply_dx = cl.kernel("polish", "polish_apply");  // q = A dx, for the final residual
+  k_apply_dx.set_args(rows, tets, sg, dx, q, partial);
+  k_residual = cl.kernel("polish", "polish_residual");
+  k_residual.set_args(m, b, q, partial);
+  k_scalars = cl.kernel("polish", "polish_scalars");
+  k_scalars.set_arg(0, static_cast<int>(dev.reduction_partials(G)));
+  set_args_at(k_scalars, 2, partial, S);
+  k_update_p = cl.kernel("polish", "polish_update_p");
+  k_update_p.set_args(3 * n, S, p, s);
+}
+
 PolishDirection DevicePolisher::Impl::result() {
   auto& queue = dev.cl().queue;
-  scalars(P_OP_RR);  // |r|^2 from the partials of the last apply_t
+  dev.cl().launch(k_apply_dx, G);  // q = A dx
+  dev.cl().launch(k_residual, G);  // |b - q|^2
+  scalars(P_OP_RR);
   PolishDirection res;
   res.dx = Points::Zero(n, 3);
   bc::copy(dx.begin(), dx.begin() + 3 * static_cast<size_t>(n), res.dx.data(), queue);

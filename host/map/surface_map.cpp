@@ -43,6 +43,7 @@ Json to_json(const SurfaceMapReport& r) {
   } else {
     j["disk_map"]["boundary_vertices"] = r.boundary_vertices;
     j["disk_map"]["ears"] = r.ears;
+    j["disk_map"]["split_edges"] = r.split_edges;
     j["disk_map"]["weights"] = "mean value";
   }
   j["stop_reason"] = r.stop_reason;

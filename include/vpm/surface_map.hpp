@@ -15,7 +15,10 @@
 //     each step put back on the sphere, halved while it flips a face, kept only while it lowers
 //     the face distortion.
 //
-// To the disk: the boundary loop on the unit circle at angles proportional to its arc length,
+// To the disk: faces with all three corners on the boundary loop ("ears") split first (one of
+// their interior edges halved: on the circle such a face spans about the cube of its corners'
+// spacing, far below its share, whatever the map), then the boundary loop on the unit circle at
+// angles proportional to its arc length,
 // the interior by Floater's mean value coordinates (a convex combination of its neighbours,
 // fold-free by Tutte's theorem), then the same polish, interior vertices moving in the plane
 // and boundary vertices along the circle.
@@ -25,6 +28,7 @@
 // flipped when its chord triangle faces the centre (det(a, b, c) <= 0), in the disk when it
 // turns clockwise. The maps never return a flipped face.
 #include <Eigen/Core>
+#include <array>
 #include <functional>
 #include <string>
 #include <vector>
@@ -58,6 +62,11 @@ struct SurfaceMapOptions {
   /// and balancing steps); the tet-specific fields are ignored.
   InitialMapOptions sphere{};
   Deadline deadline{};  ///< checked before every polish step
+  /// Disk maps: split each ear (a face whose three corners are on the boundary loop) by halving
+  /// its longest interior edge before the map, the new vertices appended after the input's
+  /// (SurfaceMapResult::added). False maps the input's faces as they are, and its ears stay
+  /// crushed (the map then misses a tolerance near 0.5 % wherever a cut left ears).
+  bool split_ears = true;
   /// Called with one line per step (progress display); may be empty.
   std::function<void(const std::string&)> progress;
 };
@@ -99,6 +108,7 @@ struct SurfaceMapReport {
   /// is about the cube of its corners' spacing, far below its share: these maps miss the
   /// tolerance (docs/surfaces.md).
   int ears = 0;
+  int split_edges = 0;                      ///< disk: interior edges halved to remove the ears
   bool reversed = false;                    ///< the input's faces pointed inwards (mapped reversed)
   SphereMapReport sphere;                   ///< step 1 (sphere)
   SurfaceMetrics initial;                   ///< after step 1
@@ -120,11 +130,23 @@ struct SurfaceMapReport {
 Json to_json(const SurfaceMapReport& report);
 
 struct SurfaceMapResult {
-  /// n x 3, same rows as the input: on the unit sphere, or in the unit disk (z = 0, the
-  /// boundary loop on the unit circle)
+  /// On the unit sphere, or in the unit disk (z = 0, the boundary loop on the unit circle): the
+  /// input's n rows, then one row per vertex added by splitting ears (`added`)
   Points sphere;
+  /// The mapped faces when ears were split (indices into `sphere`); empty: the input's faces
+  Triangles faces;
+  /// Per added vertex n + i, the two input vertices whose edge it halves
+  std::vector<std::array<int, 2>> added;
   SurfaceMapReport report;
 };
+
+/// A per-vertex field of the input (n rows) carried to the mapped surface's vertices: each added
+/// vertex (SurfaceMapResult::added) gets the mean of its edge's two ends (the midpoint, for
+/// positions). Throws InputError when `values` does not have the input's n rows.
+FieldValues extend_to_mapped(const FieldValues& values, const SurfaceMapResult& result);
+
+/// The faces of `result.sphere`: result.faces when ears were split, else `input_faces`.
+const Triangles& mapped_faces(const Triangles& input_faces, const SurfaceMapResult& result);
 
 /// Checks that `surface` is one closed, manifold, genus-0 surface with consistently oriented
 /// faces; throws InputError naming `what` and the first problem (an open or non-manifold edge, a
@@ -140,8 +162,9 @@ void validate_disk_surface(const TriSurface& surface, const std::string& what);
 /// whether it is one).
 SurfaceDomain surface_domain(const TriSurface& surface);
 
-/// Maps `surface` (validate_disk_surface) to the unit disk; see above. Throws InputError for a
-/// surface that is not a disk topologically.
+/// Maps `surface` (validate_disk_surface) to the unit disk; see above (its ears split first
+/// unless options.split_ears is false). Throws InputError for a surface that is not a disk
+/// topologically.
 SurfaceMapResult map_to_disk(const TriSurface& surface, const SurfaceMapOptions& options = {});
 
 /// Maps `surface` (validate_closed_surface) to the unit sphere; see above. `device` (may be

@@ -19,6 +19,8 @@ namespace {
 
 struct SurfaceReport : Report {
   SurfaceMetrics initial, final;
+  Triangles faces;  // of the returned points (the input's unless a disk's ears were split)
+  Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> added;  // per added vertex, its edge's ends
   bool converged = true;
   double seconds = 0;
 };
@@ -188,7 +190,11 @@ void bind_surface(py::module_& m) {
       .def_readonly("initial", &SurfaceReport::initial, "metrics after the sphere map")
       .def_readonly("final", &SurfaceReport::final, "metrics of the returned map")
       .def_readonly("converged", &SurfaceReport::converged, "face area mean |r-1| within the tolerance")
-      .def_readonly("seconds", &SurfaceReport::seconds, "the library call's wall time");
+      .def_readonly("seconds", &SurfaceReport::seconds, "the library call's wall time")
+      .def_property_readonly("faces", [](const SurfaceReport& r) { return owned_array(Triangles(r.faces)); },
+                             "(k, 3) faces of the returned points: the input's, or with a disk's ears split")
+      .def_property_readonly("added", [](const SurfaceReport& r) { return owned_array(decltype(r.added)(r.added)); },
+                             "(a, 2): per vertex added by splitting ears (rows n, n + 1, ...), its edge's ends");
   m.def(
       "_map_to_sphere",
       [](const py::object& vertices, const py::object& faces, int rounds, double tolerance, const std::string& sphere,
@@ -217,6 +223,10 @@ void bind_surface(py::module_& m) {
           report->initial = std::move(r.report.initial);
           report->final = std::move(r.report.final);
           report->converged = r.report.converged;
+          report->faces = mapped_faces(s.triangles, r);
+          report->added.resize(static_cast<Eigen::Index>(r.added.size()), 2);
+          for (size_t i = 0; i < r.added.size(); ++i)
+            report->added.row(static_cast<Eigen::Index>(i)) << r.added[i][0], r.added[i][1];
           return std::move(r.sphere);
         });
         return py::make_tuple(owned_array(std::move(sphere_points)), std::move(report));

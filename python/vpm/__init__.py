@@ -156,8 +156,11 @@ def map_to_sphere(vertices, faces, *, progress=None, **options):
 def map_to_disk(vertices, faces, *, progress=None, **options):
     """Maps a disk-like triangle surface (one boundary loop, no handles) to the unit disk in the
     plane z = 0 preserving local areas: `vpm map` of such a surface. Options as map_to_sphere's
-    (rounds, tolerance, max_seconds, source). Returns (points (n, 3) with z = 0, the boundary
-    loop on the unit circle; vpm.SurfaceMapReport)."""
+    (rounds, tolerance, max_seconds, source). Returns (points (n + a, 3) with z = 0, the boundary
+    loop on the unit circle; vpm.SurfaceMapReport). Faces whose three corners are on the boundary
+    loop ("ears", which cannot keep their area on the circle) are split first, one interior edge
+    halved each: the points then have a row per added vertex after the input's n, and
+    report.faces are their faces (report.added: each added vertex's edge)."""
     return _call(_vpm._map_to_sphere, progress, "map", vertices, faces, disk=True, **options)
 
 

@@ -113,6 +113,17 @@ def test_map_to_disk(vpm):
     assert report.final.flipped_faces == 0
     assert report.final.face_area_ratio.mean_abs_dev <= 0.005 < report.initial.face_area_ratio.mean_abs_dev
     assert np.all(disk[:, 2] == 0) and np.linalg.norm(disk[:, :2], axis=1).max() <= 1 + 1e-12
+    assert np.array_equal(report.faces, faces) and report.added.shape == (0, 2)
+    # cut by a line (centroids x < 0.55): the zigzag leaves ears, split before the map; the
+    # points gain a row per halved edge, report.faces index them
+    keep = [f for f in faces if v[f, 0].mean() < 0.55]
+    used = np.unique(keep)
+    cut_v, cut_f = v[used], np.searchsorted(used, keep)
+    cut, cut_report = vpm.map_to_disk(cut_v, cut_f)
+    d = cut_report.to_dict()["disk_map"]
+    assert d["ears"] == d["split_edges"] == len(cut_report.added) == len(cut) - len(cut_v) > 0
+    assert cut_report.faces.shape == (len(cut_f) + 2 * d["split_edges"], 3) and cut_report.faces.max() == len(cut) - 1
+    assert cut_report.final.face_area_ratio.min > 0.8 and cut_report.final.flipped_faces == 0
     with pytest.raises(ValueError, match="closed"):
         vpm.map_to_disk(*bumpy_ellipsoid(vpm, None))
     # registered in the disk: landmarks (vertex ids) onto targets turned about the centre by up
