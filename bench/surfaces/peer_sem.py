@@ -1,10 +1,10 @@
 #!/usr/bin/python3
-"""The disk map's anchor (docs/surfaces.md): stretch energy minimisation (SEM; Yueh, Lin, Wu and
-Yau, "A Novel Stretch Energy Minimization Algorithm for Equiareal Parameterizations", J. Sci.
+"""The surface maps' anchor (docs/surfaces.md): stretch energy minimisation (SEM; Yueh, Lin, Wu
+and Yau, "A Novel Stretch Energy Minimization Algorithm for Equiareal Parameterizations", J. Sci.
 Comput. 78, 2019), written here from the paper's formulas (numpy and scipy; not the authors'
-MATLAB code), run on the same disk-like surfaces as `vpm map` and scored the same way.
+MATLAB code), run on the same surfaces as `vpm map` and scored the same way.
 
-SEM, as implemented:
+SEM to the disk, as implemented:
   1. the harmonic map (cotangent weights) with the boundary loop on the unit circle at angles
      proportional to its arc length;
   2. the stretch Laplacian L_S(f): edge weights w_ij = sum over the edge's faces t of
@@ -15,10 +15,16 @@ SEM, as implemented:
      interior f_I = -L_II^-1 L_IB f_B; L_S recomputed; stop when the stretch energy
      E_S(f) = 1/2 trace(f^T L_S(f) f) rises (the previous map is kept), falls by less than
      --tolerance of itself, or after --iterations.
+SEM to the sphere, as implemented: from the conformal sphere map (vpm's own, `vpm map --sphere
+conformal --rounds 0`: the conformal map and its Moebius balancing), the stretch Laplacian of the
+sphere's chord triangles against the input's areas (scaled to the chords' total); repeat: the
+stereographic plane inverted (the other hemisphere becomes the inner one), the points inside
+radius 1.3 solved with the others held, the plane scaled to a median radius 1, back to the sphere,
+the Laplacian recomputed; the same stopping rule.
 The score (as vpm's surface metrics): face area ratios (A_f / sum A) / (A0_f / sum A0) of the
 flat triangles, mean |r - 1|, and the faces turned against the majority (flipped).
 
-Usage: peer_sem.py OUT_DIR [--runs 3] [--surfaces colin27-patch-ears,colin27-patch]
+Usage: peer_sem.py OUT_DIR [--runs 3] [--surfaces colin27-patch-ears,colin27-patch,colin27-22k,...]
                    [--iterations 1000] [--tolerance 1e-6] [--vpm build/vpm]
 Surfaces are prepared as bench/surfaces/run.py prepares them (OUT_DIR/NAME.off). Writes
 OUT_DIR/peer_sem.json and OUT_DIR/peer_sem.md (and prints the table).
@@ -122,8 +128,49 @@ def sem_disk(v, f, iterations, tolerance):
     return uv, done
 
 
+def sem_sphere(v, f, start, iterations, tolerance, radius=1.3):
+    """SEM on the sphere from the sphere map `start` (n x 3 unit vectors)."""
+    area0 = face_areas(v, f)
+    x = start.copy()
+    area0 = area0 * face_areas(x, f).sum() / area0.sum()
+
+    def plane(x):  # stereographic projection from the north pole
+        return x[:, :2] / (1 - x[:, 2:3])
+
+    def sphere(uv):
+        r2 = np.sum(uv * uv, axis=1, keepdims=True)
+        return np.column_stack([2 * uv, r2 - 1]) / (1 + r2)
+
+    def energy(x, L):
+        return 0.5 * float(np.sum(x * (L @ x)))
+
+    L = laplacian(x, f, 1.0 / area0)
+    e0, done = energy(x, L), 0
+    uv = plane(x)
+    for it in range(iterations):
+        prev_x, prev_uv = x.copy(), uv.copy()
+        uv = uv / np.sum(uv * uv, axis=1, keepdims=True)  # inversion: the other hemisphere inside
+        inside = np.linalg.norm(uv, axis=1) < radius
+        vi, vo = np.where(inside)[0], np.where(~inside)[0]
+        uv[vi] = spla.spsolve(L[vi][:, vi].tocsc(), -L[vi][:, vo] @ uv[vo])
+        uv = uv / np.median(np.linalg.norm(uv, axis=1))
+        x = sphere(uv)
+        L = laplacian(x, f, 1.0 / area0)
+        e = energy(x, L)
+        if not e <= e0:
+            x, uv = prev_x, prev_uv
+            break
+        gain, e0, done = (e0 - e) / e0, e, it + 1
+        if gain < tolerance:
+            break
+    return x, done
+
+
 def score(v, f, uv):
     a0, a = face_areas(v, f), face_areas(uv, f)
+    if uv.shape[1] == 3:  # chord triangles: flipped when facing the centre
+        p, q, r = uv[f[:, 0]], uv[f[:, 1]], uv[f[:, 2]]
+        a = a * np.sign(np.einsum("ij,ij->i", p, np.cross(q, r)))
     majority = 1.0 if (a > 0).sum() >= (a < 0).sum() else -1.0
     a = a * majority
     r = (a / a.sum()) / (a0 / a0.sum())
@@ -149,11 +196,21 @@ def main():
     os.makedirs(a.out, exist_ok=True)
     rows = []
     for name in a.surfaces.split(","):
-        v, f = read(surfaces_run.prepare(os.path.abspath(a.vpm), a.out, name, a.timeout))
+        path = surfaces_run.prepare(os.path.abspath(a.vpm), a.out, name, a.timeout)
+        v, f = read(path)
+        closed = name not in surfaces_run.PATCHES
         secs = []
         for _ in range(a.runs):
             t0 = time.perf_counter()
-            uv, its = sem_disk(v, f, a.iterations, a.tolerance)
+            if closed:
+                start = os.path.join(a.out, name + "_conformal.off")
+                rc, _, last = surfaces_run.run([os.path.abspath(a.vpm), "map", path, "--sphere", "conformal", "--rounds",
+                                               "0", "-o", start, "--quiet", "--allow-partial"], a.timeout)
+                if rc != 0:
+                    sys.exit(f"peer_sem.py: the conformal start of {name}: exit {rc}: {last}")
+                uv, its = sem_sphere(v, f, read(start)[0], a.iterations, a.tolerance)
+            else:
+                uv, its = sem_disk(v, f, a.iterations, a.tolerance)
             secs.append(time.perf_counter() - t0)
         row = {"surface": name, "vertices": len(v), "faces": len(f), "iterations": its,
                "seconds": statistics.median(secs), "seconds_all": [round(s, 2) for s in secs]}
