@@ -17,6 +17,9 @@ namespace vpm::detail {
 
 namespace {
 
+// vertex rows per thread below which the vector updates stay on one
+constexpr int kRowBlock = 16384;
+
 // min |A d - b|^2 + |H d|^2 over projected moves d = P d: A's rows are the tets' linearised
 // relative volume changes (b = 1 - vol / target), H's the holds' h . sum_k w_k d_(v_k). The
 // products with A, H and their transposes.
@@ -89,12 +92,13 @@ class HostPolishSystem {
         sums[static_cast<size_t>(j)] = acc;
       }
     });
-    w = part_[0];
     double qq = sums[0];
-    for (int j = 1; j < chunks_; ++j) {
-      w += part_[static_cast<size_t>(j)];
-      qq += sums[static_cast<size_t>(j)];
-    }
+    for (int j = 1; j < chunks_; ++j) qq += sums[static_cast<size_t>(j)];
+    w.resize(n_, 3);
+    parallel_for(n_, kRowBlock, [&](int v0, int v1) {
+      w.middleRows(v0, v1 - v0) = part_[0].middleRows(v0, v1 - v0);
+      for (int j = 1; j < chunks_; ++j) w.middleRows(v0, v1 - v0) += part_[static_cast<size_t>(j)].middleRows(v0, v1 - v0);
+    });
     for (int r = 0; r < nr_; ++r) {
       const VolumeHold& h = holds_[static_cast<size_t>(r)];
       Eigen::Vector3d acc = Eigen::Vector3d::Zero();
@@ -159,15 +163,17 @@ class HostPolishSystem {
   // d <- P d: fixed vertices zeroed, tangent ones projected on the sphere's tangent plane, each
   // anchor group's moves projected on the null space of its constraints.
   void project(Points& d) const {
-    for (int v = 0; v < n_; ++v) {
-      if (freedom_[v] == kPolishFixed) {
-        d.row(v).setZero();
-      } else if (freedom_[v] == kPolishTangent) {
-        double u[3] = {d(v, 0), d(v, 1), d(v, 2)};
-        pl_tangent(x_(v, 0), x_(v, 1), x_(v, 2), u);
-        d.row(v) = Eigen::RowVector3d(u[0], u[1], u[2]);
+    parallel_for(n_, kRowBlock, [&](int v0, int v1) {
+      for (int v = v0; v < v1; ++v) {
+        if (freedom_[v] == kPolishFixed) {
+          d.row(v).setZero();
+        } else if (freedom_[v] == kPolishTangent) {
+          double u[3] = {d(v, 0), d(v, 1), d(v, 2)};
+          pl_tangent(x_(v, 0), x_(v, 1), x_(v, 2), u);
+          d.row(v) = Eigen::RowVector3d(u[0], u[1], u[2]);
+        }
       }
-    }
+    });
     for (int gi = 0; gi < groups_.groups(); ++gi) {
       const int b = groups_.ptr[static_cast<size_t>(gi)], k = groups_.ptr[static_cast<size_t>(gi) + 1] - b;
       const double* P = groups_.matrix.data() + groups_.offset[static_cast<size_t>(gi)];
@@ -208,14 +214,20 @@ class HostPolishBackend {
   void scalars(int op) { pl_scalars(op, sum_, op == P_OP_INIT ? sys_.rhs().squaredNorm() : 0.0, S_); }
   void update() {
     const double alpha = S_[P_ALPHA];
-    dx_ += alpha * p_;
-    s_ -= alpha * w_;
-    sum_ = s_.squaredNorm();
+    sum_ = halves([&](int v0, int v1) {
+      const auto rows = [&](Points& m) { return m.middleRows(v0, v1 - v0); };
+      rows(dx_) += alpha * rows(p_);
+      rows(s_) -= alpha * rows(w_);
+      return rows(s_).squaredNorm();
+    });
   }
   void update_p() {
     const double beta = S_[P_BETA];
-    if (beta == 0) p_ = s_;
-    else p_ = s_ + beta * p_;
+    halves([&](int v0, int v1) {
+      if (beta == 0) p_.middleRows(v0, v1 - v0) = s_.middleRows(v0, v1 - v0);
+      else p_.middleRows(v0, v1 - v0) = s_.middleRows(v0, v1 - v0) + beta * p_.middleRows(v0, v1 - v0);
+      return 0.0;
+    });
   }
   bool stopped() const { return S_[P_STOP] != 0; }
   PolishDirection result() {
@@ -232,6 +244,19 @@ class HostPolishBackend {
   }
 
  private:
+  // body(v0, v1) over the vertices in two fixed halves (on two threads from kRowBlock rows), its
+  // results summed: the sums do not depend on the number of threads
+  template <class Body>
+  double halves(Body body) {
+    const int n = sys_.vertices();
+    if (n < 2 * kRowBlock) return body(0, n);
+    double part[2] = {0, 0};
+    parallel_for(2, 2, [&](int k0, int k1) {
+      for (int k = k0; k < k1; ++k) part[k] = body(k * (n / 2), k ? n : n / 2);
+    });
+    return part[0] + part[1];
+  }
+
   HostPolishSystem& sys_;
   Points dx_, s_, p_, w_;
   double sum_ = 0;
