@@ -6,7 +6,9 @@
 #include <Eigen/SparseLU>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
+#include <set>
 #include <utility>
 #include <vector>
 
@@ -78,60 +80,51 @@ Points disk_embedding(const Points& x, const Triangles& f, const std::vector<int
   return u;
 }
 
-// The ears (faces whose three corners are on the boundary) split: each ear's longest interior
-// edge (one shared by two faces) halved by a new vertex appended to `x`, the faces on a halved
-// edge replaced by two (corner order, so orientation, kept). A new vertex is interior (its edge
-// is), so no face left has three boundary corners, unless an ear has no interior edge (the
-// surface is that one face). Returns the faces; `added` gets each new vertex's edge ends.
-Triangles split_ears(Points& x, const Triangles& f, const std::vector<char>& boundary,
+// The ears (faces whose three corners are on the boundary loop) split: each ear's longest interior
+// edge (one not on the loop) halved by a new vertex appended to `x`, the faces on a halved edge
+// replaced by two (corner order, so orientation, kept). A new vertex is interior (its edge is), so
+// no face left has three boundary corners, unless an ear has no interior edge (the surface is that
+// one face). Returns the faces; `added` gets each new vertex's edge ends.
+Triangles split_ears(Points& x, const Triangles& f, const std::vector<int>& loop, const std::vector<char>& on_loop,
                      std::vector<std::array<int, 2>>& added) {
   const int n = static_cast<int>(x.rows());
-  std::map<std::pair<int, int>, int> faces_on;  // edge (low, high) -> faces on it
   auto key = [](int a, int b) { return std::make_pair(std::min(a, b), std::max(a, b)); };
-  for (Eigen::Index t = 0; t < f.rows(); ++t)
-    for (int k = 0; k < 3; ++k) ++faces_on[key(f(t, k), f(t, (k + 1) % 3))];
+  std::set<std::pair<int, int>> loop_edges;
+  for (size_t k = 0; k < loop.size(); ++k) loop_edges.insert(key(loop[k], loop[(k + 1) % loop.size()]));
   std::map<std::pair<int, int>, int> mid;  // halved edge -> its new vertex
   for (Eigen::Index t = 0; t < f.rows(); ++t) {
-    if (!(boundary[static_cast<size_t>(f(t, 0))] && boundary[static_cast<size_t>(f(t, 1))] &&
-          boundary[static_cast<size_t>(f(t, 2))]))
+    if (!(on_loop[static_cast<size_t>(f(t, 0))] && on_loop[static_cast<size_t>(f(t, 1))] &&
+          on_loop[static_cast<size_t>(f(t, 2))]))
       continue;
     std::pair<int, int> best{-1, -1};
     double best_len = -1;
     for (int k = 0; k < 3; ++k) {
       const auto e = key(f(t, k), f(t, (k + 1) % 3));
       const double len = (x.row(e.first) - x.row(e.second)).squaredNorm();
-      if (faces_on[e] == 2 && len > best_len) best = e, best_len = len;
+      if (!loop_edges.count(e) && len > best_len) best = e, best_len = len;
     }
-    if (best.first >= 0 && !mid.count(best)) {
-      mid[best] = n + static_cast<int>(added.size());
+    if (best.first >= 0 && mid.emplace(best, n + static_cast<int>(added.size())).second)
       added.push_back({best.first, best.second});
-    }
   }
   if (added.empty()) return f;
   x.conservativeResize(n + static_cast<Eigen::Index>(added.size()), 3);
   for (size_t i = 0; i < added.size(); ++i)
     x.row(n + static_cast<Eigen::Index>(i)) = 0.5 * (x.row(added[i][0]) + x.row(added[i][1]));
-  // a face has at most one halved edge unless two ears chose two of its edges: then its halves are
-  // split again (the loop below runs until no face holds a halved edge)
+  // a face is halved at its first halved edge, and its halves again where two ears chose two of
+  // its edges (at most three levels)
   std::vector<Eigen::RowVector3i> out;
-  std::vector<Eigen::RowVector3i> todo;
-  for (Eigen::Index t = 0; t < f.rows(); ++t) todo.push_back(f.row(t));
-  while (!todo.empty()) {
-    const Eigen::RowVector3i t = todo.back();
-    todo.pop_back();
-    int k = 0;
-    while (k < 3 && !mid.count(key(t(k), t((k + 1) % 3)))) ++k;
-    if (k == 3) {
-      out.push_back(t);
-      continue;
-    }
-    const int p = t(k), q = t((k + 1) % 3), r = t((k + 2) % 3), m = mid.at(key(p, q));
-    todo.emplace_back(p, m, r);
-    todo.emplace_back(m, q, r);
-  }
+  std::function<void(int, int, int)> emit = [&](int a, int b, int c) {
+    const int v[3] = {a, b, c};
+    for (int k = 0; k < 3; ++k)
+      if (const auto it = mid.find(key(v[k], v[(k + 1) % 3])); it != mid.end()) {
+        emit(v[k], it->second, v[(k + 2) % 3]);
+        emit(it->second, v[(k + 1) % 3], v[(k + 2) % 3]);
+        return;
+      }
+    out.emplace_back(a, b, c);
+  };
+  for (Eigen::Index t = 0; t < f.rows(); ++t) emit(f(t, 0), f(t, 1), f(t, 2));
   Triangles g(static_cast<Eigen::Index>(out.size()), 3);
-  // the faces in the input's order where they are kept (the loop above reversed them)
-  std::reverse(out.begin(), out.end());
   for (size_t i = 0; i < out.size(); ++i) g.row(static_cast<Eigen::Index>(i)) = out[i];
   return g;
 }
@@ -174,7 +167,7 @@ SurfaceMapResult map_to_disk(const TriSurface& input, const SurfaceMapOptions& o
       ++rep.ears;
   // the surface mapped: the input, or with its ears split (new vertices interior, after the input's)
   Points reference = input.vertices;
-  if (opt.split_ears && rep.ears > 0) res.faces = split_ears(reference, input.triangles, on_loop, res.added);
+  if (opt.split_ears && rep.ears > 0) res.faces = split_ears(reference, input.triangles, loop, on_loop, res.added);
   rep.split_edges = static_cast<int>(res.added.size());
   const Triangles& f = mapped_faces(input.triangles, res);
   const int n = static_cast<int>(reference.rows());

@@ -48,13 +48,7 @@ class HostPolishSystem {
         out(t) = s;
       }
     });
-    for (int r = 0; r < nr_; ++r) {
-      const VolumeHold& h = holds_[static_cast<size_t>(r)];
-      Eigen::Vector3d acc = Eigen::Vector3d::Zero();
-      for (int k = 0; k < 4; ++k)
-        acc += h.weights[static_cast<size_t>(k)] * d.row(h.vertices[static_cast<size_t>(k)]).transpose();
-      out_h(r) = h.direction.dot(acc);
-    }
+    apply_holds(d, out_h);
   }
 
   /// q = A d and H d, and w = P (A^T q + H^T H d), in one pass over the tets (each row read once,
@@ -94,23 +88,10 @@ class HostPolishSystem {
     });
     double qq = sums[0];
     for (int j = 1; j < chunks_; ++j) qq += sums[static_cast<size_t>(j)];
-    w.resize(n_, 3);
-    parallel_for(n_, kRowBlock, [&](int v0, int v1) {
-      w.middleRows(v0, v1 - v0) = part_[0].middleRows(v0, v1 - v0);
-      for (int j = 1; j < chunks_; ++j) w.middleRows(v0, v1 - v0) += part_[static_cast<size_t>(j)].middleRows(v0, v1 - v0);
-    });
-    for (int r = 0; r < nr_; ++r) {
-      const VolumeHold& h = holds_[static_cast<size_t>(r)];
-      Eigen::Vector3d acc = Eigen::Vector3d::Zero();
-      for (int k = 0; k < 4; ++k)
-        acc += h.weights[static_cast<size_t>(k)] * d.row(h.vertices[static_cast<size_t>(k)]).transpose();
-      const double qh = h.direction.dot(acc);
-      qq += qh * qh;
-      for (int k = 0; k < 4; ++k)
-        w.row(h.vertices[static_cast<size_t>(k)]) += (qh * h.weights[static_cast<size_t>(k)]) * h.direction.transpose();
-    }
-    project(w);
-    return qq;
+    Eigen::VectorXd q_h(nr_);
+    apply_holds(d, q_h);
+    sum_parts(q_h, w);
+    return qq + q_h.squaredNorm();
   }
 
   /// out = P (A^T y + H^T y_h): tets split into fixed chunks, each scattering into its own
@@ -126,8 +107,28 @@ class HostPolishSystem {
             o.row(tets_(t, k)) += y(t) * (k ? sg_[3 * static_cast<size_t>(t) + k - 1] : corner0(t)).transpose();
       }
     });
-    out = part_[0];
-    for (int j = 1; j < chunks_; ++j) out += part_[static_cast<size_t>(j)];
+    sum_parts(y_h, out);
+  }
+
+ private:
+  // out_h = H d: each hold's direction . sum_k w_k d_(v_k)
+  void apply_holds(const Points& d, Eigen::VectorXd& out_h) const {
+    for (int r = 0; r < nr_; ++r) {
+      const VolumeHold& h = holds_[static_cast<size_t>(r)];
+      Eigen::Vector3d acc = Eigen::Vector3d::Zero();
+      for (int k = 0; k < 4; ++k)
+        acc += h.weights[static_cast<size_t>(k)] * d.row(h.vertices[static_cast<size_t>(k)]).transpose();
+      out_h(r) = h.direction.dot(acc);
+    }
+  }
+
+  // out = P (the chunks' scattered A^T y summed + H^T y_h), the sum per vertex on the threads
+  void sum_parts(const Eigen::VectorXd& y_h, Points& out) const {
+    out.resize(n_, 3);
+    parallel_for(n_, kRowBlock, [&](int v0, int v1) {
+      out.middleRows(v0, v1 - v0) = part_[0].middleRows(v0, v1 - v0);
+      for (int j = 1; j < chunks_; ++j) out.middleRows(v0, v1 - v0) += part_[static_cast<size_t>(j)].middleRows(v0, v1 - v0);
+    });
     for (int r = 0; r < nr_; ++r) {
       const VolumeHold& h = holds_[static_cast<size_t>(r)];
       for (int k = 0; k < 4; ++k)
@@ -137,7 +138,6 @@ class HostPolishSystem {
     project(out);
   }
 
- private:
   // Per-tet scaled gradients sg_{t,k} = vol_t grad phi_k / target_t, kept for k = 1..3 only
   // (sg_[3 t + k - 1]); corner 0's, minus their sum, is recomputed where it is used, in the
   // same order of operations (the loops are memory-bound: a quarter less to read).
