@@ -17,7 +17,7 @@ cp -a "$B/vpm" "$B/libvpm.so" "$B/CTestTestfile.cmake" "$O/build/"
 cp -a "$B"/tests/*.cmake "$O/build/tests/"
 for t in "$B"/tests/test_*; do [[ -f $t && -x $t ]] && cp -a "$t" "$O/build/tests/"; done
 [[ -f $B/bench/CTestTestfile.cmake ]] && cp -a "$B/bench/CTestTestfile.cmake" "$O/build/bench/"
-for b in solver harmonic sphere_map volume_map register; do
+for b in solver harmonic sphere_map volume_map register pairs; do
   [[ -x $B/bench/vpm_bench_$b ]] && cp -a "$B/bench/vpm_bench_$b" "$O/build/bench/"
 done
 # the shared libraries of everything above, less the C/C++ runtime every Linux has
@@ -27,9 +27,11 @@ shopt -s nullglob
   grep -Ev '/(libc|libm|libstdc\+\+|libgcc_s|libpthread|libdl|librt|ld-linux[^/]*)\.so' |
   grep -v "/$B/" | while read -r l; do cp -L "$l" "$O/lib/"; done
 tar cJf "$O/libs.tar.xz" -C "$O" lib && rm -rf "$O/lib"
+# the test binaries too: over a hundred of them pass the carry limit (64 MiB) uncompressed
+tar -I "xz -T0" -cf "$O/tests.tar.xz" -C "$O/build" tests && rm -rf "$O/build/tests"
 echo libnvidia-opencl.so.1 > "$O/icd/nvidia.icd"
 T=/usr/share/mricron/templates
-cp "$T/ch2bet.nii.gz" "$T"/aal.nii* "$O/mricron/"
+cp "$T/ch2bet.nii.gz" "$T/ch2.nii.gz" "$T"/aal.nii* "$O/mricron/"
 cp /usr/bin/time "$O/bin/"
 cp scripts/gpu/run.sh "$O/run.sh"
 du -sh "$O"

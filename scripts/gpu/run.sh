@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine, from the repository root, out of the folder scripts/gpu/bundle.sh
 # made (docs/gpu.md): the test suite with VPM_DEVICE=$DEV (less the install, architecture,
-# workflow, browser and Python tests, which need tools a bare machine lacks), the solver and
+# workflow, browser, Python, h5py and shape-benchmark tests, which need tools a bare machine lacks), the solver and
 # harmonic benchmarks, and `vpm map` of Colin27 at 1.1M and 10M tets (meshed there), last a 10M map with AMG-CG.
 # Everything lands in $OUT/res.tgz, refreshed after each step, so a run cut short still returns
 # what it did.
-#   usage: bash .gpu/run.sh [STEPS (tests,bench,map1m,map10m,amg10m,extra; also pairs)]
+#   usage: bash .gpu/run.sh [STEPS (tests,bench,map1m,map10m,amg10m,extra; also sample, pairs)]
 # (extra: the volume-map and registration benchmarks and `vpm demo`, about 30 s on an H200)
 # DEVICE (gpu) and ICD_DIR (the bundle's NVIDIA vendor file) may be set for a dry run elsewhere,
 # e.g. DEVICE=cpu ICD_DIR=/etc/OpenCL/vendors on a machine with PoCL.
@@ -20,6 +20,7 @@ save() { tar czf "$OUT/res.tgz" -C /tmp res 2>/dev/null; }
 log() { echo "== $(date +%T) $*" | tee -a "$W/log.txt"; }
 want() { [[ ",$STEPS," == *",$1,"* ]]; }
 tar xJf "$G/libs.tar.xz" -C "$G"
+tar xJf "$G/tests.tar.xz" -C "$G/build"
 TV="$G/bin/time -v"
 export LD_LIBRARY_PATH=$R/build:$G/lib OCL_ICD_VENDORS=${ICD_DIR:-$G/icd}
 DEV=${DEVICE:-gpu}
@@ -40,7 +41,7 @@ if want map10m || want amg10m; then
 fi
 if want tests; then
   log "ctest${MP:+ (the 10M mesh being made beside it)}"
-  VPM_DEVICE=$DEV VPM_TEST_REQUIRE_OPENCL=1 timeout 300 ctest --test-dir build -E "install|arch|workflow|browser|python" \
+  VPM_DEVICE=$DEV VPM_TEST_REQUIRE_OPENCL=1 timeout 300 ctest --test-dir build -E "install|arch|workflow|browser|python|h5py|shapes-quick" \
     -j10 --timeout 200 --output-on-failure > "$W/ctest_gpu.log" 2>&1
   log "ctest rc $?"; grep -E "tests passed|tests failed" "$W/ctest_gpu.log" | tee -a "$W/log.txt"; save
 fi
@@ -86,11 +87,27 @@ if want extra; then
   cp /tmp/demo/demo.json "$W/demo_gpu.json" 2>/dev/null
   log "extra done"; tail -3 "$W/demo_gpu.txt" | tee -a "$W/log.txt"; save
 fi
+# step `sample`: `vpm sample` of Colin27's ball map (the default mesh, 214k tets) at level 6, graded,
+# 8 samples, two images, three runs on the device and three on the host threads, alternated
+if want sample; then
+  log "vpm sample, level 6 graded"
+  build/vpm mesh-image $M -o /tmp/ch2.vtu > "$W/sample_mesh.txt" 2>&1
+  VPM_DEVICE=$DEV build/vpm map /tmp/ch2.vtu -o /tmp/ch2_ball.vtu --quiet >> "$W/sample_mesh.txt" 2>&1
+  for run in 1 2 3; do
+    for d in $DEV host; do
+      VPM_DEVICE=$d $TV build/vpm sample /tmp/ch2_ball.vtu -o "/tmp/sample_$d.h5" --level 6 --layout graded --samples 8 \
+        --images "pet=$M,t1w=/usr/share/mricron/templates/ch2.nii.gz" > "$W/sample_${d}_$run.txt" 2>&1
+      log "sample $d run $run rc $?"; grep -h "Elapsed\|Maximum resident" "$W/sample_${d}_$run.txt" | tee -a "$W/log.txt"
+    done
+  done
+  cmp /tmp/sample_$DEV.h5 /tmp/sample_host.h5 > /dev/null && log "sample tables identical" || log "sample tables differ"
+  save
+fi
 # step `pairs`: the registration benchmark's pair (seed 1, volume-preserving, 10 degrees) through
 # vpm_bench_pairs, once per setting of DEMO_CONFIGS ("VERTICES[:OPTIONS];..."), mesh + map + register
 # timed by its report (bench/results/register_faster_dense/)
 if want pairs; then
-  IFS=';' read -ra CONFIGS <<< "${DEMO_CONFIGS:-5200;45000;45000:--dense-widths 0.3,0.2,0.14,0.1 --dense-iterations 32 --dense-restore-cycles 2}"
+  IFS=';' read -ra CONFIGS <<< "${DEMO_CONFIGS:-5200;45000;45000:--preset accurate}"
   k=0
   for c in "${CONFIGS[@]}"; do
     v=${c%%:*}; opts=""; [[ $c == *:* ]] && opts=${c#*:}
