@@ -4,9 +4,11 @@
 // The supernodes are factored by the BLAS, which OpenBLAS threads over every core by default.
 // On the 16-core H200 machine (gVisor) that made one factorisation of the 10M-tet Colin27's
 // boundary Laplacian 10x slower than one thread (4.3 s against 0.41 s; 4 threads 0.34 s), and
-// the whole map 53 s against 32-36 s. So each call runs the BLAS on one thread (restored
-// after), unless the user chose a count with OPENBLAS_NUM_THREADS; on the 2-core VM one
-// thread costs 0.45 against 0.30 s per factorisation.
+// the whole map 53 s against 32-36 s. So each call runs the BLAS on at most kMaxBlasThreads
+// threads (restored after), unless the user chose a count with OPENBLAS_NUM_THREADS. On the
+// 2-core VM two threads factor the 128k-face Colin27 boundary's Laplacian (64k vertices) in
+// 0.18 s against 0.26 s for one, and its whole surface map takes 0.87x the time (farm-bench, 4
+// pairs); the 1.1M-tet map, whose sphere map runs beside the edge split, is unchanged (1.02x).
 #include <dlfcn.h>
 
 #include <Eigen/CholmodSupport>
@@ -18,24 +20,27 @@ namespace vpm::detail {
 
 namespace {
 
-// OpenBLAS's thread count set to one for this object's lifetime, found at run time (no link
-// to OpenBLAS: with another BLAS, or OPENBLAS_NUM_THREADS set, it does nothing).
-class OneBlasThread {
+constexpr int kMaxBlasThreads = 4;
+
+// OpenBLAS's thread count capped at kMaxBlasThreads for this object's lifetime, found at run time
+// (no link to OpenBLAS: with another BLAS, or OPENBLAS_NUM_THREADS set, it does nothing).
+class BoundedBlasThreads {
  public:
-  OneBlasThread() {
+  BoundedBlasThreads() {
     if (std::getenv("OPENBLAS_NUM_THREADS")) return;
     static const auto get = reinterpret_cast<int (*)()>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
     static const auto set = reinterpret_cast<void (*)(int)>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
     if (!get || !set) return;
-    set_ = set;
     saved_ = get();
-    if (saved_ != 1) set_(1);
+    if (saved_ <= kMaxBlasThreads) return;
+    set_ = set;
+    set_(kMaxBlasThreads);
   }
-  ~OneBlasThread() {
-    if (set_ && saved_ != 1) set_(saved_);
+  ~BoundedBlasThreads() {
+    if (set_) set_(saved_);
   }
-  OneBlasThread(const OneBlasThread&) = delete;
-  OneBlasThread& operator=(const OneBlasThread&) = delete;
+  BoundedBlasThreads(const BoundedBlasThreads&) = delete;
+  BoundedBlasThreads& operator=(const BoundedBlasThreads&) = delete;
 
  private:
   void (*set_)(int) = nullptr;
@@ -46,7 +51,7 @@ class CholmodSupernodal final : public CholeskyBackend {
  public:
   CholmodSupernodal() { llt_.cholmod().print = 0; }  // not positive definite is not news: the caller falls back
   bool factorize(const Eigen::SparseMatrix<double>& a, bool same_pattern) override {
-    const OneBlasThread one;
+    const BoundedBlasThreads bounded;
     if (!(same_pattern && analysed_)) {
       llt_.analyzePattern(a);
       analysed_ = llt_.info() == Eigen::Success;
@@ -56,7 +61,7 @@ class CholmodSupernodal final : public CholeskyBackend {
     return llt_.info() == Eigen::Success;
   }
   Eigen::MatrixXd solve(const Eigen::MatrixXd& b) const override {
-    const OneBlasThread one;
+    const BoundedBlasThreads bounded;
     return llt_.solve(b);
   }
   const char* name() const override { return "cholmod-supernodal"; }
