@@ -3,6 +3,7 @@
 // positive definite; both must give Eigen's reference answers.
 #include <catch2/catch.hpp>
 #include <Eigen/SparseCholesky>
+#include <thread>
 
 #include "linalg/sparse_cholesky.hpp"
 #include "map/sphere_steps.hpp"
@@ -11,6 +12,7 @@
 #include "vpm/topology.hpp"
 
 using namespace vpm;
+using detail::BlasThreadsScope;
 using detail::SparseCholesky;
 using detail::SpMat;
 
@@ -78,4 +80,33 @@ TEST_CASE("sparse Cholesky: a symmetric matrix that is not positive definite fal
   // back to a positive definite matrix: the supernodal factor is used again where built
   REQUIRE(chol.factorize(pinned_surface_laplacian(1.0)));
   CHECK(std::string(chol.backend()) == (VPM_HAVE_CHOLMOD ? "cholmod-supernodal" : "eigen-simplicial-ldlt"));
+}
+
+TEST_CASE("sparse Cholesky: the BLAS thread bound is one outside a scope, the scope's inside, per thread") {
+  CHECK(BlasThreadsScope::current() == 1);
+  const SpMat a = pinned_surface_laplacian(1.3);
+  const Eigen::MatrixXd b = Eigen::MatrixXd::Random(a.rows(), 2);
+  SparseCholesky one;
+  REQUIRE(one.factorize(a));
+  const Eigen::MatrixXd x1 = one.solve(b);
+  {
+    const BlasThreadsScope four(4);
+    CHECK(BlasThreadsScope::current() == 4);
+    int elsewhere = 0;
+    std::thread([&] { elsewhere = BlasThreadsScope::current(); }).join();
+    CHECK(elsewhere == 1);  // the bound is the calling thread's
+    {
+      const BlasThreadsScope two(2);
+      CHECK(BlasThreadsScope::current() == 2);
+    }
+    CHECK(BlasThreadsScope::current() == 4);
+    SparseCholesky more;
+    REQUIRE(more.factorize(a));
+    const Eigen::MatrixXd x4 = more.solve(b);
+    CHECK(relative_residual(a, x4, b) < 1e-12);
+    CHECK((x4 - x1).norm() < 1e-10 * x1.norm());
+  }
+  CHECK(BlasThreadsScope::current() == 1);
+  const BlasThreadsScope none(0);
+  CHECK(BlasThreadsScope::current() == 1);  // at least one
 }

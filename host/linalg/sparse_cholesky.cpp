@@ -8,6 +8,16 @@ namespace vpm::detail {
 std::unique_ptr<CholeskyBackend> make_cholmod_backend() { return nullptr; }
 #endif
 
+namespace {
+thread_local int t_max_blas_threads = 1;
+}  // namespace
+
+BlasThreadsScope::BlasThreadsScope(int max_threads) : saved_(t_max_blas_threads) {
+  t_max_blas_threads = max_threads < 1 ? 1 : max_threads;
+}
+BlasThreadsScope::~BlasThreadsScope() { t_max_blas_threads = saved_; }
+int BlasThreadsScope::current() { return t_max_blas_threads; }
+
 SparseCholesky::SparseCholesky() : cholmod_(make_cholmod_backend()) {}
 SparseCholesky::~SparseCholesky() = default;
 

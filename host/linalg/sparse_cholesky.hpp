@@ -22,6 +22,25 @@ class CholeskyBackend {
   virtual Eigen::MatrixXd solve(const Eigen::MatrixXd& b) const = 0;
   virtual const char* name() const = 0;
 };
+/// The most BLAS threads CHOLMOD's factorisations and solves on the calling thread use while the
+/// scope lives (fewer when the BLAS has fewer; OPENBLAS_NUM_THREADS, when set, decides instead).
+/// Outside any scope: one. The tet map's sphere map runs beside the edge split and the harmonic
+/// solver's set-up: there 2 threads on the 2-core VM gained no time (0.98-1.02x) and their
+/// round-off turned bench/shapes' hand from 0.92 % (exit 0) into 2.45 % (exit 4). The surface map
+/// runs its sphere map alone and opens a scope of 4 (4 were the fastest on a 16-core machine).
+class BlasThreadsScope {
+ public:
+  explicit BlasThreadsScope(int max_threads);
+  ~BlasThreadsScope();
+  BlasThreadsScope(const BlasThreadsScope&) = delete;
+  BlasThreadsScope& operator=(const BlasThreadsScope&) = delete;
+  /// The calling thread's current bound.
+  static int current();
+
+ private:
+  int saved_;
+};
+
 /// CHOLMOD's supernodal LLT, or nullptr when vpm was built without CHOLMOD.
 std::unique_ptr<CholeskyBackend> make_cholmod_backend();
 

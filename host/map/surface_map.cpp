@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "linalg/sparse_cholesky.hpp"
 #include "map/surface_area.hpp"
 #include "map/surface_polish.hpp"
 #include "vpm/error.hpp"
@@ -90,6 +91,8 @@ SurfaceMapResult map_to_sphere(const TriSurface& input, const SurfaceMapOptions&
   const Triangles& f = s.triangles;
 
   auto t0 = Clock::now();
+  // alone here, the sphere map's factorisations may use a few BLAS threads (linalg/sparse_cholesky.hpp)
+  const detail::BlasThreadsScope blas(4);
   SphereMapResult sm = sphere_map(s, opt.sphere, device);
   rep.sphere = sm.report;
   rep.seconds_sphere_map = seconds_since(t0);

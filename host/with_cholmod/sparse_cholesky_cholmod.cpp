@@ -4,11 +4,11 @@
 // The supernodes are factored by the BLAS, which OpenBLAS threads over every core by default.
 // On the 16-core H200 machine (gVisor) that made one factorisation of the 10M-tet Colin27's
 // boundary Laplacian 10x slower than one thread (4.3 s against 0.41 s; 4 threads 0.34 s), and
-// the whole map 53 s against 32-36 s. So each call runs the BLAS on at most kMaxBlasThreads
-// threads (restored after), unless the user chose a count with OPENBLAS_NUM_THREADS. On the
-// 2-core VM two threads factor the 128k-face Colin27 boundary's Laplacian (64k vertices) in
-// 0.18 s against 0.26 s for one, and its whole surface map takes 0.87x the time (farm-bench, 4
-// pairs); the 1.1M-tet map, whose sphere map runs beside the edge split, is unchanged (1.02x).
+// the whole map 53 s against 32-36 s. So each call runs the BLAS on at most
+// BlasThreadsScope::current() threads (linalg/sparse_cholesky.hpp: one unless the caller opened
+// a scope; restored after), unless the user chose a count with OPENBLAS_NUM_THREADS. On the 2-core
+// VM two threads factor the 128k-face Colin27 boundary's Laplacian (64k vertices) in 0.18 s
+// against 0.26 s for one, and its whole surface map takes 0.87x the time (farm-bench, 4 pairs).
 #include <dlfcn.h>
 
 #include <Eigen/CholmodSupport>
@@ -20,9 +20,7 @@ namespace vpm::detail {
 
 namespace {
 
-constexpr int kMaxBlasThreads = 4;
-
-// OpenBLAS's thread count capped at kMaxBlasThreads for this object's lifetime, found at run time
+// OpenBLAS's thread count capped at BlasThreadsScope::current() for this object's lifetime, found at run time
 // (no link to OpenBLAS: with another BLAS, or OPENBLAS_NUM_THREADS set, it does nothing).
 class BoundedBlasThreads {
  public:
@@ -32,9 +30,10 @@ class BoundedBlasThreads {
     static const auto set = reinterpret_cast<void (*)(int)>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
     if (!get || !set) return;
     saved_ = get();
-    if (saved_ <= kMaxBlasThreads) return;
+    const int cap = BlasThreadsScope::current();
+    if (saved_ <= cap) return;
     set_ = set;
-    set_(kMaxBlasThreads);
+    set_(cap);
   }
   ~BoundedBlasThreads() {
     if (set_) set_(saved_);
