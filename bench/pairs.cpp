@@ -9,7 +9,9 @@
 //   vpm_bench_pairs [--out DIR] [--seed S] [--max-rotation DEG] [--incompressible] ... (--help)
 //
 // Writes DIR/demo.json (the demo's keys plus "deformation", the ball measures and "ideal") and the
-// meshes; subject_registered.vtu carries each vertex's distance to the ideal registration.
+// meshes; subject_registered.vtu carries each vertex's distance to the ideal registration
+// (error_to_ideal) and its ideal position (ideal_x, ideal_y, ideal_z; read by
+// bench/register_peers/landmark_truth.py).
 #include <exception>
 #include <filesystem>
 #include <iostream>
@@ -190,7 +192,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   const vpm::bench::IdealReport ideal = vpm::bench::measure_ideal(
       dev, sm, tm, reg.registered, st.ceiling ? [](const Eigen::Vector3d& y) { return y; } : pull, overlap_of);
   timings["ideal"] = seconds_since(t0);
-  vpm::cli::write_registered((st.out / "subject_registered.vtu").string(), sm, reg, {{"error_to_ideal", ideal.error}});
+  vpm::cli::write_registered((st.out / "subject_registered.vtu").string(), sm, reg, {{"error_to_ideal", ideal.error}, {"ideal_x", ideal.ideal.ball.col(0)}, {"ideal_y", ideal.ideal.ball.col(1)}, {"ideal_z", ideal.ideal.ball.col(2)}});
   const double total = seconds_since(t_start);
   timings["total"] = total;
 

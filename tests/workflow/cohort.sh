@@ -58,9 +58,9 @@ assert c["reference"]["image_covariate"] == "t1w", c["reference"]
 assert c["options"]["relative_extent"] == 0.3, c["options"]
 reg = json.load(open(f"{r}/subjects/sub-P01/sub-P01_register.json"))
 assert reg["input"]["landmarks"] >= 100 and reg["landmark_rms_error"] < 1e-6, reg["input"]
-# the default dense registration pulls by region boundaries and the T1w against the template's
+# the default dense registration pulls by the T1w against the template's
 d = reg["dense"]
-assert d["force"] == "both" and d["mismatch_after"] < d["mismatch_landmarks"], {k: d.get(k) for k in ("force", "mismatch_landmarks", "mismatch_after")}
+assert d["force"] == "image" and d["mismatch_after"] < d["mismatch_landmarks"], {k: d.get(k) for k in ("force", "mismatch_landmarks", "mismatch_after")}
 e = json.load(open(f"{r}/evaluation.json"))
 p = e["patients"][0]
 assert p["participant_id"] == "sub-P01"
@@ -209,7 +209,7 @@ for f in "$work"/masked/sub-N01/anat/sub-N01_T1w.nii*; do mv "$f" "${f/_T1w/_mas
    out="$work/masked_results" vpm="$build/vpm") > "$work/masked.log" 2>&1 || { tail -30 "$work/masked.log"; fail "masked plan"; }
 grep -q "register .*sub-N01_ball.vtu" "$work/masked.log" || fail "no register job planned for the mask subject"
 grep "register .*sub-N01_ball.vtu" "$work/masked.log" | grep -q -- "--dense-force" && fail "a mask subject got the image force"
-grep "register .*sub-N02_ball.vtu" "$work/masked.log" | grep -q -- "--dense-force both --image" ||
+grep "register .*sub-N02_ball.vtu" "$work/masked.log" | grep -q -- "--dense-force image --image" ||
   { grep "register" "$work/masked.log"; fail "a T1w subject lost the image force"; }
 # ... and with one subject without a T1w, compare.image_covariate: auto models none
 grep -q "compare .*--feature" "$work/masked.log" || fail "no compare job planned for the masked cohort"
