@@ -57,7 +57,8 @@ DenseRegistrationOptions dense_options(const Args& args, DenseRegistrationOption
   if (!(o.restore_image_weight >= 0 && o.restore_image_weight <= 1e6))
     throw InputError("--dense-restore-image-weight: expected 0 to 1e6");
   o.image_grid = args.get_int("--dense-image-grid", o.image_grid);
-  if (o.image_grid < 8 || o.image_grid > 256) throw InputError("--dense-image-grid: expected 8 to 256 cells");
+  if (o.image_grid != 0 && (o.image_grid < 8 || o.image_grid > 256))
+    throw InputError("--dense-image-grid: expected 8 to 256 cells, or 0 (automatic)");
   o.restore_cycles = args.get_int("--dense-restore-cycles", o.restore_cycles);
   if (o.restore_cycles < 0 || o.restore_cycles > 100) throw InputError("--dense-restore-cycles: expected 0 to 100");
   o.fit_tolerance = args.get_double("--dense-fit-tolerance", o.fit_tolerance);
@@ -119,8 +120,8 @@ Command with_dense_options(Command command, const std::string& after, int defaul
                                             format_sig(d.fit_tolerance, 6) + ")", false, 0, true, true},
           {"--dense-rk-steps", "K", "RK4 steps that carry the vertices through each dense iteration's flow (default " +
                                            std::to_string(d.advect_steps) + ")", false, 0, true, true},
-          {"--dense-image-grid", "N", "cells across the ball of the image force's grid (default " +
-                                          std::to_string(d.image_grid) + ")", false, 0, true, true},
+          {"--dense-image-grid", "N", "cells across the ball of the image force's grid (default 0: about two "
+                                          "grid points per tet of the subject)", false, 0, true, true},
           {"--dense-image-smoothing", "F", "Gaussian smoothing of the images before the image force, x the level's width (default " +
                                                format_sig(d.image_smoothing, 6) + ")", false, 0, true, true},
           {"--dense-ridge", "R", "smoothing ridge of the field's fit, x the mean Gram diagonal (default " +

@@ -650,6 +650,21 @@ TEST_CASE("registration presets: the settings they name, and --preset equals tho
   CHECK(test::slurp(dir + "err.txt").find("--preset needs --template") != std::string::npos);
 }
 
+TEST_CASE("dense_image_grid_cells: about 2.2 grid points inside the ball per tet, from 24 to 128 cells") {
+  CHECK(dense_image_grid_cells(26394) == 48);   // the paper's size
+  CHECK(dense_image_grid_cells(213511) == 96);  // the workflow's 45,000 vertices
+  CHECK(dense_image_grid_cells(0) == 24);
+  CHECK(dense_image_grid_cells(100000000) == 128);
+  int last = 0;
+  for (long t = 1000; t < 3000000; t = t * 3 / 2) {
+    const int n = dense_image_grid_cells(t);
+    CHECK(n >= last);
+    last = n;
+    const double points = 3.141592653589793 / 6 * n * n * n;
+    if (n > 24 && n < 128) CHECK(points / static_cast<double>(t) == Approx(2.2).epsilon(0.1));
+  }
+}
+
 TEST_CASE("vpm register --dense-force image: the image force from the command line") {
   const Case c = make_case();
   const std::string dir = std::string(VPM_TEST_TMP) + "/dense_image_";
@@ -681,6 +696,18 @@ TEST_CASE("vpm register --dense-force image: the image force from the command li
   refused("--dense-iterations 2 --image " + dir + "image.nii.gz", "--image needs --template-image");
   refused("--dense-iterations 2 --dense-force intensity", "expected labels, image or both");
   refused("--dense-iterations 2 --dense-fit translations", "unknown option --dense-fit");
+  refused("--dense-iterations 2 --dense-force image --dense-image-grid 5 " + images,
+          "--dense-image-grid: expected 8 to 256 cells, or 0 (automatic)");
+  // the automatic grid (the default): about two grid points per tet
+  REQUIRE(test::run_status(vpm + images + "--dense-force image --dense-iterations 4 --report " + dir + "auto.json 2>" +
+                           dir + "err.txt") == 0);
+  const Json ja = Json::parse(test::slurp(dir + "auto.json"));
+  const Json* da = ja.find("dense");
+  REQUIRE(da != nullptr);
+  CHECK(da->find("mismatch_after")->number() < da->find("mismatch_landmarks")->number());
+  const int cells = dense_image_grid_cells(static_cast<long>(c.subject.tets.rows()));
+  const double inside = da->find("iterations")->at(0).find("image_points")->number();
+  CHECK(inside == Approx(3.141592653589793 / 6 * cells * cells * cells).epsilon(0.1));
   refused("--dense-iterations 2 " + images, "--image and --template-image need --dense-force image or both");
   Image blank = native_image();
   std::fill(blank.data.begin(), blank.data.end(), 0.0f);

@@ -43,8 +43,8 @@ void check_dense(const Tets& tets, const std::vector<int>& labels, const Tets& t
   if (!(o.fit_tolerance > 0 && o.fit_tolerance < 1)) bad("the fit tolerance must lie in (0, 1)");
   if (o.advect_steps < 1 || o.agreement_grid < 4) bad("advect steps >= 1 and agreement grid >= 4 required");
   if (o.force != DenseForce::labels &&
-      (!(o.image_grid >= 4 && o.image_grid <= 512) || !(o.image_smoothing >= 0)))
-    bad("the image force needs 4 to 512 grid cells and a smoothing >= 0");
+      (!(o.image_grid == 0 || (o.image_grid >= 4 && o.image_grid <= 512)) || !(o.image_smoothing >= 0)))
+    bad("the image force needs 0 (automatic) or 4 to 512 grid cells and a smoothing >= 0");
 }
 
 /// The symmetric closest-point matches of the region boundaries with the subject at `ball`;
@@ -207,7 +207,8 @@ DenseState dense_state(Device& dev, const Points& ball, const Tets& tets, const 
   st.grid_templ = sample_labels(tball, ttets, tl, st.grid);
   if (o.force != DenseForce::labels && o.iterations > 0) {
     if (!images) throw InputError(std::string("dense registration: the ") + to_string(o.force) + " force needs images");
-    st.image = std::make_unique<const ImageForce>(*images, tball, ttets, ball, tets, o.image_grid);
+    const int cells = o.image_grid > 0 ? o.image_grid : dense_image_grid_cells(static_cast<long>(tets.rows()));
+    st.image = std::make_unique<const ImageForce>(*images, tball, ttets, ball, tets, cells);
   }
   return st;
 }
@@ -230,6 +231,12 @@ void finish(Device& dev, DenseRegistrationResult& r, const DenseState& st, const
 }
 
 }  // namespace
+
+int dense_image_grid_cells(long tets) {
+  constexpr double kPointsPerTet = 2.2;
+  const double cells = std::cbrt(6 * kPointsPerTet * static_cast<double>(std::max(tets, 0L)) / 3.141592653589793);
+  return static_cast<int>(std::clamp(std::lround(cells), 24L, 128L));
+}
 
 DenseRegistrationResult register_dense(Device& dev, const DenseSubject& subject, const DenseTemplate& templ,
                                        const Points& landmarks, const Points& targets,

@@ -67,7 +67,7 @@ def test_fmriprep_and_freesurfer_subjects_through_the_workflow(dataset):
     assert "--template-landmarks moments" in reg["sub-N02"] and "--dense-force image" in reg["sub-N02"]
     assert "sub-N02_desc-preproc_T1w.nii.gz" in reg["sub-N02"]
     assert "--template-landmarks moments" in reg["sub-N03"] and "brainmask.mgz" in reg["sub-N03"]
-    assert "moments" not in reg["sub-N01"] and "--dense-force both" in reg["sub-N01"]
+    assert "moments" not in reg["sub-N01"] and "--dense-force image" in reg["sub-N01"]
 
     run = snakemake(dataset)
     assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
