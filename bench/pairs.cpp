@@ -192,7 +192,12 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
   const vpm::bench::IdealReport ideal = vpm::bench::measure_ideal(
       dev, sm, tm, reg.registered, st.ceiling ? [](const Eigen::Vector3d& y) { return y; } : pull, overlap_of);
   timings["ideal"] = seconds_since(t0);
-  vpm::cli::write_registered((st.out / "subject_registered.vtu").string(), sm, reg, {{"error_to_ideal", ideal.error}, {"ideal_x", ideal.ideal.ball.col(0)}, {"ideal_y", ideal.ideal.ball.col(1)}, {"ideal_z", ideal.ideal.ball.col(2)}});
+  const Points& at = ideal.ideal.ball;
+  vpm::cli::write_registered((st.out / "subject_registered.vtu").string(), sm, reg,
+                             {{"error_to_ideal", ideal.error},
+                              {"ideal_x", at.col(0)},
+                              {"ideal_y", at.col(1)},
+                              {"ideal_z", at.col(2)}});
   const double total = seconds_since(t_start);
   timings["total"] = total;
 

@@ -234,7 +234,7 @@ void finish(Device& dev, DenseRegistrationResult& r, const DenseState& st, const
 
 int dense_image_grid_cells(long tets) {
   constexpr double kPointsPerTet = 2.2;
-  const double cells = std::cbrt(6 * kPointsPerTet * static_cast<double>(std::max(tets, 0L)) / 3.141592653589793);
+  const double cells = std::cbrt(6 * kPointsPerTet * static_cast<double>(std::max(tets, 0L)) / M_PI);
   return static_cast<int>(std::clamp(std::lround(cells), 24L, 128L));
 }
 
