@@ -132,6 +132,40 @@ TEST_CASE("volume map: rounds until the tolerance, every method fold-free") {
   }
 }
 
+TEST_CASE("volume map: the Moser rounds hand over to the polish once within 5x the tolerance") {
+  const InitialMapResult& im = ellipsoid_start();
+  auto host = Device::host();
+  int handed_near = 0;
+  for (double tolerance : {0.01, 0.045, 0.06}) {
+    INFO("tolerance " << tolerance);
+    VolumeMapOptions o;  // rounds automatic
+    o.tolerance = tolerance;
+    o.polish_rounds = 2;
+    Points x = im.ball;
+    const VolumeMapResult r = volume_preserving_map(*host, im.mesh.vertices, im.mesh.tets, x, o);
+    std::vector<double> moser;
+    for (const auto& rd : r.rounds)
+      if (rd.kind == "moser") moser.push_back(rd.vertex_mean_abs_dev);
+    REQUIRE(!moser.empty());
+    INFO("initial " << r.initial_vertex_mean_abs_dev << ", stop " << r.stop_reason);
+    double prev = r.initial_vertex_mean_abs_dev;
+    for (size_t k = 0; k + 1 < moser.size(); ++k) {  // each round followed by another was far and gaining
+      INFO("moser round " << k + 1 << ": " << moser[k]);
+      CHECK(moser[k] > 5 * tolerance);
+      CHECK(moser[k] <= 0.8 * prev);
+      prev = moser[k];
+    }
+    const double last = moser.back();
+    if (r.stop_reason == "stalled") {
+      CHECK(last > tolerance);
+      CHECK((last <= 5 * tolerance || last > 0.8 * prev));
+      handed_near += last <= 5 * tolerance && last <= 0.5 * prev;  // the rule before stopped no such round
+    }
+    CHECK(volume_distortion(im.mesh.vertices, x, im.mesh.tets).folds == 0);
+  }
+  CHECK(handed_near > 0);
+}
+
 TEST_CASE("volume map: polish rounds lower the per-tet distortion left by the Moser rounds") {
   const InitialMapResult& im = ellipsoid_start();
   auto host = Device::host();

@@ -91,8 +91,8 @@ struct VolumeMapOptions {
   /// `polish_min_gain`, or by less than 3 % once the vertex mean |r-1| is within `tolerance`
   /// (not in polish_volumes, vpm/polish.hpp): the last rounds of large meshes gain 0-1.5 % each
   /// for seconds, docs/volume_map.md). With
-  /// rounds == -1 the Moser rounds hand over to the polish once a round gains less than half on
-  /// the vertex mean |r-1| with it within 5 x tolerance, or gains less than a fifth. A polish
+  /// rounds == -1 the Moser rounds hand over to the polish once the vertex mean |r-1| is within
+  /// 5 x tolerance, or a round gains less than a fifth on it (stop_reason "stalled"). A polish
   /// step that folds is untangled locally like a round, then halved. Short of the tolerance,
   /// the polish goes on past this count while each round still lowers the tet mean |r-1| by a
   /// tenth, up to 4 x this count (long thin parts gain that much a round well past the eighth).
