@@ -375,3 +375,33 @@ TEST_CASE("sphere map: where the conformal start stays crowded after the area fl
   CHECK(!b.report.conformal_log_misfit);
   CHECK(!to_json(b.report).find("conformal_log_misfit"));
 }
+
+TEST_CASE("boundary_tet_ratio_bound: exact for one tet, above every fold-free interior's smallest ratio, sees a crushed face") {
+  // one regular tet inscribed in the sphere: each face's plane lies 1/3 from the origin, the apex
+  // 4/3 from it, so every face's bound is the tet's own ratio, 1
+  TetMesh one;
+  one.vertices.resize(4, 3);
+  one.vertices << 1, 1, 1, 1, -1, -1, -1, 1, -1, -1, -1, 1;
+  one.vertices /= std::sqrt(3.0);
+  one.tets.resize(1, 4);
+  one.tets << 0, 1, 2, 3;
+  if (tet_volumes(one.vertices, one.tets)(0) < 0) std::swap(one.tets(0, 2), one.tets(0, 3));
+  CHECK(boundary_tet_ratio_bound(one, one.vertices) == Approx(1).epsilon(1e-12));
+
+  auto host = Device::host();
+  const InitialMapResult im = initial_map(*host, test::ellipsoid_mesh(6));
+  const Eigen::VectorXd v0 = tet_volumes(im.mesh.vertices, im.mesh.tets), v1 = tet_volumes(im.ball, im.mesh.tets);
+  REQUIRE(v1.minCoeff() > 0);
+  const double least = ((v1 / v1.sum()).array() / (v0 / v0.sum()).array()).minCoeff();
+  const double bound = boundary_tet_ratio_bound(im.mesh, im.ball);
+  INFO("smallest ratio " << least << ", bound " << bound);
+  CHECK(least <= bound);
+  CHECK(bound < 4);  // of order one where the boundary map keeps its faces' areas
+  // a boundary vertex moved along the sphere to within 1e-9 of a neighbour crushes the faces on
+  // that edge: no interior can then keep their tets' volumes
+  const Triangles faces = boundary_faces(im.mesh.tets);
+  Points crushed = im.ball;
+  const int a = faces(0, 0), b = faces(0, 1);
+  crushed.row(a) = (im.ball.row(b) + 1e-9 * (im.ball.row(a) - im.ball.row(b))).normalized();
+  CHECK(boundary_tet_ratio_bound(im.mesh, crushed) < InitialMapReport::kCrowdedRatio);
+}

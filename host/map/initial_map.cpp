@@ -33,12 +33,6 @@ Eigen::Vector3d tet_centroid(const Points& x, const Tets& t, int i) {
   return 0.25 * (x.row(t(i, 0)) + x.row(t(i, 1)) + x.row(t(i, 2)) + x.row(t(i, 3))).transpose();
 }
 
-Json vec_json(const Eigen::Vector3d& v) {
-  Json a = Json::array();
-  for (int c = 0; c < 3; ++c) a.push_back(v(c));
-  return a;
-}
-
 void check_input(const TetMesh& input) {
   if (input.num_tets() == 0) throw InputError("initial_map: the mesh has no tets");
   const Eigen::VectorXd v = tet_volumes(input.vertices, input.tets);
@@ -222,13 +216,6 @@ bool map_through_sphere(Device& device, const TetMesh& m, const TriSurface& surf
                        std::to_string(rep.folds_before_untangle) + "): " + where + "; " + note);
 }
 
-Json untangle_json(const InitialUntangle& u) {
-  Json j = to_json(u.result);
-  j["scope"] = u.local ? "local" : "global";
-  if (u.local) j["rings"] = u.rings;
-  return j;
-}
-
 // The conformal redo crowded a thin part: the equal-area attempt `area` is kept (res) and
 // untangled with the global run after the local ones (InitialMapReport::Fallback::crowded).
 void untangle_globally(Device& device, const TetMesh& m, const InitialMapOptions& opt, InitialMapResult area,
@@ -240,6 +227,43 @@ void untangle_globally(Device& device, const TetMesh& m, const InitialMapOptions
   rep.folds_before_untangle = static_cast<int>(inverted_tets(res.ball, m.tets).size());
   rep.folds_after_untangle = untangle_map(device, m, res.boundary, opt, res.ball, rep, true);
   rep.timings.untangle += seconds_since(t0);
+}
+
+// Untangling from the equal-area boundary left folds: steps 2-4 again from the conformal sphere
+// map (a flipped sphere map would flip the same way: the flow never flips), unless it crowds a
+// thin part, decided from its boundary alone where the bound settles it (InitialMapReport::Fallback).
+void conformal_fallback(Device& device, const TetMesh& m, const TriSurface& surf, const InitialMapOptions& opt,
+                        const std::string& note, InitialMapResult& res,
+                        std::future<std::shared_ptr<PoissonSolver>>& solver) {
+  InitialMapReport& rep = res.report;
+  say(opt, std::to_string(rep.folds_after_untangle) + " folds left: again from the conformal sphere map");
+  InitialMapReport::Fallback fb;
+  fb.from = to_string(opt.sphere_density);
+  fb.flipped_triangles = rep.boundary.flipped_triangles;
+  fb.folds_after_untangle = rep.folds_after_untangle;
+  fb.seconds = rep.timings.boundary + rep.timings.harmonic + rep.timings.untangle;
+  InitialMapOptions conformal = opt;
+  conformal.sphere_density = InitialMapOptions::SphereDensity::conformal;
+  rep.untangle.reset();
+  rep.untangle_local_failed.reset();
+  rep.untangle_cleanup.reset();
+  rep.untangle_slide.reset();
+  InitialMapResult area = res;
+  TimedSphereMap redo = timed_sphere_map(surf, conformal, device);
+  if (redo.map.flipped_triangles == 0) {
+    fb.conformal_min_tet_ratio = boundary_tet_ratio_bound(m, redo.map.sphere);
+    fb.crowded_by_boundary = fb.conformal_min_tet_ratio < InitialMapReport::kCrowdedRatio;
+  }
+  if (fb.crowded_by_boundary) {
+    fb.crowded = true;
+    untangle_globally(device, m, opt, std::move(area), res);
+  } else {
+    map_through_sphere(device, m, surf, conformal, note, res, rep, solver, &redo);
+    fb.conformal_min_tet_ratio = map_metrics(device, m.vertices, res.ball, m.tets).tet_volume_ratio.min;
+    fb.crowded = rep.boundary.flipped_triangles == 0 && fb.conformal_min_tet_ratio < InitialMapReport::kCrowdedRatio;
+    if (fb.crowded) untangle_globally(device, m, opt, std::move(area), res);
+  }
+  rep.fallback = fb;
 }
 
 }  // namespace
@@ -283,28 +307,8 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
   // with a fallback to come, the first attempt untangles locally only (untangle_map)
   const bool can_fall_back = opt.sphere_density != InitialMapOptions::SphereDensity::conformal;
   const bool done = map_through_sphere(device, m, surf, opt, note, res, rep, solver, &early, !can_fall_back);
-  if (!done && rep.boundary.flipped_triangles == 0 && !opt.deadline.passed() && can_fall_back) {
-    say(opt, std::to_string(rep.folds_after_untangle) + " folds left: again from the conformal sphere map");
-    // untangling the map from the equal-area boundary left folds: the conformal boundary is
-    // the fallback (a flipped sphere map would flip the same way: the flow never flips)
-    InitialMapReport::Fallback fb;
-    fb.from = to_string(opt.sphere_density);
-    fb.flipped_triangles = rep.boundary.flipped_triangles;
-    fb.folds_after_untangle = rep.folds_after_untangle;
-    fb.seconds = rep.timings.boundary + rep.timings.harmonic + rep.timings.untangle;
-    InitialMapOptions conformal = opt;
-    conformal.sphere_density = InitialMapOptions::SphereDensity::conformal;
-    rep.untangle.reset();
-    rep.untangle_local_failed.reset();
-    rep.untangle_cleanup.reset();
-    rep.untangle_slide.reset();
-    InitialMapResult area = res;
-    map_through_sphere(device, m, surf, conformal, note, res, rep, solver);
-    fb.conformal_min_tet_ratio = map_metrics(device, m.vertices, res.ball, m.tets).tet_volume_ratio.min;
-    fb.crowded = rep.boundary.flipped_triangles == 0 && fb.conformal_min_tet_ratio < InitialMapReport::kCrowdedRatio;
-    if (fb.crowded) untangle_globally(device, m, opt, std::move(area), res);
-    rep.fallback = fb;
-  }
+  if (!done && rep.boundary.flipped_triangles == 0 && !opt.deadline.passed() && can_fall_back)
+    conformal_fallback(device, m, surf, opt, note, res, solver);
   if (rep.folds_after_untangle > 0 && rep.boundary.flipped_triangles == 0)
     say(opt, std::to_string(rep.folds_after_untangle) + " folds left: refining around them");
   if (rep.boundary.flipped_triangles == 0 && detail::refine_folds(device, surf.triangles, opt, res, rep))
@@ -320,79 +324,6 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
   rep.timings.metrics = seconds_since(t0);
   rep.timings.total = seconds_since(t_total);
   return res;
-}
-
-Json to_json(const InitialMapReport& r) {
-  Json rep = Json::object();
-  rep["device"] = r.device;
-  rep["input"]["vertices"] = r.input_vertices;
-  rep["input"]["tets"] = r.input_tets;
-  Json& q = rep["input_quality"];
-  q["min_dihedral_deg"] = r.min_dihedral_deg;
-  q["min_dihedral_tet"] = r.min_dihedral_tet;
-  q["tets_below_1deg"] = r.tets_below_1deg;
-  q["tets_below_5deg"] = r.tets_below_5deg;
-  Json list = Json::array();
-  for (const WorstTet& w : r.worst) {
-    Json o = Json::object();
-    o["tet"] = w.tet;
-    o["min_dihedral_deg"] = w.min_dihedral_deg;
-    o["centroid"] = vec_json(w.centroid);
-    list.push_back(o);
-  }
-  q["worst"] = list;
-  if (r.min_dihedral_deg < 1.0)
-    q["warning"] = "slivers below 1 degree: meshes with 0.01-0.05 degree slivers defeat the ball map "
-                   "(docs/design.md 4.2); remesh with a dihedral bound";
-  Json& s = rep["split"];
-  s["rounds"] = r.split_rounds;
-  s["inserted_vertices"] = r.inserted_vertices;
-  s["four_boundary_tets_before"] = r.four_boundary_tets_before;
-  s["four_boundary_tets_after"] = r.four_boundary_tets_after;
-  s["centroid_splits"] = r.centroid_splits;
-  rep["refined"]["vertices"] = r.refined_vertices;
-  rep["refined"]["tets"] = r.refined_tets;
-  rep["boundary"] = to_json(r.boundary);
-  if (r.fallback) {
-    Json& f = rep["fallback"];
-    f["from"] = r.fallback->from;
-    f["to"] = "conformal";
-    f["flipped_triangles"] = r.fallback->flipped_triangles;
-    f["folds_after_untangle"] = r.fallback->folds_after_untangle;
-    f["seconds"] = r.fallback->seconds;
-    f["crowded"] = r.fallback->crowded;
-    f["conformal_min_tet_ratio"] = r.fallback->conformal_min_tet_ratio;
-  }
-  rep["harmonic"]["solver"] = r.harmonic_on_device ? "PoissonSolver CG (OpenCL)" : "PoissonSolver CG (host)";
-  rep["harmonic"]["preconditioner"] = r.harmonic_preconditioner;
-  rep["harmonic"]["iterations"] = r.harmonic_iterations;
-  rep["harmonic"]["relative_residual"] = r.harmonic_relative_residual;
-  rep["harmonic"]["inverted_tets"] = r.folds_before_untangle;
-  rep["folds_before_untangle"] = r.folds_before_untangle;
-  if (r.untangle) rep["untangle"] = untangle_json(*r.untangle);
-  if (r.untangle_local_failed) rep["untangle_local_failed"] = untangle_json(*r.untangle_local_failed);
-  if (r.untangle_cleanup) rep["untangle_cleanup"] = untangle_json(*r.untangle_cleanup);
-  if (r.untangle_slide) rep["untangle_slide"] = untangle_json(*r.untangle_slide);
-  rep["folds_after_untangle"] = r.folds_after_untangle;
-  if (r.refine) {
-    Json& f = rep["refine"];
-    f["rounds"] = r.refine->rounds;
-    f["inserted_vertices"] = r.refine->inserted_vertices;
-    f["folds_before"] = r.refine->folds_before;
-    f["folds_after"] = r.refine->folds_after;
-    f["seconds"] = r.refine->seconds;
-  }
-  rep["boundary_max_radius_error"] = r.boundary_max_radius_error;
-  rep["metrics"] = to_json(r.metrics);
-  Json& tm = rep["timings_s"];
-  tm["input_quality"] = r.timings.input_quality;
-  tm["metrics"] = r.timings.metrics;
-  tm["split"] = r.timings.split;
-  tm["boundary"] = r.timings.boundary;
-  tm["harmonic"] = r.timings.harmonic;
-  tm["untangle"] = r.timings.untangle;
-  tm["total"] = r.timings.total;
-  return rep;
 }
 
 }  // namespace vpm

@@ -250,7 +250,12 @@ struct InitialMapReport {
     double seconds = 0;  ///< spent on the first attempt's steps 2-4
     /// The conformal redo's smallest tet volume ratio (normalised) was below kCrowdedRatio.
     bool crowded = false;
-    double conformal_min_tet_ratio = 0;  ///< that ratio
+    /// Decided from the conformal sphere map alone, before its interior and untangling: the
+    /// boundary fixes an upper bound of every tet's ratio (the volume a tet on a boundary face
+    /// can have inside the ball), and that bound was below kCrowdedRatio.
+    bool crowded_by_boundary = false;
+    /// that ratio (when crowded_by_boundary, its upper bound)
+    double conformal_min_tet_ratio = 0;
   };
   /// A conformal map whose smallest normalised tet volume ratio is below this has squeezed a
   /// thin part (a long bone's shaft, a limb) into a sliver no round can restore.
@@ -300,6 +305,15 @@ struct InitialMapResult {
   std::shared_ptr<PoissonSolver> poisson;
   InitialMapReport report;
 };
+
+/// An upper bound of the smallest normalised tet volume ratio (vpm/metrics.hpp) of any fold-free
+/// map of `mesh` whose boundary vertices sit at their rows of `sphere` (on the unit sphere): the
+/// tet on a boundary face f keeps at most area(f) * h / 3 of volume, its apex inside the ball at
+/// most h = 1 + (the distance of f's plane from the origin) from that plane, and the ball
+/// mesh's volume is the one its boundary encloses whatever the interior. The initial map's
+/// conformal fallback asks it before building an interior: below
+/// InitialMapReport::kCrowdedRatio no untangling can leave that boundary uncrowded.
+double boundary_tet_ratio_bound(const TetMesh& mesh, const Points& sphere);
 
 /// Maps `input` (validated tet mesh: positively oriented tets, boundary one closed genus-0
 /// surface) to the unit ball; see above. Numerical work runs on `device` where a device
