@@ -217,7 +217,7 @@ bool map_through_sphere(Device& device, const TetMesh& m, const TriSurface& surf
 }
 
 // The conformal redo crowded a thin part: the equal-area attempt `area` is kept (res) and
-// untangled with the global run after the local ones (InitialMapReport::Fallback::crowded).
+// untangled with the global run that its local runs did not try (InitialMapReport::Fallback::crowded).
 void untangle_globally(Device& device, const TetMesh& m, const InitialMapOptions& opt, InitialMapResult area,
                        InitialMapResult& res) {
   say(opt, "the conformal sphere map crowds a thin part: the equal-area one, untangled globally");
@@ -225,7 +225,7 @@ void untangle_globally(Device& device, const TetMesh& m, const InitialMapOptions
   InitialMapReport& rep = res.report;
   const auto t0 = Clock::now();
   rep.folds_before_untangle = static_cast<int>(inverted_tets(res.ball, m.tets).size());
-  rep.folds_after_untangle = untangle_map(device, m, res.boundary, opt, res.ball, rep, true);
+  rep.folds_after_untangle = untangle_map(device, m, res.boundary, opt, res.ball, rep, true, true);
   rep.timings.untangle += seconds_since(t0);
 }
 
@@ -244,11 +244,11 @@ void conformal_fallback(Device& device, const TetMesh& m, const TriSurface& surf
   fb.seconds = rep.timings.boundary + rep.timings.harmonic + rep.timings.untangle;
   InitialMapOptions conformal = opt;
   conformal.sphere_density = InitialMapOptions::SphereDensity::conformal;
-  rep.untangle.reset();
   rep.untangle_local_failed.reset();
   rep.untangle_cleanup.reset();
   rep.untangle_slide.reset();
-  InitialMapResult area = res;
+  InitialMapResult area = res;  // with its local runs' report, which its global run follows
+  rep.untangle.reset();
   TimedSphereMap redo = timed_sphere_map(surf, conformal, device);
   if (redo.map.flipped_triangles == 0) {
     fb.conformal_min_tet_ratio = boundary_tet_ratio_bound(m, redo.map.sphere);

@@ -69,14 +69,14 @@ static InitialMapOptions within_budget(const InitialMapOptions& opt) {
 // Local runs widen the rings this many times (x2 each) while each leaves fewer folds.
 constexpr int kLocalWidenings = 3;
 int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boundary, const InitialMapOptions& options,
-                 Points& ball, InitialMapReport& rep, bool global) {
+                 Points& ball, InitialMapReport& rep, bool global, bool local_tried) {
   int folds = rep.folds_before_untangle;
   const InitialMapOptions opt = within_budget(options);
   const bool run = opt.untangle == InitialMapOptions::Untangle::Always ||
                    (opt.untangle == InitialMapOptions::Untangle::IfFolded && folds > 0);
   if (!run) return folds;
   const bool local = opt.untangle == InitialMapOptions::Untangle::IfFolded && opt.local_untangle_rings > 0;
-  if (local) {  // few folds: free only their neighbourhood (fast), widening it while that helps
+  if (local && !(local_tried && rep.untangle)) {  // few folds: free only their neighbourhood, widening it while that helps
     Points trial = ball;
     int left = folds;
     UntangleOptions lo = opt.untangle_options;
