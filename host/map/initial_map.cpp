@@ -224,7 +224,6 @@ void untangle_globally(Device& device, const TetMesh& m, const InitialMapOptions
   res = std::move(area);
   InitialMapReport& rep = res.report;
   const auto t0 = Clock::now();
-  rep.folds_before_untangle = static_cast<int>(inverted_tets(res.ball, m.tets).size());
   rep.folds_after_untangle = untangle_map(device, m, res.boundary, opt, res.ball, rep, true, true);
   rep.timings.untangle += seconds_since(t0);
 }

@@ -89,7 +89,7 @@ int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boun
       left = ul.inverted_after;
     }
     folds = left;
-    if (folds == 0) ball = std::move(trial);
+    if (folds == 0 || !global) ball = std::move(trial);  // without the global run: the fewest folds
   }
   if (!local || (folds > 0 && global)) {  // Always (or no rings): the global run is what was asked
     UntangleOptions whole = opt.untangle_options;

@@ -23,10 +23,10 @@ constexpr int kCleanupMaxFolds = 64;
 /// folds, and its cleanup (the sliding still runs), for an attempt with a cheaper fallback:
 /// initial_map's equal-area boundary, whose fallback is the conformal one (the global run over
 /// a 213k-tet brain took 40-90 s and still left a fold on 3 of 60 cohort brains, the conformal
-/// attempt 0.3 s). Untangle::Always runs globally whatever `global` says. `local_tried`: the
-/// local runs already ran on this same `ball` and left folds (the last of them in rep.untangle),
-/// so the global run follows at once (they are deterministic: the same runs again would give
-/// the same result, as the initial map's return to its equal-area attempt found).
+/// attempt 0.3 s); `ball` then keeps the local runs' fewest folds. Untangle::Always runs
+/// globally whatever `global` says. `local_tried`: `ball` is such a local result, the last run
+/// in rep.untangle, so the global run follows at once, from it (the initial map's return to
+/// its equal-area attempt after a crowded fallback).
 int untangle_map(Device& device, const TetMesh& m, const std::vector<char>& boundary, const InitialMapOptions& opt,
                  Points& ball, InitialMapReport& rep, bool global = true, bool local_tried = false);
 
