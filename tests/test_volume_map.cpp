@@ -159,7 +159,7 @@ TEST_CASE("volume map: the Moser rounds hand over to the polish once within 5x t
     if (r.stop_reason == "stalled") {
       CHECK(last > tolerance);
       CHECK((last <= 5 * tolerance || last > 0.8 * prev));
-      handed_near += last <= 5 * tolerance && last <= 0.5 * prev;  // the rule before stopped no such round
+      handed_near += last <= 5 * tolerance && last <= 0.5 * prev;  // a rule waiting for a gain under half would have gone on
     }
     CHECK(volume_distortion(im.mesh.vertices, x, im.mesh.tets).folds == 0);
   }
