@@ -147,6 +147,22 @@ void restore_areas(const SurfaceDomainMoves& domain, const Points& reference, co
   for (char c : domain.fixed) res.held_vertices += c;
 }
 
+bool crushes(const Eigen::VectorXd& area0, const Points& before, const Points& after, const Triangles& faces) {
+  const double now = (face_areas(after, faces).array() / area0.array()).minCoeff();
+  return now < kCrushedArea && now < (face_areas(before, faces).array() / area0.array()).minCoeff();
+}
+
+bool relieve_areas(const SurfaceDomainMoves& domain, const Points& reference, const Triangles& faces, int rounds, Points& x) {
+  if (rounds <= 0 || !domain.flipped(x, faces).empty()) return false;
+  SurfaceMapOptions polish;
+  polish.tolerance = 0;
+  polish.polish_rounds = rounds;
+  SurfaceMapReport rep;
+  const Points before = x;
+  polish_surface(domain, faces, face_areas(reference, faces), polish, x, rep);
+  return !(x - before).isZero(0);
+}
+
 // Each corner's neighbours listed twice (once per face on each side of the edge): the mean is
 // the same.
 int repair_flips(const SurfaceDomainMoves& domain, const Triangles& f, Points& x) {

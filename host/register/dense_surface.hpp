@@ -23,6 +23,17 @@ constexpr int kHalvings = 4;
 /// A step whose flipped slivers were repaired is kept only if the repaired step changes the face
 /// areas (mean |r - 1| against the positions before it) by at most this.
 constexpr double kRepairAreaChange = 0.001;
+/// A dense step in the disk may not press a face below this fraction of its input area (unless
+/// the smallest was already there): the face counts as crushed, as a flip the repair cannot mend
+/// does (crushes).
+constexpr double kCrushedArea = 0.1;
+/// A disk level whose step crushes faces at every halving brings the face areas back towards the
+/// input's (relieve_areas, kReliefRounds polish steps) and goes on, at most kReliefs times a
+/// level: the discrete motion of an area-preserving flow shears slivers until they collapse, and
+/// without this the finer levels refuse nearly every step. On the sphere, whose deformations
+/// shear less, the same rule lowered the curvature-only gap to the ideal but not the landmarks'
+/// and took three times as long: not used there (bench/results/LEDGER.md).
+constexpr int kReliefs = 4, kReliefRounds = 15;
 /// Below this correlation of the smoothed scalars a registration without landmarks first searches
 /// a rotation; maps that correlate better are not searched: the coarse scalar then has flat
 /// directions (turns that barely change it) along which the search slides to a wrong rotation (on
@@ -102,6 +113,22 @@ Eigen::VectorXd gauss_newton_weights(const SparseRows& J, const Eigen::VectorXd&
 /// res.restore_rounds and res.held_vertices.
 void restore_areas(const SurfaceDomainMoves& domain, const Points& reference, const Triangles& faces,
                    const SurfaceRegistrationOptions& options, SurfaceRegistrationResult& res);
+
+/// The index of the point of x at `d` (within 1e-12: a landmark given as a vertex id), or x.size().
+template <class V>
+size_t vertex_at(const std::vector<V>& x, const V& d) {
+  for (size_t i = 0; i < x.size(); ++i)
+    if ((x[i] - d).squaredNorm() <= 1e-24) return i;
+  return x.size();
+}
+
+/// Whether the move from `before` to `after` presses the smallest face area ratio (against the
+/// input's areas `area0`) below kCrushedArea and lower than it was.
+bool crushes(const Eigen::VectorXd& area0, const Points& before, const Points& after, const Triangles& faces);
+
+/// Face areas brought back towards `reference`'s where the dense steps crushed them: at most
+/// `rounds` steps of the surface map's polish (domain.fixed held). Returns whether x moved.
+bool relieve_areas(const SurfaceDomainMoves& domain, const Points& reference, const Triangles& faces, int rounds, Points& x);
 
 /// Faces flipped at x (slivers sheared past their width) unflipped: each corner of a flipped
 /// face, but those domain.fixed holds and the disk's boundary loop, moved to the mean of its

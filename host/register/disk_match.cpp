@@ -218,8 +218,9 @@ struct LevelScalars {
   ScalarGrid g;
 };
 
-// One level: at most options.iterations Gauss-Newton steps of a field of width `width`.
-SphereMatchLevel match_level(Device& device, std::vector<Vector2d>& x, std::vector<Vector2d>& carried, const Triangles& faces, const LevelScalars& s,
+// One level: at most options.iterations Gauss-Newton steps of a field of width `width`; a step
+// that crushes faces at every halving gives the face areas back first (kReliefs, dense_surface.hpp).
+SphereMatchLevel match_level(Device& device, std::vector<Vector2d>& x, std::vector<Vector2d>& carried, const Points& reference, const Triangles& faces, const LevelScalars& s,
                              double width, const SphereMatchOptions& options, const SurfaceDomainMoves& domain) {
   SphereMatchLevel lv;
   lv.width = width;
@@ -231,6 +232,7 @@ SphereMatchLevel match_level(Device& device, std::vector<Vector2d>& x, std::vect
   sample(s.g, x, s.f, e, grad);
   double E = lv.mismatch_before = mismatch(e, s.area);
   const size_t flipped = domain.flipped(disk_points(x), faces).size();  // the step may not add any
+  const Eigen::VectorXd area0 = face_areas(reference, faces);  // `reference`: the input disk
   for (int it = 0; it < options.iterations; ++it) {
     const Eigen::VectorXd a = gauss_newton_weights(system_rows(x, grad, carried, lat), s.area, e, K, options.ridge, "disk registration");
     LatticeField field{&lat, {}};
@@ -238,15 +240,21 @@ SphereMatchLevel match_level(Device& device, std::vector<Vector2d>& x, std::vect
     const double speed = max_speed(x, field);
     if (!(speed > 0)) break;
     double alpha = std::min(1.0, options.max_move * width / speed), gain = 0;
-    bool kept = false;
+    bool kept = false, crushed = false;
     for (int h = 0; h <= kHalvings && !kept; ++h, alpha /= 2) {
       std::vector<Vector2d> trial = advected(device, x, field, alpha, domain.boundary);
       Points tm = disk_points(trial);
+      if (crushes(area0, disk_points(x), tm, faces)) {
+        crushed = true;
+        continue;
+      }
       if (domain.flipped(tm, faces).size() > flipped) {  // repaired when that costs little area
         repair_flips(domain, faces, tm);
         if (domain.flipped(tm, faces).size() > flipped ||
-            surface_metrics(disk_points(x), tm, faces, SurfaceDomain::disk).face_area_ratio.mean_abs_dev > kRepairAreaChange)
+            surface_metrics(disk_points(x), tm, faces, SurfaceDomain::disk).face_area_ratio.mean_abs_dev > kRepairAreaChange) {
+          crushed = true;
           continue;
+        }
         trial = disk_vectors(tm);
       }
       Eigen::VectorXd te;
@@ -259,6 +267,16 @@ SphereMatchLevel match_level(Device& device, std::vector<Vector2d>& x, std::vect
       x = std::move(trial);
       carried = advected(device, carried, field, alpha, {});
       e = std::move(te), grad = std::move(tg), E = Et;
+    }
+    if (!kept && crushed && lv.reliefs < kReliefs) {  // faces crushed: their areas back, then on
+      Points tm = disk_points(x);
+      if (relieve_areas(domain, reference, faces, kReliefRounds, tm)) {
+        ++lv.reliefs;
+        x = disk_vectors(tm);
+        sample(s.g, x, s.f, e, grad);
+        E = mismatch(e, s.area);
+        continue;
+      }
     }
     if (!kept) break;
     ++lv.iterations;
@@ -339,7 +357,7 @@ SphereMatchReport match_in_disk(Device& device, std::vector<Vector2d>& x, std::v
   for (double width : dense_widths(options.widths, disk_points(carried), reference, faces)) {
     if (options.iterations <= 0) break;
     const LevelScalars s = level_scalars(disk_points(x), values, area, templ, tarea, options.smoothing * width);
-    rep.levels.push_back(match_level(device, x, carried, faces, s, width, options, domain));
+    rep.levels.push_back(match_level(device, x, carried, reference, faces, s, width, options, domain));
   }
   rep.correlation_after = correlation(f0, template_at(templ, x), area);
   rep.seconds = seconds_since(t0);

@@ -132,12 +132,17 @@ void flow(Device& device, std::vector<Vector2d> x, const std::vector<char>& boun
 std::vector<char> landmark_corners(const std::vector<Vector2d>& x, const Triangles& f, const std::vector<Vector2d>& p) {
   std::vector<char> fixed(x.size(), 0);
   auto cross = [](const Vector2d& a, const Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); };
-  for (const Vector2d& d : p)
+  for (const Vector2d& d : p) {
+    if (const size_t at = detail::vertex_at(x, d); at < x.size()) {  // a landmark at a vertex: that vertex alone
+      fixed[at] = 1;
+      continue;
+    }
     for (Eigen::Index t = 0; t < f.rows(); ++t) {
       const Vector2d &a = x[static_cast<size_t>(f(t, 0))], &b = x[static_cast<size_t>(f(t, 1))], &c = x[static_cast<size_t>(f(t, 2))];
       if (cross(b - a, d - a) >= 0 && cross(c - b, d - b) >= 0 && cross(a - c, d - c) >= 0)
         for (int k = 0; k < 3; ++k) fixed[static_cast<size_t>(f(t, k))] = 1;
     }
+  }
   return fixed;
 }
 

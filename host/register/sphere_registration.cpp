@@ -126,10 +126,17 @@ std::vector<Vector3d> unit_rows(const Points& m, const char* what) {
 }
 
 // 1 on the corners of every face whose chord triangle the ray through a landmark crosses: the
-// faces that carry the landmarks, held still by the restoration.
+// faces that carry the landmarks, held still by the restoration. A landmark at a vertex (given by
+// its id) holds that vertex alone: holding its whole star too left slivers one ring further out
+// that the repair could not mend (bench/results/LEDGER.md).
 std::vector<char> landmark_corners(const std::vector<Vector3d>& x, const Triangles& f, const std::vector<Vector3d>& p) {
   std::vector<char> fixed(x.size(), 0);
-  for (const Vector3d& d : p)
+  for (const Vector3d& d : p) {
+    const size_t at = detail::vertex_at(x, d);
+    if (at < x.size()) {
+      fixed[at] = 1;
+      continue;
+    }
     for (Eigen::Index t = 0; t < f.rows(); ++t) {
       const Vector3d &a = x[f(t, 0)], &b = x[f(t, 1)], &c = x[f(t, 2)];
       if (d.dot(a + b + c) <= 0) continue;
@@ -138,6 +145,7 @@ std::vector<char> landmark_corners(const std::vector<Vector3d>& x, const Triangl
       if ((s0 >= 0 && s1 >= 0 && s2 >= 0) || (s0 <= 0 && s1 <= 0 && s2 <= 0))
         for (int k = 0; k < 3; ++k) fixed[static_cast<size_t>(f(t, k))] = 1;
     }
+  }
   return fixed;
 }
 

@@ -31,6 +31,7 @@ Json to_json(const SurfaceRegistrationResult& r, const SurfaceRegistrationOption
       o["width"] = l.width;
       o["centres"] = l.centres;
       o["iterations"] = l.iterations;
+      o["reliefs"] = l.reliefs;
       o["mismatch_before"] = l.mismatch_before;
       o["mismatch_after"] = l.mismatch_after;
       m["levels"].push_back(o);

@@ -94,6 +94,9 @@ struct DiskTemplate {
 struct SphereMatchLevel {
   double width = 0;
   int centres = 0, iterations = 0;
+  /// Disk levels: times the face areas were brought back towards the input's because every
+  /// halving of a step crushed faces (always 0 on the sphere).
+  int reliefs = 0;
   double mismatch_before = 0, mismatch_after = 0;  ///< area-weighted mean squared residual of the level's standardised scalars
 };
 
