@@ -33,7 +33,7 @@ constexpr double kCrushedArea = 0.1;
 /// without this the finer levels refuse nearly every step. On the sphere, whose deformations
 /// shear less, the same rule lowered the curvature-only gap to the ideal but not the landmarks'
 /// and took three times as long: not used there (bench/results/LEDGER.md).
-constexpr int kReliefs = 4, kReliefRounds = 15;
+constexpr int kReliefs = 4, kReliefRounds = 5;
 /// Below this correlation of the smoothed scalars a registration without landmarks first searches
 /// a rotation; maps that correlate better are not searched: the coarse scalar then has flat
 /// directions (turns that barely change it) along which the search slides to a wrong rotation (on
