@@ -147,19 +147,23 @@ void restore_areas(const SurfaceDomainMoves& domain, const Points& reference, co
   for (char c : domain.fixed) res.held_vertices += c;
 }
 
-bool crushes(const Eigen::VectorXd& area0, const Points& before, const Points& after, const Triangles& faces) {
-  const double now = (face_areas(after, faces).array() / area0.array()).minCoeff();
-  return now < kCrushedArea && now < (face_areas(before, faces).array() / area0.array()).minCoeff();
+double smallest_area_ratio(const Eigen::VectorXd& area0, const Points& x, const Triangles& faces) {
+  return (face_areas(x, faces).array() / area0.array()).minCoeff();
 }
 
-bool relieve_areas(const SurfaceDomainMoves& domain, const Points& reference, const Triangles& faces, int rounds, Points& x) {
+bool crushes(const Eigen::VectorXd& area0, double least, const Points& after, const Triangles& faces) {
+  const double now = smallest_area_ratio(area0, after, faces);
+  return now < kCrushedArea && now < least;
+}
+
+bool relieve_areas(const SurfaceDomainMoves& domain, const Eigen::VectorXd& area0, const Triangles& faces, int rounds, Points& x) {
   if (rounds <= 0 || !domain.flipped(x, faces).empty()) return false;
   SurfaceMapOptions polish;
   polish.tolerance = 0;
   polish.polish_rounds = rounds;
   SurfaceMapReport rep;
   const Points before = x;
-  polish_surface(domain, faces, face_areas(reference, faces), polish, x, rep);
+  polish_surface(domain, faces, area0, polish, x, rep);
   return !(x - before).isZero(0);
 }
 

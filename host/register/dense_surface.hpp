@@ -122,13 +122,16 @@ size_t vertex_at(const std::vector<V>& x, const V& d) {
   return x.size();
 }
 
-/// Whether the move from `before` to `after` presses the smallest face area ratio (against the
-/// input's areas `area0`) below kCrushedArea and lower than it was.
-bool crushes(const Eigen::VectorXd& area0, const Points& before, const Points& after, const Triangles& faces);
+/// The smallest face area ratio of x against the input's areas `area0`.
+double smallest_area_ratio(const Eigen::VectorXd& area0, const Points& x, const Triangles& faces);
 
-/// Face areas brought back towards `reference`'s where the dense steps crushed them: at most
-/// `rounds` steps of the surface map's polish (domain.fixed held). Returns whether x moved.
-bool relieve_areas(const SurfaceDomainMoves& domain, const Points& reference, const Triangles& faces, int rounds, Points& x);
+/// Whether a move to `after` presses the smallest face area ratio below kCrushedArea and below
+/// `least`, the smallest before the move (smallest_area_ratio).
+bool crushes(const Eigen::VectorXd& area0, double least, const Points& after, const Triangles& faces);
+
+/// Face areas brought back towards the input's `area0` where the dense steps crushed them: at
+/// most `rounds` steps of the surface map's polish (domain.fixed held). Returns whether x moved.
+bool relieve_areas(const SurfaceDomainMoves& domain, const Eigen::VectorXd& area0, const Triangles& faces, int rounds, Points& x);
 
 /// Faces flipped at x (slivers sheared past their width) unflipped: each corner of a flipped
 /// face, but those domain.fixed holds and the disk's boundary loop, moved to the mean of its

@@ -219,8 +219,9 @@ struct LevelScalars {
 };
 
 // One level: at most options.iterations Gauss-Newton steps of a field of width `width`; a step
-// that crushes faces at every halving gives the face areas back first (kReliefs, dense_surface.hpp).
-SphereMatchLevel match_level(Device& device, std::vector<Vector2d>& x, std::vector<Vector2d>& carried, const Points& reference, const Triangles& faces, const LevelScalars& s,
+// that crushes faces at every halving gives the face areas back first (kReliefs, dense_surface.hpp);
+// `area0`: the input disk's face areas.
+SphereMatchLevel match_level(Device& device, std::vector<Vector2d>& x, std::vector<Vector2d>& carried, const Eigen::VectorXd& area0, const Triangles& faces, const LevelScalars& s,
                              double width, const SphereMatchOptions& options, const SurfaceDomainMoves& domain) {
   SphereMatchLevel lv;
   lv.width = width;
@@ -232,7 +233,6 @@ SphereMatchLevel match_level(Device& device, std::vector<Vector2d>& x, std::vect
   sample(s.g, x, s.f, e, grad);
   double E = lv.mismatch_before = mismatch(e, s.area);
   const size_t flipped = domain.flipped(disk_points(x), faces).size();  // the step may not add any
-  const Eigen::VectorXd area0 = face_areas(reference, faces);  // `reference`: the input disk
   for (int it = 0; it < options.iterations; ++it) {
     const Eigen::VectorXd a = gauss_newton_weights(system_rows(x, grad, carried, lat), s.area, e, K, options.ridge, "disk registration");
     LatticeField field{&lat, {}};
@@ -241,10 +241,11 @@ SphereMatchLevel match_level(Device& device, std::vector<Vector2d>& x, std::vect
     if (!(speed > 0)) break;
     double alpha = std::min(1.0, options.max_move * width / speed), gain = 0;
     bool kept = false, crushed = false;
+    const double least = smallest_area_ratio(area0, disk_points(x), faces);  // x stays through the halvings
     for (int h = 0; h <= kHalvings && !kept; ++h, alpha /= 2) {
       std::vector<Vector2d> trial = advected(device, x, field, alpha, domain.boundary);
       Points tm = disk_points(trial);
-      if (crushes(area0, disk_points(x), tm, faces)) {
+      if (crushes(area0, least, tm, faces)) {
         crushed = true;
         continue;
       }
@@ -270,7 +271,7 @@ SphereMatchLevel match_level(Device& device, std::vector<Vector2d>& x, std::vect
     }
     if (!kept && crushed && lv.reliefs < kReliefs) {  // faces crushed: their areas back, then on
       Points tm = disk_points(x);
-      if (relieve_areas(domain, reference, faces, kReliefRounds, tm)) {
+      if (relieve_areas(domain, area0, faces, kReliefRounds, tm)) {
         ++lv.reliefs;
         x = disk_vectors(tm);
         sample(s.g, x, s.f, e, grad);
@@ -349,6 +350,7 @@ SphereMatchReport match_in_disk(Device& device, std::vector<Vector2d>& x, std::v
   const auto t0 = Clock::now();
   SphereMatchReport rep;
   const Eigen::VectorXd area = vertex_areas(reference, faces), tarea = vertex_areas(templ.disk, templ.faces);
+  const Eigen::VectorXd area0 = face_areas(reference, faces);
   const Eigen::VectorXd f0 = standardise(values, area, "subject");
   spread(templ.values, tarea, "template");  // refuses a constant template
   rep.correlation_before = correlation(f0, template_at(templ, x), area);
@@ -357,7 +359,7 @@ SphereMatchReport match_in_disk(Device& device, std::vector<Vector2d>& x, std::v
   for (double width : dense_widths(options.widths, disk_points(carried), reference, faces)) {
     if (options.iterations <= 0) break;
     const LevelScalars s = level_scalars(disk_points(x), values, area, templ, tarea, options.smoothing * width);
-    rep.levels.push_back(match_level(device, x, carried, reference, faces, s, width, options, domain));
+    rep.levels.push_back(match_level(device, x, carried, area0, faces, s, width, options, domain));
   }
   rep.correlation_after = correlation(f0, template_at(templ, x), area);
   rep.seconds = seconds_since(t0);

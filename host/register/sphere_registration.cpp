@@ -132,8 +132,7 @@ std::vector<Vector3d> unit_rows(const Points& m, const char* what) {
 std::vector<char> landmark_corners(const std::vector<Vector3d>& x, const Triangles& f, const std::vector<Vector3d>& p) {
   std::vector<char> fixed(x.size(), 0);
   for (const Vector3d& d : p) {
-    const size_t at = detail::vertex_at(x, d);
-    if (at < x.size()) {
+    if (const size_t at = detail::vertex_at(x, d); at < x.size()) {
       fixed[at] = 1;
       continue;
     }
