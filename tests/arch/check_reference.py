@@ -5,7 +5,8 @@ README.md, docs/*.md, include/vpm/*.hpp and workflow/*.yaml hold no session word
 session", "this session"), no commit hashes ("commit 0abb4d1") and, in Markdown, no dated
 headings ("## Bad surfaces (2026-11-23)"); the config files hold no dates at all. Measurements of
 the past, with their dates and commits, belong to bench/results/ (LEDGER.md and the folders it
-points to) and CHANGELOG.md.
+points to) and CHANGELOG.md. The ledger itself keeps its preamble and its table's header (a
+row written with `>` instead of `>>` once replaced the whole ledger).
 
 PENDING names the pages still written as a lab notebook: they are reported, not failed, and a
 pending page that has become clean fails until it leaves the list, so the list only shrinks.
@@ -52,8 +53,27 @@ def files(root):
     return names
 
 
+LEDGER = "bench/results/LEDGER.md"
+LEDGER_HEAD = ("# Results ledger", "| date | what | measured on | result | decision |")
+
+
+def ledger_problems(text):
+    """What is wrong with the ledger's text: its title or its table's header gone."""
+    lines = text.splitlines()
+    out = []
+    if not lines or lines[0] != LEDGER_HEAD[0]:
+        out.append("its first line is not " + repr(LEDGER_HEAD[0]) + ": was it overwritten?")
+    if LEDGER_HEAD[1] not in lines:
+        out.append("its table's header " + repr(LEDGER_HEAD[1]) + " is gone")
+    return out
+
+
 def check(root):
     failed = False
+    ledger = os.path.join(root, LEDGER)
+    for what in ledger_problems(open(ledger, encoding="utf-8").read() if os.path.exists(ledger) else ""):
+        print(f"{LEDGER}: {what}")
+        failed = True
     for name in files(root):
         found = problems(name, open(os.path.join(root, name), encoding="utf-8").read())
         if name in PENDING:
@@ -85,6 +105,10 @@ def self_test():
         "z.hpp": "/// A session of the browser view keeps its state.\n",
         "c.yaml": "level: 6  # canonical elements\n",
     }
+    if not ledger_problems("| 2026-12-05 | a row | m | r | d |\n") or ledger_problems(
+            LEDGER_HEAD[0] + "\n\nText.\n\n" + LEDGER_HEAD[1] + "\n|---|\n"):
+        print("self-test: the ledger's check")
+        return 1
     for name, text in bad.items():
         if not problems(name, text):
             print(f"self-test: {name!r} {text!r} passed but should not")
