@@ -396,6 +396,44 @@ TEST_CASE("dense disk registration: a crushed face given back its area, the held
   CHECK(flipped == given);
 }
 
+TEST_CASE("flip repair: a sliver pushed past its edge comes back near its own area, held corners kept") {
+  using namespace vpm::detail;
+  const TriSurface s = icosphere(3);
+  const Triangles& f = s.triangles;
+  // the input: one face made a sliver (its third corner 95 % of the way to the opposite edge's
+  // midpoint); the map: that corner pushed 5 % past the edge, the face flipped
+  const int a = f(0, 0), b = f(0, 1), c = f(0, 2);
+  const Eigen::RowVector3d mid = 0.5 * (s.vertices.row(a) + s.vertices.row(b));
+  Points reference = s.vertices, x = s.vertices;
+  reference.row(c) = (s.vertices.row(c) + 0.95 * (mid - s.vertices.row(c))).normalized();
+  x.row(c) = (s.vertices.row(c) + 1.05 * (mid - s.vertices.row(c))).normalized();
+  const Eigen::VectorXd a0 = face_areas(reference, f);
+  std::vector<char> held(static_cast<size_t>(s.vertices.rows()), 0);
+  held[static_cast<size_t>(a)] = held[static_cast<size_t>(b)] = 1;  // the edge's corners are landmarks
+  const SurfaceDomainMoves domain{SurfaceDomain::sphere, {}, held};
+  REQUIRE(domain.flipped(reference, f).empty());
+  REQUIRE(domain.flipped(x, f) == std::vector<int>{0});
+  Points kept = x, mean = x;
+  CHECK(repair_flips(domain, f, a0, kept) == 1);
+  CHECK(repair_flips(domain, f, Eigen::VectorXd(), mean) == 1);
+  const double r_kept = face_areas(kept, f)(0) / a0(0), r_mean = face_areas(mean, f)(0) / a0(0);
+  INFO("the sliver's area ratio: kept " << r_kept << ", neighbour mean " << r_mean);
+  CHECK(domain.flipped(kept, f).empty());
+  CHECK(domain.flipped(mean, f).empty());
+  CHECK(r_kept > 1.0 / 3);
+  CHECK(r_kept < 3);
+  CHECK(r_mean > 10);  // the neighbours' mean gives the sliver a whole face's area
+  CHECK(surface_metrics(reference, kept, f, SurfaceDomain::sphere).face_area_ratio.mean_abs_dev <
+        0.5 * surface_metrics(reference, mean, f, SurfaceDomain::sphere).face_area_ratio.mean_abs_dev);
+  CHECK(kept.row(a) == x.row(a));
+  CHECK(kept.row(b) == x.row(b));
+  CHECK(std::abs(kept.row(c).norm() - 1) < 1e-12);
+  // a map without a flipped face is left as it is
+  Points fine = reference;
+  CHECK(repair_flips(domain, f, a0, fine) == 0);
+  CHECK(fine == reference);
+}
+
 TEST_CASE("disk registration on host and device: the landmark flow and the dense steps' advections agree") {
   const TriSurface subject = disk_map_of_cap(3), tpl = disk_map_of_cap(4);
   const DiskTemplate t{swirled(tpl.vertices), tpl.triangles, plane_features(tpl.vertices)};

@@ -134,9 +134,15 @@ bool crushes(const Eigen::VectorXd& area0, double least, const Points& after, co
 bool relieve_areas(const SurfaceDomainMoves& domain, const Eigen::VectorXd& area0, const Triangles& faces, int rounds, Points& x);
 
 /// Faces flipped at x (slivers sheared past their width) unflipped: each corner of a flipped
-/// face, but those domain.fixed holds and the disk's boundary loop, moved to the mean of its
-/// neighbours and put back on the domain, sweeps until none is flipped (at most 50). Returns the
-/// number of faces found flipped at first; domain.flipped says what is left.
-int repair_flips(const SurfaceDomainMoves& domain, const Triangles& f, Points& x);
+/// face, but those domain.fixed holds and the disk's boundary loop, moved part of the way to the
+/// mean of its neighbours and put back on the domain, sweeps until none is flipped (at most 50).
+/// With the input's face areas `area0`, the part (of kRepairFractions) that leaves the fewest of
+/// the corner's faces flipped and, of those, their areas nearest area0 (the least sum of
+/// abs(log(area / area0))): a sliver of the input stays near its own area. With `area0` empty,
+/// the whole way: the dense steps' repair, which gives a sliver a whole face's area, so that a
+/// step sheared that far costs area and is refused (kRepairAreaChange); the area-keeping repair
+/// there let the coarse levels run on and drift from the truth. Returns the number of faces
+/// found flipped at first; domain.flipped says what is left.
+int repair_flips(const SurfaceDomainMoves& domain, const Triangles& f, const Eigen::VectorXd& area0, Points& x);
 
 }  // namespace vpm::detail

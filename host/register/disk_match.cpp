@@ -250,7 +250,7 @@ SphereMatchLevel match_level(Device& device, std::vector<Vector2d>& x, std::vect
         continue;
       }
       if (domain.flipped(tm, faces).size() > flipped) {  // repaired when that costs little area
-        repair_flips(domain, faces, tm);
+        repair_flips(domain, faces, Eigen::VectorXd(), tm);  // the neighbour-mean repair (dense_surface.hpp)
         if (domain.flipped(tm, faces).size() > flipped ||
             surface_metrics(disk_points(x), tm, faces, SurfaceDomain::disk).face_area_ratio.mean_abs_dev > kRepairAreaChange) {
           crushed = true;

@@ -189,7 +189,7 @@ void landmark_flow(Device& device, const std::vector<Vector2d>& x, const std::ve
     res.width = res.width_factor * spacing;
     flow(device, x, domain.boundary, p, q, 1 / (res.width * res.width), options.steps, res);
     res.flow_metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::disk);
-    res.repaired_faces = detail::repair_flips(domain, faces, res.points);
+    res.repaired_faces = detail::repair_flips(domain, faces, detail::face_areas(reference, faces), res.points);
     const double* narrower = std::find(std::begin(kWidthFactors), std::end(kWidthFactors), res.width_factor);
     if (options.width_factor > 0 || domain.flipped(res.points, faces).empty() || narrower == std::begin(kWidthFactors) ||
         narrower == std::end(kWidthFactors))
@@ -230,7 +230,7 @@ SurfaceRegistrationResult run(const Points& disk, const Triangles& faces, const 
     res.match = detail::match_in_disk(dev, moved, carried, reference, faces, *values, *templ, options.match, domain);
     if (!p.empty()) {  // the landmarks back onto their targets from where the dense steps left them
       flow(dev, moved, domain.boundary, carried, q, 1 / (res.width * res.width), options.steps, res);
-      res.repaired_faces += detail::repair_flips(domain, faces, res.points);
+      res.repaired_faces += detail::repair_flips(domain, faces, detail::face_areas(reference, faces), res.points);
     } else {
       res.points = detail::disk_points(moved);
     }

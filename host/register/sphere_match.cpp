@@ -143,7 +143,7 @@ SphereMatchLevel match_level(Device& device, std::vector<Vector3d>& x, std::vect
       if (domain.flipped(tm, faces).size() > flipped) {
         // slivers sheared past their width: repaired, when that costs no more area than a step's
         // discretisation does
-        repair_flips(domain, faces, tm);
+        repair_flips(domain, faces, Eigen::VectorXd(), tm);  // the neighbour-mean repair (dense_surface.hpp)
         if (domain.flipped(tm, faces).size() > flipped ||
             surface_metrics(to_matrix(x), tm, faces, SurfaceDomain::sphere).face_area_ratio.mean_abs_dev > kRepairAreaChange)
           continue;

@@ -239,7 +239,7 @@ void landmark_flow(Device& device, const std::vector<Vector3d>& x, const std::ve
     res.width = chord_width(res.width_factor, spacing);
     flow(device, x, p, q, 1 / (res.width * res.width), options.steps, res);
     res.flow_metrics = surface_metrics(reference, res.points, faces, SurfaceDomain::sphere);
-    res.repaired_faces = detail::repair_flips(domain, faces, res.points);
+    res.repaired_faces = detail::repair_flips(domain, faces, detail::face_areas(reference, faces), res.points);
     const double* narrower = std::find(std::begin(kWidthFactors), std::end(kWidthFactors), res.width_factor);
     if (options.width_factor > 0 || domain.flipped(res.points, faces).empty() || narrower == std::begin(kWidthFactors) ||
         narrower == std::end(kWidthFactors))
@@ -286,7 +286,7 @@ SurfaceRegistrationResult run(const Points& sphere, const Triangles& faces, cons
     res.match = detail::match_on_sphere(dev, moved, carried, reference, faces, *values, *templ, options.match, domain);
     if (!p.empty()) {  // the landmarks back onto their targets from where the dense steps left them
       flow(dev, moved, carried, q, 1 / (res.width * res.width), options.steps, res);
-      res.repaired_faces += detail::repair_flips(domain, faces, res.points);
+      res.repaired_faces += detail::repair_flips(domain, faces, detail::face_areas(reference, faces), res.points);
     } else {
       for (size_t i = 0; i < moved.size(); ++i) res.points.row(static_cast<Eigen::Index>(i)) = moved[i].transpose();
     }

@@ -16,7 +16,8 @@
 //    on the sphere against round-off), then one step of the same field makes the landmarks
 //    land on their targets to round-off (it moves them by the RK4 truncation error).
 // 5. Repair: faces the flow flipped (slivers sheared past their width) are unflipped by moving
-//    their corners to their neighbours' mean on the sphere.
+//    their corners part of the way to their neighbours' mean on the sphere, the part that keeps
+//    their faces' areas nearest the input's.
 // 6. Restoration: the flow keeps areas, the mesh's chord triangles only to first order in their
 //    size (their edges are the flow's secants); the surface map's polish brings the face areas
 //    back to the input's, the faces that carry a landmark held still (they keep the flow's
@@ -37,8 +38,8 @@
 //     mu = ridge x the data term's mean diagonal over the Gram's), one dense Cholesky solve;
 //  d. every vertex (and every landmark) moved through the field (RK4), the step scaled so that no
 //     vertex moves more than max_move x width and halved until the mismatch (the area-weighted
-//     mean of e^2) decreases and no face flips (flipped slivers repaired as in step 5 when that
-//     changes the face areas by at most 0.1 %); a level ends when a step gains less than 0.1 %
+//     mean of e^2) decreases and no face flips (flipped slivers repaired, each corner moved the
+//     whole way to its neighbours' mean, when that changes the face areas by at most 0.1 %); a level ends when a step gains less than 0.1 %
 //     of the mismatch, or after `iterations`.
 // With landmarks, the system of step c also pulls the field's value at each landmark to zero
 // (weighted 100 times the data term), only the levels narrower than the landmarks' mean
