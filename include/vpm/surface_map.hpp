@@ -77,7 +77,7 @@ struct SurfaceMapStep {
   int solver_iterations = 0;
   double solver_residual = 0;
   double step = 1;               ///< the fraction of the CGLS direction taken (halved on flips)
-  int frozen_vertices = 0;       ///< vertices held still because their faces flipped in a trial
+  int frozen_vertices = 0;       ///< vertices the step held still because their faces flipped in a trial
   bool discarded = false;
   double seconds = 0;
 };
