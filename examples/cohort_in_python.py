@@ -34,6 +34,8 @@ TEMPLATES = "/usr/share/mricron/templates"
 ap = argparse.ArgumentParser()
 ap.add_argument("--out", default="out/example")
 ap.add_argument("--target-vertices", type=int, default=3000)
+ap.add_argument("--bids", help="a synthetic cohort made before (scripts/synth_cohort.py --normals 3 --patients 1) "
+                "instead of making one in OUT/bids")
 args = ap.parse_args([] if "ipykernel" in sys.modules else None)
 os.makedirs(args.out, exist_ok=True)
 print("devices:", [(d["index"], d["name"]) for d in vpm.devices() if d["selected"]])
@@ -71,7 +73,7 @@ fig.savefig(os.path.join(args.out, "distortion.png"), dpi=100)
 # boundaries and the T1 images read through both maps.
 
 # %%
-bids = os.path.join(args.out, "bids")
+bids = args.bids or os.path.join(args.out, "bids")
 if not os.path.exists(os.path.join(bids, "participants.tsv")):
     subprocess.run(["/usr/bin/python3", os.path.join(HERE, "..", "scripts", "synth_cohort.py"), "--out", bids,
                     "--normals", "3", "--patients", "1", "--seed", "3", "--jobs", "2"], check=True)
