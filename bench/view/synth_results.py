@@ -29,7 +29,9 @@ import os
 import shutil
 import subprocess
 import sys
+import zlib
 
+import h5py
 import numpy as np
 import vtk
 from vtk.util import numpy_support as ns
@@ -51,17 +53,19 @@ def write_table(path, head, data, sidecar, subject, mesh):
 
 
 def read_h5_feature(path, feature):
-    import h5py
     with h5py.File(path, "r") as f:
         return np.asarray(f[f"features/{feature}/mean"], dtype=np.float64)
+
+
+def read_h5_metadata(path):
+    with h5py.File(path, "r") as f:
+        return json.loads(f.attrs["metadata"])
 
 
 def write_h5_table(path, source, feature, values, subject, mesh):
     """A copy of the HDF5 table `source` with `feature`'s means, subject and mesh replaced, and
     the digest line in its 512-byte user block written again (host/core/file_digest.hpp: the
     CRC-32 of every byte after the block), as vpm writes it."""
-    import h5py
-    import zlib
     shutil.copyfile(source, path)
     with h5py.File(path, "r+") as f:
         f[f"features/{feature}/mean"][...] = values.astype(np.float32)
@@ -191,17 +195,13 @@ def main():
     for d in ("tables", "subjects", "compare", "template"):
         os.makedirs(os.path.join(out, d), exist_ok=True)
     # HDF5 sources (the workflow's) give HDF5 tables: a copy of a source table with the values
-    # written in, 100x faster to write and to read than TSV
+    # written in (the test suite's 30 subjects in 8 s instead of 35 with TSV)
     h5 = src_patient.endswith(".h5") and all(t.endswith(".h5") for t in src_normals)
     shutil.copy(os.path.join(src, "template", "template_ball.vtu"), os.path.join(out, "template", "template_ball.vtu"))
     if h5:
-        import h5py
-        def meta(t):
-            with h5py.File(t, "r") as f:
-                return json.loads(f.attrs["metadata"])
-        sidecar, psidecar = meta(src_normals[0]), meta(src_patient)
+        sidecar, psidecar = read_h5_metadata(src_normals[0]), read_h5_metadata(src_patient)
         base = np.mean([read_h5_feature(t, feature) for t in src_normals], axis=0)
-        meshes = [meta(t)["mesh"] for t in src_normals + [src_patient]]
+        meshes = [read_h5_metadata(t)["mesh"] for t in src_normals + [src_patient]]
     else:
         scratch = os.path.join(out, "source_tables")
         os.makedirs(scratch, exist_ok=True)

@@ -15,7 +15,7 @@ mkdir -p "$work"
 export POCL_CACHE_DIR=${POCL_CACHE_DIR:-$build/pocl-cache}
 fail() { echo "FAIL: $*" >&2; exit 1; }
 # the mechanics are checked with workflow/fast.yaml (level-5 elements, 7.7x lighter than the
-# default level 6, which the last check below runs) and brains of about 8,000 vertices (the
+# default level 6, which the last check below runs) and brains of about 8,000 vertices (at the
 # default 45,000 the whole check takes 1.6 times the CPU; the elements and the group level do
 # not depend on the mesh's size)
 printf 'mesh: {target_vertices: 8000}\n' > "$work/small_meshes.yaml"
