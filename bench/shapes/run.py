@@ -9,7 +9,8 @@ Writes OUT_DIR/shapes.json and OUT_DIR/shapes.md (and prints the table). --check
 form the test suite runs, tests/CMakeLists.txt bench:shapes-quick) exits 1 naming every row that
 misses the targets of the shapes that meet them: meshed, `vpm map` exit 0, fold-free, vertex
 mean abs(r-1) <= 2 % and tet <= 8 %. Sizes: 30k (mesh-image's
-default density, 25-30k tets) and 300k (--max-volume chosen for about 300k tets).
+default density, 25-30k tets) or any other Nk (--max-volume chosen from the 30k mesh's volume
+for about N thousand tets: 150k, 300k; 30k runs first, or ran before in OUT_DIR).
 
 --models adds public surface models that Debian's libcgal-demo ships (data.tar.gz, meshes/*.off;
 only the closed genus-0 ones are listed in MODELS), meshed by `vpm mesh-image MODEL.off`;
@@ -18,6 +19,7 @@ only the closed genus-0 ones are listed in MODELS), meshed by `vpm mesh-image MO
 import argparse
 import json
 import os
+import re
 import subprocess
 import sys
 import time
@@ -67,7 +69,8 @@ def one(vpm, out, shape, size, timeout):
     density = [] if size == "30k" else ["--max-volume", "__V__"]
     if density:
         volume = json.load(open(os.path.join(out, f"{shape}_30k_mesh.json")))["mesh"]["volume_mm3"]
-        density[1] = f"{volume / 300000 * 2.2:.6g}"  # TetGen's tets average ~1/2.2 of the bound (measured)
+        tets = 1000 * float(size.rstrip("k"))
+        density[1] = f"{volume / tets * 2.2:.6g}"  # TetGen's tets average ~1/2.2 of the bound (measured)
     rc, secs, last = run([vpm, "mesh-image", mask, "-o", base + ".vtu", "--report", base + "_mesh.json"] + density, timeout)
     row = {"shape": shape, "size": size, "mesh_exit": rc, "mesh_s": round(secs, 2)}
     if rc == 2 and "self-intersects" in last and mask.endswith(".off"):
@@ -136,6 +139,10 @@ def main():
     ap.add_argument("--timeout", type=int, default=600)
     ap.add_argument("--check", action="store_true", help="exit 1 unless every row meets the targets")
     a = ap.parse_args()
+    sizes = a.sizes.split(",")
+    bad_size = [z for z in sizes if not re.fullmatch(r"[0-9]+(\.[0-9]+)?k", z)]
+    if bad_size:
+        ap.error(f"--sizes: {bad_size[0]}: not Nk (30k, 150k, 300k, ...)")
     os.makedirs(a.out, exist_ok=True)
     shapes = [] if a.shapes == "none" else a.shapes.split(",")
     missing = [s for s in shapes if not os.path.exists(os.path.join(a.out, f"{s}.nii.gz"))]
@@ -146,7 +153,7 @@ def main():
         extract_models(a.out, models)
         shapes += ["cgal-" + m for m in models]
     rows = []
-    for size in a.sizes.split(","):
+    for size in sorted(sizes, key=lambda z: z != "30k"):
         for s in shapes:
             rows.append(one(os.path.abspath(a.vpm), a.out, s, size, a.timeout))
             print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
