@@ -60,6 +60,6 @@ if $sanitize; then
   phase "the rest of the sanitizer build (beside the others until then)"
   SAN_SUITE=$san_suite SAN_PHASE=test bash scripts/sanitize.sh
   phase "the sanitizer tests"
-  FUZZ_NO_BUILD=1 FUZZ_SECONDS=${FUZZ_SECONDS:-6} bash scripts/fuzz.sh
+  FUZZ_NO_BUILD=1 FUZZ_SECONDS=${FUZZ_SECONDS:-4} bash scripts/fuzz.sh
   phase "the fuzz pass"
 fi
