@@ -9,7 +9,7 @@ Writes OUT_DIR/shapes.json and OUT_DIR/shapes.md (and prints the table). --check
 form the test suite runs, tests/CMakeLists.txt bench:shapes-quick) exits 1 naming every row that
 misses the targets of the shapes that meet them: meshed, `vpm map` exit 0, fold-free, vertex
 mean abs(r-1) <= 2 % and tet <= 8 %. Sizes: 30k (mesh-image's
-default density, 25-30k tets) or any other Nk (--max-volume chosen from the 30k mesh's volume
+default density, 26-32k tets) or any other Nk (--max-volume chosen from the 30k mesh's volume
 for about N thousand tets: 150k, 300k; 30k runs first, or ran before in OUT_DIR).
 
 --models adds public surface models that Debian's libcgal-demo ships (data.tar.gz, meshes/*.off;
