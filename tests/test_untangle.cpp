@@ -34,6 +34,13 @@ int interior_vertex_near(const TetMesh& m, const Eigen::RowVector3d& p) {
     }
   return best;
 }
+// Two interior vertices pushed through their neighbours: folds in two places.
+Points two_interior_folds(const TetMesh& m) {
+  Points x = m.vertices;
+  x.row(interior_vertex_near(m, {0, 0, 0})) += Eigen::RowVector3d(0.45, 0.1, 0);
+  x.row(interior_vertex_near(m, {0.5, 0.3, -0.2})) += Eigen::RowVector3d(-0.4, 0.2, 0.3);
+  return x;
+}
 }  // namespace
 
 TEST_CASE("untangle clears folds made by dragging interior vertices, boundary untouched") {
@@ -126,9 +133,7 @@ TEST_CASE("untangle honours a time budget and still reports the folds") {
 TEST_CASE("host and OpenCL evaluation of the untangling energy agree") {
   const TetMesh m = test::ball_mesh(6);
   const auto fixed = boundary_of(m);
-  Points start = m.vertices;
-  start.row(interior_vertex_near(m, {0, 0, 0})) += Eigen::RowVector3d(0.45, 0.1, 0);
-  start.row(interior_vertex_near(m, {0.5, 0.3, -0.2})) += Eigen::RowVector3d(-0.4, 0.2, 0.3);
+  const Points start = two_interior_folds(m);
   REQUIRE(!inverted_tets(start, m.tets).empty());
   Points ref;
   UntangleResult ref_r;
@@ -257,4 +262,78 @@ TEST_CASE("the eps update: the floor of sigma bounds how slowly eps shrinks whil
   CHECK(untangle_next_eps(2.0, 3.0, dmin, eps, 0.5) == Approx(expected(0.5)).epsilon(1e-14));
   // every det J at or above mu: eps drops to the floor
   CHECK(untangle_next_eps(e, e_prev, 0.2, eps, 0.1) == 1e-10);
+}
+
+namespace {
+namespace oracle {
+#include "kernels/untangle_energy.clh"
+}
+// The untangling energy and gradient the plain way: one thread, each tet's corner gradients
+// added to its vertices in tet order.
+UntangleEval scatter_eval(const UntangleProblem& p, const Points& x, double eps, Eigen::VectorXd& g) {
+  UntangleEval out;
+  out.min_det = 1e300;
+  g.setZero(3 * static_cast<Eigen::Index>(p.free_vertices.size()));
+  for (size_t a = 0; a < p.active.size(); ++a) {
+    const auto t = p.tets->row(p.active[a]);
+    Eigen::Matrix3d X;
+    for (int k = 0; k < 3; ++k) X.col(k) = (x.row(t(k + 1)) - x.row(t(0))).transpose();
+    const Eigen::Matrix3d J = X * p.rinv[a];
+    Eigen::Matrix3d C;
+    C.col(0) = J.col(1).cross(J.col(2));
+    C.col(1) = J.col(2).cross(J.col(0));
+    C.col(2) = J.col(0).cross(J.col(1));
+    const double d = J.col(0).dot(C.col(0));
+    out.min_det = std::min(out.min_det, d);
+    out.nonpositive += d <= 0;
+    double k1, k2;
+    out.energy += p.weight[a] * oracle::ue_energy(d, J.squaredNorm(), eps, p.theta, &k1, &k2);
+    const Eigen::Matrix3d G = (p.weight[a] * (k1 * J + k2 * C)) * p.rinv[a].transpose();
+    for (int k = 0; k < 4; ++k) {
+      const int i = p.var[t(k)];
+      const Eigen::Vector3d gk = k == 0 ? Eigen::Vector3d(-(G.col(0) + G.col(1) + G.col(2))) : Eigen::Vector3d(G.col(k - 1));
+      if (i >= 0) g.segment<3>(i) += gk;
+    }
+  }
+  return out;
+}
+}  // namespace
+
+TEST_CASE("the host evaluation over threads is the one-thread scatter bit for bit, whatever the thread count") {
+  const TetMesh m = test::ball_mesh(6);
+  const auto fixed = boundary_of(m);
+  const Points x = two_interior_folds(m);
+  UntangleProblem p;
+  p.tets = &m.tets;
+  p.var.assign(m.num_vertices(), -1);
+  for (int v = 0; v < m.num_vertices(); ++v)
+    if (!fixed[v]) {
+      p.var[v] = static_cast<int>(3 * p.free_vertices.size());
+      p.free_vertices.push_back(v);
+    }
+  const Eigen::VectorXd vol = tet_volumes(m.vertices, m.tets);
+  for (int t = 0; t < m.num_tets(); ++t) {
+    p.active.push_back(t);
+    Eigen::Matrix3d E;
+    for (int k = 0; k < 3; ++k) E.col(k) = (m.vertices.row(m.tets(t, k + 1)) - m.vertices.row(m.tets(t, 0))).transpose();
+    p.rinv.push_back(E.inverse());
+    p.weight.push_back(vol(t) / vol.sum());
+  }
+  REQUIRE(p.active.size() > 100);
+  Eigen::VectorXd g_ref;
+  const UntangleEval ref = scatter_eval(p, x, 0.05, g_ref);
+  REQUIRE(ref.nonpositive > 0);
+  for (int threads : {1, 2, 3, 7}) {
+    INFO(threads << " threads");
+    UntangleHostEval host(p, threads);
+    for (int pass = 0; pass < 2; ++pass) {  // the pool and the buffers reused
+      Eigen::VectorXd g(g_ref.size());
+      const UntangleEval e = host.run(x, 0.05, &g);
+      CHECK(e.energy == ref.energy);
+      CHECK(e.min_det == ref.min_det);
+      CHECK(e.nonpositive == ref.nonpositive);
+      CHECK((g.array() == g_ref.array()).all());
+      CHECK(host.run(x, 0.05, nullptr).energy == ref.energy);
+    }
+  }
 }

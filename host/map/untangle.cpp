@@ -234,13 +234,18 @@ UntangleResult run(Problem& p, const Points& reference, const Tets& tets, Points
   }
   prepare_reference(p, reference, tets, x, o);
   std::unique_ptr<UntangleDeviceEval> dev_eval;
+  std::unique_ptr<UntangleHostEval> host_eval;
   if (device && !device->is_host()) {
     dev_eval = std::make_unique<UntangleDeviceEval>(*device, p, static_cast<int>(x.rows()));
     p.device = dev_eval.get();
+  } else {
+    host_eval = std::make_unique<UntangleHostEval>(p);
+    p.host = host_eval.get();
   }
   const Points given = x;
   minimise(p, x, o, t0, r);
   p.device = nullptr;
+  p.host = nullptr;
   r.inverted_tets = inverted_tets(x, tets);
   r.inverted_after = static_cast<int>(r.inverted_tets.size());
   if (r.inverted_after > r.inverted_before) {  // never hand back more folds than were given

@@ -30,6 +30,7 @@ inline double untangle_next_eps(double e, double e_prev, double min_det, double 
 }
 
 class UntangleDeviceEval;
+class UntangleHostEval;
 
 /// Active tets (with inverse reference edge matrices and weights) and free vertices (their
 /// coordinates are the unknowns z, 3 per free vertex).
@@ -42,6 +43,7 @@ struct UntangleProblem {
   std::vector<int> free_vertices;
   double theta = 1.0 / 128.0;
   UntangleDeviceEval* device = nullptr;  ///< OpenCL evaluation when set
+  UntangleHostEval* host = nullptr;      ///< host threads when set (else one thread)
 };
 
 /// Energy, smallest det J and number of det J <= 0 over the active tets.
@@ -53,13 +55,31 @@ struct UntangleEval {
 
 /// Energy at positions `x` (n x 3) and eps, and its gradient with respect to the unknowns if
 /// `g` is given (resized by the caller to 3 * free vertices). On p.device when set, else on
-/// the host (threads for large problems).
+/// the host: over p.host's threads when set, else on the calling thread (the same numbers).
 UntangleEval evaluate(const UntangleProblem& p, const Points& x, double eps, Eigen::VectorXd* g);
 
 /// OpenCL evaluation: kernels/untangle.cl computes per-tet energies, determinants and corner
 /// gradients, then gathers the gradient per free vertex; the host sums the energies (fixed
 /// order) and reads everything back with one synchronisation per evaluation. The problem's
 /// active tets, rinv, weights and theta must be final when this is constructed.
+/// Host evaluation over a pool of threads: the per-tet energies, determinants and dE/dX are
+/// computed in parallel into arrays, the gradient gathered per free vertex in tet order and the
+/// energy summed in tet order, so the result is the one-thread result bit for bit whatever the
+/// number of threads. Small problems run on the calling thread. The problem's active tets,
+/// rinv, weights, var and theta must be final when this is constructed.
+class UntangleHostEval {
+ public:
+  /// `threads`: how many (the caller's included); 0: one per 512 active tets, at most the
+  /// hardware's (core/parallel.hpp host_threads).
+  explicit UntangleHostEval(const UntangleProblem& p, int threads = 0);
+  ~UntangleHostEval();
+  UntangleEval run(const Points& x, double eps, Eigen::VectorXd* grad);
+
+ private:
+  struct State;
+  std::unique_ptr<State> s_;
+};
+
 class UntangleDeviceEval {
  public:
   UntangleDeviceEval(Device& device, const UntangleProblem& p, int num_vertices);

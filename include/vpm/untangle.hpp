@@ -20,8 +20,10 @@
 // larger floor, UntangleOptions::stalled_sigma_min): eps shrinks as the folds clear, so the
 // barrier at D = 0 takes hold only when all D can be made positive.
 //
-// Host implementation (Eigen, 2+ threads for large problems); the per-tet energy and gradient
-// can also be evaluated on an OpenCL device (overloads taking a Device).
+// Host implementation (Eigen; the energy and gradient over a pool of host threads, one per 512
+// active tets at most the hardware's, with the one-thread result bit for bit whatever their
+// number); the per-tet energy and gradient can also be evaluated on an OpenCL device (overloads
+// taking a Device).
 #include <string>
 #include <vector>
 
