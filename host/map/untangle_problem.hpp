@@ -58,12 +58,8 @@ struct UntangleEval {
 /// the host: over p.host's threads when set, else on the calling thread (the same numbers).
 UntangleEval evaluate(const UntangleProblem& p, const Points& x, double eps, Eigen::VectorXd* g);
 
-/// OpenCL evaluation: kernels/untangle.cl computes per-tet energies, determinants and corner
-/// gradients, then gathers the gradient per free vertex; the host sums the energies (fixed
-/// order) and reads everything back with one synchronisation per evaluation. The problem's
-/// active tets, rinv, weights and theta must be final when this is constructed.
-/// Host evaluation over a pool of threads: the per-tet energies, determinants and dE/dX are
-/// computed in parallel into arrays, the gradient gathered per free vertex in tet order and the
+/// Host evaluation over a pool of threads: the per-tet energies and dE/dX are computed in
+/// parallel into arrays, the gradient gathered per free vertex in tet order and the
 /// energy summed in tet order, so the result is the one-thread result bit for bit whatever the
 /// number of threads. Small problems run on the calling thread. The problem's active tets,
 /// rinv, weights, var and theta must be final when this is constructed.
@@ -80,6 +76,10 @@ class UntangleHostEval {
   std::unique_ptr<State> s_;
 };
 
+/// OpenCL evaluation: kernels/untangle.cl computes per-tet energies, determinants and corner
+/// gradients, then gathers the gradient per free vertex; the host sums the energies (fixed
+/// order) and reads everything back with one synchronisation per evaluation. The problem's
+/// active tets, rinv, weights and theta must be final when this is constructed.
 class UntangleDeviceEval {
  public:
   UntangleDeviceEval(Device& device, const UntangleProblem& p, int num_vertices);
