@@ -68,7 +68,7 @@ int run(const vpm::cli::Command& self, const std::vector<std::string>& argv) {
 vpm::cli::Registrar reg({"initial-map", "MESH -o OUT", "the fold-free initial map to the unit ball (paper 4.1)",
                          {{"--untangle", "never|if-folded|always", "untangle the harmonic map (default if-folded)"},
                           {"--sphere", "area|conformal", "boundary map to the sphere: equal-area (default) or conformal only"},
-                          {"--sphere-start", "auto|progressive", "start of the sphere map: conformal, progressive where it flips or stays crowded (auto, default), or progressive"},
+                          {"--sphere-start", "auto|progressive|axial", "start of the sphere map: conformal, or where it flips or stays crowded the better of progressive and axial (auto, default); progressive; axial"},
                           {"--sphere-solve", "auto|host|device", "the sphere map's equal-area solves: host Cholesky, device AMG-CG, or auto (default: a GPU from 50,000 boundary vertices)"},
                           {"--area-correction", "", "equalise areas on the sphere before the interior map"},
                           {"--no-split", "", "do not split interior edges between boundary vertices"},

@@ -111,7 +111,7 @@ vpm::cli::Registrar reg(vpm::cli::with_expert({"map", "MESH|SURFACE -o OUT", "ma
                           {"--allow-partial", "", "exit 0 even when the map misses --tolerance by over 2x (the warning stays)"},
                           {"--method", "moser|paper|vsem", "moser (default) or a peer method for comparison"},
                           {"--sphere", "area|conformal", "boundary map to the sphere: equal-area (default) or conformal only"},
-                          {"--sphere-start", "auto|progressive", "start of the sphere map: conformal, progressive where it flips or stays crowded (auto, default), or progressive"},
+                          {"--sphere-start", "auto|progressive|axial", "start of the sphere map: conformal, or where it flips or stays crowded the better of progressive and axial (auto, default); progressive; axial"},
                           {"--sphere-solve", "auto|host|device", "the sphere map's equal-area solves: host Cholesky, device AMG-CG, or auto (default: a GPU from 50,000 boundary vertices)"},
                           {"--boundary", "slide|fixed", "boundary vertices slide on the sphere (moser default) or stay"},
                           {"--solver", "cg|paper", "Jacobi CG (default) or the paper's BiCGSTAB on the normal equations"},

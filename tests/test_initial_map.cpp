@@ -42,6 +42,43 @@ void check_map(const InitialMapResult& r, const TetMesh& input) {
   CHECK(r.report.folds_after_untangle == 0);
   CHECK(to_json(r.report).find("folds_after_untangle")->number() == 0);
 }
+// The surface of a tube of radius r along `turns` turns of a helix (radius 1, pitch 1), capped at
+// both ends by one vertex each (the last two vertices): n rings of m vertices, faces outward.
+TriSurface helix_tube(double turns, double r, int n, int m) {
+  const double len = 2 * M_PI * turns;
+  auto centre = [](double u) { return Eigen::Vector3d(std::cos(u), std::sin(u), u / (2 * M_PI)); };
+  Points v(n * m + 2, 3);
+  for (int i = 0; i < n; ++i) {
+    const double u = len * i / (n - 1);
+    const Eigen::Vector3d t = (centre(u + 1e-6) - centre(u - 1e-6)).normalized();
+    const Eigen::Vector3d nn(-std::cos(u), -std::sin(u), 0), b = t.cross(nn);
+    for (int j = 0; j < m; ++j) {
+      const double a = 2 * M_PI * j / m;
+      v.row(i * m + j) = centre(u) + r * (std::cos(a) * nn + std::sin(a) * b);
+    }
+  }
+  const Eigen::Vector3d t0 = (centre(1e-6) - centre(-1e-6)).normalized();
+  const Eigen::Vector3d t1 = (centre(len + 1e-6) - centre(len - 1e-6)).normalized();
+  v.row(n * m) = centre(0) - r * t0;
+  v.row(n * m + 1) = centre(len) + r * t1;
+  Triangles f(2 * (n - 1) * m + 2 * m, 3);
+  Eigen::Index k = 0;
+  for (int i = 0; i + 1 < n; ++i)
+    for (int j = 0; j < m; ++j) {
+      const int a = i * m + j, b = i * m + (j + 1) % m, c = a + m, d = b + m;
+      f.row(k++) << a, b, d;
+      f.row(k++) << a, d, c;
+    }
+  for (int j = 0; j < m; ++j) {
+    f.row(k++) << n * m, (j + 1) % m, j;
+    f.row(k++) << n * m + 1, (n - 1) * m + j, (n - 1) * m + (j + 1) % m;
+  }
+  double vol = 0;
+  for (Eigen::Index t = 0; t < f.rows(); ++t)
+    vol += Eigen::Vector3d(v.row(f(t, 0))).dot(Eigen::Vector3d(v.row(f(t, 1))).cross(Eigen::Vector3d(v.row(f(t, 2)))));
+  if (vol < 0) f.col(1).swap(f.col(2));
+  return {v, f};
+}
 }  // namespace
 
 TEST_CASE("edge split leaves no four-boundary-vertex tet and keeps the volume") {
@@ -258,6 +295,13 @@ TetMesh rod_mesh(int nx, double aspect) {
   m.vertices.col(0) *= aspect * 2.0 / nx;
   return m;
 }
+// The sphere map of test::ellipsoid_mesh(8)'s boundary from the given start.
+SphereMapResult ellipsoid_sphere_map(InitialMapOptions::SphereStart start) {
+  const TetMesh e = test::ellipsoid_mesh(8);
+  InitialMapOptions o;
+  o.sphere_start = start;
+  return sphere_map(TriSurface{e.vertices, boundary_faces(e.tets)}, o);
+}
 int inward_faces(const Points& s, const Triangles& f) {
   int bad = 0;
   for (Eigen::Index t = 0; t < f.rows(); ++t) {
@@ -328,10 +372,7 @@ TEST_CASE("sphere map: where the conformal map flips triangles the progressive s
   check_map(r, m);
   CHECK(r.report.boundary.start == "progressive");
   // forced on a brain-like shape it is flip-free too, and the area flow equalises from it
-  const TetMesh e = test::ellipsoid_mesh(8);
-  InitialMapOptions prog;
-  prog.sphere_start = InitialMapOptions::SphereStart::progressive;
-  const SphereMapResult b = sphere_map(TriSurface{e.vertices, boundary_faces(e.tets)}, prog);
+  const SphereMapResult b = ellipsoid_sphere_map(InitialMapOptions::SphereStart::progressive);
   CHECK(b.flipped_triangles == 0);
   CHECK(b.report.start == "progressive");
   CHECK(b.report.density_kept);
@@ -374,6 +415,84 @@ TEST_CASE("sphere map: where the conformal start stays crowded after the area fl
   CHECK(b.report.start == "conformal");
   CHECK(!b.report.conformal_log_misfit);
   CHECK(!to_json(b.report).find("conformal_log_misfit"));
+}
+
+TEST_CASE("axial sphere map: a coiled tube goes from pole to pole with each band's area, and wins the automatic start") {
+  // 2.25 turns of a tube of radius 0.27 (the coil of bench/shapes): about 50 radii long; its
+  // conformal map flips, and the progressive embedding leaves the ends crushed
+  const int n = 160, m = 24;
+  const TriSurface s = helix_tube(2.25, 0.27, n, m);
+  detail::AxialStats st;
+  const Points p = detail::axial_sphere(s.vertices, s.triangles, &st);
+  REQUIRE(p.rows() == s.vertices.rows());
+  CHECK(inward_faces(p, s.triangles) == 0);
+  CHECK((p.rowwise().norm().array() - 1).abs().maxCoeff() < 1e-14);
+  // the poles are the two ends (a cap's vertex or its ring's)
+  const auto ring_of = [&](int i) { return i >= n * m ? (i == n * m ? 0 : n - 1) : i / m; };
+  CHECK(std::min(ring_of(st.north), ring_of(st.south)) == 0);
+  CHECK(std::max(ring_of(st.north), ring_of(st.south)) == n - 1);
+  CHECK(std::abs(p(st.north, 2) - 1) < 1e-15);
+  CHECK(std::abs(p(st.south, 2) + 1) < 1e-15);
+  // away from the ends ring i lies around the axis, the cap it bounds with the share of the
+  // area up to ring i (Archimedes: a cap's area is 2 pi (1 - z))
+  const Eigen::VectorXd share = detail::vertex_area_shares(s.vertices, s.triangles);
+  const bool first_north = ring_of(st.north) == 0;
+  double below = share(first_north ? n * m : n * m + 1), worst = 0, spread = 0;
+  for (int k = 0; k < n; ++k) {
+    const int i = first_north ? k : n - 1 - k;
+    double z = 0, zmin = 1, zmax = -1, ring = 0;
+    for (int j = 0; j < m; ++j) {
+      const double zj = p(i * m + j, 2);
+      z += zj / m;
+      zmin = std::min(zmin, zj);
+      zmax = std::max(zmax, zj);
+      ring += share(i * m + j);
+    }
+    if (k >= 4 && k < n - 4) {
+      worst = std::max(worst, std::abs(2 * M_PI * (1 - z) / (4 * M_PI) - (below + 0.5 * ring)));
+      spread = std::max(spread, zmax - zmin);
+    }
+    below += ring;
+  }
+  CHECK(worst < 0.002);
+  CHECK(spread < 0.04);
+  // the automatic start compares it with the progressive one and keeps it
+  const SphereMapResult a = sphere_map(s);
+  CHECK(a.report.flipped_after_conformal > 0);
+  REQUIRE(a.report.axial_log_misfit);
+  REQUIRE(a.report.progressive_log_misfit);
+  CHECK(*a.report.axial_log_misfit < 0.1 * *a.report.progressive_log_misfit);
+  CHECK(a.report.start == "axial");
+  CHECK(a.flipped_triangles == 0);
+  CHECK(a.report.area_distortion_final < 0.05);
+  const Json j = to_json(a.report);
+  CHECK(j.find("start")->string() == "axial");
+  CHECK(j.find("axial_log_misfit")->number() == *a.report.axial_log_misfit);
+  REQUIRE(j.find("axial"));
+  // forced on a brain-like shape it is flip-free too, and the area flow equalises from it
+  const SphereMapResult b = ellipsoid_sphere_map(InitialMapOptions::SphereStart::axial);
+  CHECK(b.flipped_triangles == 0);
+  CHECK(b.report.start == "axial");
+  CHECK(b.report.density_kept);
+  CHECK(b.report.area_distortion_final < 0.1);
+  CHECK(parse_sphere_start("axial") == InitialMapOptions::SphereStart::axial);
+}
+
+TEST_CASE("initial map of a long rod from the axial start: a valid map, closer than from the progressive start") {
+  const TetMesh m = rod_mesh(60, 30);
+  const auto host = Device::host();
+  InitialMapOptions ax, prog;
+  ax.sphere_start = InitialMapOptions::SphereStart::axial;
+  prog.sphere_start = InitialMapOptions::SphereStart::progressive;
+  const InitialMapResult a = initial_map(*host, m, ax);
+  check_map(a, m);
+  CHECK(a.report.boundary.start == "axial");
+  const InitialMapResult p = initial_map(*host, m, prog);
+  check_map(p, m);
+  CHECK(p.report.boundary.start == "progressive");
+  // on this rod 0.51 against 0.97 and 0.32 against 0.62
+  CHECK(a.report.boundary.area_distortion_final < 0.7 * p.report.boundary.area_distortion_final);
+  CHECK(a.report.metrics.vertex_volume_ratio.mean_abs_dev < 0.7 * p.report.metrics.vertex_volume_ratio.mean_abs_dev);
 }
 
 TEST_CASE("boundary_tet_ratio_bound: exact for one tet, above every fold-free interior's smallest ratio, sees a crushed face") {

@@ -9,7 +9,9 @@
 #include <Eigen/Sparse>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
+#include <optional>
 #include <numeric>
 #include <set>
 #include <string>
@@ -288,13 +290,25 @@ int conformal_start(const Points& in, const Triangles& f, const InitialMapOption
   return flipped_sphere_triangles(s, f);
 }
 
-// The start and its area equalisation: the conformal start, or the progressive one where the
-// conformal start flips triangles, where the user asks for it, or where the conformal start
-// stays crowded after its equalisation (SphereMapReport::kCrowdedMisfit: limbs shrunk below
-// what the flow recovers); of the two equalised starts the one with the smaller log misfit.
+// The axial map (map/sphere_steps.hpp) as the start, its statistics in `rep`; empty when it
+// failed or a chord triangle faces inwards.
+Points axial_start(const Points& in, const Triangles& f, SphereMapReport& rep) {
+  AxialStats as;
+  Points s = axial_sphere(in, f, &as);
+  if (s.rows() == 0 || flipped_sphere_triangles(s, f) > 0) return Points();
+  rep.start = "axial";
+  rep.axial_seconds = as.seconds;
+  return s;
+}
+
+// The start and its area equalisation: the conformal start, or the progressive and the axial
+// ones where the conformal start flips triangles or stays crowded after its equalisation
+// (SphereMapReport::kCrowdedMisfit: limbs shrunk below what the flow recovers); of the
+// equalised starts the one with the smallest log misfit. `sphere_start` can name one.
 Points equalised_start(const Points& in, const Triangles& f, const InitialMapOptions& opt, SphereMapReport& rep,
                        Device* device) {
-  const bool automatic = opt.sphere_start == InitialMapOptions::SphereStart::automatic;
+  using Start = InitialMapOptions::SphereStart;
+  const bool automatic = opt.sphere_start == Start::automatic;
   const bool equal_area = opt.sphere_density != InitialMapOptions::SphereDensity::conformal;
   Points s;
   const int flips = automatic ? conformal_start(in, f, opt, s, rep) : 0;
@@ -304,15 +318,39 @@ Points equalised_start(const Points& in, const Triangles& f, const InitialMapOpt
     if (equal_area) equalise(in, f, opt, s, rep, device);
     if (!equal_area || misfit_left(rep) <= SphereMapReport::kCrowdedMisfit) return s;
   }
+  // the axial start (equal-area bands) where the areas are to be equalised
+  SphereMapReport ax = started;
+  Points x = (automatic && equal_area) || opt.sphere_start == Start::axial ? axial_start(in, f, ax) : Points();
+  if (x.rows() > 0 && equal_area) equalise(in, f, opt, x, ax, device);
+  if (opt.sphere_start == Start::axial && x.rows() > 0) {
+    rep = ax;
+    return x;
+  }
   SphereMapReport alt = started;
   Points p = progressive_start(in, f, alt);
   const bool folded = flipped_sphere_triangles(p, f) > 0;
   if (equal_area && !folded) equalise(in, f, opt, p, alt, device);
-  if (compare) {
-    rep.conformal_log_misfit = alt.conformal_log_misfit = misfit_left(rep);
-    rep.progressive_log_misfit = alt.progressive_log_misfit = misfit_left(alt);
-    if (folded || !(misfit_left(alt) < misfit_left(rep))) return s;
+  if (!automatic) {
+    rep = alt;
+    return p;
   }
+  std::optional<double> conformal, progressive, axial;
+  if (compare) conformal = misfit_left(rep);
+  if (!folded) progressive = misfit_left(alt);
+  if (x.rows() > 0) axial = misfit_left(ax);
+  for (SphereMapReport* r : {&rep, &alt, &ax}) {
+    r->conformal_log_misfit = conformal;
+    r->progressive_log_misfit = progressive;
+    r->axial_log_misfit = axial;
+  }
+  const double inf = std::numeric_limits<double>::infinity();
+  const double mc = conformal.value_or(inf), mp = progressive.value_or(inf), ma = axial.value_or(inf);
+  if (compare && mc <= mp && mc <= ma) return s;
+  if (axial && ma < mp) {
+    rep = ax;
+    return x;
+  }
+  if (folded && compare) return s;
   rep = alt;
   return p;
 }

@@ -22,7 +22,8 @@ InitialMapOptions::SphereStart parse_sphere_start(const std::string& name) {
   using S = InitialMapOptions::SphereStart;
   if (name == "auto") return S::automatic;
   if (name == "progressive") return S::progressive;
-  throw InputError("sphere start '" + name + "' is not one of auto, progressive");
+  if (name == "axial") return S::axial;
+  throw InputError("sphere start '" + name + "' is not one of auto, progressive, axial");
 }
 
 const char* to_string(InitialMapOptions::SphereDensity d) {
@@ -62,6 +63,7 @@ Json to_json(const SphereMapReport& r) {
   j["start"] = r.start;
   if (r.conformal_log_misfit) j["conformal_log_misfit"] = *r.conformal_log_misfit;
   if (r.progressive_log_misfit) j["progressive_log_misfit"] = *r.progressive_log_misfit;
+  if (r.axial_log_misfit) j["axial_log_misfit"] = *r.axial_log_misfit;
   if (r.progressive_passes) {
     Json p = Json::object();
     p["passes"] = *r.progressive_passes;
@@ -69,6 +71,11 @@ Json to_json(const SphereMapReport& r) {
     p["sweeps"] = r.progressive_sweeps;
     p["seconds"] = r.progressive_seconds;
     j["progressive"] = p;
+  }
+  if (r.start == "axial") {
+    Json a = Json::object();
+    a["seconds"] = r.axial_seconds;
+    j["axial"] = a;
   }
   if (r.flipped_before_repair) j["flipped_before_repair"] = *r.flipped_before_repair;
   if (r.repair_steps) j["repair_steps"] = *r.repair_steps;

@@ -80,6 +80,19 @@ struct ProgressiveStats {
 /// NumericalError if no valid position exists (not seen).
 Points progressive_sphere(const Points& in, const Triangles& f, ProgressiveStats* stats = nullptr);
 
+/// What axial_sphere did: the poles (the input's vertices on the north and south poles).
+struct AxialStats {
+  int north = -1, south = -1;
+  double seconds = 0;
+};
+/// A sphere map (k x 3, unit rows) of the closed genus-0 surface (in, f), f outward, as a
+/// cylinder between the two vertices farthest apart along the edges (map/sphere_axial.cpp): the
+/// height a harmonic function between the poles, the angle the harmonic one-form of period one
+/// around them, the latitude set so that each band between two heights has its share of the
+/// area. For tubes and elongated shapes, whose conformal map underflows. The caller checks the
+/// chord triangles' orientation; empty when the solves failed or the poles' rings touch.
+Points axial_sphere(const Points& in, const Triangles& f, AxialStats* stats = nullptr);
+
 /// Each vertex's share of the surface's area (a third of its triangles' areas), summing to 1.
 Eigen::VectorXd vertex_area_shares(const Points& in, const Triangles& f);
 

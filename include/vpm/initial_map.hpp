@@ -89,12 +89,15 @@ struct InitialMapOptions {
   /// Where the sphere map starts. automatic: the conformal map, and when that leaves chord
   /// triangles facing inwards (long tubes and limbs shrink by e^(-length / radius) in a
   /// conformal map, below double precision) or stays crowded after the area equalisation
-  /// (SphereMapReport::kCrowdedMisfit; the equalised start with the smaller misfit is kept)
-  /// a progressive embedding instead: the surface
-  /// simplified to a tetrahedron by edge collapses and rebuilt on the sphere vertex by vertex,
-  /// every move checked to keep each triangle facing outwards (flip-free by construction);
-  /// the area equalisation then runs from it. progressive: that embedding always.
-  enum class SphereStart { automatic, progressive };
+  /// (SphereMapReport::kCrowdedMisfit) two other starts, each equalised, the one with the
+  /// smallest log misfit kept: a progressive embedding (the surface simplified to a
+  /// tetrahedron by edge collapses and rebuilt on the sphere vertex by vertex, every move
+  /// checked to keep each triangle facing outwards: flip-free by construction) and an axial
+  /// map (the surface as a cylinder between its two farthest vertices, each band between two
+  /// heights given its share of the area: for tubes, whose progressive embedding leaves the
+  /// ends crushed). progressive, axial: that start always (axial falls back to progressive
+  /// when it fails or flips).
+  enum class SphereStart { automatic, progressive, axial };
   SphereStart sphere_start = SphereStart::automatic;
   // ---- step 3: harmonic interior
   /// Preconditioner of the harmonic solve's CG: jacobi, amg (vpm/amg.hpp) or automatic
@@ -164,14 +167,16 @@ struct SphereMapReport {
   bool density_kept = false;
   // the progressive embedding (InitialMapOptions::sphere_start), when it ran: edge-collapse
   // passes, collapses, relaxation sweeps, seconds
-  std::string start = "conformal";  ///< what the map started from: "conformal" or "progressive"
+  std::string start = "conformal";  ///< what the map started from: "conformal", "progressive" or "axial"
   std::optional<int> progressive_passes;
   int progressive_collapses = 0, progressive_sweeps = 0;
   double progressive_seconds = 0;
-  /// The automatic start's comparison, when the conformal start stayed crowded (its log misfit
-  /// after the equalisation above kCrowdedMisfit) and the progressive one was tried: each
-  /// start's log misfit after its equalisation (`start` names the one kept, the smaller).
-  std::optional<double> conformal_log_misfit, progressive_log_misfit;
+  double axial_seconds = 0;  ///< the axial map's seconds, when it was kept
+  /// The automatic start's comparison, when the conformal start flipped or stayed crowded (its
+  /// log misfit after the equalisation above kCrowdedMisfit) and the others were tried: each
+  /// start's log misfit after its equalisation (absent: that start flipped or failed; `start`
+  /// names the one kept, the smallest).
+  std::optional<double> conformal_log_misfit, progressive_log_misfit, axial_log_misfit;
   /// Above this log misfit (area-weighted mean square of log(sphere area / target)) after the
   /// equalisation, the conformal start counts as crowded. Chosen on the development surfaces
   /// of docs/surfaces.md, which bound it: the folded AAL surface's conformal start leaves 0.003
@@ -190,8 +195,8 @@ struct SphereMapReport {
 ///  "moebius_centroid_norm"?, "area_distortion_balanced"?, "moebius_kept"?,
 ///  "area_correction_steps"?, "density"? {"target","steps","log_misfit_before",
 ///  "log_misfit_after","area_distortion","kept"}, "start", "conformal_log_misfit"?,
-///  "progressive_log_misfit"?, "progressive"? {"passes","collapses",
-///  "sweeps","seconds"}, "flipped_before_repair"?, "repair_steps"?, "area_distortion_final",
+///  "progressive_log_misfit"?, "axial_log_misfit"?, "progressive"? {"passes","collapses",
+///  "sweeps","seconds"}, "axial"? {"seconds"}, "flipped_before_repair"?, "repair_steps"?, "area_distortion_final",
 ///  "flipped_triangles", "timings_s" {"conformal","moebius","density","density_solve"}}
 ///  (? = only when present)
 Json to_json(const SphereMapReport& report);
@@ -327,7 +332,7 @@ InitialMapResult initial_map(Device& device, const TetMesh& input, const Initial
 /// "conformal", "area" (InitialMapOptions::SphereDensity); InputError otherwise.
 InitialMapOptions::SphereDensity parse_sphere_density(const std::string& name);
 const char* to_string(InitialMapOptions::SphereDensity d);
-/// "auto", "progressive" (InitialMapOptions::SphereStart); InputError otherwise.
+/// "auto", "progressive", "axial" (InitialMapOptions::SphereStart); InputError otherwise.
 InitialMapOptions::SphereStart parse_sphere_start(const std::string& name);
 /// "auto", "host" or "device" (InputError otherwise).
 InitialMapOptions::DensitySolve parse_density_solve(const std::string& name);

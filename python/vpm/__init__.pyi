@@ -153,13 +153,13 @@ def mesh_image(source: Union[ImageLike, ArrayLike], labels: Optional[Union[Image
                smooth: float = ..., close_at_border: bool = ..., radius_edge: float = ...,
                min_dihedral: float = ...) -> tuple[Mesh, dict[str, Any]]: ...
 def initial_map(vertices: Union[Mesh, ArrayLike], tets: Optional[ArrayLike] = ..., *,
-                sphere: Literal["area", "conformal"] = ..., sphere_start: Literal["auto", "progressive"] = ...,
+                sphere: Literal["area", "conformal"] = ..., sphere_start: Literal["auto", "progressive", "axial"] = ...,
                 sphere_solve: Literal["auto", "host", "device"] = ...,
                 untangle: Literal["never", "if-folded", "always"] = ..., split: bool = ..., source: str = ...,
                 device: Optional[str] = ...) -> tuple[Mesh, InitialMapReport]: ...
 def map_to_ball(vertices: Union[Mesh, ArrayLike], tets: Optional[ArrayLike] = ..., *, progress: Progress = ...,
                 rounds: int = ..., tolerance: float = ...,
-                sphere: Literal["area", "conformal"] = ..., sphere_start: Literal["auto", "progressive"] = ...,
+                sphere: Literal["area", "conformal"] = ..., sphere_start: Literal["auto", "progressive", "axial"] = ...,
                 sphere_solve: Literal["auto", "host", "device"] = ...,
                 boundary: Literal["auto", "slide", "fixed"] = ...,
                 preconditioner: Literal["auto", "jacobi", "amg"] = ..., rk_steps: int = ..., max_seconds: float = ...,
@@ -170,7 +170,7 @@ def read_overlay(path: PathLike) -> np.ndarray: ...
 def write_surface(path: PathLike, vertices: ArrayLike, faces: ArrayLike) -> None: ...
 def map_to_sphere(vertices: ArrayLike, faces: ArrayLike, *, progress: Progress = ..., rounds: int = ...,
                   tolerance: float = ..., sphere: Literal["area", "conformal"] = ...,
-                  sphere_start: Literal["auto", "progressive"] = ..., max_seconds: float = ...,
+                  sphere_start: Literal["auto", "progressive", "axial"] = ..., max_seconds: float = ...,
                   source: str = ...) -> tuple[np.ndarray, SurfaceMapReport]: ...
 def map_to_disk(vertices: ArrayLike, faces: ArrayLike, *, progress: Progress = ..., rounds: int = ...,
                 tolerance: float = ..., max_seconds: float = ...,
