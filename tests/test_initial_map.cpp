@@ -295,12 +295,18 @@ TetMesh rod_mesh(int nx, double aspect) {
   m.vertices.col(0) *= aspect * 2.0 / nx;
   return m;
 }
-// The sphere map of test::ellipsoid_mesh(8)'s boundary from the given start.
-SphereMapResult ellipsoid_sphere_map(InitialMapOptions::SphereStart start) {
+// The sphere map of test::ellipsoid_mesh(8)'s boundary forced to start from `start` (named
+// `name`): flip-free from it, and the area flow equalises from it.
+void check_forced_start_on_ellipsoid(InitialMapOptions::SphereStart start, const char* name) {
   const TetMesh e = test::ellipsoid_mesh(8);
   InitialMapOptions o;
   o.sphere_start = start;
-  return sphere_map(TriSurface{e.vertices, boundary_faces(e.tets)}, o);
+  const SphereMapResult b = sphere_map(TriSurface{e.vertices, boundary_faces(e.tets)}, o);
+  CHECK(b.flipped_triangles == 0);
+  CHECK(b.report.start == name);
+  CHECK(b.report.density_kept);
+  CHECK(b.report.area_distortion_final < 0.1);
+  CHECK(parse_sphere_start(name) == start);
 }
 int inward_faces(const Points& s, const Triangles& f) {
   int bad = 0;
@@ -372,12 +378,7 @@ TEST_CASE("sphere map: where the conformal map flips triangles the progressive s
   check_map(r, m);
   CHECK(r.report.boundary.start == "progressive");
   // forced on a brain-like shape it is flip-free too, and the area flow equalises from it
-  const SphereMapResult b = ellipsoid_sphere_map(InitialMapOptions::SphereStart::progressive);
-  CHECK(b.flipped_triangles == 0);
-  CHECK(b.report.start == "progressive");
-  CHECK(b.report.density_kept);
-  CHECK(b.report.area_distortion_final < 0.1);
-  CHECK(parse_sphere_start("progressive") == InitialMapOptions::SphereStart::progressive);
+  check_forced_start_on_ellipsoid(InitialMapOptions::SphereStart::progressive, "progressive");
   CHECK_THROWS_AS(parse_sphere_start("tutte"), InputError);
 }
 
@@ -470,12 +471,7 @@ TEST_CASE("axial sphere map: a coiled tube goes from pole to pole with each band
   CHECK(j.find("axial_log_misfit")->number() == *a.report.axial_log_misfit);
   REQUIRE(j.find("axial"));
   // forced on a brain-like shape it is flip-free too, and the area flow equalises from it
-  const SphereMapResult b = ellipsoid_sphere_map(InitialMapOptions::SphereStart::axial);
-  CHECK(b.flipped_triangles == 0);
-  CHECK(b.report.start == "axial");
-  CHECK(b.report.density_kept);
-  CHECK(b.report.area_distortion_final < 0.1);
-  CHECK(parse_sphere_start("axial") == InitialMapOptions::SphereStart::axial);
+  check_forced_start_on_ellipsoid(InitialMapOptions::SphereStart::axial, "axial");
 }
 
 TEST_CASE("initial map of a long rod from the axial start: a valid map, closer than from the progressive start") {

@@ -83,33 +83,18 @@ int farthest(const Points& in, const std::vector<std::vector<int>>& nb, int from
 
 uint64_t edge_key(int i, int j) { return (static_cast<uint64_t>(static_cast<uint32_t>(i)) << 32) | static_cast<uint32_t>(j); }
 
-// Solves L_FF x_F = rhs_F with the rows in `fixed` held at 0; false when the solve failed.
+// Solves L_FF x_F = rhs_F with the rows in `fixed` held at 0 (Eigen's LDLT); false when the
+// solve failed.
 bool neumann_solve(const SpMat& L, const std::vector<char>& fixed, const Eigen::VectorXd& rhs, Eigen::VectorXd& x) {
-  const int k = static_cast<int>(L.rows());
-  std::vector<int> idx(static_cast<size_t>(k), -1);
-  int nf = 0;
-  for (int i = 0; i < k; ++i)
-    if (!fixed[static_cast<size_t>(i)]) idx[static_cast<size_t>(i)] = nf++;
-  std::vector<Eigen::Triplet<double>> t;
-  t.reserve(static_cast<size_t>(L.nonZeros()));
-  Eigen::VectorXd b(nf);
-  for (int c = 0; c < k; ++c)
-    for (SpMat::InnerIterator it(L, c); it; ++it) {
-      const int r = static_cast<int>(it.row());
-      if (idx[static_cast<size_t>(r)] >= 0 && idx[static_cast<size_t>(c)] >= 0)
-        t.emplace_back(idx[static_cast<size_t>(r)], idx[static_cast<size_t>(c)], it.value());
-    }
-  for (int i = 0; i < k; ++i)
-    if (idx[static_cast<size_t>(i)] >= 0) b(idx[static_cast<size_t>(i)]) = rhs(i);
-  SpMat A(nf, nf);
-  A.setFromTriplets(t.begin(), t.end());
-  Eigen::SimplicialLDLT<SpMat> ldlt(A);
+  const Eigen::MatrixXd zero = Eigen::MatrixXd::Zero(L.rows(), 1), source = rhs;
+  const FreeRows fr = free_rows(L, fixed, zero, &source);
+  Eigen::SimplicialLDLT<SpMat> ldlt(fr.a);
   if (ldlt.info() != Eigen::Success) return false;
-  const Eigen::VectorXd y = ldlt.solve(b);
+  const Eigen::VectorXd y = ldlt.solve(fr.rhs.col(0));
   if (ldlt.info() != Eigen::Success || !y.allFinite()) return false;
-  x = Eigen::VectorXd::Zero(k);
-  for (int i = 0; i < k; ++i)
-    if (idx[static_cast<size_t>(i)] >= 0) x(i) = y(idx[static_cast<size_t>(i)]);
+  x = Eigen::VectorXd::Zero(L.rows());
+  for (Eigen::Index i = 0; i < L.rows(); ++i)
+    if (fr.idx[static_cast<size_t>(i)] >= 0) x(i) = y(fr.idx[static_cast<size_t>(i)]);
   return true;
 }
 

@@ -57,25 +57,40 @@ SpMat cot_laplacian(const Points& p, const Triangles& f, double clamp) {
 // sparse Cholesky factorisation (iterative = false) or Jacobi-preconditioned CG to relative
 // residual `tol` (iterative = true; warm start from the free rows of u).
 // Returns false if the solve failed or the result is not finite.
-bool dirichlet_solve(const SpMat& A, const std::vector<char>& fixed, Eigen::MatrixXd& u, bool iterative,
-                     double tol, int* iterations) {
+FreeRows free_rows(const SpMat& A, const std::vector<char>& fixed, const Eigen::MatrixXd& u,
+                   const Eigen::MatrixXd* source) {
   const int k = static_cast<int>(A.rows());
-  std::vector<int> idx(k, -1);
+  FreeRows r;
+  r.idx.assign(static_cast<size_t>(k), -1);
   int nf = 0;
   for (int i = 0; i < k; ++i)
-    if (!fixed[i]) idx[i] = nf++;
-  if (nf == 0) return true;
+    if (!fixed[i]) r.idx[i] = nf++;
   std::vector<Trip> tf;
-  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(nf, u.cols());
+  r.rhs = Eigen::MatrixXd::Zero(nf, u.cols());
+  if (source)
+    for (int i = 0; i < k; ++i)
+      if (r.idx[i] >= 0) r.rhs.row(r.idx[i]) = source->row(i);
   for (int j = 0; j < A.outerSize(); ++j)
     for (SpMat::InnerIterator it(A, j); it; ++it) {
       const int i = static_cast<int>(it.row());
-      if (idx[i] < 0) continue;
-      if (idx[j] >= 0) tf.emplace_back(idx[i], idx[j], it.value());
-      else rhs.row(idx[i]) -= it.value() * u.row(j);
+      if (r.idx[i] < 0) continue;
+      if (r.idx[j] >= 0) tf.emplace_back(r.idx[i], r.idx[j], it.value());
+      else r.rhs.row(r.idx[i]) -= it.value() * u.row(j);
     }
-  SpMat Aff(nf, nf);
-  Aff.setFromTriplets(tf.begin(), tf.end());
+  r.a.resize(nf, nf);
+  r.a.setFromTriplets(tf.begin(), tf.end());
+  return r;
+}
+
+bool dirichlet_solve(const SpMat& A, const std::vector<char>& fixed, Eigen::MatrixXd& u, bool iterative,
+                     double tol, int* iterations) {
+  const int k = static_cast<int>(A.rows());
+  FreeRows fr = free_rows(A, fixed, u);
+  const std::vector<int>& idx = fr.idx;
+  const int nf = static_cast<int>(fr.a.rows());
+  if (nf == 0) return true;
+  const SpMat& Aff = fr.a;
+  const Eigen::MatrixXd& rhs = fr.rhs;
   if (iterative) {
     Eigen::ConjugateGradient<SpMat, Eigen::Lower | Eigen::Upper> cg(Aff);
     cg.setTolerance(tol);

@@ -23,6 +23,16 @@ using SpMat = Eigen::SparseMatrix<double>;
 /// (L_ii = sum_j w_ij, L_ij = -w_ij), k x k. `clamp` > 0 replaces weights below clamp * mean.
 SpMat cot_laplacian(const Points& p, const Triangles& f, double clamp);
 
+/// The system of A's free rows and columns (those not in `fixed`): idx maps a vertex to its
+/// free row (-1 when fixed), rhs = source_F - A_FB u_B (source: null for none).
+struct FreeRows {
+  std::vector<int> idx;
+  SpMat a;
+  Eigen::MatrixXd rhs;
+};
+FreeRows free_rows(const SpMat& A, const std::vector<char>& fixed, const Eigen::MatrixXd& u,
+                   const Eigen::MatrixXd* source = nullptr);
+
 /// Solves A_FF u_F = -A_FB u_B for the columns of u (k x c), rows with fixed[i] given, by sparse
 /// Cholesky (iterative = false) or Jacobi CG to relative residual `tol` (warm start from u).
 /// Returns false if the solve failed or the result is not finite.
