@@ -491,6 +491,32 @@ TEST_CASE("initial map of a long rod from the axial start: a valid map, closer t
   CHECK(a.report.metrics.vertex_volume_ratio.mean_abs_dev < 0.7 * p.report.metrics.vertex_volume_ratio.mean_abs_dev);
 }
 
+TEST_CASE("initial map from the axial start: folds its local runs leave are untangled globally, with no conformal redo") {
+  // local runs of one L-BFGS step leave the rod's folds; the conformal redo would crush the rod
+  const TetMesh m = rod_mesh(60, 30);
+  const auto host = Device::host();
+  InitialMapOptions opt;
+  opt.sphere_start = InitialMapOptions::SphereStart::axial;
+  opt.untangle_options.max_outer_iterations = 1;
+  opt.untangle_options.max_lbfgs_iterations = 1;
+  const InitialMapResult r = initial_map(*host, m, opt);
+  check_map(r, m);
+  const InitialMapReport& rep = r.report;
+  INFO("folds before " << rep.folds_before_untangle << ", fallback " << rep.fallback.has_value());
+  REQUIRE(rep.fallback);
+  CHECK(rep.fallback->axial);
+  CHECK_FALSE(rep.fallback->crowded);
+  CHECK(rep.fallback->folds_after_untangle > 0);
+  CHECK(rep.boundary.start == "axial");
+  REQUIRE(rep.untangle);
+  CHECK_FALSE(rep.untangle->local);  // the global run
+  const Json j = to_json(rep);
+  const Json* f = j.find("fallback");
+  REQUIRE(f);
+  CHECK(f->find("to")->string() == "axial");
+  CHECK(f->find("axial")->boolean());
+}
+
 TEST_CASE("boundary_tet_ratio_bound: exact for one tet, above every fold-free interior's smallest ratio, sees a crushed face") {
   // one regular tet inscribed in the sphere: each face's plane lies 1/3 from the origin, the apex
   // 4/3 from it, so every face's bound is the tet's own ratio, 1

@@ -216,11 +216,12 @@ bool map_through_sphere(Device& device, const TetMesh& m, const TriSurface& surf
                        std::to_string(rep.folds_before_untangle) + "): " + where + "; " + note);
 }
 
-// The conformal redo crowded a thin part: the equal-area attempt `area` is kept (res) and
-// untangled with the global run that its local runs did not try (InitialMapReport::Fallback::crowded).
+// The conformal redo crowded a thin part, or there is none after an axial start: the equal-area
+// attempt `area` is kept (res) and untangled with the global run that its local runs did not try
+// (InitialMapReport::Fallback::crowded, ::axial).
 void untangle_globally(Device& device, const TetMesh& m, const InitialMapOptions& opt, InitialMapResult area,
-                       InitialMapResult& res) {
-  say(opt, "the conformal sphere map crowds a thin part: the equal-area one, untangled globally");
+                       InitialMapResult& res, const char* why) {
+  say(opt, std::string(why) + ": the equal-area attempt, untangled globally");
   res = std::move(area);
   InitialMapReport& rep = res.report;
   const auto t0 = Clock::now();
@@ -230,12 +231,17 @@ void untangle_globally(Device& device, const TetMesh& m, const InitialMapOptions
 
 // Untangling from the equal-area boundary left folds: steps 2-4 again from the conformal sphere
 // map (a flipped sphere map would flip the same way: the flow never flips), unless it crowds a
-// thin part, decided from its boundary alone where the bound settles it (InitialMapReport::Fallback).
+// thin part, decided from its boundary alone where the bound settles it, or the equal-area
+// attempt started from the axial map, kept only where the conformal one flips or crowds
+// (InitialMapReport::Fallback).
+constexpr const char* kCrowds = "the conformal sphere map crowds a thin part";
+
 void conformal_fallback(Device& device, const TetMesh& m, const TriSurface& surf, const InitialMapOptions& opt,
                         const std::string& note, InitialMapResult& res,
                         std::future<std::shared_ptr<PoissonSolver>>& solver) {
   InitialMapReport& rep = res.report;
-  say(opt, std::to_string(rep.folds_after_untangle) + " folds left: again from the conformal sphere map");
+  const bool axial = rep.boundary.start == "axial";
+  say(opt, std::to_string(rep.folds_after_untangle) + " folds left" + (axial ? "" : ": again from the conformal sphere map"));
   InitialMapReport::Fallback fb;
   fb.from = to_string(opt.sphere_density);
   fb.flipped_triangles = rep.boundary.flipped_triangles;
@@ -248,6 +254,12 @@ void conformal_fallback(Device& device, const TetMesh& m, const TriSurface& surf
   rep.untangle_slide.reset();
   InitialMapResult area = res;  // with its local runs' report, which its global run follows
   rep.untangle.reset();
+  if (axial) {
+    fb.axial = true;
+    untangle_globally(device, m, opt, std::move(area), res, "an axial start has no conformal redo");
+    res.report.fallback = fb;
+    return;
+  }
   TimedSphereMap redo = timed_sphere_map(surf, conformal, device);
   if (redo.map.flipped_triangles == 0) {
     fb.conformal_min_tet_ratio = boundary_tet_ratio_bound(m, redo.map.sphere);
@@ -255,12 +267,12 @@ void conformal_fallback(Device& device, const TetMesh& m, const TriSurface& surf
   }
   if (fb.crowded_by_boundary) {
     fb.crowded = true;
-    untangle_globally(device, m, opt, std::move(area), res);
+    untangle_globally(device, m, opt, std::move(area), res, kCrowds);
   } else {
     map_through_sphere(device, m, surf, conformal, note, res, rep, solver, &redo);
     fb.conformal_min_tet_ratio = map_metrics(device, m.vertices, res.ball, m.tets).tet_volume_ratio.min;
     fb.crowded = rep.boundary.flipped_triangles == 0 && fb.conformal_min_tet_ratio < InitialMapReport::kCrowdedRatio;
-    if (fb.crowded) untangle_globally(device, m, opt, std::move(area), res);
+    if (fb.crowded) untangle_globally(device, m, opt, std::move(area), res, kCrowds);
   }
   rep.fallback = fb;
 }

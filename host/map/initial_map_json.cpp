@@ -58,13 +58,14 @@ Json to_json(const InitialMapReport& r) {
   if (r.fallback) {
     Json& f = rep["fallback"];
     f["from"] = r.fallback->from;
-    f["to"] = "conformal";
+    f["to"] = r.fallback->axial ? "axial" : "conformal";
     f["flipped_triangles"] = r.fallback->flipped_triangles;
     f["folds_after_untangle"] = r.fallback->folds_after_untangle;
     f["seconds"] = r.fallback->seconds;
     f["crowded"] = r.fallback->crowded;
     f["crowded_by_boundary"] = r.fallback->crowded_by_boundary;
     f["conformal_min_tet_ratio"] = r.fallback->conformal_min_tet_ratio;
+    f["axial"] = r.fallback->axial;
   }
   rep["harmonic"]["solver"] = r.harmonic_on_device ? "PoissonSolver CG (OpenCL)" : "PoissonSolver CG (host)";
   rep["harmonic"]["preconditioner"] = r.harmonic_preconditioner;

@@ -261,6 +261,11 @@ struct InitialMapReport {
     bool crowded_by_boundary = false;
     /// that ratio (when crowded_by_boundary, its upper bound)
     double conformal_min_tet_ratio = 0;
+    /// The first attempt started from the axial sphere map (SphereMapReport::start "axial"):
+    /// the automatic start keeps it only where the conformal map flips or crowds the surface,
+    /// so no conformal redo runs: the axial attempt is untangled globally from its local runs'
+    /// result, as a crowded redo's is.
+    bool axial = false;
   };
   /// A conformal map whose smallest normalised tet volume ratio is below this has squeezed a
   /// thin part (a long bone's shaft, a limb) into a sliver no round can restore.
@@ -286,8 +291,9 @@ struct InitialMapReport {
 ///  "refined": {"vertices","tets"}, "boundary": to_json(SphereMapReport),
 ///  "harmonic": {"solver","preconditioner","iterations","relative_residual","inverted_tets"},
 ///  "folds_before_untangle", "untangle"? (to_json(UntangleResult) + "scope", "rings"),
-///  "untangle_local_failed"?, "untangle_cleanup"?, "untangle_slide"?, "folds_after_untangle", "fallback"? {"from","to",
-///  "flipped_triangles","folds_after_untangle","seconds"}, "refine"? {"rounds",
+///  "untangle_local_failed"?, "untangle_cleanup"?, "untangle_slide"?, "folds_after_untangle", "fallback"? {"from","to"
+///  ("conformal", or "axial" for an axial start's global run),"flipped_triangles",
+///  "folds_after_untangle","seconds","crowded","crowded_by_boundary","conformal_min_tet_ratio","axial"}, "refine"? {"rounds",
 ///  "inserted_vertices","folds_before","folds_after","seconds"}, "boundary_max_radius_error",
 ///  "metrics": to_json(MapMetrics), "timings_s": {"input_quality","metrics","split","boundary",
 ///  "harmonic","untangle","total"}}
