@@ -231,16 +231,17 @@ void untangle_globally(Device& device, const TetMesh& m, const InitialMapOptions
 
 // Untangling from the equal-area boundary left folds: steps 2-4 again from the conformal sphere
 // map (a flipped sphere map would flip the same way: the flow never flips), unless it crowds a
-// thin part, decided from its boundary alone where the bound settles it, or the equal-area
-// attempt started from the axial map, kept only where the conformal one flips or crowds
-// (InitialMapReport::Fallback).
+// thin part, decided from its boundary alone where the bound settles it, or the automatic
+// start chose the axial map, which it keeps only where the conformal one flips or crowds
+// (InitialMapReport::Fallback). A start named in the options is redone without the area flow
+// (the sphere map's start stays the named one).
 constexpr const char* kCrowds = "the conformal sphere map crowds a thin part";
 
 void conformal_fallback(Device& device, const TetMesh& m, const TriSurface& surf, const InitialMapOptions& opt,
                         const std::string& note, InitialMapResult& res,
                         std::future<std::shared_ptr<PoissonSolver>>& solver) {
   InitialMapReport& rep = res.report;
-  const bool axial = rep.boundary.start == "axial";
+  const bool axial = rep.boundary.start == "axial" && opt.sphere_start == InitialMapOptions::SphereStart::automatic;
   say(opt, std::to_string(rep.folds_after_untangle) + " folds left" + (axial ? "" : ": again from the conformal sphere map"));
   InitialMapReport::Fallback fb;
   fb.from = to_string(opt.sphere_density);

@@ -261,10 +261,11 @@ struct InitialMapReport {
     bool crowded_by_boundary = false;
     /// that ratio (when crowded_by_boundary, its upper bound)
     double conformal_min_tet_ratio = 0;
-    /// The first attempt started from the axial sphere map (SphereMapReport::start "axial"):
-    /// the automatic start keeps it only where the conformal map flips or crowds the surface,
-    /// so no conformal redo runs: the axial attempt is untangled globally from its local runs'
-    /// result, as a crowded redo's is.
+    /// The automatic start chose the axial sphere map (SphereMapReport::start "axial"), which
+    /// it keeps only where the conformal map flips or crowds the surface, so no conformal redo
+    /// runs: the axial attempt is untangled globally from its local runs' result, as a crowded
+    /// redo's is. (A start named in InitialMapOptions::sphere_start is redone from that start
+    /// without the area flow.)
     bool axial = false;
   };
   /// A conformal map whose smallest normalised tet volume ratio is below this has squeezed a
