@@ -241,9 +241,10 @@ void conformal_fallback(Device& device, const TetMesh& m, const TriSurface& surf
                         const std::string& note, InitialMapResult& res,
                         std::future<std::shared_ptr<PoissonSolver>>& solver) {
   InitialMapReport& rep = res.report;
-  const bool axial = rep.boundary.start == "axial" && opt.sphere_start == InitialMapOptions::SphereStart::automatic;
-  say(opt, std::to_string(rep.folds_after_untangle) + " folds left" + (axial ? "" : ": again from the conformal sphere map"));
   InitialMapReport::Fallback fb;
+  fb.axial = rep.boundary.start == "axial" && opt.sphere_start == InitialMapOptions::SphereStart::automatic;
+  say(opt, std::to_string(rep.folds_after_untangle) + " folds left" +
+               (fb.axial ? "" : ": again from the conformal sphere map"));
   fb.from = to_string(opt.sphere_density);
   fb.flipped_triangles = rep.boundary.flipped_triangles;
   fb.folds_after_untangle = rep.folds_after_untangle;
@@ -255,22 +256,17 @@ void conformal_fallback(Device& device, const TetMesh& m, const TriSurface& surf
   rep.untangle_slide.reset();
   InitialMapResult area = res;  // with its local runs' report, which its global run follows
   rep.untangle.reset();
-  if (axial) {
-    fb.axial = true;
-    untangle_globally(device, m, opt, std::move(area), res, "an axial start has no conformal redo");
-    res.report.fallback = fb;
-    return;
-  }
-  TimedSphereMap redo = timed_sphere_map(surf, conformal, device);
-  if (redo.map.flipped_triangles == 0) {
-    fb.conformal_min_tet_ratio = boundary_tet_ratio_bound(m, redo.map.sphere);
+  std::optional<TimedSphereMap> redo;
+  if (!fb.axial) redo = timed_sphere_map(surf, conformal, device);
+  if (redo && redo->map.flipped_triangles == 0) {
+    fb.conformal_min_tet_ratio = boundary_tet_ratio_bound(m, redo->map.sphere);
     fb.crowded_by_boundary = fb.conformal_min_tet_ratio < InitialMapReport::kCrowdedRatio;
   }
-  if (fb.crowded_by_boundary) {
-    fb.crowded = true;
-    untangle_globally(device, m, opt, std::move(area), res, kCrowds);
+  if (fb.axial || fb.crowded_by_boundary) {
+    fb.crowded = fb.crowded_by_boundary;
+    untangle_globally(device, m, opt, std::move(area), res, fb.axial ? "an axial start has no conformal redo" : kCrowds);
   } else {
-    map_through_sphere(device, m, surf, conformal, note, res, rep, solver, &redo);
+    map_through_sphere(device, m, surf, conformal, note, res, rep, solver, &*redo);
     fb.conformal_min_tet_ratio = map_metrics(device, m.vertices, res.ball, m.tets).tet_volume_ratio.min;
     fb.crowded = rep.boundary.flipped_triangles == 0 && fb.conformal_min_tet_ratio < InitialMapReport::kCrowdedRatio;
     if (fb.crowded) untangle_globally(device, m, opt, std::move(area), res, kCrowds);

@@ -293,7 +293,7 @@ struct InitialMapReport {
 ///  "harmonic": {"solver","preconditioner","iterations","relative_residual","inverted_tets"},
 ///  "folds_before_untangle", "untangle"? (to_json(UntangleResult) + "scope", "rings"),
 ///  "untangle_local_failed"?, "untangle_cleanup"?, "untangle_slide"?, "folds_after_untangle", "fallback"? {"from","to"
-///  ("conformal", or "axial" for an axial start's global run),"flipped_triangles",
+///  ("conformal", or "axial" for an automatic axial start's global run),"flipped_triangles",
 ///  "folds_after_untangle","seconds","crowded","crowded_by_boundary","conformal_min_tet_ratio","axial"}, "refine"? {"rounds",
 ///  "inserted_vertices","folds_before","folds_after","seconds"}, "boundary_max_radius_error",
 ///  "metrics": to_json(MapMetrics), "timings_s": {"input_quality","metrics","split","boundary",
