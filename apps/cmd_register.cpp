@@ -197,6 +197,10 @@ RegistrationResult register_mapped(Device& dev, Inputs& io, Points& ball, const 
   }
 }
 
+// The image refinement moves the region-centroid landmarks with the image (their errors stay in
+// the report): they are no convergence criterion then.
+bool landmarks_free(const std::optional<DenseRegistrationResult>& dense) { return dense && dense->refine; }
+
 Json report_json(const std::string& device, const Inputs& io, const RegistrationResult& res,
                  const std::optional<DenseRegistrationResult>& dense, const MapMetrics& mm, Json timings) {
   Json r = Json::object();
@@ -211,7 +215,8 @@ Json report_json(const std::string& device, const Inputs& io, const Registration
   for (const char* k : {"landmark_rms_error", "landmark_max_error", "max_normal_velocity", "inverted_tets",
                         "vertex_volume_ratio", "tet_volume_ratio", "boundary_max_radius_error"})
     r[k] = *summary.find(k);
-  r["converged"] = res.landmark_max_error <= kLandmarkTolerance && !(dense && dense->time_budget_spent);
+  r["converged"] = (landmarks_free(dense) || res.landmark_max_error <= kLandmarkTolerance) &&
+                   !(dense && dense->time_budget_spent);
   r["registration"] = to_json(res);
   if (dense) r["dense"] = to_json(*dense);
   r["timings_s"] = timings;
@@ -271,6 +276,7 @@ int run(const cli::Command& self, const std::vector<std::string>& argv) {
     return cli::time_budget_status("register", std::to_string(dense->iterations.size()) + " of " +
                                                    std::to_string(io.by_template.dense.iterations) + " dense iterations",
                                    args.has("--allow-partial"));
+  if (landmarks_free(dense)) return 0;
   // the flow's landmarks are exact up to the RK4 error (about 1e-10); far from it something is off
   return cli::convergence_status("register", "landmark max error", res.landmark_max_error, kLandmarkTolerance,
                                  "after the flow and volume restoration", args.has("--allow-partial"),

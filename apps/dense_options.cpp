@@ -75,6 +75,13 @@ DenseRegistrationOptions dense_options(const Args& args, DenseRegistrationOption
   o.centre_spacing = args.get_double("--dense-centre-spacing", o.centre_spacing);
   if (!(o.centre_spacing >= 0.25 && o.centre_spacing <= 4))
     throw InputError("--dense-centre-spacing: expected 0.25 to 4 (x the level's width)");
+  o.refine.iterations = args.get_int("--dense-refine", o.refine.iterations);
+  if (o.refine.iterations < 0 || o.refine.iterations > 10000) throw InputError("--dense-refine: expected 0 to 10000");
+  o.refine.volume_weight = args.get_double("--dense-refine-volume-weight", o.refine.volume_weight);
+  if (!(o.refine.volume_weight >= 0 && o.refine.volume_weight <= 1e6))
+    throw InputError("--dense-refine-volume-weight: expected 0 to 1e6");
+  if (o.refine.iterations > 0 && o.force == DenseForce::labels)
+    throw InputError("--dense-refine: the image refinement needs --dense-force image or both");
   return o;
 }
 
@@ -110,6 +117,11 @@ Command with_dense_options(Command command, const std::string& after, int defaul
           {"--dense-force", "labels|image|both",
            std::string("what the dense flows pull: region boundaries, image intensities, or both (default ") +
                to_string(default_force) + ")", false, 0, true},
+          {"--dense-refine", "N",
+           "image refinement iterations (image force; default " + std::to_string(d.refine.iterations) + ": none)",
+           false, 0, true},
+          {"--dense-refine-volume-weight", "W", "weight of the image refinement's volume term against its image term (default " +
+                                                    format_sig(d.refine.volume_weight, 6) + ")", false, 0, true, true},
           {"--dense-restore-image-weight", "W",
            "with an image force, how firmly the final volume restoration holds the image's edges (0: not; default " +
                format_sig(d.restore_image_weight, 6) + ")", false, 0, true, true},

@@ -132,6 +132,21 @@ DenseImages case_images(const Case& c, const Image& image) {
   return im;
 }
 
+// The image force on the host at `ball`, with restore cycles and image refinement iterations.
+DenseRegistrationResult run_image(const Case& k, const DenseImages& images, Points& ball, int iterations, int cycles,
+                                  int refine) {
+  DenseRegistrationOptions o;
+  o.iterations = iterations;
+  o.widths = {0.5, 0.35};
+  o.force = DenseForce::image;
+  o.image_grid = 32;
+  o.restore_cycles = cycles;
+  o.refine.iterations = refine;
+  ball = k.subject.vertices;
+  return register_dense(*Device::host(), {ball, k.subject.tets, k.labels}, {k.templ.vertices, k.templ.tets, k.labels},
+                        k.landmarks.source, k.landmarks.target, RegistrationOptions{}, o, &images);
+}
+
 }  // namespace
 
 TEST_CASE("smooth_matches: the binned Gaussian average equals the brute-force sum") {
@@ -370,17 +385,7 @@ TEST_CASE("dense registration: restore cycles keep every guarantee") {
   const Case c = make_case();
   const Image image = native_image();
   const DenseImages images = case_images(c, image);
-  auto run = [&](const Case& k, Points& ball, int cycles) {
-    DenseRegistrationOptions o;
-    o.iterations = 16;
-    o.widths = {0.5, 0.35};
-    o.force = DenseForce::image;
-    o.image_grid = 32;
-    o.restore_cycles = cycles;
-    ball = k.subject.vertices;
-    return register_dense(*Device::host(), {ball, k.subject.tets, k.labels}, {k.templ.vertices, k.templ.tets, k.labels},
-                          k.landmarks.source, k.landmarks.target, RegistrationOptions{}, o, &images);
-  };
+  auto run = [&](const Case& k, Points& ball, int cycles) { return run_image(k, images, ball, 16, cycles, 0); };
   Points plain, cycled;
   const DenseRegistrationResult r0 = run(c, plain, 0);
   const DenseRegistrationResult r1 = run(c, cycled, 2);
@@ -437,6 +442,63 @@ TEST_CASE("dense registration: the restoration's polish on the OpenCL device, im
   INFO("max |host - device| " << diff);
   CHECK(diff < 1e-10);
   CHECK(rd.inverted_tets == 0);
+}
+
+TEST_CASE("dense registration: the image refinement aligns the image further and keeps every guarantee") {
+  const Case c = make_case();
+  const Image image = native_image();
+  const DenseImages images = case_images(c, image);
+  auto run = [&](const Case& k, Points& ball, int refine) { return run_image(k, images, ball, 4, 0, refine); };
+  Points plain, refined;
+  const DenseRegistrationResult r0 = run(c, plain, 0);
+  const DenseRegistrationResult r1 = run(c, refined, 100);
+  REQUIRE(r1.refine);
+  CHECK(!r0.refine);
+  const DenseRefineReport& f = *r1.refine;
+  INFO("refine: " << f.samples << " voxels, " << f.iterations << " iterations, mismatch " << f.mismatch_before << " -> "
+                  << f.mismatch_after << ", Dice " << overlap(c, plain) << " -> " << overlap(c, refined));
+  CHECK(f.template_cells == 50);  // the native mesh spans 100 mm, the template's voxels are 2 mm
+  // about one voxel a tet: every second of the 2 mm voxels inside the 50 mm ball
+  CHECK(f.samples > c.subject.tets.rows() / 3);
+  CHECK(f.samples < 3 * c.subject.tets.rows());
+  CHECK(f.iterations > 5);
+  CHECK(f.mismatch_after < 0.7 * f.mismatch_before);
+  CHECK(overlap(c, refined) > overlap(c, plain) + 0.005);
+  CHECK(r1.inverted_tets == 0);
+  // the landmarks move with the image, off their targets (the region centroids') by little
+  CHECK(r1.landmark_max_error > 1e-6);
+  CHECK(r1.landmark_max_error < 0.15);  // measured 0.075: the blobs' centroids are loose correspondences
+  CHECK(r0.landmark_max_error < 1e-6);
+  const MapMetrics m = map_metrics(*Device::host(), c.subject.vertices, refined, c.subject.tets);
+  CHECK(m.inverted_tets == 0);
+  CHECK(m.tet_volume_ratio.mean_abs_dev < 0.02);
+  for (Eigen::Index v = 0; v < refined.rows(); ++v)
+    if (std::abs(c.subject.vertices.row(v).norm() - 1) < 1e-9) CHECK(std::abs(refined.row(v).norm() - 1) < 1e-9);
+  const Json j = to_json(r1);
+  REQUIRE(j.find("refine") != nullptr);
+  CHECK(j.find("refine")->find("mismatch_after") != nullptr);
+  CHECK(j.find("timings_s")->find("refine") != nullptr);
+  // a subject against itself: no mismatch, no volume change, nothing moves
+  Case same = c;
+  same.subject = same.templ;
+  same.landmarks = region_landmarks(same.subject, same.templ);
+  Points self;
+  const DenseRegistrationResult rs = run(same, self, 100);
+  REQUIRE(rs.refine);
+  INFO("self mismatch " << rs.refine->mismatch_before);
+  CHECK(rs.refine->mismatch_before < DenseRefineOptions::kAligned);  // the resampling's own error
+  CHECK(rs.refine->iterations == 0);
+  CHECK((self - same.templ.vertices).cwiseAbs().maxCoeff() < 1e-9);
+  CHECK(rs.landmark_max_error < 1e-9);
+  // the refinement needs an image force and dense iterations before it
+  Points ball;
+  DenseRegistrationOptions bad;
+  bad.iterations = 2;
+  bad.refine.iterations = 10;
+  CHECK_THROWS_AS(register_dense(*Device::host(), {ball = c.subject.vertices, c.subject.tets, c.labels},
+                                 {c.templ.vertices, c.templ.tets, c.labels}, c.landmarks.source, c.landmarks.target,
+                                 RegistrationOptions{}, bad, &images),
+                  InputError);
 }
 
 TEST_CASE("dense registration of a subject to itself is the identity") {
@@ -685,6 +747,16 @@ TEST_CASE("vpm register --dense-force image: the image force from the command li
   CHECK(d->find("force")->string() == "image");
   CHECK(d->find("mismatch_after")->number() < d->find("mismatch_landmarks")->number());
   CHECK(j.find("inverted_tets")->number() == 0);
+  CHECK(d->find("refine") == nullptr);
+  // the image refinement after the dense iterations
+  REQUIRE(test::run_status(vpm + images + "--dense-force image --dense-iterations 4 --dense-image-grid 32 "
+                           "--dense-refine 30 --report " + dir + "refine.json 2>" + dir + "err.txt") == 0);
+  const Json jr = Json::parse(test::slurp(dir + "refine.json"));
+  const Json* refine = jr.find("dense")->find("refine");
+  REQUIRE(refine != nullptr);
+  CHECK(refine->find("mismatch_after")->number() < refine->find("mismatch_before")->number());
+  CHECK(refine->find("iterations")->number() > 0);
+  CHECK(jr.find("inverted_tets")->number() == 0);
   // refused: an image force without images, one image alone, a mesh without native positions
   auto refused = [&](const std::string& args, const std::string& message) {
     CHECK(test::run_status(vpm + args + " 2>" + dir + "err.txt") == 2);
@@ -696,6 +768,8 @@ TEST_CASE("vpm register --dense-force image: the image force from the command li
   refused("--dense-iterations 2 --image " + dir + "image.nii.gz", "--image needs --template-image");
   refused("--dense-iterations 2 --dense-force intensity", "expected labels, image or both");
   refused("--dense-iterations 2 --dense-fit translations", "unknown option --dense-fit");
+  refused("--dense-iterations 2 --dense-refine 10", "--dense-refine: the image refinement needs --dense-force image or both");
+  refused("--dense-iterations 2 --dense-force image --dense-refine -1 " + images, "--dense-refine: expected 0 to 10000");
   refused("--dense-iterations 2 --dense-force image --dense-image-grid 5 " + images,
           "--dense-image-grid: expected 8 to 256 cells, or 0 (automatic)");
   // the automatic grid (the default): about two grid points per tet

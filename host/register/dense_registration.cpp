@@ -12,6 +12,7 @@
 #include "vpm/format.hpp"
 #include "register/dense_force.hpp"
 #include "register/dense_image_force.hpp"
+#include "register/dense_refine.hpp"
 #include "register/dense_state.hpp"
 #include "register/rbf_gram.hpp"
 #include "register/registration_steps.hpp"
@@ -42,6 +43,12 @@ void check_dense(const Tets& tets, const std::vector<int>& labels, const Tets& t
   if (!(o.centre_spacing >= 0.25) || !(o.smoothing > 0) || !(o.ridge >= 0)) bad("invalid smoothing options");
   if (!(o.fit_tolerance > 0 && o.fit_tolerance < 1)) bad("the fit tolerance must lie in (0, 1)");
   if (o.advect_steps < 1 || o.agreement_grid < 4) bad("advect steps >= 1 and agreement grid >= 4 required");
+  const DenseRefineOptions& r = o.refine;
+  if (r.iterations < 0 || r.memory < 1 || r.memory > 64 || !(r.volume_weight >= 0) || !(r.smoothing_mm >= 0) ||
+      r.smoothing_mm > 20 || !(r.min_gain >= 0 && r.min_gain < 1))
+    bad("invalid image refinement options");
+  if (r.iterations > 0 && (o.force == DenseForce::labels || o.iterations == 0))
+    bad("the image refinement follows dense iterations with an image force (image or both)");
   if (o.force != DenseForce::labels &&
       (!(o.image_grid == 0 || (o.image_grid >= 4 && o.image_grid <= 512)) || !(o.image_smoothing >= 0)))
     bad("the image force needs 0 (automatic) or 4 to 512 grid cells and a smoothing >= 0");
@@ -230,6 +237,36 @@ void finish(Device& dev, DenseRegistrationResult& r, const DenseState& st, const
   }
 }
 
+/// The image refinement of `work`; the landmarks `lm` move with their tets (the region centroids
+/// are starting correspondences, about 0.01 ball units from the truth: held on their targets,
+/// they cost held-out overlap).
+DenseRefineReport refine_image(const DenseState& st, const DenseTemplate& templ, const DenseImages& images,
+                               const Points& reference, Points& work, Points& lm, const DenseRefineOptions& o) {
+  const std::vector<Location> at = TetLocator(work, st.tets, st.topology).locate_all(lm);
+  const std::vector<char> fixed(st.topology.boundary_vertex.begin(), st.topology.boundary_vertex.end());
+  DenseRefineReport rr = refine_against_image(images, templ, reference, st.tets, fixed, work, o);
+  for (Eigen::Index l = 0; l < lm.rows(); ++l) {
+    const Location& a = at[static_cast<size_t>(l)];
+    Eigen::Vector3d q = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 4; ++k) q += a.bary[k] * work.row(st.tets(a.tet, k)).transpose();
+    lm.row(l) = q.transpose();
+  }
+  return rr;
+}
+
+/// The landmark flow without rotation that takes the tracked landmarks `lm` back onto `targets`.
+void correct_landmarks(Device& dev, Points& work, const Tets& tets, Points& lm, const Points& targets,
+                       const RegistrationOptions& lo, DenseRegistrationResult& r) {
+  const auto t0 = Clock::now();
+  RegistrationOptions co = lo;
+  co.rigid = false;
+  co.restore_volumes = false;
+  r.correction = register_landmarks(dev, work, tets, lm, targets, co);
+  lm = r.correction->landmarks_final;
+  r.max_normal_velocity = std::max(r.max_normal_velocity, r.correction->max_normal_velocity);
+  r.seconds_correction = seconds_since(t0);
+}
+
 }  // namespace
 
 int dense_image_grid_cells(long tets) {
@@ -293,15 +330,11 @@ DenseRegistrationResult register_dense(Device& dev, const DenseSubject& subject,
     work = x.topRows(work.rows());
     lm = x.bottomRows(lm.rows());
     r.seconds_dense = seconds_since(t0);
-    if (o.exact_landmarks) {
+    if (o.exact_landmarks) correct_landmarks(dev, work, tets, lm, targets, lo, r);
+    if (o.refine.iterations > 0) {
       t0 = Clock::now();
-      RegistrationOptions co = lo;
-      co.rigid = false;
-      co.restore_volumes = false;
-      r.correction = register_landmarks(dev, work, tets, lm, targets, co);
-      lm = r.correction->landmarks_final;
-      r.max_normal_velocity = std::max(r.max_normal_velocity, r.correction->max_normal_velocity);
-      r.seconds_correction = seconds_since(t0);
+      r.refine = refine_image(st, templ, *images, ball, work, lm, o.refine);
+      r.seconds_refine = seconds_since(t0);
     }
     if (lo.restore_volumes) {
       t0 = Clock::now();

@@ -38,10 +38,25 @@ Json to_json(const DenseIteration& it) {
   return j;
 }
 
+Json to_json(const DenseRefineReport& r) {
+  Json j = Json::object();
+  j["samples"] = r.samples;
+  j["template_cells"] = r.template_cells;
+  j["pinned_vertices"] = r.pinned_vertices;
+  j["iterations"] = r.iterations;
+  j["mismatch_before"] = r.mismatch_before;
+  j["mismatch_after"] = r.mismatch_after;
+  j["volume_before"] = r.volume_before;
+  j["volume_after"] = r.volume_after;
+  j["seconds"] = r.seconds;
+  return j;
+}
+
 Json to_json(const DenseRegistrationResult& r) {
   Json j = Json::object();
   j["landmark"] = to_json(r.landmark);
   if (r.correction) j["correction"] = to_json(*r.correction);
+  if (r.refine) j["refine"] = to_json(*r.refine);
   if (r.restore) j["restore"] = to_json(*r.restore);
   Json its = Json::array();
   for (const DenseIteration& it : r.iterations) its.push_back(to_json(it));
@@ -67,6 +82,7 @@ Json to_json(const DenseRegistrationResult& r) {
   t["landmark"] = r.seconds_landmark;
   t["dense"] = r.seconds_dense;
   t["correction"] = r.seconds_correction;
+  if (r.refine) t["refine"] = r.seconds_refine;
   t["restore"] = r.seconds_restore;
   t["total"] = r.seconds_total;
   j["timings_s"] = t;

@@ -74,6 +74,32 @@ struct DenseImages {
   Points template_native;
 };
 
+/// The image refinement that can end a dense registration with an image force (DenseForce::image
+/// or both), after the landmark correction and before the final volume restoration: every
+/// interior vertex of the subject's ball mesh moves at once, by L-BFGS on
+///   E(x) = mean over the subject's voxels of (S - T(x_p))^2 / var(T)
+///          + volume_weight x mean over tets of log(V_t(x) / V0_t)^2
+/// (V0: the subject's mapped ball, the reference of every volume measure). Each voxel inside the
+/// subject's native mesh is a fixed barycentric point p of its tet, so its ball position x_p
+/// moves with the vertices; S is the subject's voxel value scaled linearly to the template's
+/// mean and spread there, T the template's image resampled through its map on a ball grid as
+/// fine as its voxels (trilinear, with its gradient). Sphere vertices stay; the landmarks move
+/// with their tets (region centroids are starting correspondences about 0.01 ball units from the
+/// truth: held on their targets they cost held-out overlap), so their errors are reported, not
+/// required. A trial step that inverts a tet is halved. The RBF flows' alignment is limited by
+/// their width (0.14 ball units at the finest level); this one by the mesh and the voxels
+/// (docs/register.md, "The image refinement").
+struct DenseRefineOptions {
+  int iterations = 0;         ///< L-BFGS iterations at most; 0 = no refinement
+  double volume_weight = 1;   ///< weight of the volume term against the image mismatch
+  double smoothing_mm = 1;    ///< Gaussian smoothing (mm) of both images before the comparison
+  int memory = 8;             ///< L-BFGS memory (pairs)
+  double min_gain = 1e-6;     ///< stop once an iteration lowers E by less than this fraction
+  /// An image term below this (1e-4 of the template's variance) is the resampling's own error:
+  /// nothing is moved (a subject registered to itself stays the identity).
+  static constexpr double kAligned = 1e-4;
+};
+
 struct DenseRegistrationOptions {
   DenseForce force = DenseForce::labels;  ///< what pulls (images required for image and both)
   /// Cells across the ball of the image force's grid (and of the image mismatch that decides
@@ -116,6 +142,8 @@ struct DenseRegistrationOptions {
   /// their edges (VolumeHold rows weighing this x the number of tets against the volume rows),
   /// so restoring volumes does not slide structures off what the images aligned; 0 = off.
   double restore_image_weight = 300;
+  /// The image refinement after the landmark correction.
+  DenseRefineOptions refine;
   /// Time budget (vpm/timing.hpp), checked before every dense iteration: when it has passed the
   /// iterations stop there (DenseRegistrationResult::time_budget_spent) and the landmarks and
   /// volumes are still restored, so the result is a valid registration, less aligned.
@@ -150,10 +178,25 @@ struct DenseIteration {
 ///  "accepted", "seconds"} and "mismatch", "image_points", "mean_translation" with the image force
 Json to_json(const DenseIteration& iteration);
 
+/// What the image refinement did.
+struct DenseRefineReport {
+  long samples = 0;             ///< subject voxels compared
+  int template_cells = 0;       ///< cells across the ball of the template's resampled image
+  int pinned_vertices = 0;      ///< sphere vertices held still
+  int iterations = 0;           ///< L-BFGS iterations taken
+  double mismatch_before = 0, mismatch_after = 0;  ///< the image term of E
+  double volume_before = 0, volume_after = 0;      ///< mean log(V / V0)^2
+  double seconds = 0;
+};
+/// {"samples", "template_cells", "pinned_vertices", "iterations", "mismatch_before",
+///  "mismatch_after", "volume_before", "volume_after", "seconds"}
+Json to_json(const DenseRefineReport& report);
+
 struct DenseRegistrationResult {
   RegistrationResult landmark;                ///< the landmark registration (first stage)
   std::optional<RegistrationResult> correction;  ///< the final landmark flow (when run)
   std::optional<RegistrationRestore> restore;    ///< the final volume restoration (when run)
+  std::optional<DenseRefineReport> refine;       ///< the image refinement (when run)
   std::vector<DenseIteration> iterations;
   std::vector<int> regions;       ///< labels the force used
   double agreement_before = 0;    ///< label agreement of the mapped mesh
@@ -166,14 +209,14 @@ struct DenseRegistrationResult {
   double max_normal_velocity = 0; ///< largest max |u . n| of all flows
   int inverted_tets = 0;          ///< at the end
   bool time_budget_spent = false; ///< DenseRegistrationOptions::deadline stopped the iterations
-  double seconds_landmark = 0, seconds_dense = 0, seconds_correction = 0, seconds_restore = 0,
-         seconds_total = 0;
+  double seconds_landmark = 0, seconds_dense = 0, seconds_correction = 0, seconds_refine = 0,
+         seconds_restore = 0, seconds_total = 0;
 };
-/// {"landmark": to_json(RegistrationResult), "correction" (when run), "restore" (when run),
+/// {"landmark": to_json(RegistrationResult), "correction", "refine", "restore" (each when run),
 ///  "iterations": [...], "regions", "agreement_before", "agreement_landmarks", "agreement_after",
 ///  "force", "mismatch_before", "mismatch_landmarks", "mismatch_after" (with the image force),
 ///  "landmark_rms_error", "landmark_max_error", "max_normal_velocity", "inverted_tets",
-///  "timings_s": {"landmark", "dense", "correction", "restore", "total"}}
+///  "timings_s": {"landmark", "dense", "correction", "refine", "restore", "total"}}
 Json to_json(const DenseRegistrationResult& result);
 
 /// The mapped mesh being registered: `ball` n x 3 (in: the mapped positions; out: the

@@ -68,7 +68,7 @@ RegistrationResult run(Request& r, Device& dev, Points& ball) {
 py::tuple register_py(const py::object& mesh, const py::object& landmarks, const py::object& targets,
                       const py::object& templ, const std::string& template_landmarks, std::vector<int> exclude,
                       const std::optional<std::string>& preset, std::optional<int> dense_iterations,
-                      const std::string& dense_force, std::shared_ptr<Image> image,
+                      const std::string& dense_force, int dense_refine, std::shared_ptr<Image> image,
                       std::shared_ptr<Image> template_image, int steps, std::optional<double> width,
                       double width_factor, const std::string& boundary, const std::string& field, bool rigid,
                       bool untangle, bool restore, double max_seconds, std::optional<std::string> device,
@@ -101,6 +101,10 @@ py::tuple register_py(const py::object& mesh, const py::object& landmarks, const
   if (preset) dense = with_preset(registration_preset_from_string(*preset));
   if (dense_iterations) dense.iterations = *dense_iterations;
   dense.force = dense_force_from_string(dense_force);
+  if (dense_refine < 0) throw InputError("dense_refine: expected 0 (none) or more iterations");
+  if (dense_refine > 0 && dense.force == DenseForce::labels)
+    throw InputError("dense_refine: the image refinement needs dense_force='image' or 'both'");
+  dense.refine.iterations = dense_refine;
   r.by_template.exclude_labels = std::move(exclude);
   if (dense.iterations > 0 && dense.force != DenseForce::labels && (!image || !template_image))
     throw InputError("dense_force: image and both need image= and template_image=");
@@ -144,7 +148,7 @@ void bind_register(py::module_& m) {
         py::arg("targets") = py::none(), py::arg("template") = py::none(), py::arg("template_landmarks") = "regions",
         py::arg("exclude_labels") = std::vector<int>{}, py::arg("preset") = py::none(),
         py::arg("dense_iterations") = py::none(),
-        py::arg("dense_force") = "labels", py::arg("image") = nullptr, py::arg("template_image") = nullptr,
+        py::arg("dense_force") = "labels", py::arg("dense_refine") = 0, py::arg("image") = nullptr, py::arg("template_image") = nullptr,
         py::arg("rk_steps") = RegistrationOptions{}.steps, py::arg("width") = py::none(),
         py::arg("width_factor") = RegistrationOptions{}.width_factor, py::arg("flow_boundary") = "tangent",
         py::arg("field") = "per-step", py::arg("rigid") = true, py::arg("untangle") = true,

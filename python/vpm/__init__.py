@@ -237,7 +237,9 @@ def register(mesh, *, landmarks=None, targets=None, template=None, image=None, t
     'moments'; use dense_force='image'). Dense iterations (preset='standard' for 12, 'accurate'
     for 32 to a finer width, 'landmarks' for none; or dense_iterations=N, which overrides the
     preset's; dense_force='labels'|'image'|'both') pull the subject onto the template; the image force
-    reads `image` and `template_image` (path, nibabel image, vpm.Image) through both maps.
+    reads `image` and `template_image` (path, nibabel image, vpm.Image) through both maps;
+    dense_refine=N (with an image force) ends them with the image refinement, N L-BFGS iterations
+    at most (300 in docs/register.md's measurements).
     Other options: exclude_labels, rk_steps, width, width_factor, flow_boundary, field, rigid,
     untangle, restore, max_seconds (a time budget for the dense iterations), device; `progress`
     as map_to_ball's (one line per dense iteration). Returns (registered vpm.Mesh,

@@ -64,6 +64,13 @@ def test_register_landmarks_template_and_moments(vpm, image_array):
                             progress=lines.append)
     assert rep.landmarks >= 20 and rep.inverted_tets == 0
     assert len(lines) >= 1  # one line per dense iteration
+    # the image refinement after them moves the vertices further; it needs an image force
+    refined, rep2 = vpm.register(bare, template=t_ball, template_landmarks="moments", dense_iterations=3,
+                                 dense_force="image", dense_refine=20, image=vpm.Image(data2, affine2),
+                                 template_image=vpm.Image(data, affine))
+    assert rep2.inverted_tets == 0 and not np.array_equal(refined.vertices, reg.vertices)
+    with pytest.raises(ValueError, match="needs dense_force='image' or 'both'"):
+        vpm.register(s_ball, template=t_ball, dense_iterations=1, dense_refine=10)
     with pytest.raises(ValueError, match="needs atlas labels"):
         vpm.register(bare, template=t_ball, template_landmarks="moments", dense_iterations=1, dense_force="labels")
 
